@@ -1,0 +1,230 @@
+"""The types every part of azgym speaks: beacon map, a frame's measurements, pose estimate.
+
+Conventions (see DESIGN.md): SI units and radians; world frame x east, y north, z up; the heading
+φ is the direction of the camera's x-axis in the world, counter-clockwise; the azimuth of beacon i
+in the camera frame is α_i = atan2(y_i − y, x_i − x) − φ (Rátosi & Simon, eq. 19-22). Every angle
+difference goes through :func:`wrap_angle`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from azgym.errors import InvalidInputError
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+
+def wrap_angle(angle: ArrayLike) -> Any:
+    """Wrap angles to the interval (−π, π].
+
+    Args:
+        angle: Angle or array of angles in radians.
+
+    Returns:
+        The wrapped angle(s), a float for a scalar input.
+    """
+    wrapped = np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), 2.0 * np.pi)
+    return float(wrapped) if wrapped.ndim == 0 else wrapped
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array.setflags(write=False)
+    return array
+
+
+def _as_ids(owner: str, name: str, values: ArrayLike) -> IntArray:
+    array = np.asarray(values)
+    if array.ndim != 1:
+        raise InvalidInputError(f"{owner}.{name} must be 1-D, got shape {array.shape}")
+    if array.size and not np.issubdtype(array.dtype, np.integer):
+        if not (np.issubdtype(array.dtype, np.floating) and np.all(array == np.round(array))):
+            raise InvalidInputError(f"{owner}.{name} must hold integers, got dtype {array.dtype}")
+    return _frozen(array.astype(np.int64, copy=True))
+
+
+def _as_finite(owner: str, name: str, values: ArrayLike, shape: tuple[int, ...]) -> FloatArray:
+    try:
+        array = np.array(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{owner}.{name} must be numeric: {exc}") from None
+    if array.shape != shape:
+        raise InvalidInputError(f"{owner}.{name} must have shape {shape}, got {array.shape}")
+    bad = ~np.isfinite(array)
+    if bad.any():
+        where = np.argwhere(bad)[0]
+        raise InvalidInputError(
+            f"{owner}.{name} must be finite, got {array[tuple(where)]} at index {tuple(where)}"
+        )
+    return _frozen(array)
+
+
+@dataclass(frozen=True, eq=False)
+class BeaconMap:
+    """The known beacons: ids, 3-D positions and horizontal sizes. Immutable.
+
+    Attributes:
+        ids: Unique integer beacon ids, shape (N,).
+        xyz: Beacon positions in the world frame [m], shape (N, 3).
+        width: Horizontal size W of each beacon [m], shape (N,), used by the coverage error
+            of eq. 2. A scalar is broadcast to every beacon.
+    """
+
+    ids: IntArray
+    xyz: FloatArray
+    width: FloatArray
+    _sorted_ids: IntArray = field(init=False, repr=False)
+    _sorted_order: IntArray = field(init=False, repr=False)
+
+    def __init__(self, ids: ArrayLike, xyz: ArrayLike, width: ArrayLike = 0.03) -> None:
+        id_array = _as_ids("BeaconMap", "ids", ids)
+        n = id_array.size
+        unique, counts = np.unique(id_array, return_counts=True)
+        if (counts > 1).any():
+            raise InvalidInputError(
+                f"BeaconMap.ids must be unique; duplicated: {unique[counts > 1].tolist()}"
+            )
+        xyz_array = _as_finite("BeaconMap", "xyz", xyz, (n, 3))
+        width_array = np.broadcast_to(np.asarray(width, dtype=np.float64), (n,)).copy()
+        width_array = _as_finite("BeaconMap", "width", width_array, (n,))
+        if (width_array < 0).any():
+            raise InvalidInputError(
+                f"BeaconMap.width must be >= 0 m, got {width_array[width_array < 0][0]}"
+            )
+        order = np.argsort(id_array, kind="stable")
+        object.__setattr__(self, "ids", id_array)
+        object.__setattr__(self, "xyz", xyz_array)
+        object.__setattr__(self, "width", width_array)
+        object.__setattr__(self, "_sorted_ids", _frozen(id_array[order]))
+        object.__setattr__(self, "_sorted_order", _frozen(order.astype(np.int64)))
+
+    def __len__(self) -> int:
+        return int(self.ids.size)
+
+    def lookup_tables(self) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
+        """(sorted ids, their rows, xyz, width): what the compiled id lookup needs."""
+        return self._sorted_ids, self._sorted_order, self.xyz, self.width
+
+    @property
+    def xy(self) -> FloatArray:
+        """Horizontal positions [m], shape (N, 2)."""
+        return self.xyz[:, :2]
+
+    def index_of(self, ids: ArrayLike) -> IntArray:
+        """Map beacon ids to row indices of this map; ids not in the map give −1.
+
+        Args:
+            ids: Beacon ids, any shape.
+        """
+        query = np.asarray(ids, dtype=np.int64)
+        pos = np.searchsorted(self._sorted_ids, query)
+        pos_clipped = np.minimum(pos, max(len(self) - 1, 0))
+        if len(self) == 0:
+            return np.full(query.shape, -1, dtype=np.int64)
+        found = self._sorted_ids[pos_clipped] == query
+        return np.where(found, self._sorted_order[pos_clipped], -1)
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """Bounding box of the beacons' horizontal positions: (x_min, y_min, x_max, y_max) [m]."""
+        lo = self.xy.min(axis=0)
+        hi = self.xy.max(axis=0)
+        return float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements:
+    """One camera frame's beacon detections. Ground truth never travels inside it.
+
+    M may differ from the number of beacons: beacons may be missing, the same id may appear twice
+    (a mirror ghost beside the real beacon) and an id may be absent from the map (misdecoded).
+
+    Attributes:
+        ids: Decoded beacon id of each detection, shape (M,).
+        azimuth: Azimuth of each detection in the camera frame [rad], shape (M,), finite.
+        quality: Optional per-detection quality (e.g. blob size), shape (M,) or (M, Q).
+    """
+
+    ids: IntArray
+    azimuth: FloatArray
+    quality: FloatArray | None = None
+
+    def __init__(
+        self, ids: ArrayLike, azimuth: ArrayLike, quality: ArrayLike | None = None
+    ) -> None:
+        id_array = _as_ids("Measurements", "ids", ids)
+        azimuth_array = _as_finite("Measurements", "azimuth", azimuth, id_array.shape)
+        quality_array = None
+        if quality is not None:
+            q = np.asarray(quality, dtype=np.float64)
+            if q.ndim not in (1, 2) or q.shape[0] != id_array.size:
+                raise InvalidInputError(
+                    f"Measurements.quality must have shape ({id_array.size},) or "
+                    f"({id_array.size}, Q), got {q.shape}"
+                )
+            quality_array = _frozen(q.copy())
+        object.__setattr__(self, "ids", id_array)
+        object.__setattr__(self, "azimuth", azimuth_array)
+        object.__setattr__(self, "quality", quality_array)
+
+    def __len__(self) -> int:
+        return int(self.ids.size)
+
+
+@dataclass(frozen=True, eq=False, slots=True)
+class Estimate:
+    """A localizer's answer for one frame.
+
+    A failed estimate has ``ok=False``, a ``reason`` and NaN pose: a missing estimate must never be
+    scored as a zero error.
+
+    Attributes:
+        x: Camera position, east [m].
+        y: Camera position, north [m].
+        heading: Camera heading φ [rad], wrapped to (−π, π].
+        inliers: Which measurements the estimate used, shape (M,) bool.
+        ok: Whether a pose was found.
+        reason: Why not, when ``ok`` is False; empty otherwise.
+        covariance: Optional 3×3 covariance of (x, y, heading).
+        diagnostics: Localizer-specific extras (iterations, residuals, ...).
+    """
+
+    x: float
+    y: float
+    heading: float
+    inliers: BoolArray
+    ok: bool = True
+    reason: str = ""
+    covariance: FloatArray | None = None
+    diagnostics: Mapping[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def failure(
+        cls, reason: str, n_measurements: int, diagnostics: Mapping[str, Any] | None = None
+    ) -> Estimate:
+        """An estimate that says no pose could be found, and why."""
+        return cls(
+            x=float("nan"),
+            y=float("nan"),
+            heading=float("nan"),
+            inliers=np.zeros(n_measurements, dtype=bool),
+            ok=False,
+            reason=reason,
+            diagnostics=dict(diagnostics or {}),
+        )
+
+    @property
+    def position(self) -> FloatArray:
+        """The position as an array [x, y] [m]."""
+        return np.array([self.x, self.y])
+
+    @property
+    def n_inliers(self) -> int:
+        """Number of measurements the estimate used."""
+        return int(np.count_nonzero(self.inliers))

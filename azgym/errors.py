@@ -1,0 +1,65 @@
+"""Exceptions raised by azgym.
+
+Every error a user can cause derives from :class:`AzgymError`, and the ones caused by a bad
+value also derive from :class:`ValueError`, so ``except ValueError`` keeps working. Messages
+name the offending field, the problem and, where there is one, the fix.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+
+class AzgymError(Exception):
+    """Base class of every exception raised by azgym."""
+
+
+class InvalidInputError(AzgymError, ValueError):
+    """An argument has the wrong shape, dtype, value or is not finite."""
+
+
+class UnknownNameError(AzgymError, KeyError):
+    """A name (localizer, scenario) is not registered."""
+
+    def __str__(self) -> str:  # KeyError would otherwise quote the whole message.
+        return str(self.args[0]) if self.args else ""
+
+
+class ScenarioError(AzgymError, ValueError):
+    """A scenario file is malformed."""
+
+
+class DependencyNotInstalled(AzgymError, ImportError):
+    """An optional dependency is missing; the message says which extra to install."""
+
+
+def unknown_name(kind: str, name: str, known: Iterable[str]) -> UnknownNameError:
+    """Build an :class:`UnknownNameError` that lists the valid names and suggests the closest.
+
+    Args:
+        kind: What was looked up, e.g. ``"localizer"``.
+        name: The name that was not found.
+        known: Every valid name.
+    """
+    known = sorted(known)
+    close = difflib.get_close_matches(name, known, n=1)
+    hint = f" Did you mean {close[0]!r}?" if close else ""
+    return UnknownNameError(
+        f"unknown {kind} {name!r}.{hint} Valid {kind}s: {', '.join(known) or '(none)'}."
+    )
+
+
+def require(module: str, extra: str) -> None:
+    """Raise :class:`DependencyNotInstalled` unless ``module`` can be imported.
+
+    Args:
+        module: The importable module name, e.g. ``"matplotlib"``.
+        extra: The azgym extra that installs it, e.g. ``"plot"``.
+    """
+    import importlib.util
+
+    if importlib.util.find_spec(module) is None:
+        raise DependencyNotInstalled(
+            f"{module} is not installed; run: pip install \"azgym[{extra}]\""
+        )

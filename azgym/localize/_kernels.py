@@ -1,0 +1,313 @@
+"""Compiled (numba) inner loops shared by the localizers.
+
+Everything here works on plain arrays of *usable* measurements — azimuths ``az`` (K,) in the camera
+frame, the horizontal positions ``bx, by`` (K,) of the beacons they were decoded as, and the beacon
+widths ``width`` (K,) — so the Python side (validation, id lookup) stays out of the hot loops.
+
+Angles between a predicted and a measured direction are computed as ``atan2(cross, dot)`` of the
+two direction vectors, which needs no wrapping: the residual ε_i of eq. 23/30 is the signed angle
+from the predicted world direction of beacon i to its measured world direction α_i + φ.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+HALF_PI = 0.5 * math.pi
+QUARTER_PI = 0.25 * math.pi
+TAN_PI_8 = math.tan(math.pi / 8.0)
+
+# Status codes of the refinement (kept as ints so the kernels stay simple).
+CONVERGED = 0
+MAX_ITER = 1
+SINGULAR = 2
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
+def fast_atan2(y: float, x: float) -> float:
+    """atan2 accurate to a few ulp (Cephes' rational approximation), cheaper than libm's.
+
+    The argument is reduced to [0, tan(π/8)] with at most one division; the remaining rational
+    P(z)/Q(z) is Cephes' ``atan.c`` minimax fit. Max error against numpy: 4.5e-16 rad.
+    """
+    ax = abs(x)
+    ay = abs(y)
+    mx = max(ax, ay)
+    mn = min(ax, ay)
+    big = mn > TAN_PI_8 * mx
+    num = mn - mx if big else mn
+    den = mn + mx if big else mx
+    if den == 0.0:
+        den = 1.0
+    t = num / den
+    z = t * t
+    p = (
+        (
+            ((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z
+             - 7.500855792314704667340e1) * z
+            - 1.228866684490136173410e2
+        ) * z
+        - 6.485021904942025371773e1
+    )
+    q = (
+        (
+            (((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z
+             + 4.328810604912902668951e2) * z
+            + 4.853903996359136964868e2
+        ) * z
+        + 1.945506571482613964425e2
+    )
+    r = t + t * z * p / q
+    if big:
+        r += QUARTER_PI
+    if ay > ax:
+        r = HALF_PI - r
+    if x < 0.0:
+        r = math.pi - r
+    return -r if y < 0.0 else r
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
+def small_angle(cross: float, dot: float) -> float:
+    """atan2(cross, dot) for a direction within a few degrees of ``dot``'s: one division.
+
+    For |u| = |cross/dot| <= 0.1 (5.7°) the Taylor series of atan to u¹⁷ is exact to 1e-18;
+    wider angles go through :func:`fast_atan2`.
+    """
+    if dot > 0.0 and abs(cross) <= 0.1 * dot:
+        u = cross / dot
+        z = u * u
+        return u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
+            1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0 + z / 17.0))))))))
+    return fast_atan2(cross, dot)
+
+
+@numba.njit(error_model="numpy", cache=True)
+def solve3(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> float:
+    """Solve the 3×3 system ``a @ out = b`` by Cramer's rule; returns det(a) (0 → not solved)."""
+    c00 = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
+    c01 = a[1, 2] * a[2, 0] - a[1, 0] * a[2, 2]
+    c02 = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
+    det = a[0, 0] * c00 + a[0, 1] * c01 + a[0, 2] * c02
+    if det == 0.0 or not math.isfinite(det):
+        return 0.0
+    c10 = a[0, 2] * a[2, 1] - a[0, 1] * a[2, 2]
+    c11 = a[0, 0] * a[2, 2] - a[0, 2] * a[2, 0]
+    c12 = a[0, 1] * a[2, 0] - a[0, 0] * a[2, 1]
+    c20 = a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1]
+    c21 = a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]
+    c22 = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+    out[0] = (c00 * b[0] + c10 * b[1] + c20 * b[2]) / det
+    out[1] = (c01 * b[0] + c11 * b[1] + c21 * b[2]) / det
+    out[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det
+    return det
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
+def circle_row(xi, yi, xj, yj, ci, si, cj, sj):
+    """The inscribed-angle circle of a beacon pair as a linear equation in (x, y, q = x² + y²).
+
+    From the law of cosines with the cross product (the derivation behind eq. 9-11): the camera C
+    sees P_i and P_j under θ_ij = α_i − α_j, so with b_k = P_k − C,
+    ``sin θ_ij (b_i · b_j) − cos θ_ij (b_j × b_i) = 0``. This is eq. 11 multiplied through by
+    sin θ_ij, which keeps it finite for every θ: at sin θ_ij = 0 it becomes the line through P_i
+    and P_j, exactly the limit case of eq. 18, so no threshold switch is needed.
+
+    Note: eq. 11 as printed has the opposite sign on its cot terms; that matches θ_ij = α_j − α_i,
+    not eq. 8's α_i − α_j. This form is checked to 1e-10 m on noise-free data by the tests.
+
+    Returns (a_x, a_y, a_q, a_0) with a_x x + a_y y + a_q q + a_0 = 0.
+    """
+    s = si * cj - ci * sj  # sin(α_i − α_j)
+    c = ci * cj + si * sj  # cos(α_i − α_j)
+    return (
+        -s * (xi + xj) - c * (yj - yi),
+        -s * (yi + yj) - c * (xi - xj),
+        s,
+        s * (xi * xj + yi * yj) - c * (xj * yi - xi * yj),
+    )
+
+
+@numba.njit(error_model="numpy", cache=True)
+def solve_triplet(bx, by, ca, sa, i, j, k, degeneracy_tol):
+    """Camera position from three azimuths (Sec. 2.5, eq. 7-18) and heading (eq. 19-20).
+
+    Solves the three pairwise circle equations for (x, y, q): where the cotangents of eq. 11 are
+    finite this has the same solution as eq. 14-17 (whose rows are differences of these circles),
+    and where one is not it contains eq. 18. Coordinates are taken relative to the triplet's
+    centroid and scaled by its size L, so the unknowns (x/L, y/L, q/L²) are of one order.
+
+    The triplet is rejected when degenerate: all three beacons on a line through C, or C on the
+    circle through them (|det| below ``degeneracy_tol`` times the rows' Hadamard bound).
+
+    The heading is the circular mean of β_m − α_m over the three beacons (eq. 20 uses one beacon;
+    the mean is the same on noise-free data and does not depend on the order of the triplet).
+
+    Returns (ok, x, y, h_x, h_y, quality) where (h_x, h_y) is a positive multiple of
+    (cos φ, sin φ) and quality = det² / Hadamard bound² in [0, 1] grades the geometry.
+    """
+    ox = (bx[i] + bx[j] + bx[k]) / 3.0
+    oy = (by[i] + by[j] + by[k]) / 3.0
+    xi, yi = bx[i] - ox, by[i] - oy
+    xj, yj = bx[j] - ox, by[j] - oy
+    xk, yk = bx[k] - ox, by[k] - oy
+    scale = max(abs(xi), abs(yi), abs(xj), abs(yj), abs(xk), abs(yk))
+    if scale == 0.0:
+        return False, 0.0, 0.0, 1.0, 0.0, 0.0
+    inv = 1.0 / scale
+    xi, yi, xj, yj, xk, yk = xi * inv, yi * inv, xj * inv, yj * inv, xk * inv, yk * inv
+    a0, a1, a2, a3 = circle_row(xi, yi, xj, yj, ca[i], sa[i], ca[j], sa[j])
+    b0, b1, b2, b3 = circle_row(xj, yj, xk, yk, ca[j], sa[j], ca[k], sa[k])
+    c0, c1, c2, c3 = circle_row(xk, yk, xi, yi, ca[k], sa[k], ca[i], sa[i])
+    m00 = b1 * c2 - b2 * c1
+    m01 = b2 * c0 - b0 * c2
+    m02 = b0 * c1 - b1 * c0
+    det = a0 * m00 + a1 * m01 + a2 * m02
+    hadamard_sq = ((a0 * a0 + a1 * a1 + a2 * a2) * (b0 * b0 + b1 * b1 + b2 * b2)
+                   * (c0 * c0 + c1 * c1 + c2 * c2))
+    quality = det * det / hadamard_sq
+    if not quality > degeneracy_tol * degeneracy_tol:
+        return False, 0.0, 0.0, 1.0, 0.0, 0.0
+    # Cramer's rule for (x, y) with right-hand side (−a3, −b3, −c3).
+    inv_det = scale / det
+    x = ox - (a3 * m00 + b3 * (a2 * c1 - a1 * c2) + c3 * (a1 * b2 - a2 * b1)) * inv_det
+    y = oy - (a3 * m01 + b3 * (a0 * c2 - a2 * c0) + c3 * (a2 * b0 - a0 * b2)) * inv_det
+    # Heading: the mean of the unit vectors of β_m − α_m, i.e. (P_m − C)/D_m rotated by −α_m.
+    dxi, dyi = bx[i] - x, by[i] - y
+    dxj, dyj = bx[j] - x, by[j] - y
+    dxk, dyk = bx[k] - x, by[k] - y
+    di = math.sqrt(dxi * dxi + dyi * dyi)
+    dj = math.sqrt(dxj * dxj + dyj * dyj)
+    dk = math.sqrt(dxk * dxk + dyk * dyk)
+    product = di * dj * dk
+    if not (product > 0.0 and math.isfinite(product)):
+        return False, 0.0, 0.0, 1.0, 0.0, 0.0  # the camera sits on a beacon
+    r = 1.0 / product
+    wi, wj, wk = dj * dk * r, di * dk * r, di * dj * r  # 1/D_i, 1/D_j, 1/D_k
+    hx = (dxi * ca[i] + dyi * sa[i]) * wi + (dxj * ca[j] + dyj * sa[j]) * wj \
+        + (dxk * ca[k] + dyk * sa[k]) * wk
+    hy = (dyi * ca[i] - dxi * sa[i]) * wi + (dyj * ca[j] - dxj * sa[j]) * wj \
+        + (dyk * ca[k] - dxk * sa[k]) * wk
+    if hx == 0.0 and hy == 0.0:
+        return False, 0.0, 0.0, 1.0, 0.0, 0.0
+    # (hx, hy) is returned unnormalised: every use of the heading is homogeneous in it.
+    return True, x, y, hx, hy, quality
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
+def residual(bx, by, ca, sa, m, x, y, ch, sh):
+    """ε_m of eq. 23/30 and the horizontal distance D_m (eq. 24) at pose (x, y, φ)."""
+    dx = bx[m] - x
+    dy = by[m] - y
+    mx = ca[m] * ch - sa[m] * sh  # cos(α_m + φ)
+    my = sa[m] * ch + ca[m] * sh  # sin(α_m + φ)
+    return fast_atan2(dx * my - dy * mx, dx * mx + dy * my), math.sqrt(dx * dx + dy * dy)
+
+
+@numba.njit(error_model="numpy", cache=True)
+def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix):
+    """Levenberg-Marquardt on the mean squared azimuth error (eq. 28-33).
+
+    Minimises Σ w_i ε_i(x, y, φ)² over the measurements with ``use[i]``; eliminating φ first gives
+    eq. 29-31's φ'(x, y), so the minimiser is the same as eq. 32-33, but the joint 3-parameter
+    problem has a cheap exact Jacobian: ∂ε/∂x = −(y_i − y)/D², ∂ε/∂y = (x_i − x)/D², ∂ε/∂φ = 1.
+
+    Writes (x, y, cos φ, sin φ, cost, iterations, status) into ``out`` and the final JᵀWJ into
+    ``info_matrix``.
+    """
+    n = bx.size
+    phi = math.atan2(sh, ch)
+    lam = 1e-3
+    jtj = np.zeros((3, 3))
+    jtr = np.zeros(3)
+    trial = np.zeros((3, 3))
+    step = np.zeros(3)
+    cost = 0.0
+    for m in range(n):
+        if use[m]:
+            e, _ = residual(bx, by, ca, sa, m, x, y, ch, sh)
+            cost += weight[m] * e * e
+    status = MAX_ITER
+    it = 0
+    while it < max_iter:
+        it += 1
+        jtj[:] = 0.0
+        jtr[:] = 0.0
+        for m in range(n):
+            if not use[m]:
+                continue
+            dx = bx[m] - x
+            dy = by[m] - y
+            d2 = dx * dx + dy * dy
+            if d2 == 0.0:
+                continue
+            e, _ = residual(bx, by, ca, sa, m, x, y, ch, sh)
+            w = weight[m]
+            j0 = -dy / d2
+            j1 = dx / d2
+            jtj[0, 0] += w * j0 * j0
+            jtj[0, 1] += w * j0 * j1
+            jtj[0, 2] += w * j0
+            jtj[1, 1] += w * j1 * j1
+            jtj[1, 2] += w * j1
+            jtj[2, 2] += w
+            jtr[0] += w * j0 * e
+            jtr[1] += w * j1 * e
+            jtr[2] += w * e
+        jtj[1, 0] = jtj[0, 1]
+        jtj[2, 0] = jtj[0, 2]
+        jtj[2, 1] = jtj[1, 2]
+        improved = False
+        while lam < 1e12:
+            trial[:, :] = jtj
+            for r in range(3):
+                trial[r, r] += lam * jtj[r, r] + 1e-300
+            if solve3(trial, -jtr, step) == 0.0:
+                lam *= 10.0
+                continue
+            nx = x + step[0]
+            ny = y + step[1]
+            nphi = phi + step[2]
+            nch = math.cos(nphi)
+            nsh = math.sin(nphi)
+            ncost = 0.0
+            for m in range(n):
+                if use[m]:
+                    e, _ = residual(bx, by, ca, sa, m, nx, ny, nch, nsh)
+                    ncost += weight[m] * e * e
+            if ncost <= cost:
+                small = abs(step[0]) + abs(step[1]) <= 1e-12 * (1.0 + abs(x) + abs(y))
+                small = small and abs(step[2]) <= 1e-13
+                flat = cost - ncost <= 1e-15 * cost
+                x, y, phi, ch, sh, cost = nx, ny, nphi, nch, nsh, ncost
+                lam = max(lam * 0.1, 1e-9)
+                improved = True
+                if small or flat:
+                    status = CONVERGED
+                break
+            lam *= 10.0
+        if not improved:  # no step lowers the cost any more: a (numerical) minimum
+            status = CONVERGED
+            break
+        if status == CONVERGED:
+            break
+    info_matrix[:, :] = jtj
+    diag = jtj[0, 0] * jtj[1, 1] * jtj[2, 2]
+    if not diag > 0.0 or solve3(jtj, jtr, step) == 0.0:
+        status = SINGULAR
+    else:
+        c00 = jtj[1, 1] * jtj[2, 2] - jtj[1, 2] * jtj[2, 1]
+        c01 = jtj[1, 2] * jtj[2, 0] - jtj[1, 0] * jtj[2, 2]
+        c02 = jtj[1, 0] * jtj[2, 1] - jtj[1, 1] * jtj[2, 0]
+        if abs(jtj[0, 0] * c00 + jtj[0, 1] * c01 + jtj[0, 2] * c02) <= 1e-12 * diag:
+            status = SINGULAR
+    out[0] = x
+    out[1] = y
+    out[2] = ch
+    out[3] = sh
+    out[4] = cost
+    out[5] = it
+    out[6] = status

@@ -1,0 +1,154 @@
+"""Least squares on every measurement: the non-robust baseline, and the solver behind `loo`."""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from azgym.core import Estimate
+from azgym.localize import _kernels as K
+from azgym.localize.base import Localizer, Problem, check_range
+from azgym.localize.refinement import finish
+from azgym.sensing.error_model import ErrorModel
+
+
+@numba.njit(error_model="numpy", cache=True)
+def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
+    """Closed-form pose from all measurements in ``use``: the triplet method's circles, pooled.
+
+    Every pair of measured beacons gives the linear circle equation of ``K.circle_row`` in
+    (x, y, q = x² + y²); all pairs are solved together by linear least squares (q treated as a
+    third unknown). With three beacons this is the triplet solution of Sec. 2.5. The heading is the
+    circular mean of β_i − α_i. Writes (x, y, cos φ, sin φ) and returns False when singular.
+    """
+    n = bx.size
+    ox = 0.0
+    oy = 0.0
+    count = 0
+    for m in range(n):
+        if use[m]:
+            ox += bx[m]
+            oy += by[m]
+            count += 1
+    if count < 3:
+        return False
+    ox /= count
+    oy /= count
+    scale = 0.0
+    for m in range(n):
+        if use[m]:
+            scale = max(scale, abs(bx[m] - ox), abs(by[m] - oy))
+    if scale == 0.0:
+        return False
+    ata = np.zeros((3, 3))
+    atb = np.zeros(3)
+    for i in range(n):
+        if not use[i]:
+            continue
+        xi = (bx[i] - ox) / scale
+        yi = (by[i] - oy) / scale
+        for j in range(i + 1, n):
+            if not use[j] or beacon_index[j] == beacon_index[i]:
+                continue
+            xj = (bx[j] - ox) / scale
+            yj = (by[j] - oy) / scale
+            r0, r1, r2, r3 = K.circle_row(xi, yi, xj, yj, ca[i], sa[i], ca[j], sa[j])
+            row = (r0, r1, r2)
+            for a in range(3):
+                atb[a] -= row[a] * r3
+                for b in range(3):
+                    ata[a, b] += row[a] * row[b]
+    sol = np.empty(3)
+    diag = ata[0, 0] * ata[1, 1] * ata[2, 2]
+    det = K.solve3(ata, atb, sol)
+    if not abs(det) > 1e-12 * diag:
+        return False
+    x = sol[0] * scale + ox
+    y = sol[1] * scale + oy
+    hx = 0.0
+    hy = 0.0
+    for m in range(n):
+        if not use[m]:
+            continue
+        dx = bx[m] - x
+        dy = by[m] - y
+        d = math.sqrt(dx * dx + dy * dy)
+        if d > 0.0:
+            hx += (dx * ca[m] + dy * sa[m]) / d
+            hy += (dy * ca[m] - dx * sa[m]) / d
+    hn = math.sqrt(hx * hx + hy * hy)
+    if not (hn > 0.0 and math.isfinite(x) and math.isfinite(y)):
+        return False
+    out[0] = x
+    out[1] = y
+    out[2] = hx / hn
+    out[3] = hy / hn
+    return True
+
+
+@numba.njit(error_model="numpy", cache=True)
+def fit_subset(bx, by, ca, sa, beacon_index, use, max_iter, out):
+    """Algebraic start plus unweighted refinement on ``use``; returns the mean squared residual.
+
+    Writes (x, y, cos φ, sin φ) into ``out``; returns inf when the subset is singular.
+    """
+    if not algebraic_start(bx, by, ca, sa, beacon_index, use, out):
+        return np.inf
+    result = np.empty(7)
+    info = np.empty((3, 3))
+    weight = np.ones(bx.size)
+    K.refine(bx, by, ca, sa, weight, use, out[0], out[1], out[2], out[3], max_iter, result, info)
+    if result[6] == K.SINGULAR:
+        return np.inf
+    out[:4] = result[:4]
+    return result[4] / np.count_nonzero(use)
+
+
+class LeastSquares(Localizer):
+    """All-measurement nonlinear least squares from an algebraic start (no outlier rejection).
+
+    The start pools every pair's circle equation (:func:`algebraic_start`); Levenberg-Marquardt
+    then minimises eq. 31 over all usable measurements. Outliers pull it away: it is the baseline
+    robust localizers are measured against.
+
+    Args:
+        weighted: Weight by the error model's variances instead of equally.
+        delta_alpha_d: Δα_d of the error model [rad] (weights and covariance).
+        coverage: Whether the error model includes the coverage term (eq. 2).
+        max_iter: Iteration limit of Levenberg-Marquardt.
+    """
+
+    name = "lsq"
+
+    def __init__(
+        self,
+        *,
+        weighted: bool = False,
+        delta_alpha_d: float = math.radians(0.4),
+        coverage: bool = True,
+        max_iter: int = 50,
+    ) -> None:
+        self.weighted = weighted
+        self.delta_alpha_d = delta_alpha_d
+        self.coverage = coverage
+        self.max_iter = max_iter
+
+    def _check_params(self) -> None:
+        name = type(self).__name__
+        check_range(name, "delta_alpha_d", self.delta_alpha_d, low=0.0, high=math.pi / 2,
+                    high_open=True)
+        check_range(name, "max_iter", self.max_iter, low=1, integer=True)
+
+    def _localize(self, problem: Problem) -> Estimate:
+        use = np.ones(problem.size, dtype=np.bool_)
+        start = np.empty(4)
+        if not algebraic_start(problem.bx, problem.by, problem.cos_az, problem.sin_az,
+                               problem.beacon_index, use, start):
+            return Estimate.failure(
+                "the measured beacons do not determine the pose (collinear or concyclic)",
+                problem.n_measurements,
+            )
+        model = ErrorModel(delta_alpha_d=self.delta_alpha_d, coverage=bool(self.coverage))
+        return finish(problem, use, start, bool(self.weighted), self.max_iter, model)

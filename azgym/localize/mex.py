@@ -1,0 +1,209 @@
+"""The method of exhaustion (MEX): the brute-force minimum of eq. 34 on a grid (Sec. 3.1)."""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from azgym.core import Estimate, FloatArray
+from azgym.errors import InvalidInputError
+from azgym.localize import _kernels as K
+from azgym.localize.base import Localizer, Problem, check_range
+
+_VECTOR_MATH = {"reassoc", "nsz", "arcp", "contract"}
+
+
+@numba.njit(fastmath=_VECTOR_MATH, error_model="numpy", cache=True)
+def _row_costs(bx, by, ca, sa, y, x0, step, nx, ux, uy, mean, cost):
+    """E_ref (eq. 34) at the grid points (x0 + i·step, y), i < nx, written into ``cost``.
+
+    For a candidate position, the world direction of beacon b rotated back by α_b, v_b, points
+    along β_b − α_b = φ + ε_b. The heading φ' of eq. 29 is the mean of these angles; they are
+    unwrapped around their circular mean u (so a point far from the truth, whose angles spread
+    round the circle, still gets a well-defined mean), and E_ref is their variance.
+    ``ux, uy, mean`` are scratch rows of length nx.
+    """
+    n = bx.size
+    for i in range(nx):
+        ux[i] = 0.0
+        uy[i] = 0.0
+        mean[i] = 0.0
+        cost[i] = 0.0
+    for b in range(n):
+        dy = by[b] - y
+        for i in range(nx):
+            dx = bx[b] - (x0 + i * step)
+            vx = dx * ca[b] + dy * sa[b]
+            vy = dy * ca[b] - dx * sa[b]
+            inv = 1.0 / math.sqrt(vx * vx + vy * vy)
+            ux[i] += vx * inv
+            uy[i] += vy * inv
+    for b in range(n):
+        dy = by[b] - y
+        for i in range(nx):
+            dx = bx[b] - (x0 + i * step)
+            vx = dx * ca[b] + dy * sa[b]
+            vy = dy * ca[b] - dx * sa[b]
+            d = K.fast_atan2(ux[i] * vy - uy[i] * vx, ux[i] * vx + uy[i] * vy)
+            mean[i] += d
+            cost[i] += d * d
+    inv_n = 1.0 / n
+    for i in range(nx):
+        m = mean[i] * inv_n
+        cost[i] = cost[i] * inv_n - m * m
+
+
+@numba.njit(error_model="numpy", cache=True)
+def grid_search(bx, by, ca, sa, x0, y0, step, nx, ny, costs_out):
+    """Exhaustive minimum of eq. 34 on the nx × ny grid from (x0, y0); row by row, O(nx) memory.
+
+    If ``costs_out`` has shape (ny, nx) every cost is stored there too. Returns (i, j, E_min).
+    """
+    ux = np.empty(nx)
+    uy = np.empty(nx)
+    mean = np.empty(nx)
+    cost = np.empty(nx)
+    best = np.inf
+    best_i = -1
+    best_j = -1
+    keep = costs_out.shape[0] == ny and costs_out.shape[1] == nx
+    for j in range(ny):
+        _row_costs(bx, by, ca, sa, y0 + j * step, x0, step, nx, ux, uy, mean, cost)
+        for i in range(nx):
+            if cost[i] < best:
+                best = cost[i]
+                best_i = i
+                best_j = j
+        if keep:
+            costs_out[j, :] = cost
+    return best_i, best_j, best
+
+
+def _local_minima(costs: FloatArray, count: int) -> list[tuple[int, int]]:
+    """(row, column) of the ``count`` lowest local minima (8-neighbourhood) of a cost grid."""
+    padded = np.pad(costs, 1, constant_values=np.inf)
+    centre = padded[1:-1, 1:-1]
+    is_min = np.ones(costs.shape, dtype=bool)
+    rows, cols = costs.shape
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            if dr or dc:
+                is_min &= centre <= padded[1 + dr:1 + dr + rows, 1 + dc:1 + dc + cols]
+    candidates = np.argwhere(is_min)
+    order = np.argsort(costs[is_min], kind="stable")[:count]
+    return [(int(r), int(c)) for r, c in candidates[order]]
+
+
+class Mex(Localizer):
+    """Method of exhaustion: the grid point with the smallest mean squared azimuth error (eq. 34).
+
+    Every grid point (x, y) is scored with E_ref = mean ε_i² over all measurements, with the
+    heading φ' of eq. 29; the answer is the best grid point and its φ'. There is no outlier
+    rejection: it is the paper's reference method, guaranteed to find the optimum on the grid.
+
+    ``coarse_step`` enables a coarse-to-fine search for long studies: the cost on a coarse grid,
+    then the fine grid (same lattice as the exhaustive one) within one coarse step of the
+    ``n_candidates`` lowest coarse local minima. The exhaustive grid stays the default.
+
+    Args:
+        step: Grid spacing [m] (the paper: 1 cm).
+        bounds: (x_min, y_min, x_max, y_max) [m]; None uses the beacons' bounding box.
+        coarse_step: Spacing of the coarse pass [m], a multiple of ``step``; None: exhaustive.
+        n_candidates: Coarse local minima refined on the fine grid.
+    """
+
+    name = "mex"
+
+    def __init__(
+        self,
+        *,
+        step: float = 0.01,
+        bounds: tuple[float, float, float, float] | None = None,
+        coarse_step: float | None = None,
+        n_candidates: int = 8,
+    ) -> None:
+        self.step = step
+        self.bounds = bounds
+        self.coarse_step = coarse_step
+        self.n_candidates = n_candidates
+
+    def _check_params(self) -> None:
+        name = type(self).__name__
+        check_range(name, "step", self.step, low=0.0, low_open=True)
+        check_range(name, "n_candidates", self.n_candidates, low=1, integer=True)
+        if self.bounds is not None:
+            if len(self.bounds) != 4:
+                raise InvalidInputError(
+                    f"{name}.bounds must be (x_min, y_min, x_max, y_max), got {self.bounds!r}"
+                )
+            for value in self.bounds:
+                check_range(name, "bounds", value)
+            if self.bounds[2] < self.bounds[0] or self.bounds[3] < self.bounds[1]:
+                raise InvalidInputError(f"{name}.bounds has max < min: {self.bounds!r}")
+        if self.coarse_step is not None:
+            check_range(name, "coarse_step", self.coarse_step, low=self.step)
+            ratio = self.coarse_step / self.step
+            if abs(ratio - round(ratio)) > 1e-9:
+                raise InvalidInputError(
+                    f"{name}.coarse_step must be a multiple of step={self.step}, "
+                    f"got {self.coarse_step}"
+                )
+
+    def grid(self, problem: Problem) -> tuple[float, float, int, int]:
+        """(x0, y0, nx, ny) of the fine grid for this frame."""
+        if self.bounds is not None:
+            x_min, y_min, x_max, y_max = (float(v) for v in self.bounds)
+        else:
+            x_min, x_max = float(problem.bx.min()), float(problem.bx.max())
+            y_min, y_max = float(problem.by.min()), float(problem.by.max())
+        nx = int(math.floor((x_max - x_min) / self.step + 1e-9)) + 1
+        ny = int(math.floor((y_max - y_min) / self.step + 1e-9)) + 1
+        return x_min, y_min, nx, ny
+
+    def _localize(self, problem: Problem) -> Estimate:
+        args = (problem.bx, problem.by, problem.cos_az, problem.sin_az)
+        x0, y0, nx, ny = self.grid(problem)
+        step = float(self.step)
+        no_store = np.empty((0, 0))
+        if self.coarse_step is None:
+            i, j, cost = grid_search(*args, x0, y0, step, nx, ny, no_store)
+        else:
+            i, j, cost = self._coarse_to_fine(args, x0, y0, nx, ny, no_store)
+        if i < 0:
+            return Estimate.failure("no grid point has a finite cost", problem.n_measurements)
+        x = x0 + i * step
+        y = y0 + j * step
+        dx = problem.bx - x
+        dy = problem.by - y
+        dist = np.hypot(dx, dy)
+        seen = dist > 0.0  # a grid point may coincide with a beacon, whose direction is unknown
+        # φ' of eq. 29 at the winner: the circular mean of β_b − α_b.
+        hx = np.sum((dx * problem.cos_az + dy * problem.sin_az)[seen] / dist[seen])
+        hy = np.sum((dy * problem.cos_az - dx * problem.sin_az)[seen] / dist[seen])
+        heading = math.atan2(hy, hx)
+        return Estimate(
+            x=float(x), y=float(y), heading=heading,
+            inliers=problem.expand(np.ones(problem.size, dtype=bool)),
+            diagnostics={"cost": float(cost), "grid_shape": (ny, nx)},
+        )
+
+    def _coarse_to_fine(self, args, x0, y0, nx, ny, no_store):
+        ratio = int(round(self.coarse_step / self.step))
+        cnx = (nx - 1) // ratio + 1
+        cny = (ny - 1) // ratio + 1
+        coarse = np.empty((cny, cnx))
+        grid_search(*args, x0, y0, self.coarse_step, cnx, cny, coarse)
+        best = (-1, -1, math.inf)
+        for cj, ci in _local_minima(coarse, self.n_candidates):
+            lo_i = max(ci * ratio - ratio, 0)
+            lo_j = max(cj * ratio - ratio, 0)
+            hi_i = min(ci * ratio + ratio, nx - 1)
+            hi_j = min(cj * ratio + ratio, ny - 1)
+            i, j, cost = grid_search(*args, x0 + lo_i * self.step, y0 + lo_j * self.step,
+                                     float(self.step), hi_i - lo_i + 1, hi_j - lo_j + 1,
+                                     no_store)
+            if i >= 0 and cost < best[2]:
+                best = (lo_i + i, lo_j + j, cost)
+        return best

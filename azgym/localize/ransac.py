@@ -1,0 +1,272 @@
+"""The paper's RANSAC localizer (Rátosi & Simon 2021, Sec. 2.3-2.7)."""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from itertools import combinations
+
+import numba
+import numpy as np
+
+from azgym.core import Estimate, IntArray
+from azgym.localize import _kernels as K
+from azgym.localize.base import Localizer, Problem, check_range
+from azgym.localize.refinement import finish
+from azgym.sensing.error_model import ErrorModel
+
+
+def n_trials(n_measurements: int, n_good: int, pr_hit: float, p_star: float) -> int:
+    """Number of random triplets N_Q that hits a reliable one with probability Pr_hit (eq. 4-6).
+
+    Args:
+        n_measurements: N_B, the number of measurements.
+        n_good: N_GOOD, a lower bound on the number of inliers (>= 3).
+        pr_hit: Pr_hit, the wanted probability of at least one reliable triplet, in (0, 1).
+        p_star: P*, the probability that an all-inlier triplet gives a good estimate, in (0, 1].
+    """
+    p_reliable = math.comb(n_good, 3) / math.comb(n_measurements, 3) * p_star  # eq. 4
+    if p_reliable >= 1.0:
+        return 1
+    return max(1, math.ceil(math.log1p(-pr_hit) / math.log1p(-p_reliable)))  # eq. 6
+
+
+@lru_cache(maxsize=64)
+def _all_triplets(n: int) -> IntArray:
+    triplets = np.array(list(combinations(range(n), 3)), dtype=np.int64).reshape(-1, 3)
+    triplets.setflags(write=False)
+    return triplets
+
+
+def _random_triplets(n: int, count: int, rng: np.random.Generator) -> IntArray:
+    """``count`` triplets of distinct indices drawn uniformly (with replacement between trials)."""
+    keys = rng.random((count, n))
+    return np.argpartition(keys, 3, axis=1)[:, :3].astype(np.int64)
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
+def _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage):
+    """Inlier test |ε_m| <= Δα_m = 2(Δα_d + Δα_c,m) (eq. 23-26); returns (inlier, ε_m).
+
+    Division-free where Δα_m < π/2 (the usual case): with tan Δα_c = W / 2D, the addition
+    formulas give tan(Δα_d + Δα_c) = n / d with n = 2D tan Δα_d + W, d = 2D − W tan Δα_d, and
+    tan Δα = 2nd / (d² − n²); then |ε| <= Δα ⟺ dot > 0 and |cross| (d² − n²) <= 2nd · dot.
+    ε itself is only computed for inliers (for eq. 27).
+    """
+    dx = bx[m] - x
+    dy = by[m] - y
+    mx = ca[m] * ch - sa[m] * sh  # measured world direction cos(α_m + φ)
+    my = sa[m] * ch + ca[m] * sh  # sin(α_m + φ)
+    cross = dx * my - dy * mx
+    dot = dx * mx + dy * my
+    w = width[m] if coverage else 0.0
+    two_d = 2.0 * math.sqrt(dx * dx + dy * dy)
+    n = two_d * tan_d + w
+    d = two_d - w * tan_d
+    if d > n:  # Δα_d + Δα_c < π/4, so Δα < π/2
+        if dot > 0.0 and abs(cross) * (d - n) * (d + n) <= 2.0 * n * d * dot:
+            return True, K.small_angle(cross, dot)
+        return False, 0.0
+    # Wide tolerance (>= π/2, beacon closer than its own width): compare the angles themselves.
+    eps = K.fast_atan2(cross, dot)
+    return abs(eps) <= 2.0 * (delta_d + K.fast_atan2(0.5 * w, 0.5 * two_d)), eps
+
+
+# Reassociation lets LLVM vectorise the loop over measurements (4 at a time); the sums then depend
+# on the compiled code, which is fixed for a machine, so results stay bit-for-bit repeatable.
+_VECTOR_MATH = {"reassoc", "nsz", "arcp", "contract"}
+
+
+@numba.njit(fastmath=_VECTOR_MATH, error_model="numpy", cache=True)
+def _score_fast(bx, by, ca, sa, width, x, y, ch, sh, tan_d, coverage):
+    """Supporters and Σε² of one candidate pose, vectorised (the fast path of _is_inlier).
+
+    Returns (NS, Σε², n_special): measurements with a tolerance of π/2 or more, or an inlier
+    more than 5.7° off, are "special" and make the caller rescore the pose exactly.
+    """
+    ns = 0
+    sq = 0.0
+    special = 0
+    for m in range(bx.size):
+        dx = bx[m] - x
+        dy = by[m] - y
+        mx = ca[m] * ch - sa[m] * sh
+        my = sa[m] * ch + ca[m] * sh
+        cross = dx * my - dy * mx
+        dot = dx * mx + dy * my
+        w = width[m] if coverage else 0.0
+        two_d = 2.0 * math.sqrt(dx * dx + dy * dy)
+        n = two_d * tan_d + w
+        d = two_d - w * tan_d
+        inlier = (dot > 0.0) & (abs(cross) * (d - n) * (d + n) <= 2.0 * n * d * dot) & (d > n)
+        u = cross / dot
+        z = u * u
+        eps = u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
+            1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0 + z / 17.0))))))))
+        ns += inlier
+        sq += eps * eps if inlier else 0.0
+        special += (d <= n) | (inlier & (z > 0.01))
+    return ns, sq, special
+
+
+@numba.njit(error_model="numpy", cache=True)
+def _score_exact(bx, by, ca, sa, width, x, y, ch, sh, tan_d, delta_d, coverage):
+    """Supporters and Σε² of one candidate pose, measurement by measurement (eq. 26-27)."""
+    ns = 0
+    sq = 0.0
+    for m in range(bx.size):
+        inlier, eps = _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage)
+        if inlier:
+            ns += 1
+            sq += eps * eps
+    return ns, sq
+
+
+@numba.njit(error_model="numpy", cache=True)
+def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, degeneracy_tol,
+            best_pose, best_mask):
+    """Steps 1-5: score every triplet by its supporters (eq. 26) and their mean ε² (eq. 27).
+
+    Returns (NS of the winner, E of the winner, number of non-degenerate triplets).
+    """
+    n = bx.size
+    tan_d = math.tan(delta_d)
+    best_ns = -1
+    best_e = np.inf
+    n_valid = 0
+    for t in range(triplets.shape[0]):
+        i = triplets[t, 0]
+        j = triplets[t, 1]
+        k = triplets[t, 2]
+        if beacon_index[i] == beacon_index[j] or beacon_index[j] == beacon_index[k] or \
+                beacon_index[i] == beacon_index[k]:
+            continue  # two detections of one beacon (a ghost) say nothing about position
+        ok, x, y, ch, sh, _ = K.solve_triplet(bx, by, ca, sa, i, j, k, degeneracy_tol)
+        if not ok:
+            continue
+        n_valid += 1
+        ns, sq, special = _score_fast(bx, by, ca, sa, width, x, y, ch, sh, tan_d, coverage)
+        if special > 0:
+            ns, sq = _score_exact(bx, by, ca, sa, width, x, y, ch, sh, tan_d, delta_d, coverage)
+        if ns < best_ns or ns == 0:
+            continue
+        e = sq / ns
+        if ns > best_ns or e < best_e:
+            best_ns = ns
+            best_e = e
+            best_pose[0] = x
+            best_pose[1] = y
+            best_pose[2] = ch
+            best_pose[3] = sh
+    if best_ns > 0:
+        for m in range(n):
+            best_mask[m], _ = _is_inlier(bx, by, ca, sa, width, m, best_pose[0], best_pose[1],
+                                         best_pose[2], best_pose[3], tan_d, delta_d, coverage)
+        norm = math.hypot(best_pose[2], best_pose[3])
+        best_pose[2] /= norm
+        best_pose[3] /= norm
+    return best_ns, best_e, n_valid
+
+
+class Ransac(Localizer):
+    """RANSAC over beacon triplets with a position-dependent tolerance (Sec. 2.3-2.7).
+
+    Steps 1-4 solve each triplet algebraically (eq. 7-20), count the measurements within the
+    tolerance Δα_i = 2 (Δα_d + Δα_c,i) at that pose (eq. 21-26) and their mean squared error
+    (eq. 27). Step 5 keeps the triplet with the most supporters, ties broken by the smallest mean
+    error; step 6 refines the pose on those supporters by Levenberg-Marquardt (eq. 28-33).
+
+    All C(K, 3) triplets are tried when there are at most ``max_exhaustive`` of them; otherwise N_Q
+    random triplets from eq. 6, with N_GOOD = ceil(min_inlier_fraction · K).
+
+    Args:
+        delta_alpha_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1).
+        coverage: Whether the tolerance includes the coverage term Δα_c,i (eq. 2).
+        pr_hit: Pr_hit of eq. 5-6.
+        p_star: P* of eq. 4-6.
+        min_inlier_fraction: Lower bound on the share of inliers, giving N_GOOD for eq. 6.
+        max_exhaustive: Use every triplet when C(K, 3) is at most this.
+        weighted: Weight the refinement by each measurement's error variance from the error model
+            (Δα_d² + Δα_c,i²)/3 (beyond the paper, which weights all equally).
+        degeneracy_tol: Triplets whose normalised determinant is below this are skipped
+            (collinear with the camera, or the camera on their circle).
+        max_iter: Iteration limit of the refinement.
+        random_state: Seed or Generator for random triplets (only used when sampling).
+    """
+
+    name = "ransac"
+
+    def __init__(
+        self,
+        *,
+        delta_alpha_d: float = math.radians(0.4),
+        coverage: bool = True,
+        pr_hit: float = 0.999,
+        p_star: float = 0.9,
+        min_inlier_fraction: float = 0.5,
+        max_exhaustive: int = 500,
+        weighted: bool = False,
+        degeneracy_tol: float = 1e-9,
+        max_iter: int = 50,
+        random_state: int | np.random.Generator | None = 0,
+    ) -> None:
+        self.delta_alpha_d = delta_alpha_d
+        self.coverage = coverage
+        self.pr_hit = pr_hit
+        self.p_star = p_star
+        self.min_inlier_fraction = min_inlier_fraction
+        self.max_exhaustive = max_exhaustive
+        self.weighted = weighted
+        self.degeneracy_tol = degeneracy_tol
+        self.max_iter = max_iter
+        self.random_state = random_state
+
+    def _check_params(self) -> None:
+        name = type(self).__name__
+        check_range(name, "delta_alpha_d", self.delta_alpha_d, low=0.0, high=math.pi / 2,
+                    high_open=True)
+        check_range(name, "pr_hit", self.pr_hit, low=0.0, high=1.0, low_open=True, high_open=True)
+        check_range(name, "p_star", self.p_star, low=0.0, high=1.0, low_open=True)
+        check_range(name, "min_inlier_fraction", self.min_inlier_fraction, low=0.0, high=1.0,
+                    low_open=True)
+        check_range(name, "max_exhaustive", self.max_exhaustive, low=1, integer=True)
+        check_range(name, "degeneracy_tol", self.degeneracy_tol, low=0.0, high=1.0)
+        check_range(name, "max_iter", self.max_iter, low=1, integer=True)
+
+    def error_model(self) -> ErrorModel:
+        """The error model whose bounds set the tolerance (eq. 25)."""
+        return ErrorModel(delta_alpha_d=self.delta_alpha_d, coverage=bool(self.coverage))
+
+    def triplets(self, n: int) -> IntArray:
+        """The triplets (rows of measurement indices) tried for ``n`` usable measurements."""
+        if math.comb(n, 3) <= self.max_exhaustive:
+            return _all_triplets(n)
+        n_good = max(3, math.ceil(self.min_inlier_fraction * n))
+        count = n_trials(n, n_good, self.pr_hit, self.p_star)
+        if count >= math.comb(n, 3):
+            return _all_triplets(n)
+        rng = self.random_state
+        if not isinstance(rng, np.random.Generator):
+            rng = np.random.default_rng(rng)
+        return _random_triplets(n, count, rng)
+
+    def _localize(self, problem: Problem) -> Estimate:
+        triplets = self.triplets(problem.size)
+        pose = np.empty(4)
+        mask = np.zeros(problem.size, dtype=np.bool_)
+        n_support, mean_sq, n_valid = _search(
+            problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width,
+            problem.beacon_index, triplets, float(self.delta_alpha_d), bool(self.coverage),
+            float(self.degeneracy_tol), pose, mask,
+        )
+        diagnostics = {"n_triplets": int(triplets.shape[0]), "n_valid_triplets": int(n_valid)}
+        if n_support < 3:
+            return Estimate.failure(
+                "no non-degenerate triplet with at least 3 supporters", problem.n_measurements,
+                diagnostics,
+            )
+        diagnostics["triplet_mean_sq_error"] = float(mean_sq)
+        return finish(
+            problem, mask, pose, bool(self.weighted), self.max_iter, self.error_model(),
+            diagnostics,
+        )

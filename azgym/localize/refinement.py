@@ -1,0 +1,113 @@
+"""Step 6 shared by the localizers: refine a start pose on chosen measurements, with a covariance.
+
+The covariance is the error model's: with Jacobian J of the residuals, weights W and the model's
+variances Σ (eq. 3: two uniform errors, variance Δ²/3 each), cov = (JᵀWJ)⁻¹ JᵀWΣWJ (JᵀWJ)⁻¹,
+which is (JᵀΣ⁻¹J)⁻¹ for the optimally weighted estimator.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numba
+import numpy as np
+
+from azgym.core import BoolArray, Estimate, FloatArray
+from azgym.localize import _kernels as K
+from azgym.localize.base import Problem
+from azgym.sensing.error_model import ErrorModel
+
+
+@numba.njit(error_model="numpy", cache=True)
+def _model_variance(width, dist, delta_d, coverage):
+    c = K.fast_atan2(0.5 * width, dist) if coverage else 0.0
+    return (delta_d * delta_d + c * c) / 3.0
+
+
+@numba.njit(error_model="numpy", cache=True)
+def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, coverage, start,
+                           max_iter, out, cov):
+    """Refine ``start`` = (x, y, cos φ, sin φ) on ``use``; fill ``out`` (as K.refine) and ``cov``."""
+    n = bx.size
+    var = np.empty(n)
+    weight = np.ones(n)
+    for m in range(n):
+        dist = math.hypot(bx[m] - start[0], by[m] - start[1])
+        var[m] = _model_variance(width[m], dist, delta_d, coverage)
+        if weighted:
+            weight[m] = 1.0 / max(var[m], 1e-300)
+    info = np.zeros((3, 3))
+    K.refine(bx, by, ca, sa, weight, use, start[0], start[1], start[2], start[3], max_iter, out,
+             info)
+    x = out[0]
+    y = out[1]
+    meat = np.zeros((3, 3))
+    for m in range(n):
+        if not use[m]:
+            continue
+        dx = bx[m] - x
+        dy = by[m] - y
+        d2 = dx * dx + dy * dy
+        if d2 == 0.0:
+            continue
+        j = (-dy / d2, dx / d2, 1.0)
+        w2v = weight[m] * weight[m] * var[m]
+        for r in range(3):
+            for c in range(3):
+                meat[r, c] += w2v * j[r] * j[c]
+    inverse = np.empty((3, 3))
+    unit = np.zeros(3)
+    column = np.empty(3)
+    for c in range(3):
+        unit[:] = 0.0
+        unit[c] = 1.0
+        if K.solve3(info, unit, column) == 0.0:
+            cov[:, :] = np.nan
+            return
+        inverse[:, c] = column
+    cov[:, :] = inverse @ meat @ inverse
+
+
+def finish(
+    problem: Problem,
+    use: BoolArray,
+    start: FloatArray,
+    weighted: bool,
+    max_iter: int,
+    error_model: ErrorModel,
+    diagnostics: Mapping[str, Any] | None = None,
+) -> Estimate:
+    """Refine the start pose on the measurements in ``use`` and package the :class:`Estimate`.
+
+    Args:
+        problem: The frame's usable measurements.
+        use: Which of them the refinement uses (they become the estimate's inliers).
+        start: Start pose (x, y, cos φ, sin φ).
+        weighted: Weight by inverse error-model variance instead of equally (eq. 31).
+        max_iter: Iteration limit of Levenberg-Marquardt.
+        error_model: Model of the azimuth errors, for weights and covariance.
+        diagnostics: Extra entries for ``Estimate.diagnostics``.
+    """
+    out = np.empty(7)
+    cov = np.empty((3, 3))
+    refine_with_covariance(
+        problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width, use, weighted,
+        error_model.delta_alpha_d, error_model.coverage, start, max_iter, out, cov,
+    )
+    info = dict(diagnostics or {})
+    info.update(n_iterations=int(out[5]), cost=float(out[4]))
+    if int(out[6]) == K.SINGULAR:
+        return Estimate.failure(
+            "the measurements used do not determine the pose (singular geometry)",
+            problem.n_measurements, info,
+        )
+    return Estimate(
+        x=float(out[0]),
+        y=float(out[1]),
+        heading=math.atan2(out[3], out[2]),
+        inliers=problem.expand(use),
+        covariance=cov,
+        diagnostics=info,
+    )

@@ -1,0 +1,77 @@
+"""The algebraic three-beacon solution of Sec. 2.5 as a localizer of its own."""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from azgym.core import Estimate
+from azgym.localize import _kernels as K
+from azgym.localize.base import Localizer, Problem, check_range
+
+
+@numba.njit(error_model="numpy", cache=True)
+def _best_triplet(bx, by, ca, sa, beacon_index, degeneracy_tol, pose, chosen):
+    """Solve every triplet of distinct beacons; keep the best-conditioned one."""
+    n = bx.size
+    best = -1.0
+    for i in range(n):
+        for j in range(i + 1, n):
+            for k in range(j + 1, n):
+                if beacon_index[i] == beacon_index[j] or beacon_index[j] == beacon_index[k] \
+                        or beacon_index[i] == beacon_index[k]:
+                    continue
+                ok, x, y, hx, hy, quality = K.solve_triplet(bx, by, ca, sa, i, j, k,
+                                                            degeneracy_tol)
+                if ok and quality > best:
+                    best = quality
+                    norm = math.hypot(hx, hy)
+                    pose[0] = x
+                    pose[1] = y
+                    pose[2] = hx / norm
+                    pose[3] = hy / norm
+                    chosen[0] = i
+                    chosen[1] = j
+                    chosen[2] = k
+    return best
+
+
+class Triplet(Localizer):
+    """Closed-form pose from three azimuths (eq. 7-20), no redundancy, no refinement.
+
+    With exactly three usable measurements it solves them. With more, it solves every triplet and
+    answers with the best-conditioned one (largest normalised determinant), ignoring the rest: the
+    minimal-data baseline that shows what redundancy buys.
+
+    Args:
+        degeneracy_tol: Triplets whose normalised determinant is below this are rejected
+            (beacons collinear with the camera, or the camera on their circle).
+    """
+
+    name = "triplet"
+
+    def __init__(self, *, degeneracy_tol: float = 1e-9) -> None:
+        self.degeneracy_tol = degeneracy_tol
+
+    def _check_params(self) -> None:
+        check_range(type(self).__name__, "degeneracy_tol", self.degeneracy_tol, low=0.0,
+                    high=1.0)
+
+    def _localize(self, problem: Problem) -> Estimate:
+        pose = np.empty(4)
+        chosen = np.empty(3, dtype=np.int64)
+        quality = _best_triplet(problem.bx, problem.by, problem.cos_az, problem.sin_az,
+                                problem.beacon_index, float(self.degeneracy_tol), pose, chosen)
+        if quality < 0.0:
+            return Estimate.failure(
+                "every triplet is degenerate (beacons collinear with the camera, or the camera "
+                "on their circle)", problem.n_measurements,
+            )
+        used = np.zeros(problem.size, dtype=bool)
+        used[chosen] = True
+        return Estimate(
+            x=float(pose[0]), y=float(pose[1]), heading=math.atan2(pose[3], pose[2]),
+            inliers=problem.expand(used), diagnostics={"conditioning": float(quality)},
+        )

@@ -1,0 +1,237 @@
+"""Scenarios: typed, validated descriptions of a site, loaded from TOML files in ``envs/``.
+
+A scenario names its room, its beacons and the error model of its camera. Shipped scenarios are
+found by name (``load_scenario("paper-room")``); a user's file by path. Every problem in a file is
+reported with the file, the field and what is wrong, e.g.
+``paper-room.toml: beacons[3].width: must be > 0 m, got -0.01``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import sys
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from azgym.core import BeaconMap
+from azgym.errors import ScenarioError, unknown_name
+from azgym.sensing.error_model import ErrorModel
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on Python 3.10 only
+    import tomli as tomllib
+
+SCENARIO_PACKAGE = "azgym.scenarios"
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A site: room bounds, beacon map and camera error model.
+
+    Attributes:
+        name: Identifier, also the file's stem.
+        description: One line for listings.
+        version: Bumped whenever the scenario changes what it simulates.
+        bounds: (x_min, y_min, x_max, y_max) of the room [m].
+        beacons: The beacon map.
+        error_model: The camera's azimuth error model (eq. 1-3).
+        source: The file it was loaded from.
+    """
+
+    name: str
+    description: str
+    version: int
+    bounds: tuple[float, float, float, float]
+    beacons: BeaconMap
+    error_model: ErrorModel
+    source: Path | None = None
+
+
+_TOP_KEYS = {"name", "description", "version", "room", "error_model", "beacon_defaults",
+             "beacons"}
+_ROOM_KEYS = {"bounds"}
+_ERROR_KEYS = {"delta_alpha_d_deg", "center_error_px", "horizon_radius_px", "coverage"}
+_DEFAULT_KEYS = {"width", "z"}
+_BEACON_KEYS = {"id", "xy", "xyz", "width", "z"}
+
+
+class _Reader:
+    """Reads fields of one file, raising :class:`ScenarioError` that names file and field."""
+
+    def __init__(self, origin: str) -> None:
+        self.origin = origin
+
+    def fail(self, field: str, problem: str) -> ScenarioError:
+        return ScenarioError(f"{self.origin}: {field}: {problem}")
+
+    def keys(self, table: dict[str, Any], allowed: set[str], where: str) -> None:
+        for key in table:
+            if key not in allowed:
+                close = difflib.get_close_matches(key, sorted(allowed), n=1)
+                hint = f" Did you mean {close[0]!r}?" if close else ""
+                raise self.fail(f"{where}{key}", f"unknown key.{hint} "
+                                f"Valid keys: {', '.join(sorted(allowed))}")
+
+    def require(self, table: dict[str, Any], key: str, where: str = "") -> Any:
+        if key not in table:
+            raise self.fail(f"{where}{key}", "missing")
+        return table[key]
+
+    def number(self, value: Any, field: str, *, positive: bool = False,
+               non_negative: bool = False) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                not math.isfinite(value):
+            raise self.fail(field, f"must be a finite number, got {value!r}")
+        if positive and not value > 0:
+            raise self.fail(field, f"must be > 0, got {value!r}")
+        if non_negative and value < 0:
+            raise self.fail(field, f"must be >= 0, got {value!r}")
+        return float(value)
+
+    def vector(self, value: Any, field: str, length: int) -> list[float]:
+        if not isinstance(value, list) or len(value) != length:
+            raise self.fail(field, f"must be a list of {length} numbers, got {value!r}")
+        return [self.number(v, f"{field}[{k}]") for k, v in enumerate(value)]
+
+    def text(self, value: Any, field: str) -> str:
+        if not isinstance(value, str) or not value.strip():
+            raise self.fail(field, f"must be a non-empty string, got {value!r}")
+        return value
+
+
+def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario:
+    """Build a :class:`Scenario` from parsed TOML, validating every field.
+
+    Raises:
+        ScenarioError: Naming the origin, the field and the problem.
+    """
+    read = _Reader(origin)
+    read.keys(data, _TOP_KEYS, "")
+    name = read.text(read.require(data, "name"), "name")
+    description = read.text(read.require(data, "description"), "description")
+    version = read.require(data, "version")
+    if isinstance(version, bool) or not isinstance(version, int) or version < 1:
+        raise read.fail("version", f"must be an integer >= 1, got {version!r}")
+
+    room = read.require(data, "room")
+    if not isinstance(room, dict):
+        raise read.fail("room", "must be a table")
+    read.keys(room, _ROOM_KEYS, "room.")
+    bounds = read.vector(read.require(room, "bounds", "room."), "room.bounds", 4)
+    if bounds[2] <= bounds[0] or bounds[3] <= bounds[1]:
+        raise read.fail("room.bounds", f"must be [x_min, y_min, x_max, y_max] with max > min, "
+                        f"got {bounds}")
+
+    error_model = _parse_error_model(read, data.get("error_model", {}))
+
+    defaults = data.get("beacon_defaults", {})
+    if not isinstance(defaults, dict):
+        raise read.fail("beacon_defaults", "must be a table")
+    read.keys(defaults, _DEFAULT_KEYS, "beacon_defaults.")
+    default_width = read.number(defaults.get("width", 0.03), "beacon_defaults.width",
+                                positive=True)
+    default_z = read.number(defaults.get("z", 0.0), "beacon_defaults.z")
+
+    entries = read.require(data, "beacons")
+    if not isinstance(entries, list) or len(entries) < 3:
+        raise read.fail("beacons", "must be an array of at least 3 [[beacons]] tables")
+    ids, xyz, width = [], [], []
+    seen: dict[int, int] = {}
+    for k, entry in enumerate(entries):
+        where = f"beacons[{k}]."
+        if not isinstance(entry, dict):
+            raise read.fail(f"beacons[{k}]", "must be a table")
+        read.keys(entry, _BEACON_KEYS, where)
+        beacon_id = read.require(entry, "id", where)
+        if isinstance(beacon_id, bool) or not isinstance(beacon_id, int):
+            raise read.fail(f"{where}id", f"must be an integer, got {beacon_id!r}")
+        if beacon_id in seen:
+            raise read.fail(f"{where}id",
+                            f"duplicate id {beacon_id} (also beacons[{seen[beacon_id]}])")
+        seen[beacon_id] = k
+        if ("xy" in entry) == ("xyz" in entry):
+            raise read.fail(f"{where}xy", "give exactly one of xy = [x, y] or xyz = [x, y, z]")
+        if "xyz" in entry:
+            if "z" in entry:
+                raise read.fail(f"{where}z", "z is already given by xyz")
+            position = read.vector(entry["xyz"], f"{where}xyz", 3)
+        else:
+            position = read.vector(entry["xy"], f"{where}xy", 2) + [
+                read.number(entry.get("z", default_z), f"{where}z")]
+        ids.append(beacon_id)
+        xyz.append(position)
+        width.append(read.number(entry.get("width", default_width), f"{where}width",
+                                 positive=True))
+    beacons = BeaconMap(np.array(ids), np.array(xyz), np.array(width))
+    return Scenario(name=name, description=description, version=version,
+                    bounds=(bounds[0], bounds[1], bounds[2], bounds[3]), beacons=beacons,
+                    error_model=error_model)
+
+
+def _parse_error_model(read: _Reader, table: Any) -> ErrorModel:
+    if not isinstance(table, dict):
+        raise read.fail("error_model", "must be a table")
+    read.keys(table, _ERROR_KEYS, "error_model.")
+    coverage = table.get("coverage", True)
+    if not isinstance(coverage, bool):
+        raise read.fail("error_model.coverage", f"must be true or false, got {coverage!r}")
+    camera_keys = {"center_error_px", "horizon_radius_px"} & set(table)
+    if camera_keys and "delta_alpha_d_deg" in table:
+        raise read.fail("error_model.delta_alpha_d_deg",
+                        "give either delta_alpha_d_deg or center_error_px + horizon_radius_px")
+    if camera_keys:
+        center = read.number(read.require(table, "center_error_px", "error_model."),
+                             "error_model.center_error_px", non_negative=True)
+        radius = read.number(read.require(table, "horizon_radius_px", "error_model."),
+                             "error_model.horizon_radius_px", positive=True)
+        return ErrorModel(delta_alpha_d=math.atan2(center, radius), coverage=coverage)
+    degrees = read.number(table.get("delta_alpha_d_deg", 0.4), "error_model.delta_alpha_d_deg",
+                          non_negative=True)
+    if degrees >= 90.0:
+        raise read.fail("error_model.delta_alpha_d_deg", f"must be < 90, got {degrees}")
+    return ErrorModel(delta_alpha_d=math.radians(degrees), coverage=coverage)
+
+
+def _shipped() -> dict[str, Any]:
+    """Name → resource of every scenario file shipped with azgym."""
+    folder = resources.files(SCENARIO_PACKAGE)
+    return {entry.name[:-5]: entry for entry in folder.iterdir() if entry.name.endswith(".toml")}
+
+
+def list_scenarios() -> list[str]:
+    """Names of the shipped scenarios."""
+    return sorted(_shipped())
+
+
+def load_scenario(scenario: str | Path | Scenario) -> Scenario:
+    """Load a shipped scenario by name, or a user's TOML file by path.
+
+    Raises:
+        UnknownNameError: No shipped scenario of that name ("Did you mean ...?").
+        ScenarioError: The file is malformed.
+    """
+    if isinstance(scenario, Scenario):
+        return scenario
+    path = Path(scenario)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            raise ScenarioError(f"{path}: no such scenario file")
+        text, origin = path.read_text(encoding="utf-8"), str(path)
+    else:
+        shipped = _shipped()
+        if str(scenario) not in shipped:
+            raise unknown_name("scenario", str(scenario), shipped)
+        entry = shipped[str(scenario)]
+        text, origin = entry.read_text(encoding="utf-8"), f"{scenario}.toml"
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{origin}: not valid TOML: {exc}") from None
+    parsed = parse_scenario(data, origin)
+    return Scenario(**{**parsed.__dict__, "source": path if path.is_file() else None})
