@@ -2,8 +2,9 @@
 
 A localizer turns one frame's :class:`~azgym.core.Measurements` and the
 :class:`~azgym.core.BeaconMap` into an :class:`~azgym.core.Estimate`. Hyperparameters are
-keyword-only ``__init__`` arguments stored unchanged (the scikit-learn way), so ``get_params()`` shows them and ``repr`` reproduces them;
-they are validated when ``localize`` is called, not in ``__init__``.
+keyword-only ``__init__`` arguments stored unchanged (the scikit-learn way), so ``get_params()``
+shows them and ``repr`` reproduces them; they are validated when ``localize`` is called, not in
+``__init__``.
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ def _model_variance(width, dist, delta_d, coverage):
 @numba.njit(error_model="numpy", cache=True)
 def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, coverage, start,
                            max_iter, out, cov):
-    """Refine ``start`` = (x, y, cos φ, sin φ) on ``use``; fill ``out`` (as K.refine) and ``cov``."""
+    """Refine ``start`` = (x, y, cos φ, sin φ) on ``use``; fill ``out`` (as K.refine), ``cov``."""
     n = bx.size
     var = np.empty(n)
     weight = np.ones(n)
