@@ -198,13 +198,20 @@ def solve_triplet(bx, by, ca, sa, i, j, k, degeneracy_tol):
 
 
 @numba.njit(inline="always", error_model="numpy", cache=True)
-def residual(bx, by, ca, sa, m, x, y, ch, sh):
-    """ε_m of eq. 23/30 and the horizontal distance D_m (eq. 24) at pose (x, y, φ)."""
-    dx = bx[m] - x
-    dy = by[m] - y
-    mx = ca[m] * ch - sa[m] * sh  # cos(α_m + φ)
-    my = sa[m] * ch + ca[m] * sh  # sin(α_m + φ)
-    return fast_atan2(dx * my - dy * mx, dx * mx + dy * my), math.sqrt(dx * dx + dy * dy)
+def residuals(bx, by, ca, sa, weight, use, x, y, ch, sh, eps):
+    """ε_i of eq. 23/30 at pose (x, y, φ) into ``eps`` (for ``use[i]``); returns Σ w_i ε_i²."""
+    cost = 0.0
+    for m in range(bx.size):
+        if not use[m]:
+            continue
+        dx = bx[m] - x
+        dy = by[m] - y
+        mx = ca[m] * ch - sa[m] * sh  # measured world direction cos(α_m + φ)
+        my = sa[m] * ch + ca[m] * sh
+        e = small_angle(dx * my - dy * mx, dx * mx + dy * my)
+        eps[m] = e
+        cost += weight[m] * e * e
+    return cost
 
 
 @numba.njit(error_model="numpy", cache=True)
@@ -214,27 +221,30 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
     Minimises Σ w_i ε_i(x, y, φ)² over the measurements with ``use[i]``; eliminating φ first gives
     eq. 29-31's φ'(x, y), so the minimiser is the same as eq. 32-33, but the joint 3-parameter
     problem has a cheap exact Jacobian: ∂ε/∂x = −(y_i − y)/D², ∂ε/∂y = (x_i − x)/D², ∂ε/∂φ = 1.
+    Stops when a step moves the position by less than 1e-10 m and the heading by less than
+    1e-12 rad, or when no step lowers the cost any more.
 
-    Writes (x, y, cos φ, sin φ, cost, iterations, status) into ``out`` and the final JᵀWJ into
-    ``info_matrix``.
+    Writes (x, y, cos φ, sin φ, cost, iterations, status) into ``out`` and JᵀWJ at the solution
+    into ``info_matrix``.
     """
     n = bx.size
     phi = math.atan2(sh, ch)
-    lam = 1e-3
-    jtj = np.zeros((3, 3))
-    jtr = np.zeros(3)
-    trial = np.zeros((3, 3))
-    step = np.zeros(3)
-    cost = 0.0
-    for m in range(n):
-        if use[m]:
-            e, _ = residual(bx, by, ca, sa, m, x, y, ch, sh)
-            cost += weight[m] * e * e
+    norm = math.hypot(ch, sh)
+    ch /= norm
+    sh /= norm
+    eps = np.empty(n)
+    trial_eps = np.empty(n)
+    jtj = info_matrix
+    jtr = np.empty(3)
+    trial = np.empty((3, 3))
+    step = np.empty(3)
+    rhs = np.empty(3)
+    cost = residuals(bx, by, ca, sa, weight, use, x, y, ch, sh, eps)
+    lam = 1e-4
     status = MAX_ITER
     it = 0
-    while it < max_iter:
-        it += 1
-        jtj[:] = 0.0
+    while True:
+        jtj[:, :] = 0.0
         jtr[:] = 0.0
         for m in range(n):
             if not use[m]:
@@ -244,10 +254,10 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
             d2 = dx * dx + dy * dy
             if d2 == 0.0:
                 continue
-            e, _ = residual(bx, by, ca, sa, m, x, y, ch, sh)
             w = weight[m]
             j0 = -dy / d2
             j1 = dx / d2
+            e = eps[m]
             jtj[0, 0] += w * j0 * j0
             jtj[0, 1] += w * j0 * j1
             jtj[0, 2] += w * j0
@@ -260,50 +270,49 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
         jtj[1, 0] = jtj[0, 1]
         jtj[2, 0] = jtj[0, 2]
         jtj[2, 1] = jtj[1, 2]
-        improved = False
+        if status == CONVERGED or it >= max_iter:
+            break  # JᵀWJ is now evaluated at the final pose
+        it += 1
+        rhs[0] = -jtr[0]
+        rhs[1] = -jtr[1]
+        rhs[2] = -jtr[2]
+        accepted = False
         while lam < 1e12:
             trial[:, :] = jtj
             for r in range(3):
                 trial[r, r] += lam * jtj[r, r] + 1e-300
-            if solve3(trial, -jtr, step) == 0.0:
+            if solve3(trial, rhs, step) == 0.0:
                 lam *= 10.0
                 continue
-            nx = x + step[0]
-            ny = y + step[1]
             nphi = phi + step[2]
             nch = math.cos(nphi)
             nsh = math.sin(nphi)
-            ncost = 0.0
-            for m in range(n):
-                if use[m]:
-                    e, _ = residual(bx, by, ca, sa, m, nx, ny, nch, nsh)
-                    ncost += weight[m] * e * e
+            ncost = residuals(bx, by, ca, sa, weight, use, x + step[0], y + step[1], nch, nsh,
+                              trial_eps)
             if ncost <= cost:
-                small = abs(step[0]) + abs(step[1]) <= 1e-12 * (1.0 + abs(x) + abs(y))
-                small = small and abs(step[2]) <= 1e-13
+                accepted = True
+                x += step[0]
+                y += step[1]
+                phi = nphi
+                ch = nch
+                sh = nsh
                 flat = cost - ncost <= 1e-15 * cost
-                x, y, phi, ch, sh, cost = nx, ny, nphi, nch, nsh, ncost
+                cost = ncost
+                eps, trial_eps = trial_eps, eps
                 lam = max(lam * 0.1, 1e-9)
-                improved = True
-                if small or flat:
+                if flat or (abs(step[0]) + abs(step[1]) <= 1e-10 and abs(step[2]) <= 1e-12):
                     status = CONVERGED
                 break
             lam *= 10.0
-        if not improved:  # no step lowers the cost any more: a (numerical) minimum
+        if not accepted:  # no step lowers the cost any more: a (numerical) minimum
             status = CONVERGED
-            break
-        if status == CONVERGED:
-            break
-    info_matrix[:, :] = jtj
     diag = jtj[0, 0] * jtj[1, 1] * jtj[2, 2]
-    if not diag > 0.0 or solve3(jtj, jtr, step) == 0.0:
+    c00 = jtj[1, 1] * jtj[2, 2] - jtj[1, 2] * jtj[2, 1]
+    c01 = jtj[1, 2] * jtj[2, 0] - jtj[1, 0] * jtj[2, 2]
+    c02 = jtj[1, 0] * jtj[2, 1] - jtj[1, 1] * jtj[2, 0]
+    if not diag > 0.0 or not abs(jtj[0, 0] * c00 + jtj[0, 1] * c01 + jtj[0, 2] * c02) > \
+            1e-12 * diag:
         status = SINGULAR
-    else:
-        c00 = jtj[1, 1] * jtj[2, 2] - jtj[1, 2] * jtj[2, 1]
-        c01 = jtj[1, 2] * jtj[2, 0] - jtj[1, 0] * jtj[2, 2]
-        c02 = jtj[1, 0] * jtj[2, 1] - jtj[1, 1] * jtj[2, 0]
-        if abs(jtj[0, 0] * c00 + jtj[0, 1] * c01 + jtj[0, 2] * c02) <= 1e-12 * diag:
-            status = SINGULAR
     out[0] = x
     out[1] = y
     out[2] = ch

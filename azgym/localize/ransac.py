@@ -12,7 +12,7 @@ import numpy as np
 from azgym.core import Estimate, IntArray
 from azgym.localize import _kernels as K
 from azgym.localize.base import Localizer, Problem, check_range
-from azgym.localize.refinement import finish
+from azgym.localize.refinement import package, refine_with_covariance
 from azgym.sensing.error_model import ErrorModel
 
 
@@ -168,6 +168,21 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
     return best_ns, best_e, n_valid
 
 
+@numba.njit(error_model="numpy", cache=True)
+def _ransac(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, degeneracy_tol,
+            weighted, max_iter, out, mask, cov):
+    """Steps 1-6 in one compiled call; ``out`` gets the refinement's 7 values + (NS, E, valid)."""
+    pose = np.empty(4)
+    n_support, mean_sq, n_valid = _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d,
+                                          coverage, degeneracy_tol, pose, mask)
+    out[7] = n_support
+    out[8] = mean_sq
+    out[9] = n_valid
+    if n_support >= 3:
+        refine_with_covariance(bx, by, ca, sa, width, mask, weighted, delta_d, coverage, pose,
+                               max_iter, out, cov)
+
+
 class Ransac(Localizer):
     """RANSAC over beacon triplets with a position-dependent tolerance (Sec. 2.3-2.7).
 
@@ -252,21 +267,18 @@ class Ransac(Localizer):
 
     def _localize(self, problem: Problem) -> Estimate:
         triplets = self.triplets(problem.size)
-        pose = np.empty(4)
+        out = np.empty(10)
         mask = np.zeros(problem.size, dtype=np.bool_)
-        n_support, mean_sq, n_valid = _search(
-            problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width,
-            problem.beacon_index, triplets, float(self.delta_alpha_d), bool(self.coverage),
-            float(self.degeneracy_tol), pose, mask,
-        )
-        diagnostics = {"n_triplets": int(triplets.shape[0]), "n_valid_triplets": int(n_valid)}
-        if n_support < 3:
+        cov = np.empty((3, 3))
+        _ransac(problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width,
+                problem.beacon_index, triplets, float(self.delta_alpha_d), bool(self.coverage),
+                float(self.degeneracy_tol), bool(self.weighted), int(self.max_iter), out, mask,
+                cov)
+        diagnostics = {"n_triplets": int(triplets.shape[0]), "n_valid_triplets": int(out[9])}
+        if out[7] < 3:
             return Estimate.failure(
                 "no non-degenerate triplet with at least 3 supporters", problem.n_measurements,
                 diagnostics,
             )
-        diagnostics["triplet_mean_sq_error"] = float(mean_sq)
-        return finish(
-            problem, mask, pose, bool(self.weighted), self.max_iter, self.error_model(),
-            diagnostics,
-        )
+        diagnostics["triplet_mean_sq_error"] = float(out[8])
+        return package(problem, mask, out, cov, diagnostics)

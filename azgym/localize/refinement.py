@@ -8,7 +8,6 @@ which is (JᵀΣ⁻¹J)⁻¹ for the optimally weighted estimator.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import Any
 
 import numba
@@ -77,7 +76,7 @@ def finish(
     weighted: bool,
     max_iter: int,
     error_model: ErrorModel,
-    diagnostics: Mapping[str, Any] | None = None,
+    diagnostics: dict[str, Any] | None = None,
 ) -> Estimate:
     """Refine the start pose on the measurements in ``use`` and package the :class:`Estimate`.
 
@@ -96,12 +95,20 @@ def finish(
         problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width, use, weighted,
         error_model.delta_alpha_d, error_model.coverage, start, max_iter, out, cov,
     )
-    info = dict(diagnostics or {})
-    info.update(n_iterations=int(out[5]), cost=float(out[4]))
+    return package(problem, use, out, cov, diagnostics or {})
+
+
+def package(
+    problem: Problem, use: BoolArray, out: FloatArray, cov: FloatArray,
+    diagnostics: dict[str, Any],
+) -> Estimate:
+    """The :class:`Estimate` from the refinement's output ``out`` (see ``K.refine``)."""
+    diagnostics["n_iterations"] = int(out[5])
+    diagnostics["cost"] = float(out[4])
     if int(out[6]) == K.SINGULAR:
         return Estimate.failure(
             "the measurements used do not determine the pose (singular geometry)",
-            problem.n_measurements, info,
+            problem.n_measurements, diagnostics,
         )
     return Estimate(
         x=float(out[0]),
@@ -109,5 +116,5 @@ def finish(
         heading=math.atan2(out[3], out[2]),
         inliers=problem.expand(use),
         covariance=cov,
-        diagnostics=info,
+        diagnostics=diagnostics,
     )
