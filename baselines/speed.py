@@ -77,7 +77,8 @@ def main() -> None:
                          ("loo", {}), ("triplet", {})):
         label = name + ("-weighted" if params else "")
         micros = per_frame_median(azgym.make_localizer(name, **params), beacons, batch)
-        report["localizers"][label] = {"median_us": micros, "ratio_to_reference": micros / reference}
+        report["localizers"][label] = {"median_us": micros,
+                                       "ratio_to_reference": micros / reference}
 
     mex = azgym.make_localizer("mex")
     micros = per_frame_median(mex, beacons, batch[: args.mex_calls])
@@ -113,8 +114,10 @@ def main() -> None:
           f"{'paper µs':>10}")
     for label, row in report["localizers"].items():
         key = label.split(" ")[0]
+        target = TARGETS_US.get(key, float("nan"))
+        paper = PAPER_US.get(key, float("nan"))
         print(f"{label:<38} {row['median_us']:>12.1f} {row['ratio_to_reference']:>12.1f} "
-              f"{TARGETS_US.get(key, float('nan')):>10.0f} {PAPER_US.get(key, float('nan')):>10.0f}")
+              f"{target:>10.0f} {paper:>10.0f}")
     print("\nransac breakdown (median µs):")
     for part, micros in report["ransac_breakdown_us"].items():
         print(f"  {part:<46} {micros:8.2f}")
