@@ -132,69 +132,83 @@ def circle_row(xi, yi, xj, yj, ci, si, cj, sj):
 
 
 @numba.njit(error_model="numpy", cache=True)
-def solve_triplet(bx, by, ca, sa, i, j, k, degeneracy_tol):
+def pair_table(bx, by, ca, sa):
+    """The circle equation (``circle_row``) of every pair of measurements, computed once a frame.
+
+    Coordinates are taken relative to the beacons' centroid and scaled by their extent L, so the
+    unknowns (x/L, y/L, q/L²) are all of order one. Returns (rows (n, n, 4), ox, oy, L).
+    """
+    n = bx.size
+    ox = 0.0
+    oy = 0.0
+    for m in range(n):
+        ox += bx[m]
+        oy += by[m]
+    ox /= n
+    oy /= n
+    scale = 0.0
+    for m in range(n):
+        scale = max(scale, abs(bx[m] - ox), abs(by[m] - oy))
+    if scale == 0.0:
+        scale = 1.0
+    inv = 1.0 / scale
+    rows = np.zeros((n, n, 4))
+    for i in range(n):
+        xi = (bx[i] - ox) * inv
+        yi = (by[i] - oy) * inv
+        for j in range(i + 1, n):
+            xj = (bx[j] - ox) * inv
+            yj = (by[j] - oy) * inv
+            r0, r1, r2, r3 = circle_row(xi, yi, xj, yj, ca[i], sa[i], ca[j], sa[j])
+            rows[i, j, 0] = r0
+            rows[i, j, 1] = r1
+            rows[i, j, 2] = r2
+            rows[i, j, 3] = r3
+    return rows, ox, oy, scale
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
+def solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k, degeneracy_tol):
     """Camera position from three azimuths (Sec. 2.5, eq. 7-18) and heading (eq. 19-20).
 
-    Solves the three pairwise circle equations for (x, y, q): where the cotangents of eq. 11 are
-    finite this has the same solution as eq. 14-17 (whose rows are differences of these circles),
-    and where one is not it contains eq. 18. Coordinates are taken relative to the triplet's
-    centroid and scaled by its size L, so the unknowns (x/L, y/L, q/L²) are of one order.
+    Solves the three pairwise circle equations (rows of ``pair_table``, i < j < k) for (x, y, q):
+    where the cotangents of eq. 11 are finite this has the same solution as eq. 14-17 (whose rows
+    are differences of these circles), and where one is not it contains eq. 18.
 
     The triplet is rejected when degenerate: all three beacons on a line through C, or C on the
     circle through them (|det| below ``degeneracy_tol`` times the rows' Hadamard bound).
 
-    The heading is the circular mean of β_m − α_m over the three beacons (eq. 20 uses one beacon;
-    the mean is the same on noise-free data and does not depend on the order of the triplet).
+    The heading is the direction of Σ_m (P_m − C) e^{−iα_m}, a circular mean of β_m − α_m weighted
+    by distance (eq. 20 uses one beacon; the mean is the same on noise-free data, does not depend on
+    the order of the triplet, and weights each beacon by how well it fixes the direction).
 
     Returns (ok, x, y, h_x, h_y, quality) where (h_x, h_y) is a positive multiple of
     (cos φ, sin φ) and quality = det² / Hadamard bound² in [0, 1] grades the geometry.
     """
-    ox = (bx[i] + bx[j] + bx[k]) / 3.0
-    oy = (by[i] + by[j] + by[k]) / 3.0
-    xi, yi = bx[i] - ox, by[i] - oy
-    xj, yj = bx[j] - ox, by[j] - oy
-    xk, yk = bx[k] - ox, by[k] - oy
-    scale = max(abs(xi), abs(yi), abs(xj), abs(yj), abs(xk), abs(yk))
-    if scale == 0.0:
-        return False, 0.0, 0.0, 1.0, 0.0, 0.0
-    inv = 1.0 / scale
-    xi, yi, xj, yj, xk, yk = xi * inv, yi * inv, xj * inv, yj * inv, xk * inv, yk * inv
-    a0, a1, a2, a3 = circle_row(xi, yi, xj, yj, ca[i], sa[i], ca[j], sa[j])
-    b0, b1, b2, b3 = circle_row(xj, yj, xk, yk, ca[j], sa[j], ca[k], sa[k])
-    c0, c1, c2, c3 = circle_row(xk, yk, xi, yi, ca[k], sa[k], ca[i], sa[i])
+    a0, a1, a2, a3 = rows[i, j, 0], rows[i, j, 1], rows[i, j, 2], rows[i, j, 3]
+    b0, b1, b2, b3 = rows[j, k, 0], rows[j, k, 1], rows[j, k, 2], rows[j, k, 3]
+    c0, c1, c2, c3 = rows[i, k, 0], rows[i, k, 1], rows[i, k, 2], rows[i, k, 3]
     m00 = b1 * c2 - b2 * c1
     m01 = b2 * c0 - b0 * c2
     m02 = b0 * c1 - b1 * c0
     det = a0 * m00 + a1 * m01 + a2 * m02
     hadamard_sq = ((a0 * a0 + a1 * a1 + a2 * a2) * (b0 * b0 + b1 * b1 + b2 * b2)
                    * (c0 * c0 + c1 * c1 + c2 * c2))
-    quality = det * det / hadamard_sq
-    if not quality > degeneracy_tol * degeneracy_tol:
+    if not det * det > degeneracy_tol * degeneracy_tol * hadamard_sq:
         return False, 0.0, 0.0, 1.0, 0.0, 0.0
     # Cramer's rule for (x, y) with right-hand side (−a3, −b3, −c3).
     inv_det = scale / det
     x = ox - (a3 * m00 + b3 * (a2 * c1 - a1 * c2) + c3 * (a1 * b2 - a2 * b1)) * inv_det
     y = oy - (a3 * m01 + b3 * (a0 * c2 - a2 * c0) + c3 * (a2 * b0 - a0 * b2)) * inv_det
-    # Heading: the mean of the unit vectors of β_m − α_m, i.e. (P_m − C)/D_m rotated by −α_m.
     dxi, dyi = bx[i] - x, by[i] - y
     dxj, dyj = bx[j] - x, by[j] - y
     dxk, dyk = bx[k] - x, by[k] - y
-    di = math.sqrt(dxi * dxi + dyi * dyi)
-    dj = math.sqrt(dxj * dxj + dyj * dyj)
-    dk = math.sqrt(dxk * dxk + dyk * dyk)
-    product = di * dj * dk
-    if not (product > 0.0 and math.isfinite(product)):
-        return False, 0.0, 0.0, 1.0, 0.0, 0.0  # the camera sits on a beacon
-    r = 1.0 / product
-    wi, wj, wk = dj * dk * r, di * dk * r, di * dj * r  # 1/D_i, 1/D_j, 1/D_k
-    hx = (dxi * ca[i] + dyi * sa[i]) * wi + (dxj * ca[j] + dyj * sa[j]) * wj \
-        + (dxk * ca[k] + dyk * sa[k]) * wk
-    hy = (dyi * ca[i] - dxi * sa[i]) * wi + (dyj * ca[j] - dxj * sa[j]) * wj \
-        + (dyk * ca[k] - dxk * sa[k]) * wk
-    if hx == 0.0 and hy == 0.0:
+    hx = (dxi * ca[i] + dyi * sa[i]) + (dxj * ca[j] + dyj * sa[j]) + (dxk * ca[k] + dyk * sa[k])
+    hy = (dyi * ca[i] - dxi * sa[i]) + (dyj * ca[j] - dxj * sa[j]) + (dyk * ca[k] - dxk * sa[k])
+    if not (hx * hx + hy * hy > 0.0 and math.isfinite(x) and math.isfinite(y)):
         return False, 0.0, 0.0, 1.0, 0.0, 0.0
     # (hx, hy) is returned unnormalised: every use of the heading is homogeneous in it.
-    return True, x, y, hx, hy, quality
+    return True, x, y, hx, hy, det * det / hadamard_sq
 
 
 @numba.njit(inline="always", error_model="numpy", cache=True)
@@ -221,8 +235,9 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
     Minimises Σ w_i ε_i(x, y, φ)² over the measurements with ``use[i]``; eliminating φ first gives
     eq. 29-31's φ'(x, y), so the minimiser is the same as eq. 32-33, but the joint 3-parameter
     problem has a cheap exact Jacobian: ∂ε/∂x = −(y_i − y)/D², ∂ε/∂y = (x_i − x)/D², ∂ε/∂φ = 1.
-    Stops when a step moves the position by less than 1e-10 m and the heading by less than
-    1e-12 rad, or when no step lowers the cost any more.
+    Stops when a step moves the position by less than 1e-9 m and the heading by less than 1e-11 rad
+    (convergence is quadratic, so the pose is then exact to rounding), or when no step lowers the
+    cost any more.
 
     Writes (x, y, cos φ, sin φ, cost, iterations, status) into ``out`` and JᵀWJ at the solution
     into ``info_matrix``.
@@ -300,7 +315,7 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
                 cost = ncost
                 eps, trial_eps = trial_eps, eps
                 lam = max(lam * 0.1, 1e-9)
-                if flat or (abs(step[0]) + abs(step[1]) <= 1e-10 and abs(step[2]) <= 1e-12):
+                if flat or (abs(step[0]) + abs(step[1]) <= 1e-9 and abs(step[2]) <= 1e-11):
                     status = CONVERGED
                 break
             lam *= 10.0

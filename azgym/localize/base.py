@@ -71,40 +71,45 @@ def _gather(ids, azimuth, sorted_ids, sorted_order, xyz, width):
 class Problem:
     """One frame reduced to the measurements a localizer can use: those with ids in the map.
 
+    The data lives in two packed arrays, ``floats`` (6, K) and ``ints`` (2, K), which compiled
+    kernels take whole; the named rows are views of them.
+
     Attributes:
-        azimuth: Usable azimuths [rad], shape (K,).
-        cos_az: cos of ``azimuth``, shape (K,).
-        sin_az: sin of ``azimuth``, shape (K,).
-        bx: East coordinate of the beacon each was decoded as [m], shape (K,).
-        by: North coordinate [m], shape (K,).
-        width: Width W of that beacon [m], shape (K,).
-        beacon_index: Row of that beacon in the map, shape (K,); repeated for a ghost.
-        source: Position of each usable measurement in the original Measurements, shape (K,).
+        floats: Rows azimuth [rad], cos and sin of it, beacon x and y [m], beacon width W [m].
+        ints: Rows source (position of each usable measurement in the original Measurements) and
+            beacon_index (row of its beacon in the map; repeated for a ghost).
         n_measurements: M, the number of measurements in the frame, usable or not.
         n_distinct: How many different beacons the usable measurements refer to.
     """
 
-    __slots__ = ("azimuth", "cos_az", "sin_az", "bx", "by", "width", "beacon_index", "source",
-                 "n_measurements", "n_distinct")
+    __slots__ = ("floats", "ints", "n_measurements", "n_distinct")
 
     def __init__(self, floats: FloatArray, ints: IntArray, n_distinct: int,
                  n_measurements: int) -> None:
-        self.azimuth, self.cos_az, self.sin_az, self.bx, self.by, self.width = floats
-        self.source, self.beacon_index = ints
+        self.floats = floats
+        self.ints = ints
         self.n_distinct = n_distinct
         self.n_measurements = n_measurements
 
     @classmethod
     def from_frame(cls, measurements: Measurements, beacons: BeaconMap) -> Problem:
         """Look up every measurement's beacon; drop (and remember) ids the map does not know."""
-        lookup = beacons.lookup_tables()
-        return cls(*_gather(measurements.ids, measurements.azimuth, *lookup),
+        return cls(*_gather(measurements.ids, measurements.azimuth, *beacons.lookup_tables()),
                    n_measurements=len(measurements))
 
     @property
     def size(self) -> int:
         """K, the number of usable measurements."""
-        return int(self.azimuth.size)
+        return int(self.floats.shape[1])
+
+    azimuth = property(lambda self: self.floats[0], doc="Usable azimuths [rad], shape (K,).")
+    cos_az = property(lambda self: self.floats[1], doc="cos of ``azimuth``.")
+    sin_az = property(lambda self: self.floats[2], doc="sin of ``azimuth``.")
+    bx = property(lambda self: self.floats[3], doc="East coordinate of each beacon [m].")
+    by = property(lambda self: self.floats[4], doc="North coordinate of each beacon [m].")
+    width = property(lambda self: self.floats[5], doc="Width W of each beacon [m].")
+    source = property(lambda self: self.ints[0], doc="Position in the original Measurements.")
+    beacon_index = property(lambda self: self.ints[1], doc="Row of each beacon in the map.")
 
     def expand(self, mask: BoolArray) -> BoolArray:
         """Turn a mask over the K usable measurements into one over all M measurements."""

@@ -39,9 +39,9 @@ def _all_triplets(n: int) -> IntArray:
 
 
 def _random_triplets(n: int, count: int, rng: np.random.Generator) -> IntArray:
-    """``count`` triplets of distinct indices drawn uniformly (with replacement between trials)."""
+    """``count`` triplets of distinct, ascending indices, drawn uniformly (independent trials)."""
     keys = rng.random((count, n))
-    return np.argpartition(keys, 3, axis=1)[:, :3].astype(np.int64)
+    return np.sort(np.argpartition(keys, 3, axis=1)[:, :3], axis=1).astype(np.int64)
 
 
 @numba.njit(inline="always", error_model="numpy", cache=True)
@@ -78,35 +78,42 @@ _VECTOR_MATH = {"reassoc", "nsz", "arcp", "contract"}
 
 
 @numba.njit(fastmath=_VECTOR_MATH, error_model="numpy", cache=True)
-def _score_fast(bx, by, ca, sa, width, x, y, ch, sh, tan_d, coverage):
-    """Supporters and Σε² of one candidate pose, vectorised (the fast path of _is_inlier).
+def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, special):
+    """Supporters NS_t and Σε² of every candidate pose t at once (the fast path of _is_inlier).
 
-    Returns (NS, Σε², n_special): measurements with a tolerance of π/2 or more, or an inlier
-    more than 5.7° off, are "special" and make the caller rescore the pose exactly.
+    The inner loop runs over candidates, so it vectorises without horizontal sums. A measurement
+    whose tolerance is π/2 or more, or an inlier more than 5.7° off, is "special" for that
+    candidate: the caller then rescores the candidate exactly with _score_exact.
     """
-    ns = 0
-    sq = 0.0
-    special = 0
+    count = px.size
+    for t in range(count):
+        ns[t] = 0
+        sq[t] = 0.0
+        special[t] = 0
     for m in range(bx.size):
-        dx = bx[m] - x
-        dy = by[m] - y
-        mx = ca[m] * ch - sa[m] * sh
-        my = sa[m] * ch + ca[m] * sh
-        cross = dx * my - dy * mx
-        dot = dx * mx + dy * my
+        xm = bx[m]
+        ym = by[m]
+        cm = ca[m]
+        sm = sa[m]
         w = width[m] if coverage else 0.0
-        two_d = 2.0 * math.sqrt(dx * dx + dy * dy)
-        n = two_d * tan_d + w
-        d = two_d - w * tan_d
-        inlier = (dot > 0.0) & (abs(cross) * (d - n) * (d + n) <= 2.0 * n * d * dot) & (d > n)
-        u = cross / dot
-        z = u * u
-        eps = u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
-            1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0 + z / 17.0))))))))
-        ns += inlier
-        sq += eps * eps if inlier else 0.0
-        special += (d <= n) | (inlier & (z > 0.01))
-    return ns, sq, special
+        for t in range(count):
+            dx = xm - px[t]
+            dy = ym - py[t]
+            mx = cm * hx[t] - sm * hy[t]  # measured world direction, scaled by |h|
+            my = sm * hx[t] + cm * hy[t]
+            cross = dx * my - dy * mx
+            dot = dx * mx + dy * my
+            two_d = 2.0 * math.sqrt(dx * dx + dy * dy)
+            n = two_d * tan_d + w
+            d = two_d - w * tan_d
+            inlier = (dot > 0.0) & (abs(cross) * (d - n) * (d + n) <= 2.0 * n * d * dot) & (d > n)
+            u = cross / dot
+            z = u * u
+            eps = u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
+                1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0 + z / 17.0))))))))
+            ns[t] += inlier
+            sq[t] += eps * eps if inlier else 0.0
+            special[t] += (d <= n) | (inlier & (z > 0.01))
 
 
 @numba.njit(error_model="numpy", cache=True)
@@ -125,39 +132,63 @@ def _score_exact(bx, by, ca, sa, width, x, y, ch, sh, tan_d, delta_d, coverage):
 @numba.njit(error_model="numpy", cache=True)
 def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, degeneracy_tol,
             best_pose, best_mask):
-    """Steps 1-5: score every triplet by its supporters (eq. 26) and their mean ε² (eq. 27).
+    """Steps 1-5: solve, score and rank every triplet.
+
+    Each triplet is solved (eq. 7-20) and scored by its supporters (eq. 21-26) and their mean ε²
+    (eq. 27); the best has the most supporters, then the smallest mean ε².
 
     Returns (NS of the winner, E of the winner, number of non-degenerate triplets).
     """
     n = bx.size
+    count = triplets.shape[0]
     tan_d = math.tan(delta_d)
-    best_ns = -1
-    best_e = np.inf
+    rows, ox, oy, scale = K.pair_table(bx, by, ca, sa)
+    px = np.full(count, np.nan)  # a degenerate triplet keeps NaN: it supports nothing
+    py = np.full(count, np.nan)
+    hx = np.zeros(count)
+    hy = np.zeros(count)
+    valid = np.zeros(count, dtype=np.bool_)
     n_valid = 0
-    for t in range(triplets.shape[0]):
+    for t in range(count):
         i = triplets[t, 0]
         j = triplets[t, 1]
         k = triplets[t, 2]
         if beacon_index[i] == beacon_index[j] or beacon_index[j] == beacon_index[k] or \
                 beacon_index[i] == beacon_index[k]:
             continue  # two detections of one beacon (a ghost) say nothing about position
-        ok, x, y, ch, sh, _ = K.solve_triplet(bx, by, ca, sa, i, j, k, degeneracy_tol)
-        if not ok:
+        ok, x, y, h0, h1, _ = K.solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k,
+                                              degeneracy_tol)
+        if ok:
+            px[t] = x
+            py[t] = y
+            hx[t] = h0
+            hy[t] = h1
+            valid[t] = True
+            n_valid += 1
+    ns = np.empty(count, dtype=np.int64)
+    sq = np.empty(count)
+    special = np.empty(count, dtype=np.int64)
+    _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, special)
+    best_ns = -1
+    best_e = np.inf
+    for t in range(count):
+        if not valid[t]:
             continue
-        n_valid += 1
-        ns, sq, special = _score_fast(bx, by, ca, sa, width, x, y, ch, sh, tan_d, coverage)
-        if special > 0:
-            ns, sq = _score_exact(bx, by, ca, sa, width, x, y, ch, sh, tan_d, delta_d, coverage)
-        if ns < best_ns or ns == 0:
+        support = ns[t]
+        total = sq[t]
+        if special[t] > 0:
+            support, total = _score_exact(bx, by, ca, sa, width, px[t], py[t], hx[t], hy[t],
+                                          tan_d, delta_d, coverage)
+        if support < best_ns or support == 0:
             continue
-        e = sq / ns
-        if ns > best_ns or e < best_e:
-            best_ns = ns
+        e = total / support
+        if support > best_ns or e < best_e:
+            best_ns = support
             best_e = e
-            best_pose[0] = x
-            best_pose[1] = y
-            best_pose[2] = ch
-            best_pose[3] = sh
+            best_pose[0] = px[t]
+            best_pose[1] = py[t]
+            best_pose[2] = hx[t]
+            best_pose[3] = hy[t]
     if best_ns > 0:
         for m in range(n):
             best_mask[m], _ = _is_inlier(bx, by, ca, sa, width, m, best_pose[0], best_pose[1],
@@ -169,18 +200,30 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
 
 
 @numba.njit(error_model="numpy", cache=True)
-def _ransac(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, degeneracy_tol,
-            weighted, max_iter, out, mask, cov):
-    """Steps 1-6 in one compiled call; ``out`` gets the refinement's 7 values + (NS, E, valid)."""
+def _ransac(floats, ints, triplets, delta_d, coverage, degeneracy_tol, weighted, max_iter, out,
+            mask, cov):
+    """Steps 1-6 in one compiled call on a Problem's packed arrays.
+
+    ``out`` gets the refinement's 7 values (see K.refine) then NS, E and the number of valid
+    triplets; ``mask`` (length M, all False on entry) the supporters, by original position.
+    """
+    bx = floats[3]
+    by = floats[4]
+    ca = floats[1]
+    sa = floats[2]
+    width = floats[5]
     pose = np.empty(4)
-    n_support, mean_sq, n_valid = _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d,
-                                          coverage, degeneracy_tol, pose, mask)
+    support = np.zeros(bx.size, dtype=np.bool_)
+    n_support, mean_sq, n_valid = _search(bx, by, ca, sa, width, ints[1], triplets, delta_d,
+                                          coverage, degeneracy_tol, pose, support)
     out[7] = n_support
     out[8] = mean_sq
     out[9] = n_valid
     if n_support >= 3:
-        refine_with_covariance(bx, by, ca, sa, width, mask, weighted, delta_d, coverage, pose,
+        refine_with_covariance(bx, by, ca, sa, width, support, weighted, delta_d, coverage, pose,
                                max_iter, out, cov)
+        for m in range(bx.size):
+            mask[ints[0, m]] = support[m]
 
 
 class Ransac(Localizer):
@@ -268,12 +311,11 @@ class Ransac(Localizer):
     def _localize(self, problem: Problem) -> Estimate:
         triplets = self.triplets(problem.size)
         out = np.empty(10)
-        mask = np.zeros(problem.size, dtype=np.bool_)
+        mask = np.zeros(problem.n_measurements, dtype=np.bool_)
         cov = np.empty((3, 3))
-        _ransac(problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width,
-                problem.beacon_index, triplets, float(self.delta_alpha_d), bool(self.coverage),
-                float(self.degeneracy_tol), bool(self.weighted), int(self.max_iter), out, mask,
-                cov)
+        _ransac(problem.floats, problem.ints, triplets, float(self.delta_alpha_d),
+                bool(self.coverage), float(self.degeneracy_tol), bool(self.weighted),
+                int(self.max_iter), out, mask, cov)
         diagnostics = {"n_triplets": int(triplets.shape[0]), "n_valid_triplets": int(out[9])}
         if out[7] < 3:
             return Estimate.failure(

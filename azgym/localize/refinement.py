@@ -95,14 +95,22 @@ def finish(
         problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width, use, weighted,
         error_model.delta_alpha_d, error_model.coverage, start, max_iter, out, cov,
     )
-    return package(problem, use, out, cov, diagnostics or {})
+    return package(problem, problem.expand(use), out, cov, diagnostics or {})
 
 
 def package(
-    problem: Problem, use: BoolArray, out: FloatArray, cov: FloatArray,
+    problem: Problem, inliers: BoolArray, out: FloatArray, cov: FloatArray,
     diagnostics: dict[str, Any],
 ) -> Estimate:
-    """The :class:`Estimate` from the refinement's output ``out`` (see ``K.refine``)."""
+    """The :class:`Estimate` from the refinement's output ``out`` (see ``K.refine``).
+
+    Args:
+        problem: The frame.
+        inliers: The measurements used, over all M measurements of the frame.
+        out: The refinement's output.
+        cov: The covariance.
+        diagnostics: Entries for ``Estimate.diagnostics`` (iterations and cost are added).
+    """
     diagnostics["n_iterations"] = int(out[5])
     diagnostics["cost"] = float(out[4])
     if int(out[6]) == K.SINGULAR:
@@ -114,7 +122,7 @@ def package(
         x=float(out[0]),
         y=float(out[1]),
         heading=math.atan2(out[3], out[2]),
-        inliers=problem.expand(use),
+        inliers=inliers,
         covariance=cov,
         diagnostics=diagnostics,
     )

@@ -16,6 +16,7 @@ from azgym.localize.base import Localizer, Problem, check_range
 def _best_triplet(bx, by, ca, sa, beacon_index, degeneracy_tol, pose, chosen):
     """Solve every triplet of distinct beacons; keep the best-conditioned one."""
     n = bx.size
+    rows, ox, oy, scale = K.pair_table(bx, by, ca, sa)
     best = -1.0
     for i in range(n):
         for j in range(i + 1, n):
@@ -23,8 +24,8 @@ def _best_triplet(bx, by, ca, sa, beacon_index, degeneracy_tol, pose, chosen):
                 if beacon_index[i] == beacon_index[j] or beacon_index[j] == beacon_index[k] \
                         or beacon_index[i] == beacon_index[k]:
                     continue
-                ok, x, y, hx, hy, quality = K.solve_triplet(bx, by, ca, sa, i, j, k,
-                                                            degeneracy_tol)
+                ok, x, y, hx, hy, quality = K.solve_triplet(rows, ox, oy, scale, bx, by, ca,
+                                                            sa, i, j, k, degeneracy_tol)
                 if ok and quality > best:
                     best = quality
                     norm = math.hypot(hx, hy)
