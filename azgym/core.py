@@ -32,6 +32,8 @@ def wrap_angle(angle: ArrayLike) -> Any:
         The wrapped angle(s), a float for a scalar input.
     """
     wrapped = np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), 2.0 * np.pi)
+    # np.mod can round a tiny negative remainder up to 2π, which would give −π: map it to π.
+    wrapped = np.where(wrapped <= -np.pi, np.pi, wrapped)
     return float(wrapped) if wrapped.ndim == 0 else wrapped
 
 
@@ -45,8 +47,12 @@ def _as_ids(owner: str, name: str, values: ArrayLike) -> IntArray:
     if array.ndim != 1:
         raise InvalidInputError(f"{owner}.{name} must be 1-D, got shape {array.shape}")
     if array.size and not np.issubdtype(array.dtype, np.integer):
-        if not (np.issubdtype(array.dtype, np.floating) and np.all(array == np.round(array))):
+        if not np.issubdtype(array.dtype, np.floating):
             raise InvalidInputError(f"{owner}.{name} must hold integers, got dtype {array.dtype}")
+        whole = np.isfinite(array) & (array == np.round(array)) & (np.abs(array) < 2.0**62)
+        if not whole.all():
+            bad = array[~whole][0]
+            raise InvalidInputError(f"{owner}.{name} must hold integers, got {bad}")
     return _frozen(array.astype(np.int64, copy=True))
 
 
@@ -59,9 +65,10 @@ def _as_finite(owner: str, name: str, values: ArrayLike, shape: tuple[int, ...])
         raise InvalidInputError(f"{owner}.{name} must have shape {shape}, got {array.shape}")
     bad = ~np.isfinite(array)
     if bad.any():
-        where = np.argwhere(bad)[0]
+        where = tuple(int(i) for i in np.argwhere(bad)[0])
+        index = where[0] if len(where) == 1 else where
         raise InvalidInputError(
-            f"{owner}.{name} must be finite, got {array[tuple(where)]} at index {tuple(where)}"
+            f"{owner}.{name} must be finite, got {array[where]} at index {index}"
         )
     return _frozen(array)
 
@@ -92,8 +99,13 @@ class BeaconMap:
                 f"BeaconMap.ids must be unique; duplicated: {unique[counts > 1].tolist()}"
             )
         xyz_array = _as_finite("BeaconMap", "xyz", xyz, (n, 3))
-        width_array = np.broadcast_to(np.asarray(width, dtype=np.float64), (n,)).copy()
-        width_array = _as_finite("BeaconMap", "width", width_array, (n,))
+        try:
+            width_values = np.asarray(width, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise InvalidInputError(f"BeaconMap.width must be numeric: {exc}") from None
+        if width_values.ndim == 0:
+            width_values = np.full(n, float(width_values))
+        width_array = _as_finite("BeaconMap", "width", width_values, (n,))
         if (width_array < 0).any():
             raise InvalidInputError(
                 f"BeaconMap.width must be >= 0 m, got {width_array[width_array < 0][0]}"
@@ -162,13 +174,13 @@ class Measurements:
         azimuth_array = _as_finite("Measurements", "azimuth", azimuth, id_array.shape)
         quality_array = None
         if quality is not None:
-            q = np.asarray(quality, dtype=np.float64)
-            if q.ndim not in (1, 2) or q.shape[0] != id_array.size:
+            shape = np.shape(quality)
+            if len(shape) not in (1, 2) or shape[0] != id_array.size:
                 raise InvalidInputError(
                     f"Measurements.quality must have shape ({id_array.size},) or "
-                    f"({id_array.size}, Q), got {q.shape}"
+                    f"({id_array.size}, Q), got {shape}"
                 )
-            quality_array = _frozen(q.copy())
+            quality_array = _as_finite("Measurements", "quality", quality, shape)
         object.__setattr__(self, "ids", id_array)
         object.__setattr__(self, "azimuth", azimuth_array)
         object.__setattr__(self, "quality", quality_array)

@@ -86,8 +86,6 @@ def test_beacon_map_rejects_bad_input_naming_the_field(ids, xyz, width, field):
         BeaconMap(ids, xyz, width)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: under numpy 2 _as_finite formats the index tuple of "
-                   "np.int64, so the message reads 'at index (np.int64(1), np.int64(2))'")
 def test_beacon_map_nan_error_says_where():
     with pytest.raises(InvalidInputError, match=re.escape("at index (1, 2)")):
         BeaconMap([1, 2, 3], [[0, 0, 0], [1, 0, np.nan], [0, 1, 0]])
@@ -109,22 +107,16 @@ def test_invalid_input_error_is_a_value_error():
         BeaconMap([1, 1, 2], XYZ3)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: BeaconMap width of the wrong length raises numpy's "
-                   "ValueError from np.broadcast_to instead of InvalidInputError naming width")
 def test_beacon_map_width_of_wrong_length_names_the_field():
     with pytest.raises(InvalidInputError, match=re.escape("BeaconMap.width")):
         BeaconMap([1, 2, 3], XYZ3, width=[0.03, 0.03])
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: a non-numeric BeaconMap width raises numpy's "
-                   "ValueError ('could not convert string to float') instead of InvalidInputError")
 def test_beacon_map_non_numeric_width_names_the_field():
     with pytest.raises(InvalidInputError, match=re.escape("BeaconMap.width")):
         BeaconMap([1, 2, 3], XYZ3, width=["a", "b", "c"])
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: _as_ids accepts float ids that are inf or beyond "
-                   "int64 (inf == round(inf)) and silently casts them to -2**63")
 @pytest.mark.filterwarnings("ignore:invalid value encountered in cast:RuntimeWarning")
 @pytest.mark.parametrize("bad_id", [np.inf, 1e30])
 def test_beacon_map_rejects_non_representable_ids(bad_id):
@@ -219,8 +211,6 @@ def test_measurements_reject_bad_input_naming_the_field(ids, azimuth, quality, f
         Measurements(ids, azimuth, quality)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: _as_ids accepts an infinite float id and casts it "
-                   "to -2**63 instead of raising InvalidInputError")
 @pytest.mark.filterwarnings("ignore:invalid value encountered in cast:RuntimeWarning")
 def test_measurements_reject_infinite_id():
     with pytest.raises(InvalidInputError, match=re.escape("Measurements.ids")):
@@ -308,9 +298,6 @@ def test_wrap_angle_is_idempotent(angle):
     assert wrap_angle(once) == once
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: wrap_angle(np.nextafter(np.pi, 4)) returns -np.pi, "
-                   "the excluded end (np.mod rounds a tiny negative up to 2π); "
-                   "wrap_angle(-np.pi) is np.pi, so the function is not idempotent there")
 def test_wrap_angle_just_above_pi():
     wrapped = wrap_angle(np.nextafter(math.pi, 4.0))
     assert wrapped != -math.pi

@@ -14,7 +14,8 @@ PAPER_DELTA_D = math.radians(0.4)
 
 
 def test_eq1_one_pixel_at_150_pixels():
-    # atan(1/150) = u − u³/3 + u⁵/5 − … with u = 1/150: 0.0066666667 − 0.0000000988 + 0.0000000000026
+    # atan(u) = u − u³/3 + u⁵/5 − … with u = 1/150:
+    # 0.0066666667 − 0.0000000988 + 0.0000000000026
     model = ErrorModel.from_camera(center_error_px=1.0, horizon_radius_px=150.0)
     assert model.delta_alpha_d == pytest.approx(0.0066665679038683, rel=1e-12)
     # The paper calls this "~0.4°" (it is 0.382°).

@@ -1,4 +1,4 @@
-"""Outlier injection of the paper's protocol (Sec. 3.1): K = 1 adds ±[10°, 170°], K >= 2 deranges."""
+"""Outlier injection of the paper's protocol (Sec. 3.1): K = 1 adds ±[10°, 170°], K >= 2 swaps."""
 
 from __future__ import annotations
 

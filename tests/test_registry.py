@@ -151,7 +151,8 @@ def test_bad_specs_raise_invalid_input(spec, message):
 
 def test_a_factory_without_localize_is_rejected(tmp_path):
     path = plugin_file(tmp_path)
-    with pytest.raises(InvalidInputError, match=re.escape("has no localize(measurements, beacons)")):
+    with pytest.raises(InvalidInputError,
+                       match=re.escape("has no localize(measurements, beacons)")):
         azgym.make_localizer(f"{path}:not_a_localizer")
 
 

@@ -1,4 +1,4 @@
-"""The reproduction of Rátosi & Simon (2021), Sec. 3: protocol, statistics against the paper, outputs.
+"""The reproduction of Rátosi & Simon (2021), Sec. 3: protocol, paper statistics, outputs.
 
 The statistical tests run a reduced protocol (every grid point, fewer realisations) with a fixed
 seed. Tolerances: the paper's 2.65 cm ± 5 % (issue #2); the per-run error has a standard deviation

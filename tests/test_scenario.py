@@ -140,7 +140,8 @@ def test_valid_user_file_loads_with_defaults_and_overrides(tmp_path):
 
 
 def test_error_model_from_camera_pixels(tmp_path):
-    text = VALID.replace("delta_alpha_d_deg = 0.5", "center_error_px = 1.0\nhorizon_radius_px = 150")
+    text = VALID.replace("delta_alpha_d_deg = 0.5",
+                         "center_error_px = 1.0\nhorizon_radius_px = 150")
     scenario = azgym.load_scenario(write(tmp_path, text))
     assert scenario.error_model.delta_alpha_d == pytest.approx(math.atan2(1.0, 150.0))
 

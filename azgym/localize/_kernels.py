@@ -211,6 +211,38 @@ def solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k, degeneracy_tol):
     return True, x, y, hx, hy, det * det / hadamard_sq
 
 
+@numba.njit(error_model="numpy", cache=True)
+def is_singular(information):
+    """Whether a 3×3 information matrix JᵀWJ of (x, y, φ) leaves the pose undetermined.
+
+    True when its determinant is below 1e-12 of the product of its diagonal (a scale-free test):
+    e.g. every beacon on one line through the camera, or fewer than three directions.
+    """
+    diag = information[0, 0] * information[1, 1] * information[2, 2]
+    c00 = information[1, 1] * information[2, 2] - information[1, 2] * information[2, 1]
+    c01 = information[1, 2] * information[2, 0] - information[1, 0] * information[2, 2]
+    c02 = information[1, 0] * information[2, 1] - information[1, 1] * information[2, 0]
+    det = information[0, 0] * c00 + information[0, 1] * c01 + information[0, 2] * c02
+    return not (diag > 0.0 and abs(det) > 1e-12 * diag)
+
+
+@numba.njit(error_model="numpy", cache=True)
+def singular_at(bx, by, x, y):
+    """Whether the azimuths of all beacons (bx, by) determine the pose at (x, y) (equal weights)."""
+    information = np.zeros((3, 3))
+    for m in range(bx.size):
+        dx = bx[m] - x
+        dy = by[m] - y
+        d2 = dx * dx + dy * dy
+        if d2 == 0.0:
+            continue
+        j = (-dy / d2, dx / d2, 1.0)
+        for r in range(3):
+            for c in range(3):
+                information[r, c] += j[r] * j[c]
+    return is_singular(information)
+
+
 @numba.njit(inline="always", error_model="numpy", cache=True)
 def residuals(bx, by, ca, sa, weight, use, x, y, ch, sh, eps):
     """ε_i of eq. 23/30 at pose (x, y, φ) into ``eps`` (for ``use[i]``); returns Σ w_i ε_i²."""
@@ -321,12 +353,7 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
             lam *= 10.0
         if not accepted:  # no step lowers the cost any more: a (numerical) minimum
             status = CONVERGED
-    diag = jtj[0, 0] * jtj[1, 1] * jtj[2, 2]
-    c00 = jtj[1, 1] * jtj[2, 2] - jtj[1, 2] * jtj[2, 1]
-    c01 = jtj[1, 2] * jtj[2, 0] - jtj[1, 0] * jtj[2, 2]
-    c02 = jtj[1, 0] * jtj[2, 1] - jtj[1, 1] * jtj[2, 0]
-    if not diag > 0.0 or not abs(jtj[0, 0] * c00 + jtj[0, 1] * c01 + jtj[0, 2] * c02) > \
-            1e-12 * diag:
+    if is_singular(jtj):
         status = SINGULAR
     out[0] = x
     out[1] = y

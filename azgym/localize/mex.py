@@ -52,7 +52,9 @@ def _row_costs(bx, by, ca, sa, y, x0, step, nx, ux, uy, mean, cost):
     inv_n = 1.0 / n
     for i in range(nx):
         m = mean[i] * inv_n
-        cost[i] = cost[i] * inv_n - m * m
+        spread = cost[i] * inv_n - m * m
+        # Directions that cancel (|u| ≈ 0) leave the heading, and so E_ref, undefined.
+        cost[i] = spread if ux[i] * ux[i] + uy[i] * uy[i] > 1e-18 * n * n else np.inf
 
 
 @numba.njit(error_model="numpy", cache=True)
@@ -175,6 +177,11 @@ class Mex(Localizer):
             return Estimate.failure("no grid point has a finite cost", problem.n_measurements)
         x = x0 + i * step
         y = y0 + j * step
+        if K.singular_at(problem.bx, problem.by, x, y):
+            return Estimate.failure(
+                "the measured beacons do not determine the pose at the best grid point "
+                "(e.g. all on one line through it)", problem.n_measurements,
+            )
         dx = problem.bx - x
         dy = problem.by - y
         dist = np.hypot(dx, dy)
@@ -190,20 +197,34 @@ class Mex(Localizer):
         )
 
     def _coarse_to_fine(self, args, x0, y0, nx, ny, no_store):
+        """Coarse grid, then a descent on the fine grid from each of the best coarse minima.
+
+        Around each candidate the fine grid is searched in a window of ± one coarse step; while the
+        window's best point lies on its edge (and not on the grid's), the window moves there and
+        the search repeats. So each candidate ends in a fine-grid local minimum, and the answer is
+        the exhaustive argmin unless the coarse grid misses the global minimum's basin entirely.
+        """
         ratio = int(round(self.coarse_step / self.step))
         cnx = (nx - 1) // ratio + 1
         cny = (ny - 1) // ratio + 1
         coarse = np.empty((cny, cnx))
-        grid_search(*args, x0, y0, self.coarse_step, cnx, cny, coarse)
+        grid_search(*args, x0, y0, float(self.coarse_step), cnx, cny, coarse)
         best = (-1, -1, math.inf)
         for cj, ci in _local_minima(coarse, self.n_candidates):
-            lo_i = max(ci * ratio - ratio, 0)
-            lo_j = max(cj * ratio - ratio, 0)
-            hi_i = min(ci * ratio + ratio, nx - 1)
-            hi_j = min(cj * ratio + ratio, ny - 1)
-            i, j, cost = grid_search(*args, x0 + lo_i * self.step, y0 + lo_j * self.step,
-                                     float(self.step), hi_i - lo_i + 1, hi_j - lo_j + 1,
-                                     no_store)
+            ci, cj = ci * ratio, cj * ratio
+            for _ in range(64):
+                lo_i, hi_i = max(ci - ratio, 0), min(ci + ratio, nx - 1)
+                lo_j, hi_j = max(cj - ratio, 0), min(cj + ratio, ny - 1)
+                i, j, cost = grid_search(*args, x0 + lo_i * self.step, y0 + lo_j * self.step,
+                                         float(self.step), hi_i - lo_i + 1, hi_j - lo_j + 1,
+                                         no_store)
+                if i < 0:
+                    break
+                ci, cj = lo_i + i, lo_j + j
+                on_edge = (ci in (lo_i, hi_i) and ci not in (0, nx - 1)) or (
+                    cj in (lo_j, hi_j) and cj not in (0, ny - 1))
+                if not on_edge:
+                    break
             if i >= 0 and cost < best[2]:
-                best = (lo_i + i, lo_j + j, cost)
+                best = (ci, cj, cost)
         return best

@@ -112,6 +112,7 @@ def package(
         diagnostics: Entries for ``Estimate.diagnostics`` (iterations and cost are added).
     """
     diagnostics["n_iterations"] = int(out[5])
+    diagnostics["converged"] = int(out[6]) == K.CONVERGED
     diagnostics["cost"] = float(out[4])
     if int(out[6]) == K.SINGULAR:
         return Estimate.failure(

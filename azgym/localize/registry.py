@@ -10,6 +10,7 @@ pyproject.toml::
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import importlib.util
 import sys
@@ -74,7 +75,8 @@ def _load_attribute(spec: str) -> Factory:
         path = Path(target).expanduser().resolve()
         if not path.is_file():
             raise InvalidInputError(f"localizer spec {spec!r}: no file {path}")
-        module_name = f"azgym_plugin_{path.stem}_{abs(hash(path)) & 0xFFFFFFFF:x}"
+        digest = hashlib.sha1(str(path).encode()).hexdigest()[:10]  # stable across processes
+        module_name = f"azgym_plugin_{path.stem}_{digest}"
         module = sys.modules.get(module_name)
         if module is None:
             module_spec = importlib.util.spec_from_file_location(module_name, path)
