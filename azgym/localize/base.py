@@ -171,9 +171,8 @@ class Localizer(ABC):
 
     def _validate_once(self) -> None:
         """Run ``_check_params`` unless these exact hyperparameter values passed it before."""
-        names = _param_names(type(self))
-        values = tuple(getattr(self, name) for name in names)
-        if getattr(self, "_validated_params", None) != values:
+        values = tuple(map(self.__dict__.get, _param_names(type(self))))
+        if self.__dict__.get("_validated_params") != values:
             self._check_params()
             self._validated_params = values
 

@@ -45,31 +45,56 @@ def _random_triplets(n: int, count: int, rng: np.random.Generator) -> IntArray:
 
 
 @numba.njit(inline="always", error_model="numpy", cache=True)
+def _inside_tolerance(cross, dot, d2, w, tan_d, wide_d2):
+    """|ε| <= Δα = 2(Δα_d + Δα_c) (eq. 25-26) from the direction vectors, without sqrt or atan.
+
+    With t = tan Δα_d, tan Δα_c = W / 2D and the addition formulas, tan(Δα_d + Δα_c) = n / d with
+    n = 2Dt + W and d = 2D − Wt, and tan Δα = 2nd / (d² − n²). Where Δα < π/2 (d > n, i.e.
+    D² > ``wide_d2``), |ε| <= Δα ⟺ dot > 0 and |cross| (d² − n²) <= 2nd · dot. Expanded in D this
+    reads L <= D·S with L = D²(4(1−t²)|cross| − 8t·dot) − W²(1−t²)|cross| + 2W²t·dot and
+    S = 8Wt|cross| + 4W(1−t²)dot >= 0, decided by L <= 0 or L² <= D²S²: only D² is needed.
+
+    Returns (inside, wide); a "wide" measurement (tolerance >= π/2, the beacon closer than about
+    its own width) is not decided here.
+    """
+    wide = d2 <= wide_d2
+    c = abs(cross)
+    q = 1.0 - tan_d * tan_d
+    lhs = d2 * (4.0 * q * c - 8.0 * tan_d * dot) - w * w * (q * c - 2.0 * tan_d * dot)
+    slope = w * (8.0 * tan_d * c + 4.0 * q * dot)
+    inside = (dot > 0.0) & ((lhs <= 0.0) | (lhs * lhs <= d2 * slope * slope)) & ~wide
+    return inside, wide
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
+def _wide_d2(w, tan_d):
+    """D² below which Δα_d + Δα_c >= π/4 (tolerance >= π/2): D <= W(1 + t) / 2(1 − t)."""
+    if tan_d >= 1.0:
+        return np.inf
+    limit = 0.5 * w * (1.0 + tan_d) / (1.0 - tan_d)
+    return limit * limit
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
 def _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage):
     """Inlier test |ε_m| <= Δα_m = 2(Δα_d + Δα_c,m) (eq. 23-26); returns (inlier, ε_m).
 
-    Division-free where Δα_m < π/2 (the usual case): with tan Δα_c = W / 2D, the addition
-    formulas give tan(Δα_d + Δα_c) = n / d with n = 2D tan Δα_d + W, d = 2D − W tan Δα_d, and
-    tan Δα = 2nd / (d² − n²); then |ε| <= Δα ⟺ dot > 0 and |cross| (d² − n²) <= 2nd · dot.
-    ε itself is only computed for inliers (for eq. 27).
+    (ch, sh) may be any positive multiple of (cos φ, sin φ). ε is computed for inliers only.
     """
     dx = bx[m] - x
     dy = by[m] - y
-    mx = ca[m] * ch - sa[m] * sh  # measured world direction cos(α_m + φ)
-    my = sa[m] * ch + ca[m] * sh  # sin(α_m + φ)
+    mx = ca[m] * ch - sa[m] * sh  # measured world direction, along α_m + φ
+    my = sa[m] * ch + ca[m] * sh
     cross = dx * my - dy * mx
     dot = dx * mx + dy * my
     w = width[m] if coverage else 0.0
-    two_d = 2.0 * math.sqrt(dx * dx + dy * dy)
-    n = two_d * tan_d + w
-    d = two_d - w * tan_d
-    if d > n:  # Δα_d + Δα_c < π/4, so Δα < π/2
-        if dot > 0.0 and abs(cross) * (d - n) * (d + n) <= 2.0 * n * d * dot:
-            return True, K.small_angle(cross, dot)
-        return False, 0.0
-    # Wide tolerance (>= π/2, beacon closer than its own width): compare the angles themselves.
+    d2 = dx * dx + dy * dy
+    inside, wide = _inside_tolerance(cross, dot, d2, w, tan_d, _wide_d2(w, tan_d))
+    if not wide:
+        return inside, K.small_angle(cross, dot) if inside else 0.0
+    # Wide tolerance: compare the angles themselves.
     eps = K.fast_atan2(cross, dot)
-    return abs(eps) <= 2.0 * (delta_d + K.fast_atan2(0.5 * w, 0.5 * two_d)), eps
+    return abs(eps) <= 2.0 * (delta_d + K.fast_atan2(0.5 * w, math.sqrt(d2))), eps
 
 
 # Reassociation lets LLVM vectorise the loop over measurements (4 at a time); the sums then depend
@@ -96,6 +121,7 @@ def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, s
         cm = ca[m]
         sm = sa[m]
         w = width[m] if coverage else 0.0
+        wide_d2 = _wide_d2(w, tan_d)
         for t in range(count):
             dx = xm - px[t]
             dy = ym - py[t]
@@ -103,17 +129,14 @@ def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, s
             my = sm * hx[t] + cm * hy[t]
             cross = dx * my - dy * mx
             dot = dx * mx + dy * my
-            two_d = 2.0 * math.sqrt(dx * dx + dy * dy)
-            n = two_d * tan_d + w
-            d = two_d - w * tan_d
-            inlier = (dot > 0.0) & (abs(cross) * (d - n) * (d + n) <= 2.0 * n * d * dot) & (d > n)
+            inlier, wide = _inside_tolerance(cross, dot, dx * dx + dy * dy, w, tan_d, wide_d2)
             u = cross / dot
             z = u * u
             eps = u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
                 1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0 + z / 17.0))))))))
             ns[t] += inlier
             sq[t] += eps * eps if inlier else 0.0
-            special[t] += (d <= n) | (inlier & (z > 0.01))
+            special[t] += wide | (inlier & (z > 0.01))
 
 
 @numba.njit(error_model="numpy", cache=True)
@@ -200,13 +223,20 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
 
 
 @numba.njit(error_model="numpy", cache=True)
-def _ransac(floats, ints, triplets, delta_d, coverage, degeneracy_tol, weighted, max_iter, out,
-            mask, cov):
+def _ransac(floats, ints, triplets, settings, out, mask):
     """Steps 1-6 in one compiled call on a Problem's packed arrays.
 
-    ``out`` gets the refinement's 7 values (see K.refine) then NS, E and the number of valid
-    triplets; ``mask`` (length M, all False on entry) the supporters, by original position.
+    ``settings`` is (Δα_d, coverage, degeneracy_tol, weighted, max_iter) as floats (one argument
+    instead of five: each argument costs time at the Python/compiled boundary). ``out`` gets the
+    refinement's 7 values (see K.refine), then NS, E, the number of valid triplets and the 3×3
+    covariance; ``mask`` (length M, all False on entry) the supporters, by original position.
     """
+    delta_d = settings[0]
+    coverage = settings[1] != 0.0
+    degeneracy_tol = settings[2]
+    weighted = settings[3] != 0.0
+    max_iter = int(settings[4])
+    cov = out[10:19].reshape((3, 3))
     bx = floats[3]
     by = floats[4]
     ca = floats[1]
@@ -290,6 +320,8 @@ class Ransac(Localizer):
         check_range(name, "max_exhaustive", self.max_exhaustive, low=1, integer=True)
         check_range(name, "degeneracy_tol", self.degeneracy_tol, low=0.0, high=1.0)
         check_range(name, "max_iter", self.max_iter, low=1, integer=True)
+        self._settings = np.array([self.delta_alpha_d, bool(self.coverage), self.degeneracy_tol,
+                                   bool(self.weighted), self.max_iter], dtype=np.float64)
 
     def error_model(self) -> ErrorModel:
         """The error model whose bounds set the tolerance (eq. 25)."""
@@ -310,12 +342,9 @@ class Ransac(Localizer):
 
     def _localize(self, problem: Problem) -> Estimate:
         triplets = self.triplets(problem.size)
-        out = np.empty(10)
+        out = np.empty(19)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
-        cov = np.empty((3, 3))
-        _ransac(problem.floats, problem.ints, triplets, float(self.delta_alpha_d),
-                bool(self.coverage), float(self.degeneracy_tol), bool(self.weighted),
-                int(self.max_iter), out, mask, cov)
+        _ransac(problem.floats, problem.ints, triplets, self._settings, out, mask)
         diagnostics = {"n_triplets": int(triplets.shape[0]), "n_valid_triplets": int(out[9])}
         if out[7] < 3:
             return Estimate.failure(
@@ -323,4 +352,4 @@ class Ransac(Localizer):
                 diagnostics,
             )
         diagnostics["triplet_mean_sq_error"] = float(out[8])
-        return package(problem, mask, out, cov, diagnostics)
+        return package(problem, mask, out, out[10:19].reshape(3, 3), diagnostics)
