@@ -127,6 +127,20 @@ def test_coarse_to_fine_in_a_long_valley(paper_beacons):
     assert grid_index(fast, -3.75, -9.75) == (373, 487)
 
 
+@pytest.mark.parametrize("beacon_id", [2, 8, 11])
+def test_coarse_to_fine_matches_exhaustive_with_the_camera_on_a_beacon(paper_room, beacon_id):
+    # The camera sits exactly on a wall-centre beacon: that beacon's azimuth is garbage (coverage
+    # error up to 90°) and E_ref is singular there, with a basin narrower than the coarse step.
+    # (The exhaustive answer itself may be metres off: see baselines/README.md.)
+    beacons = paper_room.beacons
+    x, y = beacons.xy[beacons.index_of([beacon_id])[0]]
+    rng = np.random.default_rng(beacon_id)
+    frame = noisy_measurements(x, y, 0.8, beacons, paper_room.error_model, rng)
+    exhaustive = Mex().localize(frame, beacons)
+    fast = Mex(coarse_step=0.1).localize(frame, beacons)
+    assert grid_index(fast, -11.0, -11.0) == grid_index(exhaustive, -11.0, -11.0)
+
+
 @pytest.mark.parametrize(
     ("params", "message"),
     [

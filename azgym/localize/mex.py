@@ -106,8 +106,9 @@ class Mex(Localizer):
     rejection: it is the paper's reference method, guaranteed to find the optimum on the grid.
 
     ``coarse_step`` enables a coarse-to-fine search for long studies: the cost on a coarse grid,
-    then the fine grid (same lattice as the exhaustive one) within one coarse step of the
-    ``n_candidates`` lowest coarse local minima. The exhaustive grid stays the default.
+    then descents on the fine grid (same lattice as the exhaustive one) from the
+    ``n_candidates`` lowest coarse local minima and from every beacon. The exhaustive grid stays
+    the default.
 
     Args:
         step: Grid spacing [m] (the paper: 1 cm).
@@ -197,21 +198,31 @@ class Mex(Localizer):
         )
 
     def _coarse_to_fine(self, args, x0, y0, nx, ny, no_store):
-        """Coarse grid, then a descent on the fine grid from each of the best coarse minima.
+        """Coarse grid, then a descent on the fine grid from each seed.
 
-        Around each candidate the fine grid is searched in a window of ± one coarse step; while the
-        window's best point lies on its edge (and not on the grid's), the window moves there and
-        the search repeats. So each candidate ends in a fine-grid local minimum, and the answer is
-        the exhaustive argmin unless the coarse grid misses the global minimum's basin entirely.
+        The seeds are the best coarse local minima and the beacons' positions. Around each seed
+        the fine grid is searched in a window of ± one coarse step; while the window's best point
+        lies on its edge (and not on the grid's), the window moves there and the search repeats.
+        So each seed ends in a fine-grid local minimum, and the answer is the exhaustive argmin
+        unless the coarse grid misses the global minimum's basin entirely.
         """
         ratio = int(round(self.coarse_step / self.step))
         cnx = (nx - 1) // ratio + 1
         cny = (ny - 1) // ratio + 1
         coarse = np.empty((cny, cnx))
         grid_search(*args, x0, y0, float(self.coarse_step), cnx, cny, coarse)
+        # Seeds on the fine grid: the best coarse local minima, and every beacon inside the grid.
+        # Near a beacon E_ref is singular (its direction turns arbitrarily fast), so a camera at
+        # or next to a beacon has its minimum in a basin narrower than the coarse step.
+        seeds = [(ci * ratio, cj * ratio) for cj, ci in _local_minima(coarse, self.n_candidates)]
+        bx, by = args[0], args[1]
+        step = float(self.step)
+        for b in range(bx.size):
+            bi, bj = round((bx[b] - x0) / step), round((by[b] - y0) / step)
+            if 0 <= bi < nx and 0 <= bj < ny:
+                seeds.append((int(bi), int(bj)))
         best = (-1, -1, math.inf)
-        for cj, ci in _local_minima(coarse, self.n_candidates):
-            ci, cj = ci * ratio, cj * ratio
+        for ci, cj in seeds:
             for _ in range(64):
                 lo_i, hi_i = max(ci - ratio, 0), min(ci + ratio, nx - 1)
                 lo_j, hi_j = max(cj - ratio, 0), min(cj + ratio, ny - 1)
