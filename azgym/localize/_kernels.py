@@ -227,10 +227,15 @@ def is_singular(information):
 
 
 @numba.njit(error_model="numpy", cache=True)
-def singular_at(bx, by, x, y):
-    """Whether the azimuths of all beacons (bx, by) determine the pose at (x, y) (equal weights)."""
-    information = np.zeros((3, 3))
+def information(bx, by, use, weight, x, y, out):
+    """``out`` = Σ_i w_i j_i j_iᵀ over ``use``, with j_i = ∂ε_i/∂(x, y, φ) = (−Δy/D², Δx/D², 1).
+
+    A beacon at (x, y) itself has no defined direction and is left out.
+    """
+    out[:, :] = 0.0
     for m in range(bx.size):
+        if not use[m]:
+            continue
         dx = bx[m] - x
         dy = by[m] - y
         d2 = dx * dx + dy * dy
@@ -239,8 +244,16 @@ def singular_at(bx, by, x, y):
         j = (-dy / d2, dx / d2, 1.0)
         for r in range(3):
             for c in range(3):
-                information[r, c] += j[r] * j[c]
-    return is_singular(information)
+                out[r, c] += weight[m] * j[r] * j[c]
+
+
+@numba.njit(error_model="numpy", cache=True)
+def singular_at(bx, by, x, y):
+    """Whether the azimuths of all beacons (bx, by) determine the pose at (x, y) (equal weights)."""
+    matrix = np.empty((3, 3))
+    ones = np.ones(bx.size)
+    information(bx, by, ones != 0.0, ones, x, y, matrix)
+    return is_singular(matrix)
 
 
 @numba.njit(inline="always", error_model="numpy", cache=True)

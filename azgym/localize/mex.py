@@ -214,16 +214,19 @@ class Mex(Localizer):
         # Seeds on the fine grid: the best coarse local minima, and every beacon inside the grid.
         # Near a beacon E_ref is singular (its direction turns arbitrarily fast), so a camera at
         # or next to a beacon has its minimum in a basin narrower than the coarse step.
-        seeds = [(ci * ratio, cj * ratio) for cj, ci in _local_minima(coarse, self.n_candidates)]
+        # A beacon's seed gets one window: it is there for a basin at the beacon, and a descent
+        # that leaves the window is heading for a minimum that a coarse seed covers.
+        seeds = [(ci * ratio, cj * ratio, 64)
+                 for cj, ci in _local_minima(coarse, self.n_candidates)]
         bx, by = args[0], args[1]
         step = float(self.step)
         for b in range(bx.size):
             bi, bj = round((bx[b] - x0) / step), round((by[b] - y0) / step)
             if 0 <= bi < nx and 0 <= bj < ny:
-                seeds.append((int(bi), int(bj)))
+                seeds.append((int(bi), int(bj), 1))
         best = (-1, -1, math.inf)
-        for ci, cj in seeds:
-            for _ in range(64):
+        for ci, cj, moves in seeds:
+            for _ in range(moves):
                 lo_i, hi_i = max(ci - ratio, 0), min(ci + ratio, nx - 1)
                 lo_j, hi_j = max(cj - ratio, 0), min(cj + ratio, ny - 1)
                 i, j, cost = grid_search(*args, x0 + lo_i * self.step, y0 + lo_j * self.step,

@@ -40,22 +40,8 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
     info = np.zeros((3, 3))
     K.refine(bx, by, ca, sa, weight, use, start[0], start[1], start[2], start[3], max_iter, out,
              info)
-    x = out[0]
-    y = out[1]
-    meat = np.zeros((3, 3))
-    for m in range(n):
-        if not use[m]:
-            continue
-        dx = bx[m] - x
-        dy = by[m] - y
-        d2 = dx * dx + dy * dy
-        if d2 == 0.0:
-            continue
-        j = (-dy / d2, dx / d2, 1.0)
-        w2v = weight[m] * weight[m] * var[m]
-        for r in range(3):
-            for c in range(3):
-                meat[r, c] += w2v * j[r] * j[c]
+    meat = np.empty((3, 3))
+    K.information(bx, by, use, weight * weight * var, out[0], out[1], meat)
     inverse = np.empty((3, 3))
     unit = np.zeros(3)
     column = np.empty(3)
