@@ -212,21 +212,6 @@ def solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k, degeneracy_tol):
 
 
 @numba.njit(error_model="numpy", cache=True)
-def is_singular(information):
-    """Whether a 3×3 information matrix JᵀWJ of (x, y, φ) leaves the pose undetermined.
-
-    True when its determinant is below 1e-12 of the product of its diagonal (a scale-free test):
-    e.g. every beacon on one line through the camera, or fewer than three directions.
-    """
-    diag = information[0, 0] * information[1, 1] * information[2, 2]
-    c00 = information[1, 1] * information[2, 2] - information[1, 2] * information[2, 1]
-    c01 = information[1, 2] * information[2, 0] - information[1, 0] * information[2, 2]
-    c02 = information[1, 0] * information[2, 1] - information[1, 1] * information[2, 0]
-    det = information[0, 0] * c00 + information[0, 1] * c01 + information[0, 2] * c02
-    return not (diag > 0.0 and abs(det) > 1e-12 * diag)
-
-
-@numba.njit(error_model="numpy", cache=True)
 def information(bx, by, use, weight, x, y, out):
     """``out`` = Σ_i w_i j_i j_iᵀ over ``use``, with j_i = ∂ε_i/∂(x, y, φ) = (−Δy/D², Δx/D², 1).
 
@@ -248,12 +233,37 @@ def information(bx, by, use, weight, x, y, out):
 
 
 @numba.njit(error_model="numpy", cache=True)
-def singular_at(bx, by, x, y):
-    """Whether the azimuths of all beacons (bx, by) determine the pose at (x, y) (equal weights)."""
-    matrix = np.empty((3, 3))
-    ones = np.ones(bx.size)
-    information(bx, by, ones != 0.0, ones, x, y, matrix)
-    return is_singular(matrix)
+def singular_at(bx, by, use, x, y):
+    """Whether the azimuths of the beacons in ``use`` leave the pose at (x, y) undetermined.
+
+    The test is on the rank of the Jacobian, scale-free: its rows j_i are normalised to unit
+    length (so one beacon very close to the camera, whose row is huge, cannot make the others look
+    negligible), and the pose is undetermined when det(Σ ĵ_i ĵ_iᵀ) is below 1e-12 of the product
+    of its diagonal. That happens when every beacon lies on one line through the camera, or when
+    the camera is on a circle through all of them (the "danger circle" of three beacons).
+    """
+    matrix = np.zeros((3, 3))
+    for m in range(bx.size):
+        if not use[m]:
+            continue
+        dx = bx[m] - x
+        dy = by[m] - y
+        d2 = dx * dx + dy * dy
+        if d2 == 0.0:
+            continue
+        j0 = -dy / d2
+        j1 = dx / d2
+        norm2 = j0 * j0 + j1 * j1 + 1.0
+        j = (j0, j1, 1.0)
+        for r in range(3):
+            for c in range(3):
+                matrix[r, c] += j[r] * j[c] / norm2
+    diag = matrix[0, 0] * matrix[1, 1] * matrix[2, 2]
+    c00 = matrix[1, 1] * matrix[2, 2] - matrix[1, 2] * matrix[2, 1]
+    c01 = matrix[1, 2] * matrix[2, 0] - matrix[1, 0] * matrix[2, 2]
+    c02 = matrix[1, 0] * matrix[2, 1] - matrix[1, 1] * matrix[2, 0]
+    det = matrix[0, 0] * c00 + matrix[0, 1] * c01 + matrix[0, 2] * c02
+    return not (diag > 0.0 and abs(det) > 1e-12 * diag)
 
 
 @numba.njit(inline="always", error_model="numpy", cache=True)
@@ -367,7 +377,7 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
             lam *= 10.0
         if not accepted:  # no step lowers the cost any more: a (numerical) minimum
             status = CONVERGED
-    if is_singular(jtj):
+    if singular_at(bx, by, use, x, y):
         status = SINGULAR
     out[0] = x
     out[1] = y

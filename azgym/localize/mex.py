@@ -178,7 +178,7 @@ class Mex(Localizer):
             return Estimate.failure("no grid point has a finite cost", problem.n_measurements)
         x = x0 + i * step
         y = y0 + j * step
-        if K.singular_at(problem.bx, problem.by, x, y):
+        if K.singular_at(problem.bx, problem.by, np.ones(problem.size, dtype=np.bool_), x, y):
             return Estimate.failure(
                 "the measured beacons do not determine the pose at the best grid point "
                 "(e.g. all on one line through it)", problem.n_measurements,
