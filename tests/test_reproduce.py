@@ -74,12 +74,15 @@ def test_ransac_barely_degrades_with_outliers(ransac_runs, k, ceiling_cm):
     assert entry["mean_cm"] <= ceiling_cm
 
 
-def test_ransac_sits_close_to_the_weighted_least_squares_limit(ransac_runs):
-    for k, limit in ransac_runs.results["limit"].items():
-        mean = ransac_runs.results["localizers"]["ransac"]["by_k"][k]["far"]["mean_cm"]
-        # RANSAC refines by (unweighted) least squares on its inliers, so it cannot be far better
-        # than the weighted-LS limit, and should not be much worse.
-        assert 0.85 * limit["mean_cm_far"] <= mean <= 1.3 * limit["mean_cm_far"], k
+@pytest.mark.parametrize(("k", "ceiling"), [("0", 1.05), ("1", 1.1), ("3", 1.15), ("5", 1.5)])
+def test_ransac_sits_close_to_the_weighted_least_squares_limit(ransac_runs, k, ceiling):
+    # RANSAC refines by (unweighted) least squares on its inliers, so it cannot beat the
+    # weighted-LS limit by much. Without outliers it should sit on it (the full protocol: 1.01x).
+    # With 5 shuffled measurements some swaps stay within tolerance and go undetected, which the
+    # limit (computed on the truly clean beacons) does not suffer: the full protocol gives 1.20x.
+    limit = ransac_runs.results["limit"][k]["mean_cm_far"]
+    mean = ransac_runs.results["localizers"]["ransac"]["by_k"][k]["far"]["mean_cm"]
+    assert 0.95 * limit <= mean <= ceiling * limit
 
 
 def test_non_robust_methods_break_down_with_outliers():
