@@ -107,7 +107,7 @@ def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, s
     """Supporters NS_t and Σε² of every candidate pose t at once (the fast path of _is_inlier).
 
     The inner loop runs over candidates, so it vectorises without horizontal sums. A measurement
-    whose tolerance is π/2 or more, or an inlier more than 5.7° off, is "special" for that
+    whose tolerance is π/2 or more, or an inlier more than 2.86° off, is "special" for that
     candidate: the caller then rescores the candidate exactly with _score_exact.
     """
     count = px.size
@@ -132,11 +132,12 @@ def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, s
             inlier, wide = _inside_tolerance(cross, dot, dx * dx + dy * dy, w, tan_d, wide_d2)
             u = cross / dot
             z = u * u
+            # atan(u) to u¹¹: for z <= 0.0025 (ε <= 2.86°) the next term is below 2e-17 of ε.
             eps = u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
-                1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0 + z / 17.0))))))))
+                1.0 / 9.0 - z / 11.0)))))
             ns[t] += inlier
             sq[t] += eps * eps if inlier else 0.0
-            special[t] += wide | (inlier & (z > 0.01))
+            special[t] += wide | (inlier & (z > 0.0025))
 
 
 @numba.njit(error_model="numpy", cache=True)
@@ -223,20 +224,19 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
 
 
 @numba.njit(error_model="numpy", cache=True)
-def _ransac(floats, ints, triplets, settings, out, mask):
+def _ransac(floats, ints, triplets, settings, out, mask, cov):
     """Steps 1-6 in one compiled call on a Problem's packed arrays.
 
     ``settings`` is (Δα_d, coverage, degeneracy_tol, weighted, max_iter) as floats (one argument
     instead of five: each argument costs time at the Python/compiled boundary). ``out`` gets the
-    refinement's 7 values (see K.refine), then NS, E, the number of valid triplets and the 3×3
-    covariance; ``mask`` (length M, all False on entry) the supporters, by original position.
+    refinement's 7 values (see K.refine), then NS, E and the number of valid triplets; ``mask``
+    (length M, all False on entry) the supporters, by original position; ``cov`` the covariance.
     """
     delta_d = settings[0]
     coverage = settings[1] != 0.0
     degeneracy_tol = settings[2]
     weighted = settings[3] != 0.0
     max_iter = int(settings[4])
-    cov = out[10:19].reshape((3, 3))
     bx = floats[3]
     by = floats[4]
     ca = floats[1]
@@ -342,9 +342,10 @@ class Ransac(Localizer):
 
     def _localize(self, problem: Problem) -> Estimate:
         triplets = self.triplets(problem.size)
-        out = np.empty(19)
+        out = np.empty(10)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
-        _ransac(problem.floats, problem.ints, triplets, self._settings, out, mask)
+        cov = np.empty((3, 3))
+        _ransac(problem.floats, problem.ints, triplets, self._settings, out, mask, cov)
         diagnostics = {"n_triplets": int(triplets.shape[0]), "n_valid_triplets": int(out[9])}
         if out[7] < 3:
             return Estimate.failure(
@@ -352,4 +353,4 @@ class Ransac(Localizer):
                 diagnostics,
             )
         diagnostics["triplet_mean_sq_error"] = float(out[8])
-        return package(problem, mask, out, out[10:19].reshape(3, 3), diagnostics)
+        return package(problem, mask, out, cov, diagnostics)
