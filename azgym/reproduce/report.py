@@ -145,6 +145,7 @@ def _figures(reproduction: Reproduction, out: Path) -> list[Path]:
             ax.step(ranked, np.arange(1, ranked.size + 1) / ranked.size, where="post",
                     label=label)
         ax.set_xscale("log")
+        ax.set_xlim(left=0.05)  # MEX is exact (0 cm) where the truth lies on its 1 cm lattice
         ax.set_title(f"K = {k}")
         ax.set_xlabel("position error [cm]")
         ax.grid(True, which="both", alpha=0.3)
