@@ -451,3 +451,25 @@ def test_sampled_triplets_are_valid_and_exhaustive_below_the_limit():
     assert len({tuple(sorted(row)) for row in Ransac().triplets(12).tolist()}) == 220
     # Sampling that would need more trials than there are triplets uses them all.
     assert Ransac(max_exhaustive=10, pr_hit=0.999999).triplets(8).shape == (56, 3)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_ransac_fast_path_answers_exactly_as_the_general_path(paper_room, seed):
+    # localize() looks ids up inside the compiled kernel; _localize(Problem) is the general path.
+    from azgym.localize.base import Problem
+
+    rng = np.random.default_rng(seed)
+    beacons = paper_room.beacons
+    frame = noisy_measurements(*rng.uniform(-9, 9, 2), rng.uniform(-3, 3), beacons,
+                               paper_room.error_model, rng)
+    ids, azimuth = frame.ids.copy(), frame.azimuth.copy()
+    if seed % 2:  # a mirror ghost of one beacon and a misdecoded id
+        ids = np.append(ids, [ids[3], 777])
+        azimuth = np.append(azimuth, [azimuth[3] + 0.4, 0.1])
+    frame = Measurements(ids, azimuth)
+    ransac = azgym.make_localizer("ransac")
+    fast = ransac.localize(frame, beacons)
+    general = ransac._localize(Problem.from_frame(frame, beacons))
+    assert (fast.x, fast.y, fast.heading) == (general.x, general.y, general.heading)
+    assert np.array_equal(fast.inliers, general.inliers)
+    assert fast.diagnostics == general.diagnostics

@@ -26,7 +26,7 @@ MIN_MEASUREMENTS = 3
 
 
 @numba.njit(error_model="numpy", cache=True)
-def _gather(ids, azimuth, sorted_ids, sorted_order, xyz, width):
+def gather(ids, azimuth, sorted_ids, sorted_order, xyz, width):
     """Look up each measured id in the map (binary search); gather the usable measurements.
 
     Returns a (6, K) float array (azimuth, cos, sin, beacon x, beacon y, width), a (2, K) int
@@ -94,7 +94,7 @@ class Problem:
     @classmethod
     def from_frame(cls, measurements: Measurements, beacons: BeaconMap) -> Problem:
         """Look up every measurement's beacon; drop (and remember) ids the map does not know."""
-        return cls(*_gather(measurements.ids, measurements.azimuth, *beacons.lookup_tables()),
+        return cls(*gather(measurements.ids, measurements.azimuth, *beacons.lookup_tables()),
                    n_measurements=len(measurements))
 
     @property
@@ -151,6 +151,15 @@ class Localizer(ABC):
                 f"beacons must be an azgym.BeaconMap, got {type(beacons).__name__}"
             )
         self._validate_once()
+        return self._localize_frame(measurements, beacons)
+
+    def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        """Reduce the frame to its usable measurements, refuse fewer than three beacons, solve.
+
+        A localizer whose compiled kernel can do the id lookup itself may override this to save
+        the round trip through :class:`Problem` (ransac does); it must answer exactly as this
+        method would, and may call it for the cases it does not handle.
+        """
         problem = Problem.from_frame(measurements, beacons)
         if problem.n_distinct < MIN_MEASUREMENTS:
             unknown = problem.n_measurements - problem.size

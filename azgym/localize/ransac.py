@@ -9,9 +9,9 @@ from itertools import combinations
 import numba
 import numpy as np
 
-from azgym.core import Estimate, IntArray
+from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Measurements
 from azgym.localize import _kernels as K
-from azgym.localize.base import Localizer, Problem, check_range
+from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range, gather
 from azgym.localize.refinement import package, refine_with_covariance
 from azgym.sensing.error_model import ErrorModel
 
@@ -256,6 +256,24 @@ def _ransac(floats, ints, triplets, settings, out, mask, cov):
             mask[ints[0, m]] = support[m]
 
 
+@numba.njit(error_model="numpy", cache=True)
+def _ransac_frame(ids, azimuth, sorted_ids, sorted_order, xyz, width, triplets, settings, out,
+                  mask, cov):
+    """The id lookup (``gather``) and steps 1-6 in one compiled call, for exhaustive triplets.
+
+    ``triplets`` are all triplets of the M measurements in lexicographic order; those within the
+    first K (the usable measurements) are exactly all triplets of K. Returns (K, distinct
+    beacons); when fewer than three beacons are distinct nothing else is done.
+    """
+    floats, ints, distinct = gather(ids, azimuth, sorted_ids, sorted_order, xyz, width)
+    usable = floats.shape[1]
+    if distinct >= 3:
+        if usable < ids.size:
+            triplets = triplets[triplets[:, 2] < usable]
+        _ransac(floats, ints, triplets, settings, out, mask, cov)
+    return usable, distinct
+
+
 class Ransac(Localizer):
     """RANSAC over beacon triplets with a position-dependent tolerance (Sec. 2.3-2.7).
 
@@ -340,17 +358,37 @@ class Ransac(Localizer):
             rng = np.random.default_rng(rng)
         return _random_triplets(n, count, rng)
 
+    def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        # The fast path, with the id lookup in the kernel: exhaustive triplets only, since
+        # sampled ones depend on the number of usable measurements, known after the lookup.
+        count = len(measurements)
+        if math.comb(count, 3) > self.max_exhaustive:
+            return super()._localize_frame(measurements, beacons)
+        out = np.empty(10)
+        mask = np.zeros(count, dtype=np.bool_)
+        cov = np.empty((3, 3))
+        usable, distinct = _ransac_frame(
+            measurements.ids, measurements.azimuth, *beacons.lookup_tables(),
+            _all_triplets(count), self._settings, out, mask, cov,
+        )
+        if distinct < MIN_MEASUREMENTS:
+            return super()._localize_frame(measurements, beacons)  # the standard refusal
+        return self._estimate(out, mask, cov, math.comb(usable, 3))
+
     def _localize(self, problem: Problem) -> Estimate:
         triplets = self.triplets(problem.size)
         out = np.empty(10)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
         cov = np.empty((3, 3))
         _ransac(problem.floats, problem.ints, triplets, self._settings, out, mask, cov)
-        diagnostics = {"n_triplets": int(triplets.shape[0]), "n_valid_triplets": int(out[9])}
+        return self._estimate(out, mask, cov, int(triplets.shape[0]))
+
+    @staticmethod
+    def _estimate(out: FloatArray, mask: BoolArray, cov: FloatArray, n_triplets: int) -> Estimate:
+        diagnostics = {"n_triplets": n_triplets, "n_valid_triplets": int(out[9])}
         if out[7] < 3:
             return Estimate.failure(
-                "no non-degenerate triplet with at least 3 supporters", problem.n_measurements,
-                diagnostics,
+                "no non-degenerate triplet with at least 3 supporters", mask.size, diagnostics
             )
         diagnostics["triplet_mean_sq_error"] = float(out[8])
-        return package(problem, mask, out, cov, diagnostics)
+        return package(mask, out, cov, diagnostics)

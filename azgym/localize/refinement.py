@@ -81,17 +81,15 @@ def finish(
         problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width, use, weighted,
         error_model.delta_alpha_d, error_model.coverage, start, max_iter, out, cov,
     )
-    return package(problem, problem.expand(use), out, cov, diagnostics or {})
+    return package(problem.expand(use), out, cov, diagnostics or {})
 
 
 def package(
-    problem: Problem, inliers: BoolArray, out: FloatArray, cov: FloatArray,
-    diagnostics: dict[str, Any],
+    inliers: BoolArray, out: FloatArray, cov: FloatArray, diagnostics: dict[str, Any]
 ) -> Estimate:
     """The :class:`Estimate` from the refinement's output ``out`` (see ``K.refine``).
 
     Args:
-        problem: The frame.
         inliers: The measurements used, over all M measurements of the frame.
         out: The refinement's output.
         cov: The covariance.
@@ -103,7 +101,7 @@ def package(
     if int(out[6]) == K.SINGULAR:
         return Estimate.failure(
             "the measurements used do not determine the pose (singular geometry)",
-            problem.n_measurements, diagnostics,
+            inliers.size, diagnostics,
         )
     return Estimate(
         x=float(out[0]),
