@@ -3,16 +3,24 @@
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 
 import numpy as np
 import pytest
+from hypothesis import settings
 
 import azgym
 from azgym.core import BeaconMap, Measurements, wrap_angle
 from azgym.sensing.synthetic import ideal_azimuths
 
 FrameMaker = Callable[..., Measurements]
+
+# The same examples on every run: a red CI must mean a regression, not an unlucky draw. To draw
+# fresh examples locally: HYPOTHESIS_PROFILE=explore python -m pytest
+settings.register_profile("repeatable", derandomize=True, print_blob=True)
+settings.register_profile("explore", derandomize=False, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 
 def ideal_frame(x: float, y: float, heading: float, beacons: BeaconMap) -> Measurements:
