@@ -212,10 +212,11 @@ def solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k, degeneracy_tol):
 
 
 @numba.njit(error_model="numpy", cache=True)
-def information(bx, by, use, weight, x, y, out):
+def information(bx, by, use, weight, x, y, unit_rows, out):
     """``out`` = Σ_i w_i j_i j_iᵀ over ``use``, with j_i = ∂ε_i/∂(x, y, φ) = (−Δy/D², Δx/D², 1).
 
-    A beacon at (x, y) itself has no defined direction and is left out.
+    With ``unit_rows`` each j_i is first scaled to unit length. A beacon at (x, y) itself has no
+    defined direction and is left out.
     """
     out[:, :] = 0.0
     for m in range(bx.size):
@@ -227,9 +228,12 @@ def information(bx, by, use, weight, x, y, out):
         if d2 == 0.0:
             continue
         j = (-dy / d2, dx / d2, 1.0)
+        w = weight[m]
+        if unit_rows:
+            w /= j[0] * j[0] + j[1] * j[1] + 1.0
         for r in range(3):
             for c in range(3):
-                out[r, c] += weight[m] * j[r] * j[c]
+                out[r, c] += w * j[r] * j[c]
 
 
 @numba.njit(error_model="numpy", cache=True)
@@ -242,22 +246,8 @@ def singular_at(bx, by, use, x, y):
     of its diagonal. That happens when every beacon lies on one line through the camera, or when
     the camera is on a circle through all of them (the "danger circle" of three beacons).
     """
-    matrix = np.zeros((3, 3))
-    for m in range(bx.size):
-        if not use[m]:
-            continue
-        dx = bx[m] - x
-        dy = by[m] - y
-        d2 = dx * dx + dy * dy
-        if d2 == 0.0:
-            continue
-        j0 = -dy / d2
-        j1 = dx / d2
-        norm2 = j0 * j0 + j1 * j1 + 1.0
-        j = (j0, j1, 1.0)
-        for r in range(3):
-            for c in range(3):
-                matrix[r, c] += j[r] * j[c] / norm2
+    matrix = np.empty((3, 3))
+    information(bx, by, use, np.ones(bx.size), x, y, True, matrix)
     diag = matrix[0, 0] * matrix[1, 1] * matrix[2, 2]
     c00 = matrix[1, 1] * matrix[2, 2] - matrix[1, 2] * matrix[2, 1]
     c01 = matrix[1, 2] * matrix[2, 0] - matrix[1, 0] * matrix[2, 2]

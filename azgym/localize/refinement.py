@@ -41,7 +41,7 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
     K.refine(bx, by, ca, sa, weight, use, start[0], start[1], start[2], start[3], max_iter, out,
              info)
     meat = np.empty((3, 3))
-    K.information(bx, by, use, weight * weight * var, out[0], out[1], meat)
+    K.information(bx, by, use, weight * weight * var, out[0], out[1], False, meat)
     inverse = np.empty((3, 3))
     unit = np.zeros(3)
     column = np.empty(3)
