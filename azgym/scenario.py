@@ -190,7 +190,7 @@ def _parse_error_model(read: _Reader, table: Any) -> ErrorModel:
                              "error_model.center_error_px", non_negative=True)
         radius = read.number(read.require(table, "horizon_radius_px", "error_model."),
                              "error_model.horizon_radius_px", positive=True)
-        return ErrorModel(delta_alpha_d=math.atan2(center, radius), coverage=coverage)
+        return ErrorModel.from_camera(center, radius, coverage=coverage)
     degrees = read.number(table.get("delta_alpha_d_deg", 0.4), "error_model.delta_alpha_d_deg",
                           non_negative=True)
     if degrees >= 90.0:

@@ -41,18 +41,22 @@ class ErrorModel:
             )
 
     @classmethod
-    def from_camera(cls, center_error_px: float, horizon_radius_px: float) -> ErrorModel:
+    def from_camera(
+        cls, center_error_px: float, horizon_radius_px: float, coverage: bool = True
+    ) -> ErrorModel:
         """Δα_d from the camera: eq. 1, Δα_d = atan2(ΔC_p, R_p).
 
         Args:
             center_error_px: Centre-detection error ΔC_p [px].
             horizon_radius_px: Radius R_p of the horizon on the image [px].
+            coverage: Whether the coverage error of eq. 2 is drawn.
         """
         if not center_error_px >= 0:
             raise InvalidInputError(f"center_error_px must be >= 0, got {center_error_px}")
         if not horizon_radius_px > 0:
             raise InvalidInputError(f"horizon_radius_px must be > 0, got {horizon_radius_px}")
-        return cls(delta_alpha_d=math.atan2(center_error_px, horizon_radius_px))
+        return cls(delta_alpha_d=math.atan2(center_error_px, horizon_radius_px),
+                   coverage=coverage)
 
     def coverage_bound(self, distance: ArrayLike, width: ArrayLike) -> FloatArray:
         """Δα_c,i = atan2(W_i / 2, D_i) (eq. 2) [rad]; zero when coverage errors are off."""
