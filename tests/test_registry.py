@@ -256,3 +256,22 @@ def test_editing_a_kernel_module_drops_the_whole_kernel_cache(tmp_path):
     assert drop_stale_cache(tmp_path) is True
     assert not (cache / "ransac._search-10.py311.nbi").exists()
     assert (cache / "other.f-1.py311.nbi").exists()
+
+
+def test_entry_point_plugins_are_listed_and_built(monkeypatch):
+    from importlib.metadata import EntryPoint
+
+    from azgym.localize import registry
+
+    plugin = EntryPoint(name="vendor-lsq", value="azgym.localize.lsq:LeastSquares",
+                        group=registry.ENTRY_POINT_GROUP)
+
+    def fake_entry_points(*, group):
+        return [plugin] if group == registry.ENTRY_POINT_GROUP else []
+
+    monkeypatch.setattr(registry, "entry_points", fake_entry_points)
+    assert "vendor-lsq" in azgym.list_localizers()
+    localizer = azgym.make_localizer("vendor-lsq", max_iter=7)
+    assert type(localizer).__name__ == "LeastSquares" and localizer.max_iter == 7
+    with pytest.raises(azgym.UnknownNameError, match=re.escape("Did you mean 'vendor-lsq'?")):
+        azgym.make_localizer("vendor-lsk")
