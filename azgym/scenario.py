@@ -18,8 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from azgym.core import BeaconMap
+from azgym.core import BeaconMap, FloatArray
 from azgym.errors import ScenarioError, unknown_name
+from azgym.layout import Camera, Faults, Rack, Wall
 from azgym.sensing.error_model import ErrorModel
 
 if sys.version_info >= (3, 11):
@@ -50,15 +51,32 @@ class Scenario:
     bounds: tuple[float, float, float, float]
     beacons: BeaconMap
     error_model: ErrorModel
+    racks: tuple[Rack, ...] = ()
+    walls: tuple[Wall, ...] = ()
+    camera: Camera = Camera()
+    faults: Faults = Faults()
+    physical_xyz: FloatArray | None = None
     source: Path | None = None
+
+    @property
+    def beacon_positions(self) -> FloatArray:
+        """Where the beacons physically are, shape (N, 3) [m].
+
+        The map's positions, except for beacons moved after the map was made (``moved_to``).
+        """
+        return self.beacons.xyz if self.physical_xyz is None else self.physical_xyz
 
 
 _TOP_KEYS = {"name", "description", "version", "room", "error_model", "beacon_defaults",
-             "beacons"}
+             "beacons", "camera", "faults", "racks", "walls"}
+_CAMERA_KEYS = {"height", "min_elevation_deg", "max_range"}
+_FAULT_KEYS = {"misdecode_rate"}
+_RACK_KEYS = {"center", "size", "angle_deg", "height", "reflectivity"}
+_WALL_KEYS = {"start", "end", "height", "reflectivity"}
 _ROOM_KEYS = {"bounds"}
 _ERROR_KEYS = {"delta_alpha_d_deg", "center_error_px", "horizon_radius_px", "coverage"}
 _DEFAULT_KEYS = {"width", "z"}
-_BEACON_KEYS = {"id", "xy", "xyz", "width", "z"}
+_BEACON_KEYS = {"id", "xy", "xyz", "width", "z", "moved_to"}
 
 
 class _Reader:
@@ -141,7 +159,7 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
     entries = read.require(data, "beacons")
     if not isinstance(entries, list) or len(entries) < 3:
         raise read.fail("beacons", "must be an array of at least 3 [[beacons]] tables")
-    ids, xyz, width = [], [], []
+    ids, xyz, width, physical = [], [], [], []
     seen: dict[int, int] = {}
     for k, entry in enumerate(entries):
         where = f"beacons[{k}]."
@@ -166,12 +184,109 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
                 read.number(entry.get("z", default_z), f"{where}z")]
         ids.append(beacon_id)
         xyz.append(position)
+        physical.append(_moved_to(read, entry, position, where))
         width.append(read.number(entry.get("width", default_width), f"{where}width",
                                  positive=True))
     beacons = BeaconMap(np.array(ids), np.array(xyz), np.array(width))
+    racks = tuple(_parse_rack(read, entry, k) for k, entry in enumerate(
+        _array_of_tables(read, data, "racks")))
+    walls = tuple(_parse_wall(read, entry, k) for k, entry in enumerate(
+        _array_of_tables(read, data, "walls")))
+    physical_xyz = np.array(physical)
+    for k, position in enumerate(physical_xyz):
+        for r, rack in enumerate(racks):
+            if rack.contains(position[0], position[1]):
+                raise read.fail(f"beacons[{k}]", f"beacon {ids[k]} at ({position[0]:g}, "
+                                f"{position[1]:g}) is inside racks[{r}]")
     return Scenario(name=name, description=description, version=version,
                     bounds=(bounds[0], bounds[1], bounds[2], bounds[3]), beacons=beacons,
-                    error_model=error_model)
+                    error_model=error_model, racks=racks, walls=walls,
+                    camera=_parse_camera(read, data.get("camera", {})),
+                    faults=_parse_faults(read, data.get("faults", {})),
+                    physical_xyz=None if np.array_equal(physical_xyz, beacons.xyz)
+                    else physical_xyz)
+
+
+def _array_of_tables(read: _Reader, data: dict[str, Any], key: str) -> list[dict[str, Any]]:
+    entries = data.get(key, [])
+    if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
+        raise read.fail(key, f"must be an array of [[{key}]] tables")
+    return entries
+
+
+def _moved_to(read: _Reader, entry: dict[str, Any], position: list[float],
+              where: str) -> list[float]:
+    """Where a beacon physically is: ``moved_to`` = [x, y] or [x, y, z], else its map position."""
+    if "moved_to" not in entry:
+        return position
+    moved = entry["moved_to"]
+    if isinstance(moved, list) and len(moved) == 2:
+        return read.vector(moved, f"{where}moved_to", 2) + [position[2]]
+    return read.vector(moved, f"{where}moved_to", 3)
+
+
+def _parse_rack(read: _Reader, entry: dict[str, Any], k: int) -> Rack:
+    where = f"racks[{k}]."
+    read.keys(entry, _RACK_KEYS, where)
+    center = read.vector(read.require(entry, "center", where), f"{where}center", 2)
+    size = read.vector(read.require(entry, "size", where), f"{where}size", 2)
+    if min(size) <= 0:
+        raise read.fail(f"{where}size", f"must be positive [length, depth], got {size}")
+    return Rack(
+        center=(center[0], center[1]), size=(size[0], size[1]),
+        angle=math.radians(read.number(entry.get("angle_deg", 0.0), f"{where}angle_deg")),
+        height=read.number(read.require(entry, "height", where), f"{where}height",
+                           positive=True),
+        reflectivity=_reflectivity(read, entry, where),
+    )
+
+
+def _parse_wall(read: _Reader, entry: dict[str, Any], k: int) -> Wall:
+    where = f"walls[{k}]."
+    read.keys(entry, _WALL_KEYS, where)
+    start = read.vector(read.require(entry, "start", where), f"{where}start", 2)
+    end = read.vector(read.require(entry, "end", where), f"{where}end", 2)
+    if start == end:
+        raise read.fail(f"{where}end", f"must differ from start, got {end}")
+    return Wall(start=(start[0], start[1]), end=(end[0], end[1]),
+                height=read.number(read.require(entry, "height", where), f"{where}height",
+                                   positive=True),
+                reflectivity=_reflectivity(read, entry, where))
+
+
+def _reflectivity(read: _Reader, entry: dict[str, Any], where: str) -> float:
+    value = read.number(entry.get("reflectivity", 0.0), f"{where}reflectivity", non_negative=True)
+    if value > 1.0:
+        raise read.fail(f"{where}reflectivity", f"must be in [0, 1], got {value}")
+    return value
+
+
+def _parse_camera(read: _Reader, table: Any) -> Camera:
+    if not isinstance(table, dict):
+        raise read.fail("camera", "must be a table")
+    read.keys(table, _CAMERA_KEYS, "camera.")
+    default = Camera()
+    elevation = read.number(table.get("min_elevation_deg", math.degrees(default.min_elevation)),
+                            "camera.min_elevation_deg")
+    if not -90.0 < elevation < 90.0:
+        raise read.fail("camera.min_elevation_deg", f"must be in (-90, 90), got {elevation}")
+    return Camera(
+        height=read.number(table.get("height", default.height), "camera.height", positive=True),
+        min_elevation=math.radians(elevation),
+        max_range=read.number(table.get("max_range", default.max_range), "camera.max_range",
+                              positive=True),
+    )
+
+
+def _parse_faults(read: _Reader, table: Any) -> Faults:
+    if not isinstance(table, dict):
+        raise read.fail("faults", "must be a table")
+    read.keys(table, _FAULT_KEYS, "faults.")
+    rate = read.number(table.get("misdecode_rate", 0.0), "faults.misdecode_rate",
+                       non_negative=True)
+    if rate > 1.0:
+        raise read.fail("faults.misdecode_rate", f"must be in [0, 1], got {rate}")
+    return Faults(misdecode_rate=rate)
 
 
 def _parse_error_model(read: _Reader, table: Any) -> ErrorModel:

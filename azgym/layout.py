@@ -1,0 +1,107 @@
+"""The physical layout of a site: shelf racks, walls, the camera on the forklift, sensor faults.
+
+Racks and walls are vertical obstacles standing on the floor. For the camera they are occluders
+(and, if reflective, mirrors): :func:`occluder_table` turns them into one array of segments with
+a height and a reflectivity, the form the compiled sensor kernels take.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from azgym.core import FloatArray
+
+
+@dataclass(frozen=True)
+class Rack:
+    """A shelf rack: a rectangular footprint of some height.
+
+    Attributes:
+        center: Centre of the footprint (x, y) [m].
+        size: (length, depth) [m], length along the rack's axis.
+        angle: Direction of the rack's axis, counter-clockwise from east [rad].
+        height: Height of its top [m].
+        reflectivity: Share of light its faces mirror (metal faces), 0 for none.
+    """
+
+    center: tuple[float, float]
+    size: tuple[float, float]
+    angle: float
+    height: float
+    reflectivity: float = 0.0
+
+    def corners(self) -> FloatArray:
+        """The footprint's four corners, counter-clockwise, shape (4, 2) [m]."""
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        half_l, half_d = 0.5 * self.size[0], 0.5 * self.size[1]
+        local = np.array([[-half_l, -half_d], [half_l, -half_d], [half_l, half_d],
+                          [-half_l, half_d]])
+        return local @ np.array([[c, s], [-s, c]]) + np.asarray(self.center)
+
+    def contains(self, x: float, y: float, margin: float = 1e-6) -> bool:
+        """Whether (x, y) lies inside the footprint, more than ``margin`` [m] from its faces."""
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        dx, dy = x - self.center[0], y - self.center[1]
+        along, across = c * dx + s * dy, -s * dx + c * dy
+        return (abs(along) < 0.5 * self.size[0] - margin
+                and abs(across) < 0.5 * self.size[1] - margin)
+
+
+@dataclass(frozen=True)
+class Wall:
+    """A straight wall (or glass pane) from ``start`` to ``end``.
+
+    Attributes:
+        start: One end (x, y) [m].
+        end: The other end (x, y) [m].
+        height: Height of its top [m].
+        reflectivity: Share of light it mirrors (glass, polished metal), 0 for none.
+    """
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    height: float
+    reflectivity: float = 0.0
+
+
+@dataclass(frozen=True)
+class Camera:
+    """The upward fisheye camera as the sensor geometry needs it.
+
+    Attributes:
+        height: Height of the lens above the floor [m].
+        min_elevation: Lowest elevation the lens sees, from the horizon [rad].
+        max_range: Distance at which a beacon's flux falls to the detection threshold [m, 3-D];
+            a ghost's reflected flux must reach the same threshold.
+    """
+
+    height: float = 2.0
+    min_elevation: float = 0.0
+    max_range: float = 60.0
+
+
+@dataclass(frozen=True)
+class Faults:
+    """Decoding faults that geometry does not produce.
+
+    Attributes:
+        misdecode_rate: Probability that a detection's id is decoded as another map beacon's.
+    """
+
+    misdecode_rate: float = 0.0
+
+
+def occluder_table(racks: tuple[Rack, ...], walls: tuple[Wall, ...]) -> FloatArray:
+    """Every rack face and wall as a row (x1, y1, x2, y2, height, reflectivity), shape (S, 6)."""
+    rows = []
+    for rack in racks:
+        corners = rack.corners()
+        for k in range(4):
+            a, b = corners[k], corners[(k + 1) % 4]
+            rows.append((a[0], a[1], b[0], b[1], rack.height, rack.reflectivity))
+    for wall in walls:
+        rows.append((*wall.start, *wall.end, wall.height, wall.reflectivity))
+    return np.array(rows, dtype=np.float64).reshape(-1, 6)
