@@ -1,4 +1,4 @@
-"""The physical sensor: hand-worked geometry (occlusion, partial cover, mirrors) and fault labels."""
+"""The physical sensor: hand-worked occlusion, partial cover and mirrors; fault labels."""
 
 from __future__ import annotations
 
