@@ -230,3 +230,66 @@ def mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, out):
                 out[found, 3] = reflectivity * limit2 / (path2 + dz * dz)
                 found += 1
     return found
+
+
+@numba.njit(error_model="numpy", cache=True)
+def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max_range, world,
+            beacon, label, visible, scratch_azimuth, scratch_label, scratch_visible, ghosts):
+    """Every detection of a frame before noise: direct (or partial, or moved) views, then ghosts.
+
+    Fills ``world`` (azimuth in the world frame), ``beacon`` (map row), ``label`` and ``visible``
+    and returns their count M.
+    """
+    direct_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_range,
+                scratch_azimuth, scratch_label, scratch_visible)
+    count = 0
+    for b in range(beacon_xyz.shape[0]):
+        if scratch_visible[b] > 0.0:
+            world[count] = scratch_azimuth[b]
+            beacon[count] = b
+            label[count] = MOVED if moved[b] else scratch_label[b]
+            visible[count] = scratch_visible[b]
+            count += 1
+    n_ghosts = mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, ghosts)
+    for g in range(n_ghosts):
+        world[count] = ghosts[g, 0]
+        beacon[count] = int(ghosts[g, 1])
+        label[count] = GHOST
+        visible[count] = 1.0
+        count += 1
+    return count
+
+
+@numba.njit(error_model="numpy", cache=True)
+def finish(world, beacon, label, visible, heading, uniforms, delta_d, misdecode_rate, map_ids,
+           out_ids, out_measured, out_true, out_beacon, out_label, out_visible):
+    """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
+
+    ``uniforms`` (3, M) in [0, 1): the noise, whether the id is misread, and which other map id
+    it is read as (one of the N − 1 others, uniformly).
+    """
+    count = world.size
+    n_map = map_ids.size
+    measured = np.empty(count)
+    ids = np.empty(count, dtype=np.int64)
+    true_azimuth = np.empty(count)
+    for m in range(count):
+        a = world[m] - heading
+        a = a - 2.0 * math.pi * math.ceil((a - math.pi) / (2.0 * math.pi))  # to (−π, π]
+        true_azimuth[m] = a
+        noisy = a + (2.0 * uniforms[0, m] - 1.0) * delta_d
+        measured[m] = noisy - 2.0 * math.pi * math.ceil((noisy - math.pi) / (2.0 * math.pi))
+        ids[m] = map_ids[beacon[m]]
+        if uniforms[1, m] < misdecode_rate and n_map > 1:
+            shift = 1 + int(uniforms[2, m] * (n_map - 1))
+            ids[m] = map_ids[(beacon[m] + min(shift, n_map - 1)) % n_map]
+            label[m] = MISIDENTIFIED
+    order = np.argsort(measured, kind="mergesort")
+    for k in range(count):
+        m = order[k]
+        out_ids[k] = ids[m]
+        out_measured[k] = measured[m]
+        out_true[k] = true_azimuth[m]
+        out_beacon[k] = beacon[m]
+        out_label[k] = label[m]
+        out_visible[k] = visible[m]

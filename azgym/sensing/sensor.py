@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from azgym.core import FloatArray, IntArray, Measurements, wrap_angle
+from azgym.core import FloatArray, IntArray, Measurements
 from azgym.layout import occluder_table
 from azgym.scenario import Scenario
 from azgym.sensing import geometry as G
@@ -56,12 +56,12 @@ class Sensor:
         self._xyz = np.ascontiguousarray(scenario.beacon_positions)
         self._width = scenario.beacons.width
         self._moved = np.any(self._xyz != scenario.beacons.xyz, axis=1)
-        reflective = int(np.count_nonzero(self._segments[:, 5] > 0))
-        self._ghosts = np.empty((reflective * len(scenario.beacons), 4))
         n = len(scenario.beacons)
-        self._azimuth = np.empty(n)
-        self._label = np.empty(n, dtype=np.int64)
-        self._visible = np.empty(n)
+        most = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
+        self._ghosts = np.empty((most, 4))
+        self._scratch = (np.empty(n), np.empty(n, dtype=np.int64), np.empty(n))
+        self._collected = (np.empty(most), np.empty(most, dtype=np.int64),
+                           np.empty(most, dtype=np.int64), np.empty(most))
 
     def observe(
         self, x: float, y: float, heading: float, rng: np.random.Generator,
@@ -73,7 +73,8 @@ class Sensor:
             x: Camera position, east [m].
             y: Camera position, north [m].
             heading: Camera heading φ [rad].
-            rng: The generator every random draw of the frame comes from.
+            rng: The generator every random draw of the frame comes from (3 uniforms per
+                detection: its noise, whether its id is misread, and as which).
             camera_height: Lens height [m]; default the scenario's camera height.
 
         Returns:
@@ -82,31 +83,17 @@ class Sensor:
         """
         camera = self.scenario.camera
         cz = camera.height if camera_height is None else camera_height
-        G.direct_view(x, y, cz, self._xyz, self._width, self._segments, camera.min_elevation,
-                      camera.max_range, self._azimuth, self._label, self._visible)
-        seen = np.flatnonzero(self._visible > 0.0)
-        n_ghosts = G.mirror_view(x, y, cz, self._xyz, self._segments, camera.min_elevation,
-                                 camera.max_range, self._ghosts)
-        ghosts = self._ghosts[:n_ghosts]
-        beacon = np.concatenate([seen, ghosts[:, 1].astype(np.int64)])
-        world = np.concatenate([self._azimuth[seen], ghosts[:, 0]])
-        label = np.concatenate([self._label[seen], np.full(n_ghosts, G.GHOST)])
-        visible = np.concatenate([self._visible[seen], np.ones(n_ghosts)])
-        label[(label != G.GHOST) & self._moved[beacon]] = G.MOVED
-
-        count = beacon.size
-        true_azimuth = wrap_angle(world - heading)
-        noise = rng.uniform(-1.0, 1.0, count) * self.scenario.error_model.delta_alpha_d
-        ids = self.scenario.beacons.ids[beacon].copy()
-        misread = rng.random(count) < self.scenario.faults.misdecode_rate
-        if misread.any():
-            n_map = len(self.scenario.beacons)
-            # Another map beacon's id, uniformly: shift the row by 1..N-1.
-            rows = (beacon[misread] + rng.integers(1, max(n_map, 2), misread.sum())) % n_map
-            ids[misread] = self.scenario.beacons.ids[rows]
-            label[misread] = G.MISIDENTIFIED
-        measured = wrap_angle(true_azimuth + noise)
-        order = np.argsort(measured, kind="stable")
-        truth = DetectionTruth(label=label[order], beacon=beacon[order],
-                               azimuth=true_azimuth[order], visible=visible[order])
-        return Measurements(ids[order], measured[order]), truth
+        world, beacon, label, visible = self._collected
+        count = G.collect(float(x), float(y), float(cz), self._xyz, self._width, self._moved,
+                          self._segments, camera.min_elevation, camera.max_range, world, beacon,
+                          label, visible, *self._scratch, self._ghosts)
+        ids = np.empty(count, dtype=np.int64)
+        measured = np.empty(count)
+        truth = DetectionTruth(label=np.empty(count, dtype=np.int64),
+                               beacon=np.empty(count, dtype=np.int64),
+                               azimuth=np.empty(count), visible=np.empty(count))
+        G.finish(world[:count], beacon[:count], label[:count], visible[:count], float(heading),
+                 rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
+                 self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, ids, measured,
+                 truth.azimuth, truth.beacon, truth.label, truth.visible)
+        return Measurements(ids, measured), truth
