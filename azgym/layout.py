@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from azgym.core import FloatArray
+from azgym.core import FloatArray, wrap_angle
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,64 @@ class Faults:
     """
 
     misdecode_rate: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Route:
+    """A named polyline for the forklift to follow.
+
+    Attributes:
+        name: Identifier within the scenario.
+        waypoints: Points to pass, in order, shape (K, 2) [m].
+        reverse: For each of the K − 1 legs, whether it is driven backwards.
+        speed: Cruise speed [m/s].
+    """
+
+    name: str
+    waypoints: FloatArray
+    reverse: tuple[bool, ...]
+    speed: float
+
+    def start_pose(self) -> tuple[float, float, float]:
+        """Where the forklift starts: on the first waypoint, facing along the first leg."""
+        (x0, y0), (x1, y1) = self.waypoints[0], self.waypoints[1]
+        heading = math.atan2(y1 - y0, x1 - x0)
+        if self.reverse[0]:
+            heading = float(wrap_angle(heading + math.pi))
+        return float(x0), float(y0), heading
+
+
+ROUTE_CLEARANCE = 0.7
+"""A route must keep this far from every rack [m]: half a forklift's width and a margin."""
+
+
+def leg_hits_rack(start: FloatArray, end: FloatArray, rack: Rack, clearance: float) -> bool:
+    """Whether the straight leg start→end comes within ``clearance`` of the rack's footprint.
+
+    Liang-Barsky clipping of the leg, in the rack's own frame, against its footprint grown by the
+    clearance on every side (a slightly conservative test at the corners).
+    """
+    c, s = math.cos(rack.angle), math.sin(rack.angle)
+    local = [((p[0] - rack.center[0]) * c + (p[1] - rack.center[1]) * s,
+              -(p[0] - rack.center[0]) * s + (p[1] - rack.center[1]) * c) for p in (start, end)]
+    (x0, y0), (x1, y1) = local
+    dx, dy = x1 - x0, y1 - y0
+    half_x = 0.5 * rack.size[0] + clearance
+    half_y = 0.5 * rack.size[1] + clearance
+    lo, hi = 0.0, 1.0
+    for p, q in ((-dx, x0 + half_x), (dx, half_x - x0), (-dy, y0 + half_y), (dy, half_y - y0)):
+        if p == 0:
+            if q < 0:
+                return False
+            continue
+        t = q / p
+        if p < 0:
+            lo = max(lo, t)
+        else:
+            hi = min(hi, t)
+        if lo > hi:
+            return False
+    return True
 
 
 def occluder_table(racks: tuple[Rack, ...], walls: tuple[Wall, ...]) -> FloatArray:

@@ -20,7 +20,7 @@ import numpy as np
 
 from azgym.core import BeaconMap, FloatArray
 from azgym.errors import ScenarioError, unknown_name
-from azgym.layout import Camera, Faults, Rack, Wall
+from azgym.layout import ROUTE_CLEARANCE, Camera, Faults, Rack, Route, Wall, leg_hits_rack
 from azgym.sensing.error_model import ErrorModel
 
 if sys.version_info >= (3, 11):
@@ -55,6 +55,7 @@ class Scenario:
     walls: tuple[Wall, ...] = ()
     camera: Camera = Camera()
     faults: Faults = Faults()
+    routes: tuple[Route, ...] = ()
     physical_xyz: FloatArray | None = None
     source: Path | None = None
 
@@ -68,11 +69,12 @@ class Scenario:
 
 
 _TOP_KEYS = {"name", "description", "version", "room", "error_model", "beacon_defaults",
-             "beacons", "camera", "faults", "racks", "walls"}
+             "beacons", "camera", "faults", "racks", "walls", "routes"}
 _CAMERA_KEYS = {"height", "min_elevation_deg", "max_range"}
 _FAULT_KEYS = {"misdecode_rate"}
 _RACK_KEYS = {"center", "size", "angle_deg", "height", "reflectivity"}
 _WALL_KEYS = {"start", "end", "height", "reflectivity"}
+_ROUTE_KEYS = {"name", "waypoints", "reverse", "speed"}
 _ROOM_KEYS = {"bounds"}
 _ERROR_KEYS = {"delta_alpha_d_deg", "center_error_px", "horizon_radius_px", "coverage"}
 _DEFAULT_KEYS = {"width", "z"}
@@ -198,9 +200,15 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
             if rack.contains(position[0], position[1]):
                 raise read.fail(f"beacons[{k}]", f"beacon {ids[k]} at ({position[0]:g}, "
                                 f"{position[1]:g}) is inside racks[{r}]")
+    routes = tuple(_parse_route(read, entry, k, bounds, racks) for k, entry in enumerate(
+        _array_of_tables(read, data, "routes")))
+    names = [route.name for route in routes]
+    for k, route_name in enumerate(names):
+        if route_name in names[:k]:
+            raise read.fail(f"routes[{k}].name", f"duplicate route name {route_name!r}")
     return Scenario(name=name, description=description, version=version,
                     bounds=(bounds[0], bounds[1], bounds[2], bounds[3]), beacons=beacons,
-                    error_model=error_model, racks=racks, walls=walls,
+                    error_model=error_model, racks=racks, walls=walls, routes=routes,
                     camera=_parse_camera(read, data.get("camera", {})),
                     faults=_parse_faults(read, data.get("faults", {})),
                     physical_xyz=None if np.array_equal(physical_xyz, beacons.xyz)
@@ -252,6 +260,35 @@ def _parse_wall(read: _Reader, entry: dict[str, Any], k: int) -> Wall:
                 height=read.number(read.require(entry, "height", where), f"{where}height",
                                    positive=True),
                 reflectivity=_reflectivity(read, entry, where))
+
+
+def _parse_route(read: _Reader, entry: dict[str, Any], k: int, bounds: list[float],
+                 racks: tuple[Rack, ...]) -> Route:
+    where = f"routes[{k}]."
+    read.keys(entry, _ROUTE_KEYS, where)
+    name = read.text(read.require(entry, "name", where), f"{where}name")
+    raw = read.require(entry, "waypoints", where)
+    if not isinstance(raw, list) or len(raw) < 2:
+        raise read.fail(f"{where}waypoints", "must be a list of at least 2 [x, y] points")
+    points = np.array([read.vector(p, f"{where}waypoints[{i}]", 2) for i, p in enumerate(raw)])
+    for i, (x, y) in enumerate(points):
+        if not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
+            raise read.fail(f"{where}waypoints[{i}]", f"({x:g}, {y:g}) is outside the room")
+    reverse = entry.get("reverse", [False] * (len(points) - 1))
+    if not (isinstance(reverse, list) and len(reverse) == len(points) - 1
+            and all(isinstance(r, bool) for r in reverse)):
+        raise read.fail(f"{where}reverse",
+                        f"must be a list of {len(points) - 1} booleans, one per leg")
+    for leg in range(len(points) - 1):
+        for r, rack in enumerate(racks):
+            if leg_hits_rack(points[leg], points[leg + 1], rack, ROUTE_CLEARANCE):
+                raise read.fail(
+                    f"{where}waypoints",
+                    f"leg {leg} from ({points[leg][0]:g}, {points[leg][1]:g}) to "
+                    f"({points[leg + 1][0]:g}, {points[leg + 1][1]:g}) passes within "
+                    f"{ROUTE_CLEARANCE} m of racks[{r}]")
+    speed = read.number(entry.get("speed", 1.5), f"{where}speed", positive=True)
+    return Route(name=name, waypoints=points, reverse=tuple(reverse), speed=speed)
 
 
 def _reflectivity(read: _Reader, entry: dict[str, Any], where: str) -> float:

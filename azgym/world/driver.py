@@ -1,0 +1,103 @@
+"""A waypoint driver (pure pursuit) that makes a scenario's routes reproducible trajectories."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from azgym.core import FloatArray, wrap_angle
+from azgym.layout import Route
+from azgym.world.forklift import ForkliftSpec
+
+
+class PurePursuit:
+    """Steers toward a point one lookahead distance ahead on the route (pure pursuit).
+
+    The route is split into stretches of constant direction (forwards or backwards); the driver
+    stops at the end of each stretch before changing direction. In a stretch, the target is the
+    route point ``lookahead`` metres beyond the one nearest the reference axle, and the path's
+    curvature toward it, κ = 2 sin α / L_d, sets the steering: tan δ = ±κ · wheelbase.
+
+    Args:
+        route: The route.
+        spec: The forklift (wheelbase, steering and speed limits).
+        lookahead: L_d [m].
+        tolerance: Distance to a stretch's end that counts as arrived [m].
+    """
+
+    def __init__(self, route: Route, spec: ForkliftSpec, lookahead: float = 2.0,
+                 tolerance: float = 0.25) -> None:
+        self.route = route
+        self.spec = spec
+        self.lookahead = lookahead
+        self.tolerance = tolerance
+        self._stretches = self._split(route)
+        self._stretch = 0
+        self._progress = 0.0
+        self.done = False
+
+    @staticmethod
+    def _split(route: Route) -> list[tuple[FloatArray, bool]]:
+        stretches, start = [], 0
+        for leg in range(1, len(route.reverse) + 1):
+            if leg == len(route.reverse) or route.reverse[leg] != route.reverse[start]:
+                stretches.append((route.waypoints[start:leg + 1], route.reverse[start]))
+                start = leg
+        return stretches
+
+    def command(self, x: float, y: float, heading: float, speed: float) -> tuple[float, float]:
+        """(throttle, steer) in [-1, 1] for the forklift at pose (x, y, heading) and speed."""
+        if self.done:
+            return -float(np.clip(speed / (self.spec.max_accel * 0.1), -1, 1)), 0.0
+        points, backwards = self._stretches[self._stretch]
+        direction = -1.0 if backwards else 1.0
+        reference = self._reference(x, y, heading)
+        lengths = np.hypot(*np.diff(points, axis=0).T)
+        total = float(lengths.sum())
+        self._progress = max(self._progress, _project(points, lengths, reference))
+        remaining = total - self._progress
+        end_distance = math.hypot(*(points[-1] - reference))
+        if remaining < self.tolerance or end_distance < self.tolerance:
+            if abs(speed) < 0.05:
+                self._stretch += 1
+                self._progress = 0.0
+                self.done = self._stretch == len(self._stretches)
+            return float(np.clip(-speed / (self.spec.max_accel * 0.1), -1, 1)), 0.0
+        target = _point_at(points, lengths, min(total, self._progress + self.lookahead))
+        travel = heading + (math.pi if backwards else 0.0)
+        alpha = float(wrap_angle(math.atan2(target[1] - reference[1], target[0] - reference[0])
+                                 - travel))
+        curvature = 2.0 * math.sin(alpha) / max(self.lookahead, 1e-6)
+        steer = math.atan(direction * curvature * self.spec.wheelbase) / self.spec.max_steer
+        # Slow down for the end of the stretch: v² = 2 a d with a margin.
+        wanted = direction * min(self.route.speed,
+                                 math.sqrt(max(0.0, remaining - 0.5 * self.tolerance)
+                                           * self.spec.max_accel))
+        throttle = float(np.clip((wanted - speed) / (self.spec.max_accel * 0.2), -1, 1))
+        return throttle, float(np.clip(steer, -1, 1))
+
+    def _reference(self, x: float, y: float, heading: float) -> FloatArray:
+        """The non-steering axle's position (the point pure pursuit steers)."""
+        offset = 0.5 * self.spec.wheelbase * (1.0 if self.spec.rear_steer else -1.0)
+        return np.array([x + offset * math.cos(heading), y + offset * math.sin(heading)])
+
+
+def _project(points: FloatArray, lengths: FloatArray, p: FloatArray) -> float:
+    """Arc length of the polyline point nearest to p (all legs at once)."""
+    a = points[:-1]
+    ab = points[1:] - a
+    t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum(lengths**2, 1e-300), 0.0, 1.0)
+    distance = np.hypot(*(a + t[:, None] * ab - p).T)
+    k = int(np.argmin(distance))
+    return float(lengths[:k].sum() + t[k] * lengths[k])
+
+
+def _point_at(points: FloatArray, lengths: FloatArray, s: float) -> FloatArray:
+    """The polyline point at arc length s."""
+    for k, length in enumerate(lengths):
+        if s <= length or k == len(lengths) - 1:
+            t = 0.0 if length == 0 else min(s / length, 1.0)
+            return points[k] + t * (points[k + 1] - points[k])
+        s -= length
+    return points[-1]

@@ -1,0 +1,138 @@
+"""The forklift: a rigid body with car-like (bicycle-model) steering, driven the pymunk way.
+
+pymunk's top-down vehicles (its ``tank.py`` example) are driven through a kinematic *control body*:
+each step the control body gets the velocity the vehicle should have, and a pivot joint and a gear
+joint with ``max_bias = 0`` drag the real body after it with at most ``max_force`` and
+``max_torque`` — which acts like tyre friction, and lets a rack or a wall stop the forklift.
+
+The wanted velocity comes from a kinematic bicycle model: speed v along the heading at the
+reference axle (the one that does not steer) and yaw rate ω = v tan δ / L for steering angle δ
+and wheelbase L. Forklifts steer with their rear wheels: then the reference is the front axle and
+the tail swings out in turns.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import pymunk
+
+from azgym.errors import InvalidInputError
+
+FORKLIFT_COLLISION_TYPE = 1
+
+
+@dataclass(frozen=True)
+class ForkliftSpec:
+    """Dimensions and limits of the forklift.
+
+    Attributes:
+        length: Body length [m].
+        width: Body width [m].
+        mass: Mass [kg].
+        wheelbase: Distance between the axles [m].
+        rear_steer: Whether the rear wheels steer (a forklift's do).
+        max_speed: Speed limit, forwards and backwards [m/s].
+        max_accel: Acceleration at full throttle [m/s²].
+        max_steer: Steering angle at full lock [rad].
+        max_force: Largest traction force the tyres transmit [N].
+        max_torque: Largest yaw torque the tyres transmit [N m].
+        camera_offset: Camera position in the body frame (forward, left) [m].
+    """
+
+    length: float = 2.4
+    width: float = 1.2
+    mass: float = 3000.0
+    wheelbase: float = 1.6
+    rear_steer: bool = True
+    max_speed: float = 3.0
+    max_accel: float = 1.5
+    max_steer: float = math.radians(60.0)
+    max_force: float = 30_000.0
+    max_torque: float = 60_000.0
+    camera_offset: tuple[float, float] = (0.3, 0.0)
+
+    def __post_init__(self) -> None:
+        for name in ("length", "width", "mass", "wheelbase", "max_speed", "max_accel",
+                     "max_force", "max_torque"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise InvalidInputError(f"ForkliftSpec.{name} must be > 0, got {value!r}")
+        if not 0 < self.max_steer < math.pi / 2:
+            raise InvalidInputError(
+                f"ForkliftSpec.max_steer must be in (0, π/2) rad, got {self.max_steer!r}"
+            )
+
+
+class Forklift:
+    """The forklift's body in a pymunk space, with its control body and speed state.
+
+    Args:
+        space: The space to add it to.
+        spec: Its dimensions and limits.
+        x: Start position, east [m].
+        y: Start position, north [m].
+        heading: Start heading [rad].
+    """
+
+    def __init__(self, space: pymunk.Space, spec: ForkliftSpec, x: float, y: float,
+                 heading: float) -> None:
+        self.spec = spec
+        moment = pymunk.moment_for_box(spec.mass, (spec.length, spec.width))
+        self.body = pymunk.Body(spec.mass, moment)
+        self.body.position = (x, y)
+        self.body.angle = heading
+        self.shape = pymunk.Poly.create_box(self.body, (spec.length, spec.width), radius=0.02)
+        self.shape.collision_type = FORKLIFT_COLLISION_TYPE
+        self.shape.friction = 0.5
+        self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        self.control.position = self.body.position
+        pivot = pymunk.PivotJoint(self.control, self.body, (0, 0), (0, 0))
+        pivot.max_bias = 0.0  # no position correction: the joint only transmits velocity
+        pivot.max_force = spec.max_force
+        gear = pymunk.GearJoint(self.control, self.body, 0.0, 1.0)
+        gear.error_bias = 0.0
+        gear.max_bias = 0.0
+        gear.max_force = spec.max_torque
+        space.add(self.body, self.shape, self.control, pivot, gear)
+        self.speed = 0.0
+        self.steer = 0.0
+        # Body centre relative to the reference (non-steering) axle, along the heading [m].
+        self._centre_offset = 0.5 * spec.wheelbase if not spec.rear_steer else -0.5 * spec.wheelbase
+
+    def command(self, throttle: float, steer: float, dt: float) -> None:
+        """Set the control body's velocity for the next ``dt`` from throttle and steering.
+
+        Args:
+            throttle: In [-1, 1]: the share of ``max_accel`` to apply (negative: brake/reverse).
+            steer: In [-1, 1]: the share of ``max_steer``, positive turns left.
+            dt: The step [s].
+        """
+        spec = self.spec
+        heading = self.body.angle
+        # Speed state follows the body (a collision stops it), then the throttle acts.
+        velocity = self.body.velocity
+        actual = velocity.x * math.cos(heading) + velocity.y * math.sin(heading)
+        self.speed = max(-spec.max_speed, min(spec.max_speed, actual + throttle * spec.max_accel
+                                               * dt))
+        self.steer = steer * spec.max_steer
+        omega = self.speed * math.tan(self.steer) / spec.wheelbase
+        # Velocity of the body centre: v along the heading at the reference axle, plus ω × r.
+        c, s = math.cos(heading), math.sin(heading)
+        r = self._centre_offset
+        self.control.velocity = (self.speed * c - omega * r * s, self.speed * s + omega * r * c)
+        self.control.angular_velocity = omega
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        """(x, y, heading) of the body centre [m, m, rad]."""
+        position = self.body.position
+        return position.x, position.y, self.body.angle
+
+    def camera_position(self) -> tuple[float, float]:
+        """Where the camera is in the world (x, y) [m]."""
+        x, y, heading = self.pose
+        forward, left = self.spec.camera_offset
+        c, s = math.cos(heading), math.sin(heading)
+        return x + forward * c - left * s, y + forward * s + left * c
