@@ -38,22 +38,25 @@ class PurePursuit:
         self.done = False
 
     @staticmethod
-    def _split(route: Route) -> list[tuple[FloatArray, bool]]:
+    def _split(route: Route) -> list[tuple[FloatArray, FloatArray, bool]]:
+        """The stretches of one direction: (points, leg lengths, backwards)."""
         stretches, start = [], 0
         for leg in range(1, len(route.reverse) + 1):
             if leg == len(route.reverse) or route.reverse[leg] != route.reverse[start]:
-                stretches.append((route.waypoints[start:leg + 1], route.reverse[start]))
+                points = route.waypoints[start:leg + 1]
+                lengths = np.hypot(*np.diff(points, axis=0).T)
+                stretches.append((points, lengths, route.reverse[start]))
                 start = leg
         return stretches
 
     def command(self, x: float, y: float, heading: float, speed: float) -> tuple[float, float]:
         """(throttle, steer) in [-1, 1] for the forklift at pose (x, y, heading) and speed."""
+        brake = max(-1.0, min(1.0, -speed / (self.spec.max_accel * 0.1)))
         if self.done:
-            return -float(np.clip(speed / (self.spec.max_accel * 0.1), -1, 1)), 0.0
-        points, backwards = self._stretches[self._stretch]
+            return brake, 0.0
+        points, lengths, backwards = self._stretches[self._stretch]
         direction = -1.0 if backwards else 1.0
         reference = self._reference(x, y, heading)
-        lengths = np.hypot(*np.diff(points, axis=0).T)
         total = float(lengths.sum())
         self._progress = max(self._progress, _project(points, lengths, reference))
         remaining = total - self._progress
@@ -63,7 +66,7 @@ class PurePursuit:
                 self._stretch += 1
                 self._progress = 0.0
                 self.done = self._stretch == len(self._stretches)
-            return float(np.clip(-speed / (self.spec.max_accel * 0.1), -1, 1)), 0.0
+            return brake, 0.0
         target = _point_at(points, lengths, min(total, self._progress + self.lookahead))
         travel = heading + (math.pi if backwards else 0.0)
         alpha = float(wrap_angle(math.atan2(target[1] - reference[1], target[0] - reference[0])
@@ -74,8 +77,8 @@ class PurePursuit:
         wanted = direction * min(self.route.speed,
                                  math.sqrt(max(0.0, remaining - 0.5 * self.tolerance)
                                            * self.spec.max_accel))
-        throttle = float(np.clip((wanted - speed) / (self.spec.max_accel * 0.2), -1, 1))
-        return throttle, float(np.clip(steer, -1, 1))
+        throttle = max(-1.0, min(1.0, (wanted - speed) / (self.spec.max_accel * 0.2)))
+        return throttle, max(-1.0, min(1.0, steer))
 
     def _reference(self, x: float, y: float, heading: float) -> FloatArray:
         """The non-steering axle's position (the point pure pursuit steers)."""
