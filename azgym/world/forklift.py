@@ -21,6 +21,8 @@ import pymunk
 from azgym.errors import InvalidInputError
 
 FORKLIFT_COLLISION_TYPE = 1
+SLIP_TOLERANCE = 0.2
+"""Largest gap between commanded and actual speed [m/s] before the command follows the body."""
 
 
 @dataclass(frozen=True)
@@ -111,11 +113,14 @@ class Forklift:
         """
         spec = self.spec
         heading = self.body.angle
-        # Speed state follows the body (a collision stops it), then the throttle acts.
+        # The speed state integrates the throttle; when the body lags it by more than the tyres
+        # would slip (a rack or a wall holds the forklift), it falls back to the body's speed.
         velocity = self.body.velocity
         actual = velocity.x * math.cos(heading) + velocity.y * math.sin(heading)
-        self.speed = max(-spec.max_speed, min(spec.max_speed, actual + throttle * spec.max_accel
-                                               * dt))
+        if abs(actual - self.speed) > SLIP_TOLERANCE:
+            self.speed = actual
+        self.speed = max(-spec.max_speed, min(spec.max_speed,
+                                              self.speed + throttle * spec.max_accel * dt))
         self.steer = steer * spec.max_steer
         omega = self.speed * math.tan(self.steer) / spec.wheelbase
         # Velocity of the body centre: v along the heading at the reference axle, plus ω × r.
