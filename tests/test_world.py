@@ -1,4 +1,4 @@
-"""The pymunk world: forklift kinematics against hand-worked cases, routes, collisions, repeatability."""
+"""The pymunk world: forklift kinematics by hand, routes, collisions, repeatability."""
 
 from __future__ import annotations
 
