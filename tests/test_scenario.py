@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import azgym
 from azgym import ScenarioError, UnknownNameError
-from azgym.scenario import parse_scenario
+from azgym.scenario import load_scenario, parse_scenario
 
 THIRD = 22.0 / 3.0
 # DESIGN.md: counter-clockwise from the east wall, three per wall at offsets −22/3, 0, +22/3 m.
@@ -226,3 +227,34 @@ def test_scenario_error_is_a_value_error(tmp_path):
 def test_parse_scenario_uses_the_given_origin():
     with pytest.raises(ScenarioError, match=re.escape("memory.toml: name: missing")):
         parse_scenario({}, "memory.toml")
+
+
+BROKEN = Path(__file__).parent / "data" / "broken"
+EXPECTED_PROBLEMS = {
+    "01-missing-name.toml": "name: missing",
+    "02-unknown-room-key.toml": "room.colour: unknown key",
+    "03-duplicate-id.toml": "beacons[3].id: duplicate id 2 (also beacons[1])",
+    "04-beacon-inside-rack.toml": "beacons[3]: beacon 4 at (5, 5) is inside racks[0]",
+    "05-negative-rack-size.toml": "racks[0].size: must be positive",
+    "06-route-through-rack.toml": "routes[0].waypoints: leg 0 from (5, 1) to (5, 9) passes",
+    "07-inverted-bounds.toml": "room.bounds: must be [x_min, y_min, x_max, y_max] with max > min",
+    "08-two-beacons.toml": "beacons: must be an array of at least 3",
+    "09-zero-width.toml": "beacons[0].width: must be > 0",
+    "10-reflectivity-above-one.toml": "walls[0].reflectivity: must be in [0, 1]",
+    "11-camera-typo.toml": "camera.heigth: unknown key. Did you mean 'height'?",
+    "12-conflicting-error-model.toml": "error_model.delta_alpha_d_deg: give either",
+    "13-not-toml.toml": "not valid TOML",
+    "14-route-leaves-room.toml": "routes[0].waypoints[1]: (15, 5) is outside the room",
+    "15-negative-misdecode-rate.toml": "faults.misdecode_rate: must be >= 0",
+}
+
+
+def test_the_broken_corpus_is_complete():
+    assert sorted(path.name for path in BROKEN.glob("*.toml")) == sorted(EXPECTED_PROBLEMS)
+
+
+@pytest.mark.parametrize("name", sorted(EXPECTED_PROBLEMS))
+def test_every_broken_scenario_file_gets_its_own_clear_error(name):
+    path = BROKEN / name
+    with pytest.raises(ScenarioError, match=re.escape(f"{path}: {EXPECTED_PROBLEMS[name]}")):
+        load_scenario(path)
