@@ -1,0 +1,121 @@
+"""Issue #3's measurements: localizers on warehouse frames, and the speed of the sensor and world.
+
+    python baselines/warehouse.py [--seed 0] [--out results/warehouse.json]
+
+Accuracy: every route of ``warehouse-small`` is driven (``azgym.simulate``). The frames are
+localized by ``ransac`` and ``lsq`` under two conditions: as shipped, with reflections (glass wall,
+metal racks), misread ids and a moved beacon, and "clean", with reflectivities, the misread rate
+and the move set to zero. The report gives availability and the mean, p75 and p95 position
+errors. Speed: the median µs of one sensor frame in ``warehouse-small`` and ``warehouse-large``,
+and of one world step, over 5 rounds, reporting the least disturbed round.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+import azgym
+from azgym.layout import Faults
+from azgym.sensing.sensor import Sensor
+from azgym.simulate import simulate
+from azgym.world.world import World
+
+
+def clean(scenario: azgym.Scenario) -> azgym.Scenario:
+    """The scenario without reflections, misread ids or moved beacons."""
+    return dataclasses.replace(
+        scenario,
+        racks=tuple(dataclasses.replace(rack, reflectivity=0.0) for rack in scenario.racks),
+        walls=tuple(dataclasses.replace(wall, reflectivity=0.0) for wall in scenario.walls),
+        faults=Faults(misdecode_rate=0.0),
+        physical_xyz=None,
+    )
+
+
+def accuracy(scenario: azgym.Scenario, seed: int) -> dict:
+    frames = [frame for route in scenario.routes
+              for frame in simulate(scenario, route, seed=seed)]
+    faulty = sum(bool((frame.truth.label >= 2).any()) for frame in frames)
+    result = {"frames": len(frames), "frames_with_ghost_misread_or_moved": faulty}
+    for name in ("ransac", "lsq"):
+        localizer = azgym.make_localizer(name)
+        errors = []
+        for frame in frames:
+            estimate = localizer.localize(frame.measurements, scenario.beacons)
+            if estimate.ok:
+                errors.append(math.hypot(estimate.x - frame.pose[0], estimate.y - frame.pose[1]))
+        cm = np.array(errors) * 100
+        result[name] = {
+            "availability": len(errors) / len(frames),
+            "mean_cm": float(cm.mean()),
+            "p75_cm": float(np.percentile(cm, 75)),
+            "p95_cm": float(np.percentile(cm, 95)),
+            "failure_rate": float((len(frames) - np.count_nonzero(cm <= 100)) / len(frames)),
+        }
+    return result
+
+
+def best_round_us(call, count: int, rounds: int = 5) -> float:
+    medians = []
+    for _ in range(rounds):
+        times = np.empty(count)
+        for k in range(count):
+            start = time.perf_counter_ns()
+            call(k)
+            times[k] = time.perf_counter_ns() - start
+        medians.append(float(np.median(times)) / 1000)
+    return min(medians)
+
+
+def speed() -> dict:
+    result = {}
+    for name in ("warehouse-small", "warehouse-large"):
+        scenario = azgym.load_scenario(name)
+        sensor = Sensor(scenario)
+        rng = np.random.default_rng(0)
+        poses = [frame.pose for route in scenario.routes
+                 for frame in simulate(scenario, route, seed=0)][::3]
+        sensor.observe(*poses[0], rng)
+        result[f"sensor frame, {name} (µs)"] = best_round_us(
+            lambda k, p=poses, s=sensor, g=rng: s.observe(*p[k % len(p)], g), 2000)
+    scenario = azgym.load_scenario("warehouse-small")
+    world = World(scenario, scenario.routes[0].start_pose())
+    result["world step, warehouse-small (µs)"] = best_round_us(
+        lambda k: world.step(0.3, 0.3 * math.sin(k / 50)), 2000)
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", default="results/warehouse.json")
+    args = parser.parse_args()
+    shipped = azgym.load_scenario("warehouse-small")
+    report = {"as shipped": accuracy(shipped, args.seed),
+              "clean": accuracy(clean(shipped), args.seed), "speed": speed()}
+    for condition in ("as shipped", "clean"):
+        row = report[condition]
+        print(f"{condition}: {row['frames']} frames, "
+              f"{row['frames_with_ghost_misread_or_moved']} with a ghost, misread id or moved "
+              "beacon")
+        for name in ("ransac", "lsq"):
+            stats = row[name]
+            print(f"  {name:<7} available {100 * stats['availability']:5.1f} %  mean "
+                  f"{stats['mean_cm']:7.1f} cm  p75 {stats['p75_cm']:7.1f} cm  p95 "
+                  f"{stats['p95_cm']:7.1f} cm  failures {100 * stats['failure_rate']:5.1f} %")
+    for part, micros in report["speed"].items():
+        print(f"{part:<40} {micros:8.1f}")
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text(json.dumps(report, indent=1) + "\n", encoding="utf-8")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
