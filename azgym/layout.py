@@ -119,6 +119,26 @@ class Route:
         return float(x0), float(y0), heading
 
 
+@dataclass(frozen=True)
+class Bump:
+    """A bumpy stretch of floor: a rectangle where the camera sways.
+
+    Attributes:
+        center: Centre (x, y) [m].
+        size: (x extent, y extent) [m].
+        tilt: Standard deviation of the camera's pitch and roll there [rad].
+    """
+
+    center: tuple[float, float]
+    size: tuple[float, float]
+    tilt: float
+
+    def contains(self, x: float, y: float) -> bool:
+        """Whether (x, y) is on the stretch."""
+        return (abs(x - self.center[0]) <= 0.5 * self.size[0]
+                and abs(y - self.center[1]) <= 0.5 * self.size[1])
+
+
 ROUTE_CLEARANCE = 0.7
 """A route must keep this far from every rack [m]: half a forklift's width and a margin."""
 

@@ -20,7 +20,16 @@ import numpy as np
 
 from azgym.core import BeaconMap, FloatArray
 from azgym.errors import ScenarioError, unknown_name
-from azgym.layout import ROUTE_CLEARANCE, Camera, Faults, Rack, Route, Wall, leg_hits_rack
+from azgym.layout import (
+    ROUTE_CLEARANCE,
+    Bump,
+    Camera,
+    Faults,
+    Rack,
+    Route,
+    Wall,
+    leg_hits_rack,
+)
 from azgym.sensing.error_model import ErrorModel
 
 if sys.version_info >= (3, 11):
@@ -56,6 +65,7 @@ class Scenario:
     camera: Camera = Camera()
     faults: Faults = Faults()
     routes: tuple[Route, ...] = ()
+    bumps: tuple[Bump, ...] = ()
     physical_xyz: FloatArray | None = None
     source: Path | None = None
 
@@ -69,12 +79,14 @@ class Scenario:
 
 
 _TOP_KEYS = {"name", "description", "version", "room", "error_model", "beacon_defaults",
-             "beacons", "camera", "faults", "racks", "walls", "routes"}
+             "beacons", "camera", "faults", "racks", "walls", "routes",
+             "bumps"}
 _CAMERA_KEYS = {"height", "min_elevation_deg", "max_range"}
 _FAULT_KEYS = {"misdecode_rate"}
 _RACK_KEYS = {"center", "size", "angle_deg", "height", "reflectivity"}
 _WALL_KEYS = {"start", "end", "height", "reflectivity"}
 _ROUTE_KEYS = {"name", "waypoints", "reverse", "speed"}
+_BUMP_KEYS = {"center", "size", "tilt_deg"}
 _ROOM_KEYS = {"bounds"}
 _ERROR_KEYS = {"delta_alpha_d_deg", "center_error_px", "horizon_radius_px", "coverage"}
 _DEFAULT_KEYS = {"width", "z"}
@@ -209,6 +221,8 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
     return Scenario(name=name, description=description, version=version,
                     bounds=(bounds[0], bounds[1], bounds[2], bounds[3]), beacons=beacons,
                     error_model=error_model, racks=racks, walls=walls, routes=routes,
+                    bumps=tuple(_parse_bump(read, entry, k) for k, entry in enumerate(
+                        _array_of_tables(read, data, "bumps"))),
                     camera=_parse_camera(read, data.get("camera", {})),
                     faults=_parse_faults(read, data.get("faults", {})),
                     physical_xyz=None if np.array_equal(physical_xyz, beacons.xyz)
@@ -289,6 +303,21 @@ def _parse_route(read: _Reader, entry: dict[str, Any], k: int, bounds: list[floa
                     f"{ROUTE_CLEARANCE} m of racks[{r}]")
     speed = read.number(entry.get("speed", 1.5), f"{where}speed", positive=True)
     return Route(name=name, waypoints=points, reverse=tuple(reverse), speed=speed)
+
+
+def _parse_bump(read: _Reader, entry: dict[str, Any], k: int) -> Bump:
+    where = f"bumps[{k}]."
+    read.keys(entry, _BUMP_KEYS, where)
+    center = read.vector(read.require(entry, "center", where), f"{where}center", 2)
+    size = read.vector(read.require(entry, "size", where), f"{where}size", 2)
+    if min(size) <= 0:
+        raise read.fail(f"{where}size", f"must be positive, got {size}")
+    tilt = read.number(read.require(entry, "tilt_deg", where), f"{where}tilt_deg",
+                       non_negative=True)
+    if tilt >= 45.0:
+        raise read.fail(f"{where}tilt_deg", f"must be < 45, got {tilt}")
+    return Bump(center=(center[0], center[1]), size=(size[0], size[1]),
+                tilt=math.radians(tilt))
 
 
 def _reflectivity(read: _Reader, entry: dict[str, Any], where: str) -> float:

@@ -5,7 +5,8 @@ driver, wheel odometry and the IMU at their own rates, and the camera at ``camer
 :class:`Frame` holds the camera's measurements with their ground truth beside them, the odometry
 and IMU samples since the previous frame, and the true camera pose. The same seed gives the same
 frames, bit for bit: one seed is split into independent streams for the camera, the odometry and
-the IMU, so that changing one sensor's settings leaves the others' draws alone.
+the IMU and the camera's sway on bumpy stretches, so that changing one sensor's settings leaves
+the others' draws alone. On a bump the camera's pitch and roll are drawn afresh each frame.
 """
 
 from __future__ import annotations
@@ -72,6 +73,16 @@ def _route(scenario: Scenario, route: str | Route | None) -> Route:
     return names[route]
 
 
+def _sway(scenario: Scenario, x: float, y: float,
+          rng: np.random.Generator) -> tuple[float, float]:
+    """The camera's (pitch, roll) at (x, y): normal with the bump's spread on a bumpy stretch."""
+    for bump in scenario.bumps:
+        if bump.contains(x, y):
+            pitch, roll = rng.normal(0.0, bump.tilt, size=2)
+            return float(pitch), float(roll)
+    return 0.0, 0.0
+
+
 def simulate(
     scenario: Scenario | str,
     route: str | Route | None = None,
@@ -101,8 +112,8 @@ def simulate(
     chosen = _route(scenario, route)
     if not camera_rate_hz > 0 or not dt > 0:
         raise InvalidInputError(f"camera_rate_hz and dt must be > 0, got {camera_rate_hz}, {dt}")
-    camera_stream, odometry_stream, imu_stream = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(3))
+    camera_stream, odometry_stream, imu_stream, sway_stream = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
     world = World(scenario, chosen.start_pose(), spec, dt)
     forklift = world.forklift
     driver = PurePursuit(chosen, forklift.spec)
@@ -118,7 +129,8 @@ def simulate(
         if world.time + 1e-9 >= next_frame:
             x, y, heading = forklift.pose
             cx, cy = forklift.camera_position()
-            measurements, truth = sensor.observe(cx, cy, heading, camera_stream)
+            tilt = _sway(scenario, cx, cy, sway_stream)
+            measurements, truth = sensor.observe(cx, cy, heading, camera_stream, tilt=tilt)
             yield Frame(index=index, time=world.time, measurements=measurements, truth=truth,
                         pose=(cx, cy, heading), odometry=odometer.take(), imu=inertial.take(),
                         contacts=len(world.contacts) - contacts_seen)

@@ -188,3 +188,23 @@ def test_malformed_layouts_are_reported_with_the_field(change, message):
     beacons = [{"id": 1, "xyz": [10.0, 0.0, 4.0]}, *far_beacons()]
     with pytest.raises(ScenarioError, match=re.escape(f"test-site.toml: {message}")):
         site(beacons, **change)
+
+
+def test_a_rolled_camera_sees_a_beacon_ahead_shifted_by_atan_sin_roll_tan_elevation():
+    # A beacon straight ahead at 45° elevation; the camera rolled by 5° about its forward axis
+    # sees it at azimuth atan(sin 5° · tan 45°).
+    scenario = site([{"id": 1, "xyz": [4.0, 0.0, CAMERA_Z + 4.0]}, *far_beacons()])
+    sensor = Sensor(scenario)
+    level, level_truth = sensor.observe(0.0, 0.0, 0.0, np.random.default_rng(0))
+    rolled, truth = sensor.observe(0.0, 0.0, 0.0, np.random.default_rng(0),
+                                   tilt=(0.0, math.radians(5.0)))
+    [(azimuth, _, _)] = detections_of(rolled, truth, 1)
+    assert [row[0] for row in detections_of(level, level_truth, 1)] == [0.0]
+    assert azimuth == pytest.approx(math.atan(math.sin(math.radians(5.0))), abs=1e-12)
+    # Pitch moves a beacon on the side: at 90° left and 45° elevation, by atan(sin p · tan e).
+    side = site([{"id": 1, "xyz": [0.0, 4.0, CAMERA_Z + 4.0]}, *far_beacons()])
+    pitched, truth = Sensor(side).observe(0.0, 0.0, 0.0, np.random.default_rng(0),
+                                          tilt=(math.radians(5.0), 0.0))
+    [(azimuth, _, _)] = detections_of(pitched, truth, 1)
+    assert azimuth == pytest.approx(math.pi / 2 + math.atan(math.sin(math.radians(5.0))),
+                                    abs=1e-12)

@@ -176,7 +176,7 @@ def mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, out):
     direction of B' when R lies on the segment, below its top (heights vary linearly along the
     unfolded path), both legs C→R and R→B are clear, the elevation is within the lens' range and
     the reflected flux, reflectivity / path², is at least that of a direct beacon at ``max_range``.
-    ``out`` rows get (world azimuth, beacon index, segment index, flux ratio).
+    ``out`` rows get (world azimuth, beacon index, segment index, flux ratio, elevation).
     """
     found = 0
     limit2 = max_range * max_range
@@ -228,17 +228,19 @@ def mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, out):
                 out[found, 1] = b
                 out[found, 2] = s
                 out[found, 3] = reflectivity * limit2 / (path2 + dz * dz)
+                out[found, 4] = math.atan2(dz, path)
                 found += 1
     return found
 
 
 @numba.njit(error_model="numpy", cache=True)
 def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max_range, world,
-            beacon, label, visible, scratch_azimuth, scratch_label, scratch_visible, ghosts):
+            elevation, beacon, label, visible, scratch_azimuth, scratch_label, scratch_visible,
+            ghosts):
     """Every detection of a frame before noise: direct (or partial, or moved) views, then ghosts.
 
-    Fills ``world`` (azimuth in the world frame), ``beacon`` (map row), ``label`` and ``visible``
-    and returns their count M.
+    Fills ``world`` (azimuth in the world frame), ``elevation``, ``beacon`` (map row), ``label``
+    and ``visible`` and returns their count M.
     """
     direct_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_range,
                 scratch_azimuth, scratch_label, scratch_visible)
@@ -246,6 +248,8 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
     for b in range(beacon_xyz.shape[0]):
         if scratch_visible[b] > 0.0:
             world[count] = scratch_azimuth[b]
+            elevation[count] = math.atan2(beacon_xyz[b, 2] - cz, math.hypot(
+                beacon_xyz[b, 0] - cx, beacon_xyz[b, 1] - cy))
             beacon[count] = b
             label[count] = MOVED if moved[b] else scratch_label[b]
             visible[count] = scratch_visible[b]
@@ -253,6 +257,7 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
     n_ghosts = mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, ghosts)
     for g in range(n_ghosts):
         world[count] = ghosts[g, 0]
+        elevation[count] = ghosts[g, 4]
         beacon[count] = int(ghosts[g, 1])
         label[count] = GHOST
         visible[count] = 1.0
@@ -261,20 +266,33 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
 
 
 @numba.njit(error_model="numpy", cache=True)
-def finish(world, beacon, label, visible, heading, uniforms, delta_d, misdecode_rate, map_ids,
-           out_ids, out_measured, out_true, out_beacon, out_label, out_visible):
+def finish(world, elevation, beacon, label, visible, heading, pitch, roll, uniforms, delta_d,
+           misdecode_rate, map_ids, out_ids, out_measured, out_true, out_beacon, out_label,
+           out_visible):
     """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
 
-    ``uniforms`` (3, M) in [0, 1): the noise, whether the id is misread, and which other map id
-    it is read as (one of the N − 1 others, uniformly).
+    A tilted camera (``pitch`` and ``roll``: right-handed rotations of the camera about its y- and
+    x-axes) sees each direction (elevation e, level azimuth α) rotated: its azimuth is that of
+    R_y(pitch)ᵀ R_x(roll)ᵀ d for d = (cos e cos α, cos e sin α, sin e) — the perturbation the paper
+    describes on its bumpy stretch. ``uniforms`` (3, M) in [0, 1): the noise, whether the id is
+    misread, and which other map id it is read as (one of the N − 1 others, uniformly).
     """
     count = world.size
     n_map = map_ids.size
     measured = np.empty(count)
     ids = np.empty(count, dtype=np.int64)
     true_azimuth = np.empty(count)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cr, sr = math.cos(roll), math.sin(roll)
+    tilted = pitch != 0.0 or roll != 0.0
     for m in range(count):
         a = world[m] - heading
+        if tilted:
+            ce = math.cos(elevation[m])
+            dx, dy, dz = ce * math.cos(a), ce * math.sin(a), math.sin(elevation[m])
+            dy, dz = cr * dy + sr * dz, -sr * dy + cr * dz  # undo the roll
+            dx = cp * dx - sp * dz  # undo the pitch (only x matters for the azimuth)
+            a = math.atan2(dy, dx)
         a = a - 2.0 * math.pi * math.ceil((a - math.pi) / (2.0 * math.pi))  # to (−π, π]
         true_azimuth[m] = a
         noisy = a + (2.0 * uniforms[0, m] - 1.0) * delta_d

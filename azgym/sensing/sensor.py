@@ -58,14 +58,14 @@ class Sensor:
         self._moved = np.any(self._xyz != scenario.beacons.xyz, axis=1)
         n = len(scenario.beacons)
         most = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
-        self._ghosts = np.empty((most, 4))
+        self._ghosts = np.empty((most, 5))
         self._scratch = (np.empty(n), np.empty(n, dtype=np.int64), np.empty(n))
-        self._collected = (np.empty(most), np.empty(most, dtype=np.int64),
+        self._collected = (np.empty(most), np.empty(most), np.empty(most, dtype=np.int64),
                            np.empty(most, dtype=np.int64), np.empty(most))
 
     def observe(
         self, x: float, y: float, heading: float, rng: np.random.Generator,
-        camera_height: float | None = None,
+        camera_height: float | None = None, tilt: tuple[float, float] = (0.0, 0.0),
     ) -> tuple[Measurements, DetectionTruth]:
         """One frame from the camera at (x, y) with the given heading.
 
@@ -76,6 +76,7 @@ class Sensor:
             rng: The generator every random draw of the frame comes from (3 uniforms per
                 detection: its noise, whether its id is misread, and as which).
             camera_height: Lens height [m]; default the scenario's camera height.
+            tilt: (pitch, roll) of the camera's axis from the vertical [rad], e.g. on a bump.
 
         Returns:
             The measurements (sorted by azimuth, as a detector scanning the image would list
@@ -83,16 +84,17 @@ class Sensor:
         """
         camera = self.scenario.camera
         cz = camera.height if camera_height is None else camera_height
-        world, beacon, label, visible = self._collected
+        world, elevation, beacon, label, visible = self._collected
         count = G.collect(float(x), float(y), float(cz), self._xyz, self._width, self._moved,
-                          self._segments, camera.min_elevation, camera.max_range, world, beacon,
-                          label, visible, *self._scratch, self._ghosts)
+                          self._segments, camera.min_elevation, camera.max_range, world,
+                          elevation, beacon, label, visible, *self._scratch, self._ghosts)
         ids = np.empty(count, dtype=np.int64)
         measured = np.empty(count)
         truth = DetectionTruth(label=np.empty(count, dtype=np.int64),
                                beacon=np.empty(count, dtype=np.int64),
                                azimuth=np.empty(count), visible=np.empty(count))
-        G.finish(world[:count], beacon[:count], label[:count], visible[:count], float(heading),
+        G.finish(world[:count], elevation[:count], beacon[:count], label[:count],
+                 visible[:count], float(heading), float(tilt[0]), float(tilt[1]),
                  rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
                  self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, ids, measured,
                  truth.azimuth, truth.beacon, truth.label, truth.visible)

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import pymunk
 
+from azgym.core import wrap_angle
 from azgym.errors import InvalidInputError
 
 FORKLIFT_COLLISION_TYPE = 1
@@ -131,9 +132,9 @@ class Forklift:
 
     @property
     def pose(self) -> tuple[float, float, float]:
-        """(x, y, heading) of the body centre [m, m, rad]."""
+        """(x, y, heading) of the body centre [m, m, rad], the heading wrapped to (−π, π]."""
         position = self.body.position
-        return position.x, position.y, self.body.angle
+        return position.x, position.y, float(wrap_angle(self.body.angle))
 
     def camera_position(self) -> tuple[float, float]:
         """Where the camera is in the world (x, y) [m]."""
