@@ -247,13 +247,19 @@ def _moved_to(read: _Reader, entry: dict[str, Any], position: list[float],
     return read.vector(moved, f"{where}moved_to", 3)
 
 
-def _parse_rack(read: _Reader, entry: dict[str, Any], k: int) -> Rack:
-    where = f"racks[{k}]."
-    read.keys(entry, _RACK_KEYS, where)
+def _footprint(read: _Reader, entry: dict[str, Any], where: str) -> tuple[list[float], ...]:
+    """A rectangle's ``center`` = [x, y] and positive ``size`` = [x extent, y extent] [m]."""
     center = read.vector(read.require(entry, "center", where), f"{where}center", 2)
     size = read.vector(read.require(entry, "size", where), f"{where}size", 2)
     if min(size) <= 0:
         raise read.fail(f"{where}size", f"must be positive [length, depth], got {size}")
+    return center, size
+
+
+def _parse_rack(read: _Reader, entry: dict[str, Any], k: int) -> Rack:
+    where = f"racks[{k}]."
+    read.keys(entry, _RACK_KEYS, where)
+    center, size = _footprint(read, entry, where)
     return Rack(
         center=(center[0], center[1]), size=(size[0], size[1]),
         angle=math.radians(read.number(entry.get("angle_deg", 0.0), f"{where}angle_deg")),
@@ -308,10 +314,7 @@ def _parse_route(read: _Reader, entry: dict[str, Any], k: int, bounds: list[floa
 def _parse_bump(read: _Reader, entry: dict[str, Any], k: int) -> Bump:
     where = f"bumps[{k}]."
     read.keys(entry, _BUMP_KEYS, where)
-    center = read.vector(read.require(entry, "center", where), f"{where}center", 2)
-    size = read.vector(read.require(entry, "size", where), f"{where}size", 2)
-    if min(size) <= 0:
-        raise read.fail(f"{where}size", f"must be positive, got {size}")
+    center, size = _footprint(read, entry, where)
     tilt = read.number(read.require(entry, "tilt_deg", where), f"{where}tilt_deg",
                        non_negative=True)
     if tilt >= 45.0:
