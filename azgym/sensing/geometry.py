@@ -235,12 +235,14 @@ def mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, out):
 
 @numba.njit(error_model="numpy", cache=True)
 def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max_range, world,
-            elevation, beacon, label, visible, scratch_azimuth, scratch_label, scratch_visible,
-            ghosts):
+            elevation, beacon, label, visible, brightness, scratch_azimuth, scratch_label,
+            scratch_visible, ghosts):
     """Every detection of a frame before noise: direct (or partial, or moved) views, then ghosts.
 
-    Fills ``world`` (azimuth in the world frame), ``elevation``, ``beacon`` (map row), ``label``
-    and ``visible`` and returns their count M.
+    Fills ``world`` (azimuth in the world frame), ``elevation``, ``beacon`` (map row), ``label``,
+    ``visible`` and ``brightness`` (received flux over the detection threshold, >= 1: the visible
+    share over the squared 3-D distance, times the reflectivity for a ghost) and returns their
+    count M.
     """
     direct_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_range,
                 scratch_azimuth, scratch_label, scratch_visible)
@@ -248,8 +250,12 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
     for b in range(beacon_xyz.shape[0]):
         if scratch_visible[b] > 0.0:
             world[count] = scratch_azimuth[b]
-            elevation[count] = math.atan2(beacon_xyz[b, 2] - cz, math.hypot(
-                beacon_xyz[b, 0] - cx, beacon_xyz[b, 1] - cy))
+            dx = beacon_xyz[b, 0] - cx
+            dy = beacon_xyz[b, 1] - cy
+            dz = beacon_xyz[b, 2] - cz
+            elevation[count] = math.atan2(dz, math.hypot(dx, dy))
+            brightness[count] = max(1.0, scratch_visible[b] * max_range * max_range
+                                    / (dx * dx + dy * dy + dz * dz))
             beacon[count] = b
             label[count] = MOVED if moved[b] else scratch_label[b]
             visible[count] = scratch_visible[b]
@@ -258,6 +264,7 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
     for g in range(n_ghosts):
         world[count] = ghosts[g, 0]
         elevation[count] = ghosts[g, 4]
+        brightness[count] = ghosts[g, 3]
         beacon[count] = int(ghosts[g, 1])
         label[count] = GHOST
         visible[count] = 1.0
@@ -266,9 +273,9 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
 
 
 @numba.njit(error_model="numpy", cache=True)
-def finish(world, elevation, beacon, label, visible, heading, pitch, roll, uniforms, delta_d,
-           misdecode_rate, map_ids, out_ids, out_measured, out_true, out_beacon, out_label,
-           out_visible):
+def finish(world, elevation, beacon, label, visible, brightness, heading, pitch, roll, uniforms,
+           delta_d, misdecode_rate, map_ids, out_ids, out_measured, out_true, out_beacon,
+           out_label, out_visible, out_brightness):
     """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
 
     A tilted camera (``pitch`` and ``roll``: right-handed rotations of the camera about its y- and
@@ -311,3 +318,4 @@ def finish(world, elevation, beacon, label, visible, heading, pitch, roll, unifo
         out_beacon[k] = beacon[m]
         out_label[k] = label[m]
         out_visible[k] = visible[m]
+        out_brightness[k] = brightness[m]

@@ -61,7 +61,7 @@ class Sensor:
         self._ghosts = np.empty((most, 5))
         self._scratch = (np.empty(n), np.empty(n, dtype=np.int64), np.empty(n))
         self._collected = (np.empty(most), np.empty(most), np.empty(most, dtype=np.int64),
-                           np.empty(most, dtype=np.int64), np.empty(most))
+                           np.empty(most, dtype=np.int64), np.empty(most), np.empty(most))
 
     def observe(
         self, x: float, y: float, heading: float, rng: np.random.Generator,
@@ -80,22 +80,25 @@ class Sensor:
 
         Returns:
             The measurements (sorted by azimuth, as a detector scanning the image would list
-            them) and the ground truth of each.
+            them; ``quality`` is log10 of each blob's brightness over the detection threshold)
+            and the ground truth of each.
         """
         camera = self.scenario.camera
         cz = camera.height if camera_height is None else camera_height
-        world, elevation, beacon, label, visible = self._collected
+        world, elevation, beacon, label, visible, brightness = self._collected
         count = G.collect(float(x), float(y), float(cz), self._xyz, self._width, self._moved,
                           self._segments, camera.min_elevation, camera.max_range, world,
-                          elevation, beacon, label, visible, *self._scratch, self._ghosts)
+                          elevation, beacon, label, visible, brightness, *self._scratch,
+                          self._ghosts)
         ids = np.empty(count, dtype=np.int64)
         measured = np.empty(count)
+        quality = np.empty(count)
         truth = DetectionTruth(label=np.empty(count, dtype=np.int64),
                                beacon=np.empty(count, dtype=np.int64),
                                azimuth=np.empty(count), visible=np.empty(count))
         G.finish(world[:count], elevation[:count], beacon[:count], label[:count],
-                 visible[:count], float(heading), float(tilt[0]), float(tilt[1]),
-                 rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
+                 visible[:count], brightness[:count], float(heading), float(tilt[0]),
+                 float(tilt[1]), rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
                  self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, ids, measured,
-                 truth.azimuth, truth.beacon, truth.label, truth.visible)
-        return Measurements(ids, measured), truth
+                 truth.azimuth, truth.beacon, truth.label, truth.visible, quality)
+        return Measurements(ids, measured, np.log10(quality)), truth
