@@ -278,6 +278,9 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
            out_label, out_visible, out_brightness):
     """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
 
+    The ``out_*`` arrays may be longer than M (fixed-size observations): the rest is padded with
+    id −1, beacon −1, label −1 and zeros.
+
     A tilted camera (``pitch`` and ``roll``: right-handed rotations of the camera about its y- and
     x-axes) sees each direction (elevation e, level azimuth α) rotated: its azimuth is that of
     R_y(pitch)ᵀ R_x(roll)ᵀ d for d = (cos e cos α, cos e sin α, sin e) — the perturbation the paper
@@ -310,7 +313,7 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
             ids[m] = map_ids[(beacon[m] + min(shift, n_map - 1)) % n_map]
             label[m] = MISIDENTIFIED
     order = np.argsort(measured, kind="mergesort")
-    for k in range(count):
+    for k in range(min(count, out_ids.size)):
         m = order[k]
         out_ids[k] = ids[m]
         out_measured[k] = measured[m]
@@ -319,3 +322,11 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
         out_label[k] = label[m]
         out_visible[k] = visible[m]
         out_brightness[k] = brightness[m]
+    for k in range(count, out_ids.size):  # padding, where the outputs are longer than M
+        out_ids[k] = -1
+        out_measured[k] = 0.0
+        out_true[k] = 0.0
+        out_beacon[k] = -1
+        out_label[k] = -1
+        out_visible[k] = 0.0
+        out_brightness[k] = 1.0

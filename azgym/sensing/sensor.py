@@ -62,6 +62,42 @@ class Sensor:
         self._scratch = (np.empty(n), np.empty(n, dtype=np.int64), np.empty(n))
         self._collected = (np.empty(most), np.empty(most), np.empty(most, dtype=np.int64),
                            np.empty(most, dtype=np.int64), np.empty(most), np.empty(most))
+        self._buffers = FrameBuffers(most)
+
+    @property
+    def capacity(self) -> int:
+        """The most detections a frame can have: every beacon, and its mirror in every mirror."""
+        return int(self._ghosts.shape[0])
+
+    def new_buffers(self, size: int | None = None) -> FrameBuffers:
+        """Arrays for :meth:`observe_into`, ``size`` long (default: :attr:`capacity`)."""
+        return FrameBuffers(self.capacity if size is None else size)
+
+    def observe_into(
+        self, x: float, y: float, heading: float, rng: np.random.Generator, out: FrameBuffers,
+        camera_height: float | None = None, tilt: tuple[float, float] = (0.0, 0.0),
+    ) -> int:
+        """Like :meth:`observe`, into preallocated arrays; returns the number of detections M.
+
+        Entries past M are padded (id −1). If a frame has more detections than ``out`` holds,
+        the ones with the largest azimuths are dropped — size the buffers with :attr:`capacity`
+        to keep them all.
+        """
+        camera = self.scenario.camera
+        cz = camera.height if camera_height is None else camera_height
+        world, elevation, beacon, label, visible, brightness = self._collected
+        count = G.collect(float(x), float(y), float(cz), self._xyz, self._width, self._moved,
+                          self._segments, camera.min_elevation, camera.max_range, world,
+                          elevation, beacon, label, visible, brightness, *self._scratch,
+                          self._ghosts)
+        kept = min(count, out.ids.size)
+        G.finish(world[:count], elevation[:count], beacon[:count], label[:count],
+                 visible[:count], brightness[:count], float(heading), float(tilt[0]),
+                 float(tilt[1]), rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
+                 self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, out.ids,
+                 out.azimuth, out.true_azimuth, out.beacon, out.label, out.visible,
+                 out.brightness)
+        return kept
 
     def observe(
         self, x: float, y: float, heading: float, rng: np.random.Generator,
@@ -83,22 +119,29 @@ class Sensor:
             them; ``quality`` is log10 of each blob's brightness over the detection threshold)
             and the ground truth of each.
         """
-        camera = self.scenario.camera
-        cz = camera.height if camera_height is None else camera_height
-        world, elevation, beacon, label, visible, brightness = self._collected
-        count = G.collect(float(x), float(y), float(cz), self._xyz, self._width, self._moved,
-                          self._segments, camera.min_elevation, camera.max_range, world,
-                          elevation, beacon, label, visible, brightness, *self._scratch,
-                          self._ghosts)
-        ids = np.empty(count, dtype=np.int64)
-        measured = np.empty(count)
-        quality = np.empty(count)
-        truth = DetectionTruth(label=np.empty(count, dtype=np.int64),
-                               beacon=np.empty(count, dtype=np.int64),
-                               azimuth=np.empty(count), visible=np.empty(count))
-        G.finish(world[:count], elevation[:count], beacon[:count], label[:count],
-                 visible[:count], brightness[:count], float(heading), float(tilt[0]),
-                 float(tilt[1]), rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
-                 self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, ids, measured,
-                 truth.azimuth, truth.beacon, truth.label, truth.visible, quality)
-        return Measurements(ids, measured, np.log10(quality)), truth
+        out = self._buffers
+        count = self.observe_into(x, y, heading, rng, out, camera_height, tilt)
+        truth = DetectionTruth(label=out.label[:count].copy(), beacon=out.beacon[:count].copy(),
+                               azimuth=out.true_azimuth[:count].copy(),
+                               visible=out.visible[:count].copy())
+        return Measurements(out.ids[:count], out.azimuth[:count],
+                            np.log10(out.brightness[:count])), truth
+
+
+class FrameBuffers:
+    """Fixed-size arrays one frame is written into (see :meth:`Sensor.observe_into`).
+
+    Attributes:
+        ids, azimuth, brightness: What the camera reports (brightness over the detection
+            threshold, >= 1).
+        true_azimuth, beacon, label, visible: The ground truth beside it.
+    """
+
+    def __init__(self, size: int) -> None:
+        self.ids = np.full(size, -1, dtype=np.int64)
+        self.azimuth = np.zeros(size)
+        self.brightness = np.ones(size)
+        self.true_azimuth = np.zeros(size)
+        self.beacon = np.full(size, -1, dtype=np.int64)
+        self.label = np.full(size, -1, dtype=np.int64)
+        self.visible = np.zeros(size)
