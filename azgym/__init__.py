@@ -9,6 +9,7 @@ The public API in one place::
 """
 
 from azgym.core import BeaconMap, Estimate, Measurements, wrap_angle
+from azgym.envs.registration import ENV_IDS
 from azgym.errors import (
     AzgymError,
     DependencyNotInstalled,
@@ -29,6 +30,7 @@ from azgym.sensing.error_model import ErrorModel
 __version__ = "0.1.0"
 
 __all__ = [
+    "ENV_IDS",
     "AzgymError",
     "BeaconMap",
     "DependencyNotInstalled",

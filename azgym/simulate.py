@@ -73,14 +73,45 @@ def _route(scenario: Scenario, route: str | Route | None) -> Route:
     return names[route]
 
 
-def _sway(scenario: Scenario, x: float, y: float,
-          rng: np.random.Generator) -> tuple[float, float]:
+def sway(scenario: Scenario, x: float, y: float,
+         rng: np.random.Generator) -> tuple[float, float]:
     """The camera's (pitch, roll) at (x, y): normal with the bump's spread on a bumpy stretch."""
     for bump in scenario.bumps:
         if bump.contains(x, y):
             pitch, roll = rng.normal(0.0, bump.tilt, size=2)
             return float(pitch), float(roll)
     return 0.0, 0.0
+
+
+def _drive(scenario: Scenario, route: Route, dt: float,
+           spec: ForkliftSpec | None) -> Iterator[tuple[World, bool]]:
+    """Step the world along the route: yields (world, route done) before each physics step."""
+    world = World(scenario, route.start_pose(), spec, dt)
+    forklift = world.forklift
+    driver = PurePursuit(route, forklift.spec)
+    while True:
+        yield world, driver.done and abs(forklift.speed) < 0.05
+        x, y, heading = forklift.pose
+        world.step(*driver.command(x, y, heading, forklift.speed))
+
+
+def camera_trajectory(scenario: Scenario, route: Route, camera_rate_hz: float = 10.0,
+                      dt: float = 0.02, spec: ForkliftSpec | None = None,
+                      max_time: float = 600.0) -> np.ndarray:
+    """The camera pose (x, y, heading) at each frame of a route, shape (F, 3).
+
+    The drive is deterministic (no random draw), the same for every seed; ``simulate`` adds the
+    sensors along it.
+    """
+    poses = []
+    next_frame = 0.0
+    for world, done in _drive(scenario, route, dt, spec):
+        if world.time + 1e-9 >= next_frame:
+            poses.append((*world.forklift.camera_position(), world.forklift.pose[2]))
+            next_frame += 1.0 / camera_rate_hz
+            if done or world.time > max_time:
+                break
+    return np.array(poses)
 
 
 def simulate(
@@ -114,9 +145,6 @@ def simulate(
         raise InvalidInputError(f"camera_rate_hz and dt must be > 0, got {camera_rate_hz}, {dt}")
     camera_stream, odometry_stream, imu_stream, sway_stream = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
-    world = World(scenario, chosen.start_pose(), spec, dt)
-    forklift = world.forklift
-    driver = PurePursuit(chosen, forklift.spec)
     sensor = Sensor(scenario)
     odometer = Odometer(odometry or OdometryModel(), odometry_stream)
     inertial = Imu(imu or ImuModel(), imu_stream)
@@ -124,12 +152,22 @@ def simulate(
     next_frame = 0.0
     index = 0
     contacts_seen = 0
-    velocity = forklift.body.velocity
-    while world.time <= max_time:
+    velocity = None
+    for world, done in _drive(scenario, chosen, dt, spec):
+        forklift = world.forklift
+        if velocity is not None:  # the sensors of the step just taken
+            new_velocity = forklift.body.velocity
+            ax, ay = (new_velocity.x - velocity.x) / dt, (new_velocity.y - velocity.y) / dt
+            heading = forklift.body.angle
+            c, s = math.cos(heading), math.sin(heading)
+            odometer.update(world.time, forklift.speed, forklift.steer)
+            inertial.update(world.time, forklift.body.angular_velocity,
+                            (c * ax + s * ay, -s * ax + c * ay), heading)
+        velocity = forklift.body.velocity
         if world.time + 1e-9 >= next_frame:
-            x, y, heading = forklift.pose
+            _, _, heading = forklift.pose
             cx, cy = forklift.camera_position()
-            tilt = _sway(scenario, cx, cy, sway_stream)
+            tilt = sway(scenario, cx, cy, sway_stream)
             measurements, truth = sensor.observe(cx, cy, heading, camera_stream, tilt=tilt)
             yield Frame(index=index, time=world.time, measurements=measurements, truth=truth,
                         pose=(cx, cy, heading), odometry=odometer.take(), imu=inertial.take(),
@@ -137,15 +175,5 @@ def simulate(
             contacts_seen = len(world.contacts)
             index += 1
             next_frame += period
-            if driver.done and abs(forklift.speed) < 0.05:
+            if done or world.time > max_time:
                 return
-        x, y, heading = forklift.pose
-        world.step(*driver.command(x, y, heading, forklift.speed))
-        new_velocity = forklift.body.velocity
-        ax, ay = (new_velocity.x - velocity.x) / dt, (new_velocity.y - velocity.y) / dt
-        velocity = new_velocity
-        heading = forklift.body.angle
-        c, s = math.cos(heading), math.sin(heading)
-        odometer.update(world.time, forklift.speed, forklift.steer)
-        inertial.update(world.time, forklift.body.angular_velocity,
-                        (c * ax + s * ay, -s * ax + c * ay), heading)

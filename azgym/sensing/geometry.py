@@ -330,3 +330,21 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
         out_label[k] = -1
         out_visible[k] = 0.0
         out_brightness[k] = 1.0
+
+
+@numba.njit(error_model="numpy", cache=True)
+def ray_ranges(x, y, heading, seg, count, max_range, out):
+    """Distances to the nearest occluder along ``count`` rays around (x, y): a range sensor.
+
+    The rays are evenly spaced, the first along ``heading``; ranges are capped at ``max_range``.
+    """
+    for r in range(count):
+        angle = heading + 2.0 * math.pi * r / count
+        qx = x + max_range * math.cos(angle)
+        qy = y + max_range * math.sin(angle)
+        nearest = 1.0
+        for s in range(seg.shape[0]):
+            t, u = _crossing(x, y, qx, qy, seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
+            if 0.0 <= t < nearest and 0.0 <= u <= 1.0:
+                nearest = t
+        out[r] = nearest * max_range

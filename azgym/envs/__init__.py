@@ -1,0 +1,1 @@
+"""Gymnasium environments: registration of every scenario, localization and navigation."""

@@ -1,0 +1,282 @@
+"""The localization environment: the agent answers each camera frame with a pose estimate."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from azgym.core import wrap_angle
+from azgym.errors import InvalidInputError
+from azgym.scenario import Scenario, load_scenario
+from azgym.sensing.sensor import Sensor
+from azgym.simulate import camera_trajectory, sway
+
+
+class LocalizeEnv(gym.Env):
+    """Localization: estimate the camera's pose from each frame of a drive through a warehouse.
+
+    ## Description
+
+    A forklift drives one of a scenario's routes through the warehouse; its upward fisheye camera
+    sees the beacons — and the faults the warehouse makes: racks hide beacons or cover part of
+    them, reflective walls and rack faces add ghosts with the real beacon's id, ids are misread,
+    a beacon may have been moved. Each step is one camera frame (10 Hz). The agent answers every
+    frame with its estimate of the camera pose and is rewarded for its accuracy. A scenario
+    without routes (``paper-room``) shows the camera at a random pose in every frame instead.
+
+    ## Action Space
+
+    ``Box(-1, 1, (3,), float32)``: the estimated camera pose, normalised: x and y scaled from the
+    room's bounds to [-1, 1], the heading divided by π (the form RL libraries expect).
+    ``env.unwrapped.pose_to_action(x, y, heading)`` and ``action_to_pose(action)`` convert. A NaN,
+    an action of the wrong shape or one outside [-1, 1] raises :class:`azgym.InvalidInputError`.
+
+    ## Observation Space
+
+    ``Dict`` of fixed-size arrays, K = ``max_detections`` (padded past the frame's M detections):
+
+    | key | space | meaning |
+    |---|---|---|
+    | ``ids`` | ``Box(-1, max id, (K,), int64)`` | decoded beacon id, −1 for padding |
+    | ``azimuth`` | ``Box(-π, π, (K,), float32)`` | azimuth in the camera frame [rad] |
+    | ``valid`` | ``MultiBinary(K)`` | which entries are detections |
+    | ``quality`` | ``Box(0, 10, (K,), float32)`` | log10 of the blob's brightness over threshold |
+    | ``beacon_ids`` | ``Box(min id, max id, (N,), int64)`` | the beacon map: ids (constant) |
+    | ``beacon_xyz`` | ``Box((N, 3), float32)`` | the beacon map: positions [m] (constant) |
+
+    ## Rewards
+
+    Named terms, each weighted by the argument of the same name, summed, and reported in
+    ``info["rewards"]``: ``position_error`` = −weight · distance [m] and ``heading_error`` =
+    −weight · |wrapped heading error| [rad].
+
+    ## Starting State
+
+    ``reset`` picks the route (``options={"route": name}``, the ``route`` argument, or uniformly
+    at random) and shows its first frame. The route's trajectory is deterministic; the sensor's
+    noise, misread ids and the camera's sway come from the environment's generator.
+
+    ## Episode End
+
+    Terminated after the answer to the route's last frame (or ``episode_length`` frames for a
+    scenario without routes). There is no truncation of its own.
+
+    ## Arguments
+
+    ``gym.make("azgym/Localize-WarehouseSmall-v0", scenario=..., route=None, max_detections=32,
+    position_error=1.0, heading_error=0.1, episode_length=200, render_mode=None)``.
+    ``scenario`` accepts a shipped name or the path of a user's TOML file.
+
+    ``info`` holds the true ``pose`` of the answered frame and, for the returned observation,
+    ``labels`` (see ``azgym.sensing.geometry.LABEL_NAMES``, −1 for padding) and ``true_beacons``
+    (map rows) — ground truth kept beside the observation, never in it.
+
+    ## Version History
+
+    * v0: initial version.
+
+    ## Example
+
+    >>> import gymnasium as gym, azgym
+    >>> env = gym.make("azgym/Localize-WarehouseSmall-v0")
+    >>> observation, info = env.reset(seed=0)
+    >>> observation, reward, terminated, truncated, info = env.step(env.action_space.sample())
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
+
+    def __init__(
+        self,
+        scenario: str | Scenario = "warehouse-small",
+        route: str | None = None,
+        max_detections: int = 32,
+        position_error: float = 1.0,
+        heading_error: float = 0.1,
+        episode_length: int = 200,
+        render_mode: str | None = None,
+    ) -> None:
+        self.scenario = load_scenario(scenario)
+        names = [r.name for r in self.scenario.routes]
+        if route is not None and route not in names:
+            from azgym.errors import unknown_name
+
+            raise unknown_name("route", route, names)
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise InvalidInputError(
+                f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
+            )
+        for name, value in (("position_error", position_error),
+                            ("heading_error", heading_error)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise InvalidInputError(f"{name} weight must be a number >= 0, got {value!r}")
+        if not (isinstance(max_detections, int) and max_detections >= 3):
+            raise InvalidInputError(f"max_detections must be an integer >= 3, got "
+                                    f"{max_detections!r}")
+        self.route = route
+        self.max_detections = max_detections
+        self.weights = {"position_error": float(position_error),
+                        "heading_error": float(heading_error)}
+        self.episode_length = episode_length
+        self.render_mode = render_mode
+        self._sensor = Sensor(self.scenario)
+        self._buffers = self._sensor.new_buffers(max_detections)
+        self._trajectories: dict[str, np.ndarray] = {}
+        beacons = self.scenario.beacons
+        ids = beacons.ids
+        x_min, y_min, x_max, y_max = self.scenario.bounds
+        self._centre = np.array([(x_min + x_max) / 2, (y_min + y_max) / 2, 0.0])
+        self._half = np.array([(x_max - x_min) / 2, (y_max - y_min) / 2, math.pi])
+        self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        z_low = float(min(0.0, beacons.xyz[:, 2].min()))
+        z_high = float(beacons.xyz[:, 2].max()) + 1.0
+        span = max(abs(v) for v in self.scenario.bounds) + 100.0
+        self.observation_space = spaces.Dict({
+            "ids": spaces.Box(-1, int(ids.max()), (max_detections,), np.int64),
+            "azimuth": spaces.Box(-math.pi, math.pi, (max_detections,), np.float32),
+            "valid": spaces.MultiBinary(max_detections),
+            "quality": spaces.Box(0.0, 10.0, (max_detections,), np.float32),
+            "beacon_ids": spaces.Box(int(ids.min()), int(ids.max()), (len(ids),), np.int64),
+            "beacon_xyz": spaces.Box(
+                low=np.tile(np.array([-span, -span, z_low], dtype=np.float32), (len(ids), 1)),
+                high=np.tile(np.array([span, span, z_high], dtype=np.float32), (len(ids), 1)),
+                dtype=np.float32),
+        })
+        self._beacon_ids = ids.astype(np.int64)
+        self._beacon_xyz = beacons.xyz.astype(np.float32)
+        self._poses = np.zeros((1, 3))
+        self._frame = 0
+        self._route_name: str | None = None
+        self._estimate: tuple[float, float, float] | None = None
+
+    # -- episode -------------------------------------------------------------------------------
+
+    def _trajectory(self, name: str) -> np.ndarray:
+        if name not in self._trajectories:
+            route = next(r for r in self.scenario.routes if r.name == name)
+            self._trajectories[name] = camera_trajectory(self.scenario, route)
+        return self._trajectories[name]
+
+    def _random_poses(self) -> np.ndarray:
+        """Poses for a scenario without routes: uniform in the room, off the racks."""
+        x_min, y_min, x_max, y_max = self.scenario.bounds
+        poses = np.empty((self.episode_length, 3))
+        for k in range(self.episode_length):
+            while True:
+                x, y = self.np_random.uniform((x_min, y_min), (x_max, y_max))
+                if not any(rack.contains(x, y, margin=-0.3) for rack in self.scenario.racks):
+                    break
+            poses[k] = (x, y, self.np_random.uniform(-math.pi, math.pi))
+        return poses
+
+    def reset(self, *, seed: int | None = None,
+              options: dict[str, Any] | None = None) -> tuple[dict[str, np.ndarray], dict]:
+        """Start an episode: pick the route and show its first frame."""
+        super().reset(seed=seed)
+        options = options or {}
+        if self.scenario.routes:
+            names = [r.name for r in self.scenario.routes]
+            name = options.get("route", self.route)
+            if name is None:
+                name = names[int(self.np_random.integers(len(names)))]
+            elif name not in names:
+                from azgym.errors import unknown_name
+
+                raise unknown_name("route", str(name), names)
+            self._route_name = name
+            self._poses = self._trajectory(name)
+        else:
+            self._route_name = None
+            self._poses = self._random_poses()
+        self._frame = 0
+        self._estimate = None
+        observation = self._observe()
+        return observation, self._frame_info()
+
+    def step(self, action: np.ndarray) -> tuple[dict[str, np.ndarray], float, bool, bool, dict]:
+        """Score the estimate of the current frame's pose, then show the next frame."""
+        estimate = self.action_to_pose(self._check_action(action))
+        x, y, heading = self._poses[self._frame]
+        position_error = math.hypot(float(estimate[0]) - x, float(estimate[1]) - y)
+        heading_error = abs(float(wrap_angle(float(estimate[2]) - heading)))
+        rewards = {"position_error": -self.weights["position_error"] * position_error,
+                   "heading_error": -self.weights["heading_error"] * heading_error}
+        answered = (float(x), float(y), float(heading))
+        self._estimate = (float(estimate[0]), float(estimate[1]), float(estimate[2]))
+        terminated = self._frame + 1 >= len(self._poses)
+        if not terminated:
+            self._frame += 1
+            observation = self._observe()
+        else:
+            observation = {key: value.copy() for key, value in self._observation.items()}
+        info = self._frame_info()
+        info.update(pose=answered, rewards=rewards, position_error=position_error,
+                    heading_error=heading_error)
+        return observation, float(sum(rewards.values())), terminated, False, info
+
+    # -- helpers -------------------------------------------------------------------------------
+
+    def _observe(self) -> dict[str, np.ndarray]:
+        x, y, heading = self._poses[self._frame]
+        out = self._buffers
+        tilt = sway(self.scenario, x, y, self.np_random)
+        self._sensor.observe_into(x, y, heading, self.np_random, out, tilt=tilt)
+        valid = out.ids >= 0
+        self._observation = {
+            "ids": out.ids.copy(),
+            "azimuth": out.azimuth.astype(np.float32),
+            "valid": valid.astype(np.int8),
+            "quality": np.log10(out.brightness).astype(np.float32),
+            "beacon_ids": self._beacon_ids.copy(),
+            "beacon_xyz": self._beacon_xyz.copy(),
+        }
+        return self._observation
+
+    def _frame_info(self) -> dict[str, Any]:
+        return {"frame": self._frame, "route": self._route_name,
+                "labels": self._buffers.label.copy(), "true_beacons": self._buffers.beacon.copy(),
+                "true_pose": self.true_pose()}
+
+    def _check_action(self, action: Any) -> np.ndarray:
+        estimate = np.asarray(action, dtype=np.float64)
+        if estimate.shape != (3,):
+            raise InvalidInputError(
+                f"action must be a pose estimate (x, y, heading) of shape (3,), got shape "
+                f"{estimate.shape}"
+            )
+        if not np.isfinite(estimate).all():
+            raise InvalidInputError(f"action must be finite, got {estimate.tolist()}")
+        if (np.abs(estimate) > 1.0 + 1e-6).any():
+            raise InvalidInputError(
+                f"action {estimate.tolist()} is outside the action space [-1, 1]^3 (use "
+                "pose_to_action to normalise a pose)"
+            )
+        return estimate
+
+    def pose_to_action(self, x: float, y: float, heading: float) -> np.ndarray:
+        """The normalised action for the pose estimate (x, y, heading), clipped to [-1, 1]."""
+        pose = np.array([x, y, float(wrap_angle(heading))])
+        return np.clip((pose - self._centre) / self._half, -1.0, 1.0).astype(np.float32)
+
+    def action_to_pose(self, action: np.ndarray) -> tuple[float, float, float]:
+        """The pose (x, y, heading) an action stands for."""
+        x, y, heading = self._centre + np.asarray(action, dtype=np.float64) * self._half
+        return float(x), float(y), float(heading)
+
+    def true_pose(self) -> tuple[float, float, float]:
+        """The true camera pose of the frame last observed."""
+        x, y, heading = self._poses[self._frame]
+        return float(x), float(y), float(heading)
+
+    def last_estimate(self) -> tuple[float, float, float] | None:
+        """The agent's last answer, if any in this episode."""
+        return self._estimate
+
+    def render(self) -> np.ndarray | None:
+        """Draw the top-down view (see :mod:`azgym.envs.render`)."""
+        from azgym.envs.render import render_frame
+
+        return render_frame(self, self.render_mode)

@@ -1,0 +1,259 @@
+"""The navigation environment: drive the forklift to a goal on the pose a localizer estimates."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from azgym.core import Measurements
+from azgym.errors import InvalidInputError
+from azgym.layout import occluder_table
+from azgym.localize.registry import SupportsLocalize, make_localizer
+from azgym.scenario import Scenario, load_scenario
+from azgym.sensing import geometry as G
+from azgym.sensing.sensor import Sensor
+from azgym.simulate import sway
+from azgym.world.world import World
+
+DISCRETE_CONTROLS = np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.6, 1.0], [0.6, -1.0]],
+                             dtype=np.float32)
+"""(throttle, steer) of the discrete actions: coast, forward, back, forward-left, forward-right."""
+
+GOAL_SCALE = 20.0
+"""Goal offsets in the observation are divided by this [m]."""
+
+
+class NavigateEnv(gym.Env):
+    """Navigation: drive the forklift to a pick or drop spot, seeing only the estimated pose.
+
+    ## Description
+
+    The forklift starts at one of the scenario's spots (its routes' waypoints: aisle ends and
+    crossings) and must reach another. It does not know where it is: every control period (10 Hz)
+    its camera takes a frame, with all the warehouse's faults, and a localizer — ``ransac`` by
+    default, any registered name or object, or ``"truth"`` as an oracle — estimates the pose. The
+    goal is given in the frame of that estimate. When the localizer fails (``ok=False``) the
+    observation says so and gives no goal, rather than inventing a pose.
+
+    ## Action Space
+
+    ``Box(-1, 1, (2,), float32)``: throttle (share of the maximum acceleration, negative to
+    brake or reverse) and steering (share of full lock, positive left). With ``discrete=True``
+    (the ``NavigateDiscrete`` ids): ``Discrete(5)`` — coast, forward, back, forward-left,
+    forward-right. A NaN, a wrong shape or an out-of-range action raises
+    :class:`azgym.InvalidInputError`.
+
+    ## Observation Space
+
+    ``Box(-1, 1, (5 + n_rays,), float32)``: ``[localized, goal_forward, goal_left, speed, steer,
+    ranges...]`` — whether the localizer answered; the goal in the estimated body frame divided
+    by 20 m (clipped, zero when not localized); speed and steering as shares of their limits; and
+    ``n_rays`` range readings around the body, divided by ``ray_range``.
+
+    ## Rewards
+
+    Named terms, each weighted by the argument of the same name and reported in
+    ``info["rewards"]``: ``progress`` (metres closer to the goal, by the true pose), ``collision``
+    (−1 in a step that begins a contact), ``time`` (−1 per step) and ``success`` (+1 on arrival).
+
+    ## Starting State
+
+    Start and goal are two different spots at least 5 m apart, drawn by the environment's
+    generator; the heading is uniform. The sensor's noise comes from the same generator.
+
+    ## Episode End
+
+    Terminated when the true position is within ``goal_radius`` of the goal; truncated after
+    ``max_steps`` steps.
+
+    ## Arguments
+
+    ``gym.make("azgym/Navigate-WarehouseSmall-v0", scenario=..., localizer="ransac",
+    discrete=False, max_steps=600, progress=1.0, collision=1.0, time=0.01, success=10.0,
+    goal_radius=1.0, n_rays=8, ray_range=10.0, render_mode=None)``.
+
+    ## Version History
+
+    * v0: initial version.
+
+    ## Example
+
+    >>> import gymnasium as gym, azgym
+    >>> env = gym.make("azgym/Navigate-WarehouseSmall-v0", localizer="ransac")
+    >>> observation, info = env.reset(seed=0)
+    >>> observation, reward, terminated, truncated, info = env.step(env.action_space.sample())
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
+
+    def __init__(
+        self,
+        scenario: str | Scenario = "warehouse-small",
+        localizer: str | SupportsLocalize = "ransac",
+        discrete: bool = False,
+        max_steps: int = 600,
+        progress: float = 1.0,
+        collision: float = 1.0,
+        time: float = 0.01,
+        success: float = 10.0,
+        goal_radius: float = 1.0,
+        n_rays: int = 8,
+        ray_range: float = 10.0,
+        render_mode: str | None = None,
+    ) -> None:
+        self.scenario = load_scenario(scenario)
+        if not self.scenario.routes:
+            raise InvalidInputError(
+                f"scenario {self.scenario.name!r} has no routes, whose waypoints are the "
+                "navigation spots; add [[routes]] to it"
+            )
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise InvalidInputError(
+                f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
+            )
+        self.weights = {}
+        for name, value in (("progress", progress), ("collision", collision), ("time", time),
+                            ("success", success)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise InvalidInputError(f"{name} weight must be a number >= 0, got {value!r}")
+            self.weights[name] = float(value)
+        self.localizer_name = localizer if isinstance(localizer, str) else type(localizer).__name__
+        self.localizer = None if localizer == "truth" else (
+            make_localizer(localizer) if isinstance(localizer, str) else localizer)
+        self.discrete = bool(discrete)
+        self.max_steps = int(max_steps)
+        self.goal_radius = float(goal_radius)
+        self.n_rays = int(n_rays)
+        self.ray_range = float(ray_range)
+        self.render_mode = render_mode
+        self._sensor = Sensor(self.scenario)
+        self._buffers = self._sensor.new_buffers()
+        self._segments = occluder_table(self.scenario.racks, self.scenario.walls)
+        self._rays = np.empty(self.n_rays)
+        self.spots = np.unique(np.concatenate([r.waypoints for r in self.scenario.routes]),
+                               axis=0)
+        self.action_space = (spaces.Discrete(len(DISCRETE_CONTROLS)) if self.discrete else
+                             spaces.Box(-1.0, 1.0, (2,), np.float32))
+        self.observation_space = spaces.Box(-1.0, 1.0, (5 + self.n_rays,), np.float32)
+        self._world: World | None = None
+        self._goal = np.zeros(2)
+        self._estimate: tuple[float, float, float] | None = None
+
+    def reset(self, *, seed: int | None = None,
+              options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+        """Place the forklift at a spot facing a random way, and pick a goal spot."""
+        super().reset(seed=seed)
+        while True:
+            start, goal = self.np_random.choice(len(self.spots), size=2, replace=False)
+            if np.hypot(*(self.spots[goal] - self.spots[start])) >= 5.0:
+                break
+        heading = float(self.np_random.uniform(-math.pi, math.pi))
+        self._world = World(self.scenario, (*self.spots[start], heading))
+        self._goal = self.spots[goal].astype(np.float64)
+        self._steps = 0
+        self._distance = self._true_distance()
+        observation = self._observe()
+        return observation, self._info()
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
+        """Drive for one control period (0.1 s), then look and localize."""
+        throttle, steer = self._controls(action)
+        world = self._world
+        contacts_before = len(world.contacts)
+        for _ in range(5):
+            world.step(throttle, steer)
+        self._steps += 1
+        distance = self._true_distance()
+        arrived = distance < self.goal_radius
+        rewards = {
+            "progress": self.weights["progress"] * (self._distance - distance),
+            "collision": -self.weights["collision"] * (len(world.contacts) > contacts_before),
+            "time": -self.weights["time"],
+            "success": self.weights["success"] * arrived,
+        }
+        self._distance = distance
+        observation = self._observe()
+        info = self._info()
+        info["rewards"] = rewards
+        return (observation, float(sum(rewards.values())), bool(arrived),
+                self._steps >= self.max_steps and not arrived, info)
+
+    # -- helpers -------------------------------------------------------------------------------
+
+    def _controls(self, action: Any) -> tuple[float, float]:
+        if self.discrete:
+            if not (np.ndim(action) == 0 and int(action) == action
+                    and 0 <= int(action) < len(DISCRETE_CONTROLS)):
+                raise InvalidInputError(
+                    f"action must be an integer in [0, {len(DISCRETE_CONTROLS)}), got {action!r}"
+                )
+            throttle, steer = DISCRETE_CONTROLS[int(action)]
+            return float(throttle), float(steer)
+        controls = np.asarray(action, dtype=np.float64)
+        if controls.shape != (2,):
+            raise InvalidInputError(
+                f"action must be (throttle, steer) of shape (2,), got shape {controls.shape}"
+            )
+        if not np.isfinite(controls).all() or (np.abs(controls) > 1.0 + 1e-6).any():
+            raise InvalidInputError(
+                f"action must be finite and within [-1, 1], got {controls.tolist()}"
+            )
+        return float(controls[0]), float(controls[1])
+
+    def _true_distance(self) -> float:
+        x, y, _ = self._world.forklift.pose
+        return math.hypot(self._goal[0] - x, self._goal[1] - y)
+
+    def _observe(self) -> np.ndarray:
+        forklift = self._world.forklift
+        x, y, heading = forklift.pose
+        cx, cy = forklift.camera_position()
+        tilt = sway(self.scenario, cx, cy, self.np_random)
+        frame = self._buffers
+        count = self._sensor.observe_into(cx, cy, heading, self.np_random, frame, tilt=tilt)
+        if self.localizer is None:
+            self._estimate = (cx, cy, heading)
+        else:
+            measurements = Measurements(frame.ids[:count], frame.azimuth[:count])
+            estimate = self.localizer.localize(measurements, self.scenario.beacons)
+            self._estimate = (estimate.x, estimate.y, estimate.heading) if estimate.ok else None
+        G.ray_ranges(x, y, heading, self._segments, self.n_rays, self.ray_range, self._rays)
+        spec = forklift.spec
+        observation = np.zeros(5 + self.n_rays, dtype=np.float32)
+        if self._estimate is not None:
+            ex, ey, eh = self._estimate
+            dx, dy = self._goal[0] - ex, self._goal[1] - ey
+            c, s = math.cos(eh), math.sin(eh)
+            observation[0] = 1.0
+            observation[1] = np.clip((c * dx + s * dy) / GOAL_SCALE, -1.0, 1.0)
+            observation[2] = np.clip((-s * dx + c * dy) / GOAL_SCALE, -1.0, 1.0)
+        observation[3] = np.clip(forklift.speed / spec.max_speed, -1.0, 1.0)
+        observation[4] = np.clip(forklift.steer / spec.max_steer, -1.0, 1.0)
+        observation[5:] = self._rays / self.ray_range
+        return observation
+
+    def _info(self) -> dict[str, Any]:
+        x, y, heading = self._world.forklift.pose
+        return {"true_pose": (x, y, heading), "estimate": self._estimate,
+                "localized": self._estimate is not None, "goal": tuple(self._goal),
+                "distance": self._distance, "contacts": len(self._world.contacts)}
+
+    def true_pose(self) -> tuple[float, float, float]:
+        """The camera's true pose."""
+        forklift = self._world.forklift
+        return (*forklift.camera_position(), forklift.pose[2])
+
+    def last_estimate(self) -> tuple[float, float, float] | None:
+        """The localizer's last estimate (None when it failed)."""
+        return self._estimate
+
+    def render(self) -> np.ndarray | None:
+        """Draw the top-down view (see :mod:`azgym.envs.render`)."""
+        from azgym.envs.render import render_frame
+
+        return render_frame(self, self.render_mode)
+
