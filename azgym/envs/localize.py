@@ -109,6 +109,10 @@ class LocalizeEnv(gym.Env):
             raise InvalidInputError(
                 f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
             )
+        if render_mode == "human":
+            from azgym.envs.render import require_display
+
+            require_display()
         for name, value in (("position_error", position_error),
                             ("heading_error", heading_error)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
@@ -194,6 +198,8 @@ class LocalizeEnv(gym.Env):
         self._frame = 0
         self._estimate = None
         observation = self._observe()
+        if self.render_mode == "human":
+            self.render()
         return observation, self._frame_info()
 
     def step(self, action: np.ndarray) -> tuple[dict[str, np.ndarray], float, bool, bool, dict]:
@@ -215,6 +221,8 @@ class LocalizeEnv(gym.Env):
         info = self._frame_info()
         info.update(pose=answered, rewards=rewards, position_error=position_error,
                     heading_error=heading_error)
+        if self.render_mode == "human":
+            self.render()
         return observation, float(sum(rewards.values())), terminated, False, info
 
     # -- helpers -------------------------------------------------------------------------------

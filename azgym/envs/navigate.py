@@ -115,6 +115,10 @@ class NavigateEnv(gym.Env):
             raise InvalidInputError(
                 f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
             )
+        if render_mode == "human":
+            from azgym.envs.render import require_display
+
+            require_display()
         self.weights = {}
         for name, value in (("progress", progress), ("collision", collision), ("time", time),
                             ("success", success)):
@@ -157,6 +161,8 @@ class NavigateEnv(gym.Env):
         self._steps = 0
         self._distance = self._true_distance()
         observation = self._observe()
+        if self.render_mode == "human":
+            self.render()
         return observation, self._info()
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
@@ -179,6 +185,8 @@ class NavigateEnv(gym.Env):
         observation = self._observe()
         info = self._info()
         info["rewards"] = rewards
+        if self.render_mode == "human":
+            self.render()
         return (observation, float(sum(rewards.values())), bool(arrived),
                 self._steps >= self.max_steps and not arrived, info)
 

@@ -56,8 +56,8 @@ def render_frame(env: Any, mode: str | None) -> np.ndarray | None:
     return image
 
 
-def _show(image: np.ndarray) -> None:
-    """Show the frame in a matplotlib window (OpenCV here is headless and opens none)."""
+def require_display() -> None:
+    """Raise a clear error unless a window can be opened (for render_mode="human")."""
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
             or sys.platform in ("darwin", "win32")):
         raise AzgymError(
@@ -66,6 +66,11 @@ def _show(image: np.ndarray) -> None:
             '(pip install moviepy).'
         )
     require("matplotlib", "plot")
+
+
+def _show(image: np.ndarray) -> None:
+    """Show the frame in a matplotlib window (OpenCV here is headless and opens none)."""
+    require_display()
     import matplotlib.pyplot as plt
 
     global _WINDOW
