@@ -8,6 +8,7 @@ difference goes through :func:`wrap_angle`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -31,6 +32,9 @@ def wrap_angle(angle: ArrayLike) -> Any:
     Returns:
         The wrapped angle(s), a float for a scalar input.
     """
+    if isinstance(angle, (float, int)):  # the same formula without numpy's overhead
+        wrapped_scalar = math.pi - (math.pi - angle) % (2.0 * math.pi)
+        return wrapped_scalar if wrapped_scalar > -math.pi else math.pi
     wrapped = np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), 2.0 * np.pi)
     # np.mod can round a tiny negative remainder up to 2π, which would give −π: map it to π.
     wrapped = np.where(wrapped <= -np.pi, np.pi, wrapped)

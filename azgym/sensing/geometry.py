@@ -274,12 +274,12 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
 
 @numba.njit(error_model="numpy", cache=True)
 def finish(world, elevation, beacon, label, visible, brightness, heading, pitch, roll, uniforms,
-           delta_d, misdecode_rate, map_ids, out_ids, out_measured, out_true, out_beacon,
-           out_label, out_visible, out_brightness):
+           delta_d, misdecode_rate, map_ids, out_floats, out_ints):
     """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
 
-    The ``out_*`` arrays may be longer than M (fixed-size observations): the rest is padded with
-    id −1, beacon −1, label −1 and zeros.
+    ``out_floats`` rows get the measured azimuth, brightness, true azimuth and visible share;
+    ``out_ints`` rows the decoded id, beacon row and label. They may be longer than M (fixed-size
+    observations): the rest is padded with id −1, beacon −1, label −1 and zeros.
 
     A tilted camera (``pitch`` and ``roll``: right-handed rotations of the camera about its y- and
     x-axes) sees each direction (elevation e, level azimuth α) rotated: its azimuth is that of
@@ -289,6 +289,9 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
     """
     count = world.size
     n_map = map_ids.size
+    out_measured, out_brightness, out_true, out_visible = (out_floats[0], out_floats[1],
+                                                           out_floats[2], out_floats[3])
+    out_ids, out_beacon, out_label = out_ints[0], out_ints[1], out_ints[2]
     measured = np.empty(count)
     ids = np.empty(count, dtype=np.int64)
     true_azimuth = np.empty(count)

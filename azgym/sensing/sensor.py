@@ -57,7 +57,8 @@ class Sensor:
         self._width = scenario.beacons.width
         self._moved = np.any(self._xyz != scenario.beacons.xyz, axis=1)
         n = len(scenario.beacons)
-        most = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
+        self._capacity = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
+        most = self._capacity
         self._ghosts = np.empty((most, 5))
         self._scratch = (np.empty(n), np.empty(n, dtype=np.int64), np.empty(n))
         self._collected = (np.empty(most), np.empty(most), np.empty(most, dtype=np.int64),
@@ -67,7 +68,7 @@ class Sensor:
     @property
     def capacity(self) -> int:
         """The most detections a frame can have: every beacon, and its mirror in every mirror."""
-        return int(self._ghosts.shape[0])
+        return self._capacity
 
     def new_buffers(self, size: int | None = None) -> FrameBuffers:
         """Arrays for :meth:`observe_into`, ``size`` long (default: :attr:`capacity`)."""
@@ -90,14 +91,12 @@ class Sensor:
                           self._segments, camera.min_elevation, camera.max_range, world,
                           elevation, beacon, label, visible, brightness, *self._scratch,
                           self._ghosts)
-        kept = min(count, out.ids.size)
         G.finish(world[:count], elevation[:count], beacon[:count], label[:count],
                  visible[:count], brightness[:count], float(heading), float(tilt[0]),
                  float(tilt[1]), rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
-                 self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, out.ids,
-                 out.azimuth, out.true_azimuth, out.beacon, out.label, out.visible,
-                 out.brightness)
-        return kept
+                 self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, out.floats,
+                 out.ints)
+        return min(count, out.size)
 
     def observe(
         self, x: float, y: float, heading: float, rng: np.random.Generator,
@@ -131,6 +130,9 @@ class Sensor:
 class FrameBuffers:
     """Fixed-size arrays one frame is written into (see :meth:`Sensor.observe_into`).
 
+    Two packed arrays, ``floats`` (4, size) and ``ints`` (3, size), which the compiled kernel
+    fills in one call; the named rows are views of them.
+
     Attributes:
         ids, azimuth, brightness: What the camera reports (brightness over the detection
             threshold, >= 1).
@@ -138,10 +140,16 @@ class FrameBuffers:
     """
 
     def __init__(self, size: int) -> None:
-        self.ids = np.full(size, -1, dtype=np.int64)
-        self.azimuth = np.zeros(size)
-        self.brightness = np.ones(size)
-        self.true_azimuth = np.zeros(size)
-        self.beacon = np.full(size, -1, dtype=np.int64)
-        self.label = np.full(size, -1, dtype=np.int64)
-        self.visible = np.zeros(size)
+        self.size = size
+        self.floats = np.zeros((4, size))
+        self.ints = np.full((3, size), -1, dtype=np.int64)
+        self.floats[1] = 1.0
+
+    # Views made on access (stored views would turn into copies when the object is pickled).
+    azimuth = property(lambda self: self.floats[0], doc="Measured azimuths [rad].")
+    brightness = property(lambda self: self.floats[1], doc="Flux over the threshold (>= 1).")
+    true_azimuth = property(lambda self: self.floats[2], doc="Noise-free azimuths [rad].")
+    visible = property(lambda self: self.floats[3], doc="Visible share of each beacon.")
+    ids = property(lambda self: self.ints[0], doc="Decoded ids, -1 for padding.")
+    beacon = property(lambda self: self.ints[1], doc="Map row of the true beacon.")
+    label = property(lambda self: self.ints[2], doc="Cause of each detection.")
