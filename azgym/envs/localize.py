@@ -46,7 +46,7 @@ class LocalizeEnv(gym.Env):
     | ``valid`` | ``MultiBinary(K)`` | which entries are detections |
     | ``quality`` | ``Box(0, 10, (K,), float32)`` | log10 of the blob's brightness over threshold |
     | ``beacon_ids`` | ``Box(min id, max id, (N,), int64)`` | the beacon map: ids (constant) |
-    | ``beacon_xyz`` | ``Box((N, 3), float32)`` | the beacon map: positions [m] (constant) |
+    | ``beacon_xyz`` | ``Box((3N,), float32)`` | the map: x, y, z of each beacon in turn [m] |
 
     ## Rewards
 
@@ -145,12 +145,12 @@ class LocalizeEnv(gym.Env):
             "quality": spaces.Box(0.0, 10.0, (max_detections,), np.float32),
             "beacon_ids": spaces.Box(int(ids.min()), int(ids.max()), (len(ids),), np.int64),
             "beacon_xyz": spaces.Box(
-                low=np.tile(np.array([-span, -span, z_low], dtype=np.float32), (len(ids), 1)),
-                high=np.tile(np.array([span, span, z_high], dtype=np.float32), (len(ids), 1)),
+                low=np.tile(np.array([-span, -span, z_low], dtype=np.float32), len(ids)),
+                high=np.tile(np.array([span, span, z_high], dtype=np.float32), len(ids)),
                 dtype=np.float32),
         })
         self._beacon_ids = ids.astype(np.int64)
-        self._beacon_xyz = beacons.xyz.astype(np.float32)
+        self._beacon_xyz = beacons.xyz.astype(np.float32).ravel()
         self._poses = np.zeros((1, 3))
         self._frame = 0
         self._route_name: str | None = None
