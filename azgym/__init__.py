@@ -9,6 +9,7 @@ The public API in one place::
 """
 
 from azgym.core import BeaconMap, Estimate, Measurements, wrap_angle
+from azgym.envs.evaluate import evaluate
 from azgym.envs.registration import ENV_IDS
 from azgym.errors import (
     AzgymError,
@@ -45,6 +46,7 @@ __all__ = [
     "UnknownNameError",
     "__version__",
     "check_localizer",
+    "evaluate",
     "list_localizers",
     "list_scenarios",
     "load_scenario",

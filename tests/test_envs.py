@@ -202,3 +202,15 @@ def test_rgb_array_rendering_and_a_clear_error_for_human_without_a_display(monke
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     with pytest.raises(azgym.AzgymError, match="needs a display"):
         gym.make("azgym/Navigate-WarehouseSmall-v0", render_mode="human")
+
+
+def test_evaluate_runs_a_localizer_as_the_agent():
+    env = gym.make("azgym/Localize-WarehouseSmall-v0", route="cross-aisle")
+    ransac = azgym.evaluate(env, "ransac", seed=0)
+    lsq = azgym.evaluate(env, "lsq", seed=0)
+    assert ransac["n"] == lsq["n"] == len(env.unwrapped._trajectory("cross-aisle"))
+    assert 0.8 < ransac["availability"] <= 1.0
+    assert ransac["median_cm"] < 5.0
+    assert lsq["mean_cm"] > 3 * ransac["mean_cm"]
+    with pytest.raises(InvalidInputError, match="needs a Localize environment"):
+        azgym.evaluate(gym.make("azgym/Navigate-WarehouseSmall-v0"), "ransac")
