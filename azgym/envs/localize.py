@@ -132,8 +132,8 @@ class LocalizeEnv(gym.Env):
         beacons = self.scenario.beacons
         ids = beacons.ids
         x_min, y_min, x_max, y_max = self.scenario.bounds
-        self._centre = np.array([(x_min + x_max) / 2, (y_min + y_max) / 2, 0.0])
-        self._half = np.array([(x_max - x_min) / 2, (y_max - y_min) / 2, math.pi])
+        self._centre = ((x_min + x_max) / 2, (y_min + y_max) / 2, 0.0)
+        self._half = ((x_max - x_min) / 2, (y_max - y_min) / 2, math.pi)
         self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
         z_low = float(min(0.0, beacons.xyz[:, 2].min()))
         z_high = float(beacons.xyz[:, 2].max()) + 1.0
@@ -205,13 +205,13 @@ class LocalizeEnv(gym.Env):
     def step(self, action: np.ndarray) -> tuple[dict[str, np.ndarray], float, bool, bool, dict]:
         """Score the estimate of the current frame's pose, then show the next frame."""
         estimate = self.action_to_pose(self._check_action(action))
-        x, y, heading = self._poses[self._frame]
-        position_error = math.hypot(float(estimate[0]) - x, float(estimate[1]) - y)
-        heading_error = abs(float(wrap_angle(float(estimate[2]) - heading)))
+        x, y, heading = (float(v) for v in self._poses[self._frame])
+        position_error = math.hypot(estimate[0] - x, estimate[1] - y)
+        heading_error = abs(wrap_angle(estimate[2] - heading))
         rewards = {"position_error": -self.weights["position_error"] * position_error,
                    "heading_error": -self.weights["heading_error"] * heading_error}
-        answered = (float(x), float(y), float(heading))
-        self._estimate = (float(estimate[0]), float(estimate[1]), float(estimate[2]))
+        answered = (x, y, heading)
+        self._estimate = estimate
         terminated = self._frame + 1 >= len(self._poses)
         if not terminated:
             self._frame += 1
@@ -237,7 +237,7 @@ class LocalizeEnv(gym.Env):
             "ids": out.ids.copy(),
             "azimuth": out.azimuth.astype(np.float32),
             "valid": valid.astype(np.int8),
-            "quality": np.log10(out.brightness).astype(np.float32),
+            "quality": out.quality.astype(np.float32),
             "beacon_ids": self._beacon_ids.copy(),
             "beacon_xyz": self._beacon_xyz.copy(),
         }
@@ -248,31 +248,33 @@ class LocalizeEnv(gym.Env):
                 "labels": self._buffers.label.copy(), "true_beacons": self._buffers.beacon.copy(),
                 "true_pose": self.true_pose()}
 
-    def _check_action(self, action: Any) -> np.ndarray:
-        estimate = np.asarray(action, dtype=np.float64)
+    def _check_action(self, action: Any) -> tuple[float, float, float]:
+        estimate = np.asarray(action)
         if estimate.shape != (3,):
             raise InvalidInputError(
                 f"action must be a pose estimate (x, y, heading) of shape (3,), got shape "
                 f"{estimate.shape}"
             )
-        if not np.isfinite(estimate).all():
-            raise InvalidInputError(f"action must be finite, got {estimate.tolist()}")
-        if (np.abs(estimate) > 1.0 + 1e-6).any():
+        values = (float(estimate[0]), float(estimate[1]), float(estimate[2]))
+        if not all(math.isfinite(v) for v in values):
+            raise InvalidInputError(f"action must be finite, got {list(values)}")
+        if any(abs(v) > 1.0 + 1e-6 for v in values):
             raise InvalidInputError(
-                f"action {estimate.tolist()} is outside the action space [-1, 1]^3 (use "
+                f"action {list(values)} is outside the action space [-1, 1]^3 (use "
                 "pose_to_action to normalise a pose)"
             )
-        return estimate
+        return values
 
     def pose_to_action(self, x: float, y: float, heading: float) -> np.ndarray:
         """The normalised action for the pose estimate (x, y, heading), clipped to [-1, 1]."""
         pose = np.array([x, y, float(wrap_angle(heading))])
-        return np.clip((pose - self._centre) / self._half, -1.0, 1.0).astype(np.float32)
+        return np.clip((pose - self._centre) / np.array(self._half), -1.0, 1.0).astype(np.float32)
 
-    def action_to_pose(self, action: np.ndarray) -> tuple[float, float, float]:
+    def action_to_pose(self, action: Any) -> tuple[float, float, float]:
         """The pose (x, y, heading) an action stands for."""
-        x, y, heading = self._centre + np.asarray(action, dtype=np.float64) * self._half
-        return float(x), float(y), float(heading)
+        centre, half = self._centre, self._half
+        return (centre[0] + float(action[0]) * half[0], centre[1] + float(action[1]) * half[1],
+                float(action[2]) * half[2])
 
     def true_pose(self) -> tuple[float, float, float]:
         """The true camera pose of the frame last observed."""

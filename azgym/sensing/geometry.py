@@ -277,7 +277,8 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
            delta_d, misdecode_rate, map_ids, out_floats, out_ints):
     """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
 
-    ``out_floats`` rows get the measured azimuth, brightness, true azimuth and visible share;
+    ``out_floats`` rows get the measured azimuth, the quality (log10 of the brightness over the
+    detection threshold, >= 0), the true azimuth and the visible share;
     ``out_ints`` rows the decoded id, beacon row and label. They may be longer than M (fixed-size
     observations): the rest is padded with id −1, beacon −1, label −1 and zeros.
 
@@ -289,7 +290,7 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
     """
     count = world.size
     n_map = map_ids.size
-    out_measured, out_brightness, out_true, out_visible = (out_floats[0], out_floats[1],
+    out_measured, out_quality, out_true, out_visible = (out_floats[0], out_floats[1],
                                                            out_floats[2], out_floats[3])
     out_ids, out_beacon, out_label = out_ints[0], out_ints[1], out_ints[2]
     measured = np.empty(count)
@@ -324,7 +325,7 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
         out_beacon[k] = beacon[m]
         out_label[k] = label[m]
         out_visible[k] = visible[m]
-        out_brightness[k] = brightness[m]
+        out_quality[k] = math.log10(brightness[m])
     for k in range(count, out_ids.size):  # padding, where the outputs are longer than M
         out_ids[k] = -1
         out_measured[k] = 0.0
@@ -332,7 +333,7 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
         out_beacon[k] = -1
         out_label[k] = -1
         out_visible[k] = 0.0
-        out_brightness[k] = 1.0
+        out_quality[k] = 0.0
 
 
 @numba.njit(error_model="numpy", cache=True)

@@ -123,8 +123,7 @@ class Sensor:
         truth = DetectionTruth(label=out.label[:count].copy(), beacon=out.beacon[:count].copy(),
                                azimuth=out.true_azimuth[:count].copy(),
                                visible=out.visible[:count].copy())
-        return Measurements(out.ids[:count], out.azimuth[:count],
-                            np.log10(out.brightness[:count])), truth
+        return Measurements(out.ids[:count], out.azimuth[:count], out.quality[:count]), truth
 
 
 class FrameBuffers:
@@ -134,8 +133,8 @@ class FrameBuffers:
     fills in one call; the named rows are views of them.
 
     Attributes:
-        ids, azimuth, brightness: What the camera reports (brightness over the detection
-            threshold, >= 1).
+        ids, azimuth, quality: What the camera reports (quality: log10 of the blob's brightness
+            over the detection threshold, >= 0).
         true_azimuth, beacon, label, visible: The ground truth beside it.
     """
 
@@ -143,11 +142,11 @@ class FrameBuffers:
         self.size = size
         self.floats = np.zeros((4, size))
         self.ints = np.full((3, size), -1, dtype=np.int64)
-        self.floats[1] = 1.0
 
     # Views made on access (stored views would turn into copies when the object is pickled).
     azimuth = property(lambda self: self.floats[0], doc="Measured azimuths [rad].")
-    brightness = property(lambda self: self.floats[1], doc="Flux over the threshold (>= 1).")
+    quality = property(lambda self: self.floats[1],
+                       doc="log10 of the blob's brightness over the detection threshold (>= 0).")
     true_azimuth = property(lambda self: self.floats[2], doc="Noise-free azimuths [rad].")
     visible = property(lambda self: self.floats[3], doc="Visible share of each beacon.")
     ids = property(lambda self: self.ints[0], doc="Decoded ids, -1 for padding.")
