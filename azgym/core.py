@@ -192,6 +192,22 @@ class Measurements:
     def __len__(self) -> int:
         return int(self.ids.size)
 
+    @classmethod
+    def _from_valid_arrays(
+        cls, ids: IntArray, azimuth: FloatArray, quality: FloatArray | None = None
+    ) -> Measurements:
+        """Wrap arrays azgym's own sensor produced, skipping the checks (a hot path).
+
+        Only for int64 ids and finite float64 azimuths of equal length, which the compiled
+        sensor guarantees; the arrays are copied and frozen like in ``__init__``.
+        """
+        measurements = object.__new__(cls)
+        object.__setattr__(measurements, "ids", _frozen(ids.copy()))
+        object.__setattr__(measurements, "azimuth", _frozen(azimuth.copy()))
+        object.__setattr__(measurements, "quality",
+                           None if quality is None else _frozen(quality.copy()))
+        return measurements
+
 
 @dataclass(frozen=True, eq=False, slots=True)
 class Estimate:

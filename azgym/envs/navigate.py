@@ -226,7 +226,8 @@ class NavigateEnv(gym.Env):
         if self.localizer is None:
             self._estimate = (cx, cy, heading)
         else:
-            measurements = Measurements(frame.ids[:count], frame.azimuth[:count])
+            measurements = Measurements._from_valid_arrays(frame.ids[:count],
+                                                           frame.azimuth[:count])
             estimate = self.localizer.localize(measurements, self.scenario.beacons)
             self._estimate = (estimate.x, estimate.y, estimate.heading) if estimate.ok else None
         G.ray_ranges(x, y, heading, self._segments, self.n_rays, self.ray_range, self._rays)
@@ -237,10 +238,10 @@ class NavigateEnv(gym.Env):
             dx, dy = self._goal[0] - ex, self._goal[1] - ey
             c, s = math.cos(eh), math.sin(eh)
             observation[0] = 1.0
-            observation[1] = np.clip((c * dx + s * dy) / GOAL_SCALE, -1.0, 1.0)
-            observation[2] = np.clip((-s * dx + c * dy) / GOAL_SCALE, -1.0, 1.0)
-        observation[3] = np.clip(forklift.speed / spec.max_speed, -1.0, 1.0)
-        observation[4] = np.clip(forklift.steer / spec.max_steer, -1.0, 1.0)
+            observation[1] = max(-1.0, min(1.0, (c * dx + s * dy) / GOAL_SCALE))
+            observation[2] = max(-1.0, min(1.0, (-s * dx + c * dy) / GOAL_SCALE))
+        observation[3] = max(-1.0, min(1.0, forklift.speed / spec.max_speed))
+        observation[4] = max(-1.0, min(1.0, forklift.steer / spec.max_steer))
         observation[5:] = self._rays / self.ray_range
         return observation
 

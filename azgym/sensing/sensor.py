@@ -123,7 +123,8 @@ class Sensor:
         truth = DetectionTruth(label=out.label[:count].copy(), beacon=out.beacon[:count].copy(),
                                azimuth=out.true_azimuth[:count].copy(),
                                visible=out.visible[:count].copy())
-        return Measurements(out.ids[:count], out.azimuth[:count], out.quality[:count]), truth
+        return Measurements._from_valid_arrays(out.ids[:count], out.azimuth[:count],
+                                               out.quality[:count]), truth
 
 
 class FrameBuffers:

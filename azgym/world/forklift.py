@@ -113,21 +113,24 @@ class Forklift:
             dt: The step [s].
         """
         spec = self.spec
-        heading = self.body.angle
+        body = self.body
+        heading = body.angle
+        c, s = math.cos(heading), math.sin(heading)
         # The speed state integrates the throttle; when the body lags it by more than the tyres
         # would slip (a rack or a wall holds the forklift), it falls back to the body's speed.
-        velocity = self.body.velocity
-        actual = velocity.x * math.cos(heading) + velocity.y * math.sin(heading)
-        if abs(actual - self.speed) > SLIP_TOLERANCE:
-            self.speed = actual
-        self.speed = max(-spec.max_speed, min(spec.max_speed,
-                                              self.speed + throttle * spec.max_accel * dt))
+        vx, vy = body.velocity
+        speed = self.speed
+        actual = vx * c + vy * s
+        if abs(actual - speed) > SLIP_TOLERANCE:
+            speed = actual
+        limit = spec.max_speed
+        speed = max(-limit, min(limit, speed + throttle * spec.max_accel * dt))
+        self.speed = speed
         self.steer = steer * spec.max_steer
-        omega = self.speed * math.tan(self.steer) / spec.wheelbase
+        omega = speed * math.tan(self.steer) / spec.wheelbase
         # Velocity of the body centre: v along the heading at the reference axle, plus ω × r.
-        c, s = math.cos(heading), math.sin(heading)
-        r = self._centre_offset
-        self.control.velocity = (self.speed * c - omega * r * s, self.speed * s + omega * r * c)
+        turn = omega * self._centre_offset
+        self.control.velocity = (speed * c - turn * s, speed * s + turn * c)
         self.control.angular_velocity = omega
 
     @property
