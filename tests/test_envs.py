@@ -214,3 +214,17 @@ def test_evaluate_runs_a_localizer_as_the_agent():
     assert lsq["mean_cm"] > 3 * ransac["mean_cm"]
     with pytest.raises(InvalidInputError, match="needs a Localize environment"):
         azgym.evaluate(gym.make("azgym/Navigate-WarehouseSmall-v0"), "ransac")
+
+
+def test_record_video_writes_an_episode(tmp_path):
+    pytest.importorskip("moviepy", reason='needs pip install "azgym[video]"')
+    env = gym.make("azgym/Navigate-WarehouseSmall-v0", render_mode="rgb_array", max_steps=20)
+    env = gym.wrappers.RecordVideo(env, str(tmp_path), episode_trigger=lambda _: True,
+                                   disable_logger=True)
+    env.reset(seed=0)
+    truncated = terminated = False
+    while not (terminated or truncated):
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+    env.close()
+    videos = list(tmp_path.glob("*.mp4"))
+    assert len(videos) == 1 and videos[0].stat().st_size > 1000

@@ -63,7 +63,7 @@ def require_display() -> None:
         raise AzgymError(
             'render_mode="human" needs a display, and there is none (DISPLAY is not set). Use '
             'render_mode="rgb_array", or record episodes with gymnasium.wrappers.RecordVideo '
-            '(pip install moviepy).'
+            '(pip install "azgym[video]").'
         )
     require("matplotlib", "plot")
 
