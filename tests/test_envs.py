@@ -181,6 +181,8 @@ def test_bad_arguments_are_refused_clearly(tmp_path):
         gym.make("azgym/Localize-WarehouseSmall-v0", route="aisle-lop")
     with pytest.raises(InvalidInputError, match="render_mode must be one of"):
         gym.make("azgym/Localize-WarehouseSmall-v0", render_mode="ascii")
+    with pytest.raises(InvalidInputError, match=re.escape("collision weight must be a number")):
+        gym.make("azgym/Navigate-WarehouseSmall-v0", collision=-1.0)
 
 
 def test_a_users_scenario_file_runs_under_any_id(tmp_path):

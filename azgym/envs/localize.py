@@ -10,7 +10,8 @@ import numpy as np
 from gymnasium import spaces
 
 from azgym.core import wrap_angle
-from azgym.errors import InvalidInputError
+from azgym.envs.common import check_render_mode, reward_weights
+from azgym.errors import InvalidInputError, unknown_name
 from azgym.scenario import Scenario, load_scenario
 from azgym.sensing.sensor import Sensor
 from azgym.simulate import camera_trajectory, sway
@@ -102,28 +103,15 @@ class LocalizeEnv(gym.Env):
         self.scenario = load_scenario(scenario)
         names = [r.name for r in self.scenario.routes]
         if route is not None and route not in names:
-            from azgym.errors import unknown_name
-
             raise unknown_name("route", route, names)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise InvalidInputError(
-                f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
-            )
-        if render_mode == "human":
-            from azgym.envs.render import require_display
-
-            require_display()
-        for name, value in (("position_error", position_error),
-                            ("heading_error", heading_error)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-                raise InvalidInputError(f"{name} weight must be a number >= 0, got {value!r}")
+        check_render_mode(render_mode, self.metadata["render_modes"])
         if not (isinstance(max_detections, int) and max_detections >= 3):
             raise InvalidInputError(f"max_detections must be an integer >= 3, got "
                                     f"{max_detections!r}")
         self.route = route
         self.max_detections = max_detections
-        self.weights = {"position_error": float(position_error),
-                        "heading_error": float(heading_error)}
+        self.weights = reward_weights(position_error=position_error,
+                                      heading_error=heading_error)
         self.episode_length = episode_length
         self.render_mode = render_mode
         self._sensor = Sensor(self.scenario)
@@ -187,8 +175,6 @@ class LocalizeEnv(gym.Env):
             if name is None:
                 name = names[int(self.np_random.integers(len(names)))]
             elif name not in names:
-                from azgym.errors import unknown_name
-
                 raise unknown_name("route", str(name), names)
             self._route_name = name
             self._poses = self._trajectory(name)

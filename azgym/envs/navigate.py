@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from azgym.core import Measurements
+from azgym.envs.common import check_render_mode, reward_weights
 from azgym.errors import InvalidInputError
 from azgym.layout import occluder_table
 from azgym.localize.registry import SupportsLocalize, make_localizer
@@ -111,20 +112,9 @@ class NavigateEnv(gym.Env):
                 f"scenario {self.scenario.name!r} has no routes, whose waypoints are the "
                 "navigation spots; add [[routes]] to it"
             )
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise InvalidInputError(
-                f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
-            )
-        if render_mode == "human":
-            from azgym.envs.render import require_display
-
-            require_display()
-        self.weights = {}
-        for name, value in (("progress", progress), ("collision", collision), ("time", time),
-                            ("success", success)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-                raise InvalidInputError(f"{name} weight must be a number >= 0, got {value!r}")
-            self.weights[name] = float(value)
+        check_render_mode(render_mode, self.metadata["render_modes"])
+        self.weights = reward_weights(progress=progress, collision=collision, time=time,
+                                      success=success)
         self.localizer_name = localizer if isinstance(localizer, str) else type(localizer).__name__
         self.localizer = None if localizer == "truth" else (
             make_localizer(localizer) if isinstance(localizer, str) else localizer)
