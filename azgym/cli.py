@@ -42,6 +42,35 @@ def _reproduce_paper(args: argparse.Namespace) -> int:
     return 0
 
 
+DEFAULT_SUITE = "warehouse-static"
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from azgym.bench.runner import Contender, default_contenders, ranked_table, run_benchmark
+    from azgym.bench.suites import get_suite
+
+    # With no suite named, the default suite runs in its quick size: the README's main job.
+    quick = args.quick or args.suite is None
+    suite = get_suite(args.suite or DEFAULT_SUITE)
+    contenders = ([Contender(spec, spec) for spec in args.localizer] if args.localizer
+                  else default_contenders())
+    workers = args.workers or _cores()
+    started = time.perf_counter()
+    result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
+                           progress=lambda line: print(line, flush=True))
+    written = result.write(Path(args.out))
+    print()
+    print(ranked_table(result.summary))
+    print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
+    return 0
+
+
+def _cores() -> int:
+    import os
+
+    return max(1, os.cpu_count() or 1)
+
+
 def _scenarios(_args: argparse.Namespace) -> int:
     from azgym.scenario import list_scenarios, load_scenario
 
@@ -64,6 +93,18 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``azgym`` command."""
     parser = argparse.ArgumentParser(prog="azgym", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
+
+    bench = commands.add_parser("bench", help="score localizers on a benchmark suite")
+    bench.add_argument("--suite", help=f"suite name (default: {DEFAULT_SUITE}, quick)")
+    bench.add_argument("--localizer", action="append", default=[],
+                       help="NAME, package.module:Class or path/file.py:Class; repeatable "
+                            "(default: every built-in)")
+    bench.add_argument("--split", choices=("dev", "test"), default="dev",
+                       help="dev: the suite's fixed seed; test: a fresh seed, reported")
+    bench.add_argument("--workers", type=int, default=0, help="processes (0: one per core)")
+    bench.add_argument("--quick", action="store_true", help="the suite's small version")
+    bench.add_argument("--out", default="results/bench", help="output folder")
+    bench.set_defaults(handler=_bench)
 
     reproduce = commands.add_parser("reproduce", help="reproduce a paper's study")
     target = reproduce.add_subparsers(dest="target", required=True)
