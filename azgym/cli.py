@@ -65,6 +65,28 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _leaderboard(args: argparse.Namespace) -> int:
+    from azgym.bench import leaderboard
+
+    if args.action == "submit":
+        path = leaderboard.submit(Path(args.results), args.localizer, Path(args.entries),
+                                  name=args.name, version=args.version, authors=args.authors,
+                                  link=args.link, overwrite=args.overwrite)
+        print(f"wrote {path}")
+    elif args.action == "build":
+        for path in leaderboard.build(Path(args.entries), Path(args.out)):
+            print(f"wrote {path}")
+    else:
+        differences = leaderboard.verify(Path(args.entry), workers=args.workers or 1)
+        if differences:
+            for key, (claimed, fresh) in differences.items():
+                print(f"{key}: entry {claimed}, rerun {fresh}")
+            print(f"{args.entry}: NOT reproduced")
+            return 1
+        print(f"{args.entry}: reproduced (every accuracy figure within 1e-6)")
+    return 0
+
+
 def _cores() -> int:
     import os
 
@@ -105,6 +127,25 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--quick", action="store_true", help="the suite's small version")
     bench.add_argument("--out", default="results/bench", help="output folder")
     bench.set_defaults(handler=_bench)
+
+    board = commands.add_parser("leaderboard", help="submit, build or verify entries")
+    actions = board.add_subparsers(dest="action", required=True)
+    submit = actions.add_parser("submit", help="make an entry from an azgym bench output")
+    submit.add_argument("results", help="the folder azgym bench wrote (results.json, frames.csv)")
+    submit.add_argument("--localizer", required=True, help="the localizer's label in the results")
+    submit.add_argument("--name", required=True, help="entry name (letters, digits, . _ -)")
+    submit.add_argument("--version", required=True, help="the localizer's version")
+    submit.add_argument("--authors", required=True, nargs="+")
+    submit.add_argument("--link", default="", help="paper or code")
+    submit.add_argument("--entries", default="leaderboard/entries")
+    submit.add_argument("--overwrite", action="store_true")
+    build = actions.add_parser("build", help="write leaderboard/README.md and index.html")
+    build.add_argument("--entries", default="leaderboard/entries")
+    build.add_argument("--out", default="leaderboard")
+    verify = actions.add_parser("verify", help="rerun an entry and compare its figures")
+    verify.add_argument("entry", help="path of the entry's .json")
+    verify.add_argument("--workers", type=int, default=1)
+    board.set_defaults(handler=_leaderboard)
 
     reproduce = commands.add_parser("reproduce", help="reproduce a paper's study")
     target = reproduce.add_subparsers(dest="target", required=True)

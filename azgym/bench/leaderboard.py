@@ -1,0 +1,300 @@
+"""The leaderboard: entries a researcher submits, checks they cannot fake, and the published board.
+
+An entry (``leaderboard/entries/NAME.json``, format in ``entry.schema.json``) holds a localizer's
+metrics on one suite, and beside it the per-frame results they were computed from
+(``NAME.frames.csv``). Validation checks the schema, that the suite and its version exist, that
+the per-frame file matches the entry's SHA-256, and that the metrics recomputed from it are the
+entry's: a tampered number, a swapped file or an old suite is rejected with the reason. ``build``
+writes the ranked tables (``leaderboard/README.md``) and a self-contained, sortable HTML page;
+``verify`` reruns the entry's localizer and compares.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import html
+import io
+import json
+import math
+import os
+import platform
+import sys
+from datetime import datetime, timezone
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import numpy as np
+
+from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.suites import SUITES, get_suite
+from azgym.errors import AzgymError
+from azgym.metrics import summarize_errors
+
+ENTRY_FORMAT = 1
+FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
+                 "heading_error_rad", "micros", "error"]
+RANK_BY = "p75_cm"
+"""Boards rank by the 75th percentile of the position error, the EvAAL competitions' headline."""
+
+
+class LeaderboardError(AzgymError, ValueError):
+    """An entry is malformed, tampered with, or does not match what it claims."""
+
+
+def schema() -> dict[str, Any]:
+    """The JSON Schema of an entry."""
+    return json.loads(resources.files("azgym.bench").joinpath("entry.schema.json").read_text())
+
+
+def _clean(value: Any) -> Any:
+    """NaN and inf become null: JSON has no NaN."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_clean(v) for v in value]
+    return value
+
+
+def frames_file_text(rows: list[list[str]]) -> str:
+    """The per-frame results file of one localizer: CSV with FRAME_COLUMNS, LF line ends."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(FRAME_COLUMNS)
+    writer.writerows(rows)
+    return buffer.getvalue()
+
+
+def metrics_from_frames(text: str) -> dict[str, Any]:
+    """The overall statistics recomputed from a per-frame results file."""
+    reader = csv.DictReader(io.StringIO(text))
+    if reader.fieldnames != FRAME_COLUMNS:
+        raise LeaderboardError(f"per-frame results: columns must be {FRAME_COLUMNS}, got "
+                               f"{reader.fieldnames}")
+    ok, position, heading = [], [], []
+    for row in reader:
+        ok.append(row["ok"] == "1")
+        position.append(float(row["position_error_m"]))
+        heading.append(float(row["heading_error_rad"]))
+    return _clean(summarize_errors(np.array(position), np.array(heading), np.array(ok)))
+
+
+def make_entry(results_dir: Path, label: str, *, name: str, version: str, authors: list[str],
+               link: str) -> tuple[dict[str, Any], str]:
+    """An entry for localizer ``label`` from an ``azgym bench`` output folder, and its frames."""
+    summary = json.loads((results_dir / "results.json").read_text(encoding="utf-8"))
+    if label not in summary["localizers"]:
+        raise LeaderboardError(f"{results_dir}: no localizer {label!r} in the results; there "
+                               f"are: {', '.join(summary['localizers'])}")
+    with (results_dir / "frames.csv").open(newline="", encoding="utf-8") as handle:
+        rows = [row for row in csv.reader(handle)][1:]
+    text = frames_file_text([row for row in rows if row[0] == label])
+    row = summary["localizers"][label]
+    entry = {
+        "format": ENTRY_FORMAT, "name": name, "version": version, "authors": authors,
+        "link": link, "localizer": {"spec": row["spec"], "params": row["params"]},
+        "suite": summary["suite"], "suite_version": summary["suite_version"],
+        "split": summary["split"], "seed": summary["seed"], "quick": summary["quick"],
+        "n_frames": summary["n_frames"], "azgym_version": summary["azgym_version"],
+        "metrics": _clean({key: row[key] for key in ("all", "by_cause", "by_group",
+                                                     "runtime_us")}),
+        "machine": {"platform": platform.platform(), "processor": platform.processor() or
+                    platform.machine(), "cpus": os.cpu_count(), "python": sys.version.split()[0]},
+        "timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "results_file": f"{name}.frames.csv",
+        "results_sha256": hashlib.sha256(text.encode()).hexdigest(),
+    }
+    return entry, text
+
+
+def validate_entry(entry: Any, frames_text: str | None, origin: str) -> None:
+    """Raise :class:`LeaderboardError` naming the problem unless the entry is sound."""
+    validator = jsonschema.Draft202012Validator(schema())
+    errors = sorted(validator.iter_errors(entry), key=lambda e: list(e.absolute_path))
+    if errors:
+        first = errors[0]
+        where = "/".join(str(p) for p in first.absolute_path) or "(top level)"
+        raise LeaderboardError(f"{origin}: {where}: {first.message}")
+    suite = SUITES.get(entry["suite"])
+    if suite is None:
+        raise LeaderboardError(f"{origin}: suite: unknown suite {entry['suite']!r}")
+    if entry["suite_version"] != suite.version:
+        raise LeaderboardError(
+            f"{origin}: suite_version: {entry['suite']} is at version {suite.version}, the entry "
+            f"was scored on version {entry['suite_version']}; rerun it on the current suite"
+        )
+    if frames_text is None:
+        raise LeaderboardError(f"{origin}: results_file: {entry['results_file']} is missing")
+    digest = hashlib.sha256(frames_text.encode()).hexdigest()
+    if digest != entry["results_sha256"]:
+        raise LeaderboardError(f"{origin}: results_sha256: the per-frame results file does not "
+                               f"match (its SHA-256 is {digest})")
+    recomputed = metrics_from_frames(frames_text)
+    for key, claimed in entry["metrics"]["all"].items():
+        actual = recomputed.get(key)
+        if not _close(claimed, actual):
+            raise LeaderboardError(f"{origin}: metrics/all/{key}: the entry says {claimed}, its "
+                                   f"per-frame results give {actual}")
+    if recomputed["n"] != entry["n_frames"]:
+        raise LeaderboardError(f"{origin}: n_frames: the entry says {entry['n_frames']}, its "
+                               f"per-frame results hold {recomputed['n']}")
+
+
+def _close(a: Any, b: Any) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    return math.isclose(float(a), float(b), rel_tol=1e-9, abs_tol=1e-9)
+
+
+def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, version: str,
+           authors: list[str], link: str = "", overwrite: bool = False) -> Path:
+    """Validate an entry from a results folder and write it (and its frames) to entries_dir."""
+    entry, text = make_entry(results_dir, label, name=name, version=version, authors=authors,
+                             link=link)
+    validate_entry(entry, text, f"entry {name!r}")
+    entries_dir.mkdir(parents=True, exist_ok=True)
+    path = entries_dir / f"{name}.json"
+    if path.exists() and not overwrite:
+        raise LeaderboardError(f"{path}: an entry of that name exists; pick another name or "
+                               "pass --overwrite")
+    (entries_dir / entry["results_file"]).write_text(text, encoding="utf-8")
+    path.write_text(json.dumps(entry, indent=1) + "\n", encoding="utf-8")
+    return path
+
+
+def load_entry(path: Path) -> dict[str, Any]:
+    """Read and validate one entry file (and its per-frame results beside it)."""
+    try:
+        entry = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise LeaderboardError(f"{path}: not valid JSON: {exc}") from None
+    frames = None
+    if isinstance(entry, dict) and isinstance(entry.get("results_file"), str):
+        frames_path = path.parent / Path(entry["results_file"]).name
+        frames = frames_path.read_text(encoding="utf-8") if frames_path.is_file() else None
+    validate_entry(entry, frames, str(path))
+    return entry
+
+
+def load_entries(entries_dir: Path) -> list[dict[str, Any]]:
+    """Every entry in the folder, validated (the first bad one raises, naming its file)."""
+    return [load_entry(path) for path in sorted(entries_dir.glob("*.json"))]
+
+
+def _ranked(entries: list[dict[str, Any]], suite: str) -> list[dict[str, Any]]:
+    rows = [e for e in entries if e["suite"] == suite]
+    return sorted(rows, key=lambda e: (e["metrics"]["all"][RANK_BY] is None,
+                                       e["metrics"]["all"][RANK_BY] or 0.0))
+
+
+def _fmt(value: Any, digits: int = 2) -> str:
+    return "–" if value is None else f"{value:.{digits}f}"
+
+
+COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
+           ("availability %", "availability"), ("mean cm", "mean_cm"),
+           ("median cm", "median_cm"), ("p75 cm", "p75_cm"), ("p95 cm", "p95_cm"),
+           ("failures %", "failure_rate"), ("µs", None), ("× ransac", None), ("split", None),
+           ("azgym", None)]
+
+
+def _cells(rank: int, entry: dict[str, Any]) -> list[str]:
+    stats, runtime = entry["metrics"]["all"], entry["metrics"]["runtime_us"]
+
+    def percent(value: float | None) -> str:
+        return _fmt(None if value is None else 100 * value, 1)
+
+    return [str(rank), entry["name"], entry["version"], ", ".join(entry["authors"]),
+            percent(stats["availability"]), _fmt(stats["mean_cm"]), _fmt(stats["median_cm"]),
+            _fmt(stats["p75_cm"]), _fmt(stats["p95_cm"], 1), percent(stats["failure_rate"]),
+            _fmt(runtime["median"], 1), _fmt(runtime["ratio_to_ransac"]),
+            f"{entry['split']} ({'quick' if entry['quick'] else 'full'})",
+            entry["azgym_version"]]
+
+
+def build(entries_dir: Path, out_dir: Path) -> list[Path]:
+    """Write the board: README.md (tables) and index.html (sortable, self-contained)."""
+    entries = load_entries(entries_dir)
+    suites = [name for name in SUITES if any(e["suite"] == name for e in entries)]
+    lines = ["# azgym leaderboard", "",
+             f"Ranked by the 75th percentile of the position error (EvAAL's headline). Generated "
+             f"by `azgym leaderboard build` from {len(entries)} entries in `entries/`; every "
+             "entry's figures are recomputed from its per-frame results when it is read.", ""]
+    sections = []
+    for suite in suites:
+        description = get_suite(suite).description
+        header = [c for c, _ in COLUMNS]
+        rows = [_cells(rank, entry) for rank, entry in enumerate(_ranked(entries, suite), 1)]
+        lines += [f"## {suite} — {description}", "",
+                  "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+        lines += ["| " + " | ".join(row) + " |" for row in rows]
+        lines.append("")
+        sections.append((suite, description, header, rows))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    readme, page = out_dir / "README.md", out_dir / "index.html"
+    readme.write_text("\n".join(lines), encoding="utf-8")
+    page.write_text(_html(sections, len(entries)), encoding="utf-8")
+    return [readme, page]
+
+
+_SORT_SCRIPT = """
+document.querySelectorAll("table.board th").forEach(function (th, column) {
+  th.addEventListener("click", function () {
+    var table = th.closest("table"), body = table.tBodies[0];
+    var ascending = th.getAttribute("data-order") !== "ascending";
+    table.querySelectorAll("th").forEach(function (h) { h.removeAttribute("data-order"); });
+    th.setAttribute("data-order", ascending ? "ascending" : "descending");
+    var rows = Array.prototype.slice.call(body.rows);
+    rows.sort(function (a, b) {
+      var x = a.cells[column].textContent, y = b.cells[column].textContent;
+      var nx = parseFloat(x), ny = parseFloat(y);
+      var order = (isNaN(nx) || isNaN(ny)) ? x.localeCompare(y) : nx - ny;
+      return ascending ? order : -order;
+    });
+    rows.forEach(function (row) { body.appendChild(row); });
+  });
+});
+"""
+
+
+def _html(sections: list[tuple[str, str, list[str], list[list[str]]]], count: int) -> str:
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+             "<title>azgym leaderboard</title><style>",
+             "body{font-family:sans-serif;margin:2em}table{border-collapse:collapse;margin:1em 0}",
+             "th,td{border:1px solid #bbb;padding:4px 8px;text-align:right}",
+             "th{cursor:pointer;background:#eee}th[data-order=ascending]::after{content:' ▲'}",
+             "th[data-order=descending]::after{content:' ▼'}</style></head><body>",
+             "<h1>azgym leaderboard</h1>",
+             f"<p>{count} entries, ranked by p75 position error. Click a column to sort.</p>"]
+    for suite, description, header, rows in sections:
+        parts.append(f'<h2>{html.escape(suite)}</h2><p>{html.escape(description)}</p>')
+        parts.append(f'<table class="board" id="board-{html.escape(suite)}"><thead><tr>')
+        parts += [f"<th>{html.escape(cell)}</th>" for cell in header]
+        parts.append("</tr></thead><tbody>")
+        for row in rows:
+            parts.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>")
+        parts.append("</tbody></table>")
+    parts += [f"<script>{_SORT_SCRIPT}</script>", "</body></html>"]
+    return "\n".join(parts)
+
+
+def verify(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]]:
+    """Rerun an entry's localizer on its suite, split and seed; return differing figures.
+
+    Runtimes are not compared (they depend on the machine). An empty answer means the entry's
+    accuracy figures were reproduced.
+    """
+    entry = load_entry(path)
+    result = run_benchmark(get_suite(entry["suite"]),
+                           [Contender(entry["name"], entry["localizer"]["spec"],
+                                      entry["localizer"]["params"])],
+                           split=entry["split"], seed=entry["seed"], quick=entry["quick"],
+                           workers=workers)
+    fresh = _clean(result.summary["localizers"][entry["name"]]["all"])
+    return {key: (claimed, fresh.get(key)) for key, claimed in entry["metrics"]["all"].items()
+            if not math.isclose(claimed or 0.0, fresh.get(key) or 0.0, rel_tol=1e-6,
+                                abs_tol=1e-6)}
