@@ -99,3 +99,17 @@ def test_cli_default_run_prints_a_ranked_table_and_writes_results(tmp_path, caps
                                           "mex"}
     lines = (tmp_path / "frames.csv").read_text().splitlines()
     assert len(lines) == 1 + 6 * summary["n_frames"]
+
+
+def test_the_paper_suite_agrees_with_the_reproduction():
+    from azgym.reproduce.paper import Contender as PaperContender
+    from azgym.reproduce.paper import reproduce
+    from azgym.reproduce.protocol import ProtocolConfig
+
+    bench = run_benchmark(get_suite("paper"), [Contender("ransac", "ransac")], quick=True)
+    study = reproduce(config=ProtocolConfig.quick(), contenders=[PaperContender("ransac",
+                                                                                "ransac")])
+    by_group = bench.summary["localizers"]["ransac"]["by_group"]
+    for k, row in study.results["localizers"]["ransac"]["by_k"].items():
+        assert by_group[f"K={k}"]["mean_cm"] == row["all"]["mean_cm"]
+        assert by_group[f"K={k}"]["p95_cm"] == row["all"]["p95_cm"]
