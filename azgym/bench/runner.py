@@ -9,6 +9,7 @@ and reported beside ``ransac``'s median from the same run, so runs on different 
 from __future__ import annotations
 
 import csv
+import importlib.util
 import json
 import math
 import secrets
@@ -100,8 +101,8 @@ class BenchResult:
     frames: list[Frame]
     outcomes: dict[str, dict[str, Any]]
 
-    def write(self, out: Path) -> list[Path]:
-        """Write results.json and frames.csv into ``out``."""
+    def write(self, out: Path, figures: bool = True) -> list[Path]:
+        """Write results.json, frames.csv and, with matplotlib installed, the figures."""
         out.mkdir(parents=True, exist_ok=True)
         summary_path, frames_path = out / "results.json", out / "frames.csv"
         summary_path.write_text(json.dumps(self.summary, indent=1) + "\n", encoding="utf-8")
@@ -115,7 +116,12 @@ class BenchResult:
                                      int(outcome["ok"][k]), f"{outcome['position'][k]:.17g}",
                                      f"{outcome['heading'][k]:.17g}",
                                      f"{outcome['micros'][k]:.3f}", outcome["errors"][k]])
-        return [summary_path, frames_path]
+        written = [summary_path, frames_path]
+        if figures and importlib.util.find_spec("matplotlib") is not None:
+            from azgym.bench.plots import write_figures
+
+            written += write_figures(self.summary, self.frames, self.outcomes, out)
+        return written
 
 
 def run_benchmark(

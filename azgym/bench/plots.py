@@ -1,0 +1,85 @@
+"""Figures of a benchmark run: error CDFs, a breakdown by fault cause, error maps on the floor."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from azgym.bench.suites import CAUSES, Frame
+from azgym.scenario import load_scenario
+
+
+def write_figures(summary: dict[str, Any], frames: list[Frame],
+                  outcomes: dict[str, dict[str, Any]], out: Path) -> list[Path]:
+    """cdf.png, causes.png and one error_map_<scenario>.png per scenario (needs matplotlib)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    labels = list(summary["localizers"])
+    written = []
+
+    figure, axes = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    for label in labels:
+        outcome = outcomes[label]
+        # A missing estimate is a failure: it sits at +inf, never at zero error.
+        errors = np.sort(np.where(outcome["ok"], outcome["position"] * 100, np.inf))
+        axes.step(errors, np.arange(1, errors.size + 1) / errors.size, where="post", label=label)
+    axes.set_xscale("log")
+    axes.set_xlim(left=0.1)
+    axes.set_xlabel("position error [cm]")
+    axes.set_ylabel("share of frames")
+    axes.set_title(f"{summary['suite']} ({summary['split']}): error CDF")
+    axes.grid(True, which="both", alpha=0.3)
+    axes.legend(fontsize=8, loc="lower right")
+    written.append(_save(figure, out / "cdf.png", plt))
+
+    causes = [c for c in CAUSES if any(c in summary["localizers"][lab]["by_cause"]
+                                       for lab in labels)]
+    figure, axes = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
+    width = 0.8 / max(len(labels), 1)
+    for k, label in enumerate(labels):
+        by_cause = summary["localizers"][label]["by_cause"]
+        values = [by_cause.get(c, {}).get("p75_cm", np.nan) for c in causes]
+        axes.bar(np.arange(len(causes)) + k * width, values, width, label=label)
+    axes.set_xticks(np.arange(len(causes)) + 0.4 - width / 2, causes)
+    axes.set_yscale("log")
+    axes.set_ylabel("p75 position error [cm]")
+    axes.set_title("by the worst fault in the frame")
+    axes.legend(fontsize=8)
+    written.append(_save(figure, out / "causes.png", plt))
+
+    for scenario_name in dict.fromkeys(f.scenario for f in frames):
+        scenario = load_scenario(scenario_name)
+        rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
+        xy = np.array([frames[k].pose[:2] for k in rows])
+        columns = min(3, len(labels))
+        lines = -(-len(labels) // columns)
+        figure, grid = plt.subplots(lines, columns, figsize=(4.6 * columns, 3.6 * lines),
+                                    squeeze=False, constrained_layout=True)
+        norm = matplotlib.colors.LogNorm(vmin=0.5, vmax=1000.0)
+        for axes, label in zip(grid.ravel(), labels, strict=False):
+            outcome = outcomes[label]
+            error = np.where(outcome["ok"][rows], outcome["position"][rows] * 100, 1000.0)
+            for rack in scenario.racks:
+                axes.fill(*rack.corners().T, color="0.75")
+            for wall in scenario.walls:
+                axes.plot(*zip(wall.start, wall.end, strict=True), color="0.3")
+            shown = axes.scatter(xy[:, 0], xy[:, 1], c=np.clip(error, 0.5, 1000.0), s=8,
+                                 norm=norm, cmap="viridis")
+            axes.set_title(label, fontsize=9)
+            axes.set_aspect("equal")
+        for axes in grid.ravel()[len(labels):]:
+            axes.set_axis_off()
+        figure.colorbar(shown, ax=grid.ravel().tolist(), label="position error [cm] (none: top)")
+        written.append(_save(figure, out / f"error_map_{scenario_name}.png", plt))
+    return written
+
+
+def _save(figure: Any, path: Path, plt: Any) -> Path:
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
+    return path
