@@ -1,0 +1,41 @@
+"""The README's worked example runs as written: plug in, check, benchmark, submit."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import sys
+from pathlib import Path
+
+import azgym
+from azgym.cli import main
+
+README = Path(__file__).parent.parent / "README.md"
+
+
+def plugin_source() -> str:
+    text = README.read_text(encoding="utf-8")
+    section = text.split("## Plug in your localizer", 1)[1]
+    return re.search(r"```python\n(.*?)```", section, re.S).group(1)
+
+
+def test_the_plugin_example_checks_benchmarks_and_submits(tmp_path, monkeypatch, capsys):
+    source = plugin_source()
+    assert len(source.strip().splitlines()) <= 32
+    (tmp_path / "my_localizer.py").write_text(source)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import my_localizer
+
+    azgym.check_localizer(my_localizer.MedianOfTriplets())
+    section = README.read_text(encoding="utf-8").split("## Plug in your localizer", 1)[1]
+    shell = re.search(r"```bash\n(.*?)```", section, re.S).group(1).replace("\\\n", " ")
+    commands = [shlex.split(line) for line in shell.splitlines() if line.startswith("azgym")]
+    assert [c[1] for c in commands] == ["bench", "leaderboard", "leaderboard"]
+    bench = commands[0] + ["--suite", "stress", "--quick", "--workers", "1"]
+    assert main(bench[1:]) == 0
+    assert main(commands[1][1:]) == 0
+    assert main(commands[2][1:]) == 0
+    assert (tmp_path / "leaderboard" / "entries" / "median-of-triplets.json").is_file()
+    assert "median-of-triplets" in (tmp_path / "leaderboard" / "README.md").read_text()
+    sys.modules.pop("my_localizer", None)
