@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gzip
 import json
 import re
 
@@ -29,7 +30,7 @@ def entry_path(results, tmp_path):
 def test_a_submitted_entry_validates_builds_and_reproduces(entry_path, tmp_path):
     entry = L.load_entry(entry_path)
     assert entry["name"] == "lsq-ref" and entry["localizer"] == {"spec": "lsq", "params": {}}
-    assert (entry_path.parent / "lsq-ref.frames.csv").is_file()
+    assert (entry_path.parent / "lsq-ref.frames.csv.gz").is_file()
     readme, page = L.build(entry_path.parent, tmp_path / "board")
     assert "| 1 | lsq-ref | 1.0 | A. Author |" in readme.read_text()
     text = page.read_text()
@@ -64,18 +65,19 @@ def test_malformed_or_tampered_entries_are_rejected_with_the_reason(entry_path, 
 
 
 def test_a_tampered_frames_file_is_caught(entry_path):
-    frames = entry_path.parent / "lsq-ref.frames.csv"
-    lines = frames.read_text().splitlines()
+    frames = entry_path.parent / "lsq-ref.frames.csv.gz"
+    lines = gzip.decompress(frames.read_bytes()).decode().splitlines()
     cells = lines[1].split(",")
     cells[6] = "0.0"  # claim a perfect estimate on the first frame
-    frames.write_text("\n".join([lines[0], ",".join(cells), *lines[2:]]) + "\n")
+    frames.write_bytes(gzip.compress(("\n".join([lines[0], ",".join(cells), *lines[2:]])
+                                      + "\n").encode()))
     with pytest.raises(L.LeaderboardError, match="results_sha256: the per-frame results file"):
         L.load_entry(entry_path)
 
 
 def test_missing_frames_file_and_invalid_json(entry_path):
-    (entry_path.parent / "lsq-ref.frames.csv").unlink()
-    with pytest.raises(L.LeaderboardError, match="results_file: lsq-ref.frames.csv is missing"):
+    (entry_path.parent / "lsq-ref.frames.csv.gz").unlink()
+    with pytest.raises(L.LeaderboardError, match="results_file: lsq-ref.frames.csv.gz is missing"):
         L.load_entry(entry_path)
     entry_path.write_text("{not json")
     with pytest.raises(L.LeaderboardError, match="not valid JSON"):

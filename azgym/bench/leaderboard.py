@@ -2,16 +2,17 @@
 
 An entry (``leaderboard/entries/NAME.json``, format in ``entry.schema.json``) holds a localizer's
 metrics on one suite, and beside it the per-frame results they were computed from
-(``NAME.frames.csv``). Validation checks the schema, that the suite and its version exist, that
-the per-frame file matches the entry's SHA-256, and that the metrics recomputed from it are the
-entry's: a tampered number, a swapped file or an old suite is rejected with the reason. ``build``
-writes the ranked tables (``leaderboard/README.md``) and a self-contained, sortable HTML page;
-``verify`` reruns the entry's localizer and compares.
+(``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Validation checks the schema,
+that the suite and its version exist, that the per-frame file matches the entry's SHA-256, and
+that the metrics recomputed from it are the entry's: a tampered number, a swapped file or an old
+suite is rejected with the reason. ``build`` writes the ranked tables (``leaderboard/README.md``)
+and a self-contained, sortable HTML page; ``verify`` reruns the entry's localizer and compares.
 """
 
 from __future__ import annotations
 
 import csv
+import gzip
 import hashlib
 import html
 import io
@@ -105,7 +106,7 @@ def make_entry(results_dir: Path, label: str, *, name: str, version: str, author
         "machine": {"platform": platform.platform(), "processor": platform.processor() or
                     platform.machine(), "cpus": os.cpu_count(), "python": sys.version.split()[0]},
         "timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "results_file": f"{name}.frames.csv",
+        "results_file": f"{name}.frames.csv.gz",
         "results_sha256": hashlib.sha256(text.encode()).hexdigest(),
     }
     return entry, text
@@ -161,7 +162,8 @@ def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, versi
     if path.exists() and not overwrite:
         raise LeaderboardError(f"{path}: an entry of that name exists; pick another name or "
                                "pass --overwrite")
-    (entries_dir / entry["results_file"]).write_text(text, encoding="utf-8")
+    # mtime=0: the same results give the same bytes.
+    (entries_dir / entry["results_file"]).write_bytes(gzip.compress(text.encode(), mtime=0))
     path.write_text(json.dumps(entry, indent=1) + "\n", encoding="utf-8")
     return path
 
@@ -175,7 +177,12 @@ def load_entry(path: Path) -> dict[str, Any]:
     frames = None
     if isinstance(entry, dict) and isinstance(entry.get("results_file"), str):
         frames_path = path.parent / Path(entry["results_file"]).name
-        frames = frames_path.read_text(encoding="utf-8") if frames_path.is_file() else None
+        if frames_path.is_file():
+            try:
+                frames = gzip.decompress(frames_path.read_bytes()).decode("utf-8")
+            except (OSError, EOFError, UnicodeDecodeError) as exc:
+                raise LeaderboardError(f"{frames_path}: not a gzip-compressed CSV: {exc}") \
+                    from None
     validate_entry(entry, frames, str(path))
     return entry
 
