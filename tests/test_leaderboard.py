@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import gzip
+import html
 import json
 import re
+import shutil
+import subprocess
 
 import pytest
 
@@ -90,3 +93,44 @@ def test_submit_refuses_unknown_localizers_and_overwrites(results, entry_path):
     with pytest.raises(L.LeaderboardError, match="an entry of that name exists"):
         L.submit(results, "lsq", entry_path.parent, name="lsq-ref", version="1", authors=["a"])
 
+
+
+def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, tmp_path):
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run installs it)")
+    entries = tmp_path / "entries"
+    for label in ("ransac", "lsq"):
+        L.submit(results, label, entries, name=f"{label}-ref", version="1", authors=["a"])
+    _, page = L.build(entries, tmp_path / "board")
+    column = [c for c, _ in L.COLUMNS].index("p75 cm")
+    probe = f"""<script>
+      var header = document.querySelectorAll("table.board th")[{column}];
+      function names() {{
+        return Array.prototype.map.call(document.querySelectorAll("table.board tbody tr"),
+          function (row) {{ return row.cells[1].textContent; }}).join(",");
+      }}
+      header.click(); var up = names(); header.click(); var down = names();
+      document.body.setAttribute("data-up", up); document.body.setAttribute("data-down", down);
+      document.body.setAttribute("data-errors", JSON.stringify(window.pageErrors));
+    </script>"""
+    catcher = ('<script>window.pageErrors = []; window.addEventListener("error", function (e) '
+               '{ window.pageErrors.push(e.message); });</script>')
+    text = page.read_text().replace("<title>", catcher + "<title>").replace(
+        "</body>", probe + "</body>")
+    harness = tmp_path / "harness.html"
+    harness.write_text(text)
+    completed = subprocess.run(
+        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--disable-background-networking", "--disable-component-update", "--no-first-run",
+         "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom",
+         harness.as_uri()],
+        capture_output=True, text=True, timeout=120, check=True)
+    body = re.search(r"<body([^>]*)>", completed.stdout).group(1)
+    attributes = dict(re.findall(r'data-(\w+)="([^"]*)"', body))
+    assert html.unescape(attributes["errors"]) == "[]"
+    p75 = {label: json.loads((entries / f"{label}-ref.json").read_text())["metrics"]["all"][
+        "p75_cm"] for label in ("ransac", "lsq")}
+    best, worst = sorted(p75, key=p75.get)
+    assert attributes["up"] == f"{best}-ref,{worst}-ref"
+    assert attributes["down"] == f"{worst}-ref,{best}-ref"

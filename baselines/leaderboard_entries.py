@@ -1,0 +1,45 @@
+"""Reference leaderboard entries: every built-in localizer on every suite (dev split, full size).
+
+    python baselines/leaderboard_entries.py [--workers 2] [--suite NAME ...]
+
+Writes ``leaderboard/entries/<localizer>-<suite>.json`` (and the per-frame results beside each),
+then rebuilds ``leaderboard/README.md`` and ``leaderboard/index.html``. The bench outputs
+(figures included) go to ``results/bench-<suite>/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from azgym.bench import leaderboard
+from azgym.bench.runner import default_contenders, ranked_table, run_benchmark
+from azgym.bench.suites import SUITES
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--suite", action="append", choices=sorted(SUITES))
+    args = parser.parse_args()
+    entries = ROOT / "leaderboard" / "entries"
+    for name in args.suite or list(SUITES):
+        result = run_benchmark(SUITES[name], default_contenders(), workers=args.workers,
+                               progress=lambda line: print(line, flush=True))
+        out = ROOT / "results" / f"bench-{name}"
+        result.write(out)
+        print(ranked_table(result.summary), flush=True)
+        for label in result.summary["localizers"]:
+            path = leaderboard.submit(out, label, entries, name=f"{label}-{name}",
+                                      version="0.1.0", authors=["azgym developers"],
+                                      link="built into azgym",
+                                      overwrite=True)
+            print(f"wrote {path}")
+    for path in leaderboard.build(entries, ROOT / "leaderboard"):
+        print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
