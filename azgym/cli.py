@@ -57,7 +57,7 @@ def _bench(args: argparse.Namespace) -> int:
     workers = args.workers or _cores()
     started = time.perf_counter()
     result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
-                           progress=lambda line: print(line, flush=True))
+                           progress=_progress_printer())
     written = result.write(Path(args.out))
     print()
     print(ranked_table(result.summary))
@@ -85,6 +85,19 @@ def _leaderboard(args: argparse.Namespace) -> int:
             return 1
         print(f"{args.entry}: reproduced (every accuracy figure within 1e-6)")
     return 0
+
+
+def _progress_printer():
+    """Print progress: a bar redrawn in place on a terminal, only finished lines otherwise."""
+    terminal = sys.stdout.isatty()
+
+    def show(text: str) -> None:
+        if not text.startswith("\r"):
+            print(("\r" if terminal else "") + text, flush=True)
+        elif terminal:
+            print(text, end="", flush=True)
+
+    return show
 
 
 def _cores() -> int:

@@ -37,6 +37,7 @@ def test_a_submitted_entry_validates_builds_and_reproduces(entry_path, tmp_path)
     readme, page = L.build(entry_path.parent, tmp_path / "board")
     assert "| 1 | lsq-ref | 1.0 | A. Author |" in readme.read_text()
     text = page.read_text()
+    assert "data:image/png;base64," in text  # the suite's error CDFs, embedded
     assert "<table class=\"board\"" in text and "<script>" in text and "http" not in text.split(
         "<script>")[1]  # self-contained: no external resources
     assert L.verify(entry_path) == {}

@@ -11,10 +11,12 @@ and a self-contained, sortable HTML page; ``verify`` reruns the entry's localize
 
 from __future__ import annotations
 
+import base64
 import csv
 import gzip
 import hashlib
 import html
+import importlib.util
 import io
 import json
 import math
@@ -101,7 +103,7 @@ def make_entry(results_dir: Path, label: str, *, name: str, version: str, author
         "suite": summary["suite"], "suite_version": summary["suite_version"],
         "split": summary["split"], "seed": summary["seed"], "quick": summary["quick"],
         "n_frames": summary["n_frames"], "azgym_version": summary["azgym_version"],
-        "metrics": _clean({key: row[key] for key in ("all", "by_cause", "by_group",
+        "metrics": _clean({key: row[key] for key in ("all", "ci95", "by_cause", "by_group",
                                                      "runtime_us")}),
         "machine": {"platform": platform.platform(), "processor": platform.processor() or
                     platform.machine(), "cpus": os.cpu_count(), "python": sys.version.split()[0]},
@@ -170,6 +172,11 @@ def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, versi
 
 def load_entry(path: Path) -> dict[str, Any]:
     """Read and validate one entry file (and its per-frame results beside it)."""
+    return _load(path)[0]
+
+
+def _load(path: Path) -> tuple[dict[str, Any], str]:
+    """The validated entry and its per-frame results text."""
     try:
         entry = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:
@@ -184,12 +191,16 @@ def load_entry(path: Path) -> dict[str, Any]:
                 raise LeaderboardError(f"{frames_path}: not a gzip-compressed CSV: {exc}") \
                     from None
     validate_entry(entry, frames, str(path))
-    return entry
+    return entry, frames
 
 
 def load_entries(entries_dir: Path) -> list[dict[str, Any]]:
     """Every entry in the folder, validated (the first bad one raises, naming its file)."""
-    return [load_entry(path) for path in sorted(entries_dir.glob("*.json"))]
+    return [entry for entry, _ in _load_all(entries_dir)]
+
+
+def _load_all(entries_dir: Path) -> list[tuple[dict[str, Any], str]]:
+    return [_load(path) for path in sorted(entries_dir.glob("*.json"))]
 
 
 def _ranked(entries: list[dict[str, Any]], suite: str) -> list[dict[str, Any]]:
@@ -198,13 +209,18 @@ def _ranked(entries: list[dict[str, Any]], suite: str) -> list[dict[str, Any]]:
                                        e["metrics"]["all"][RANK_BY] or 0.0))
 
 
+def _interval(bounds: list[float] | None) -> str:
+    return "–" if not bounds or None in bounds else f"{bounds[0]:.2f}–{bounds[1]:.2f}"
+
+
 def _fmt(value: Any, digits: int = 2) -> str:
     return "–" if value is None else f"{value:.{digits}f}"
 
 
 COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
            ("availability %", "availability"), ("mean cm", "mean_cm"),
-           ("median cm", "median_cm"), ("p75 cm", "p75_cm"), ("p95 cm", "p95_cm"),
+           ("median cm", "median_cm"), ("p75 cm", "p75_cm"), ("p75 95% CI", None),
+           ("p95 cm", "p95_cm"),
            ("failures %", "failure_rate"), ("µs", None), ("× ransac", None), ("split", None),
            ("azgym", None)]
 
@@ -217,7 +233,8 @@ def _cells(rank: int, entry: dict[str, Any]) -> list[str]:
 
     return [str(rank), entry["name"], entry["version"], ", ".join(entry["authors"]),
             percent(stats["availability"]), _fmt(stats["mean_cm"]), _fmt(stats["median_cm"]),
-            _fmt(stats["p75_cm"]), _fmt(stats["p95_cm"], 1), percent(stats["failure_rate"]),
+            _fmt(stats["p75_cm"]), _interval(entry["metrics"].get("ci95", {}).get("p75_cm")),
+            _fmt(stats["p95_cm"], 1), percent(stats["failure_rate"]),
             _fmt(runtime["median"], 1), _fmt(runtime["ratio_to_ransac"]),
             f"{entry['split']} ({'quick' if entry['quick'] else 'full'})",
             entry["azgym_version"]]
@@ -225,7 +242,9 @@ def _cells(rank: int, entry: dict[str, Any]) -> list[str]:
 
 def build(entries_dir: Path, out_dir: Path) -> list[Path]:
     """Write the board: README.md (tables) and index.html (sortable, self-contained)."""
-    entries = load_entries(entries_dir)
+    loaded = _load_all(entries_dir)
+    entries = [entry for entry, _ in loaded]
+    frames = {entry["name"]: text for entry, text in loaded}
     suites = [name for name in SUITES if any(e["suite"] == name for e in entries)]
     lines = ["# azgym leaderboard", "",
              f"Ranked by the 75th percentile of the position error (EvAAL's headline). Generated "
@@ -240,7 +259,8 @@ def build(entries_dir: Path, out_dir: Path) -> list[Path]:
                   "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
         lines += ["| " + " | ".join(row) + " |" for row in rows]
         lines.append("")
-        sections.append((suite, description, header, rows))
+        sections.append((suite, description, header, rows,
+                         _cdf_png(_ranked(entries, suite), frames)))
     out_dir.mkdir(parents=True, exist_ok=True)
     readme, page = out_dir / "README.md", out_dir / "index.html"
     readme.write_text("\n".join(lines), encoding="utf-8")
@@ -268,7 +288,37 @@ document.querySelectorAll("table.board th").forEach(function (th, column) {
 """
 
 
-def _html(sections: list[tuple[str, str, list[str], list[list[str]]]], count: int) -> str:
+def _cdf_png(entries: list[dict[str, Any]], frames: dict[str, str]) -> str | None:
+    """The suite's error CDFs as a base64 PNG (None without matplotlib)."""
+    if importlib.util.find_spec("matplotlib") is None:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
+    for entry in entries:
+        rows = list(csv.DictReader(io.StringIO(frames[entry["name"]])))
+        # A missing estimate is a failure: it sits at +inf, never at zero error.
+        errors = np.sort([float(r["position_error_m"]) * 100 if r["ok"] == "1" else np.inf
+                          for r in rows])
+        axes.step(errors, np.arange(1, errors.size + 1) / errors.size, where="post",
+                  label=entry["name"])
+    axes.set_xscale("log")
+    axes.set_xlim(left=0.1)
+    axes.set_xlabel("position error [cm]")
+    axes.set_ylabel("share of frames")
+    axes.grid(True, which="both", alpha=0.3)
+    axes.legend(fontsize=7, loc="lower right")
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=90)
+    plt.close(figure)
+    return base64.b64encode(buffer.getvalue()).decode("ascii")
+
+
+def _html(sections: list[tuple[str, str, list[str], list[list[str]], str | None]],
+          count: int) -> str:
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              "<title>azgym leaderboard</title><style>",
              "body{font-family:sans-serif;margin:2em}table{border-collapse:collapse;margin:1em 0}",
@@ -277,8 +327,11 @@ def _html(sections: list[tuple[str, str, list[str], list[list[str]]]], count: in
              "th[data-order=descending]::after{content:' ▼'}</style></head><body>",
              "<h1>azgym leaderboard</h1>",
              f"<p>{count} entries, ranked by p75 position error. Click a column to sort.</p>"]
-    for suite, description, header, rows in sections:
+    for suite, description, header, rows, cdf in sections:
         parts.append(f'<h2>{html.escape(suite)}</h2><p>{html.escape(description)}</p>')
+        if cdf is not None:
+            parts.append(f'<img alt="error CDFs, {html.escape(suite)}" '
+                         f'src="data:image/png;base64,{cdf}">')
         parts.append(f'<table class="board" id="board-{html.escape(suite)}"><thead><tr>')
         parts += [f"<th>{html.escape(cell)}</th>" for cell in header]
         parts.append("</tr></thead><tbody>")

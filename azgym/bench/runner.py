@@ -144,7 +144,8 @@ def run_benchmark(
         quick: Draw the suite's small version.
         workers: Worker processes (1: this process).
         seed: Draw the frames from this seed instead (to rerun a reported test split).
-        progress: Called with a line of text as the run advances.
+        progress: Called with text as the run advances; text starting with a carriage
+            return redraws the current line (a progress bar).
     """
     if split not in ("dev", "test"):
         raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
@@ -165,10 +166,14 @@ def run_benchmark(
     try:
         for contender in contenders:
             begun = time.perf_counter()
-            if executor is None:
-                parts = [_localize_chunk(contender, piece) for piece in pieces]
-            else:
-                parts = list(executor.map(_localize_chunk, [contender] * len(pieces), pieces))
+            results = (map(_localize_chunk, [contender] * len(pieces), pieces) if executor is None
+                       else executor.map(_localize_chunk, [contender] * len(pieces), pieces))
+            parts = []
+            for part in results:  # in order, as each chunk completes
+                parts.append(part)
+                done = len(parts) * 20 // len(pieces)
+                say(f"\r  {contender.label:<20} [{'#' * done}{'.' * (20 - done)}] "
+                    f"{len(parts)}/{len(pieces)}")
             outcomes[contender.label] = {
                 key: (sum((p[key] for p in parts), []) if key == "errors"
                       else np.concatenate([p[key] for p in parts]))
@@ -202,6 +207,7 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
         results[contender.label] = {
             "spec": contender.spec, "params": contender.params,
             "all": stats(np.ones(len(frames), dtype=bool)),
+            "ci95": confidence_intervals(outcome["position"], outcome["ok"]),
             "by_cause": {c: stats(causes == c) for c in CAUSES if (causes == c).any()},
             "by_group": {g: stats(groups == g) for g in dict.fromkeys(groups)},
             "runtime_us": {"median": median_us,
@@ -213,6 +219,35 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
     return {"suite": suite.name, "suite_version": suite.version, "split": split, "seed": seed,
             "quick": quick, "n_frames": len(frames), "azgym_version": _version(),
             "python": sys.version.split()[0], "localizers": results}
+
+
+def confidence_intervals(position: np.ndarray, ok: np.ndarray, resamples: int = 400,
+                         seed: int = 0) -> dict[str, list[float]]:
+    """95 % bootstrap intervals of the mean and p75 position error [cm] and the failure rate.
+
+    Frames are resampled with replacement (a missing estimate stays a failure), 50 resamples at
+    a time to bound memory; the generator is seeded, so the intervals repeat like the figures.
+    """
+    count = position.size
+    if count == 0:
+        return {}
+    rng = np.random.default_rng(seed)
+    error = np.where(ok, position * 100, np.inf)
+    means, p75, failures = [], [], []
+    for _ in range(0, resamples, 50):
+        samples = error[rng.integers(0, count, size=(50, count))]
+        available = np.isfinite(samples)
+        means += list(np.where(available, samples, 0.0).sum(axis=1)
+                      / np.maximum(available.sum(axis=1), 1))
+        p75 += [float(np.percentile(row[np.isfinite(row)], 75)) if np.isfinite(row).any()
+                else math.nan for row in samples]
+        failures += list(((~available) | (samples > 100.0)).mean(axis=1))
+
+    def interval(values: list[float]) -> list[float]:
+        return [float(np.nanpercentile(values, 2.5)), float(np.nanpercentile(values, 97.5))]
+
+    return {"mean_cm": interval(means), "p75_cm": interval(p75),
+            "failure_rate": interval(failures)}
 
 
 def _version() -> str:
@@ -230,12 +265,13 @@ def ranked_table(summary: dict[str, Any]) -> str:
              f"{summary['seed']}{', quick' if summary['quick'] else ''}): "
              f"{summary['n_frames']} frames; errors in cm",
              f"{'#':>2} {'localizer':<18} {'avail':>6} {'mean':>8} {'median':>8} {'p75':>8} "
-             f"{'p95':>8} {'fail':>6} {'µs':>9} {'×ransac':>8}"]
+             f"{'p75 95% CI':>15} {'p95':>8} {'fail':>6} {'µs':>9} {'×ransac':>8}"]
     for rank, (label, row) in enumerate(rows, 1):
         a, t = row["all"], row["runtime_us"]
+        low, high = row["ci95"].get("p75_cm", [math.nan, math.nan])
         lines.append(f"{rank:>2} {label:<18} {100 * a['availability']:5.1f}% {a['mean_cm']:8.2f} "
-                     f"{a['median_cm']:8.2f} {a['p75_cm']:8.2f} {a['p95_cm']:8.1f} "
-                     f"{100 * a['failure_rate']:5.1f}% {t['median']:9.1f} "
+                     f"{a['median_cm']:8.2f} {a['p75_cm']:8.2f} {f'{low:.2f}-{high:.2f}':>15} "
+                     f"{a['p95_cm']:8.1f} {100 * a['failure_rate']:5.1f}% {t['median']:9.1f} "
                      f"{t['ratio_to_ransac']:8.2f}")
         if row["crashes"]:
             lines.append(f"   ! {row['crashes']} frames raised: {row['first_error']}")
