@@ -135,3 +135,15 @@ def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, 
     best, worst = sorted(p75, key=p75.get)
     assert attributes["up"] == f"{best}-ref,{worst}-ref"
     assert attributes["down"] == f"{worst}-ref,{best}-ref"
+
+
+def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(tmp_path):
+    root = L.Path(__file__).parent.parent / "leaderboard"
+    entries = L.load_entries(root / "entries")
+    builtins = {"ransac", "ransac-weighted", "loo", "lsq", "triplet", "mex"}
+    for suite in L.SUITES:
+        assert {e["name"].removesuffix(f"-{suite}") for e in entries
+                if e["suite"] == suite} == builtins, suite
+    readme, _ = L.build(root / "entries", tmp_path)
+    assert readme.read_text() == (root / "README.md").read_text(), \
+        "leaderboard/README.md is stale: run python baselines/leaderboard_entries.py"
