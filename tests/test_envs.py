@@ -221,12 +221,13 @@ def test_evaluate_runs_a_localizer_as_the_agent():
 def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy", reason='needs pip install "azgym[video]"')
     env = gym.make("azgym/Navigate-WarehouseSmall-v0", render_mode="rgb_array", max_steps=20)
-    env = gym.wrappers.RecordVideo(env, str(tmp_path), episode_trigger=lambda _: True,
+    folder = tmp_path / "videos"
+    env = gym.wrappers.RecordVideo(env, str(folder), episode_trigger=lambda _: True,
                                    disable_logger=True)
     env.reset(seed=0)
     truncated = terminated = False
     while not (terminated or truncated):
         _, _, terminated, truncated, _ = env.step(env.action_space.sample())
     env.close()
-    videos = list(tmp_path.glob("*.mp4"))
+    videos = list(folder.glob("*.mp4"))
     assert len(videos) == 1 and videos[0].stat().st_size > 1000

@@ -244,7 +244,11 @@ def confidence_intervals(position: np.ndarray, ok: np.ndarray, resamples: int = 
         failures += list(((~available) | (samples > 100.0)).mean(axis=1))
 
     def interval(values: list[float]) -> list[float]:
-        return [float(np.nanpercentile(values, 2.5)), float(np.nanpercentile(values, 97.5))]
+        finite = np.asarray(values, dtype=float)
+        finite = finite[np.isfinite(finite)]
+        if finite.size == 0:  # no estimate at all: no interval either
+            return [math.nan, math.nan]
+        return [float(np.percentile(finite, 2.5)), float(np.percentile(finite, 97.5))]
 
     return {"mean_cm": interval(means), "p75_cm": interval(p75),
             "failure_rate": interval(failures)}
