@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from azgym.core import BeaconMap, FloatArray
-from azgym.errors import ScenarioError, unknown_name
+from azgym.errors import InvalidInputError, ScenarioError, unknown_name
 from azgym.layout import (
     ROUTE_CLEARANCE,
     Bump,
@@ -31,6 +31,7 @@ from azgym.layout import (
     leg_hits_rack,
 )
 from azgym.sensing.error_model import ErrorModel
+from azgym.sensing.fisheye import FisheyeCamera
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -66,6 +67,7 @@ class Scenario:
     faults: Faults = Faults()
     routes: tuple[Route, ...] = ()
     bumps: tuple[Bump, ...] = ()
+    fisheye: FisheyeCamera = FisheyeCamera()
     physical_xyz: FloatArray | None = None
     source: Path | None = None
 
@@ -80,13 +82,14 @@ class Scenario:
 
 _TOP_KEYS = {"name", "description", "version", "room", "error_model", "beacon_defaults",
              "beacons", "camera", "faults", "racks", "walls", "routes",
-             "bumps"}
+             "bumps", "fisheye"}
 _CAMERA_KEYS = {"height", "min_elevation_deg", "max_range"}
 _FAULT_KEYS = {"misdecode_rate"}
 _RACK_KEYS = {"center", "size", "angle_deg", "height", "reflectivity"}
 _WALL_KEYS = {"start", "end", "height", "reflectivity"}
 _ROUTE_KEYS = {"name", "waypoints", "reverse", "speed"}
 _BUMP_KEYS = {"center", "size", "tilt_deg"}
+_FISHEYE_KEYS = {"focal_px", "principal_point", "image_size", "distortion"}
 _ROOM_KEYS = {"bounds"}
 _ERROR_KEYS = {"delta_alpha_d_deg", "center_error_px", "horizon_radius_px", "coverage"}
 _DEFAULT_KEYS = {"width", "z"}
@@ -223,6 +226,7 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
                     error_model=error_model, racks=racks, walls=walls, routes=routes,
                     bumps=tuple(_parse_bump(read, entry, k) for k, entry in enumerate(
                         _array_of_tables(read, data, "bumps"))),
+                    fisheye=_parse_fisheye(read, data.get("fisheye", {})),
                     camera=_parse_camera(read, data.get("camera", {})),
                     faults=_parse_faults(read, data.get("faults", {})),
                     physical_xyz=None if np.array_equal(physical_xyz, beacons.xyz)
@@ -321,6 +325,29 @@ def _parse_bump(read: _Reader, entry: dict[str, Any], k: int) -> Bump:
         raise read.fail(f"{where}tilt_deg", f"must be < 45, got {tilt}")
     return Bump(center=(center[0], center[1]), size=(size[0], size[1]),
                 tilt=math.radians(tilt))
+
+
+def _parse_fisheye(read: _Reader, table: Any) -> FisheyeCamera:
+    if not isinstance(table, dict):
+        raise read.fail("fisheye", "must be a table")
+    read.keys(table, _FISHEYE_KEYS, "fisheye.")
+    default = FisheyeCamera()
+    size = table.get("image_size", list(default.image_size))
+    if not (isinstance(size, list) and len(size) == 2 and all(isinstance(v, int) for v in size)):
+        raise read.fail("fisheye.image_size", f"must be [width, height] in pixels, got {size!r}")
+    point = read.vector(table.get("principal_point", list(default.principal_point)),
+                        "fisheye.principal_point", 2)
+    distortion = read.vector(table.get("distortion", list(default.distortion)),
+                             "fisheye.distortion", 4)
+    focal = read.number(table.get("focal_px", default.focal_px), "fisheye.focal_px")
+    try:
+        return FisheyeCamera(focal_px=focal, principal_point=(point[0], point[1]),
+                             image_size=(size[0], size[1]),
+                             distortion=(distortion[0], distortion[1], distortion[2],
+                                         distortion[3]))
+    except InvalidInputError as exc:  # it names the field; add the file
+        field = str(exc).split(" ", 1)[0].replace("FisheyeCamera.", "fisheye.")
+        raise read.fail(field, str(exc).split(" ", 1)[1]) from None
 
 
 def _reflectivity(read: _Reader, entry: dict[str, Any], where: str) -> float:
