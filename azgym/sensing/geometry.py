@@ -168,7 +168,7 @@ def direct_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_ra
 
 
 @numba.njit(error_model="numpy", cache=True)
-def mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, out):
+def mirror_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_range, out):
     """Ghosts: mirror images of beacons in reflective occluders. Returns how many were found.
 
     For each reflective segment and beacon on the camera's side of it, the beacon's mirror image
@@ -176,7 +176,8 @@ def mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, out):
     direction of B' when R lies on the segment, below its top (heights vary linearly along the
     unfolded path), both legs C→R and R→B are clear, the elevation is within the lens' range and
     the reflected flux, reflectivity / path², is at least that of a direct beacon at ``max_range``.
-    ``out`` rows get (world azimuth, beacon index, segment index, flux ratio, elevation).
+    ``out`` rows get (world azimuth, beacon index, segment index, flux ratio, elevation, angular
+    half-width).
     """
     found = 0
     limit2 = max_range * max_range
@@ -229,20 +230,21 @@ def mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, out):
                 out[found, 2] = s
                 out[found, 3] = reflectivity * limit2 / (path2 + dz * dz)
                 out[found, 4] = math.atan2(dz, path)
+                out[found, 5] = math.atan2(0.5 * beacon_width[b], path)
                 found += 1
     return found
 
 
 @numba.njit(error_model="numpy", cache=True)
 def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max_range, world,
-            elevation, beacon, label, visible, brightness, scratch_azimuth, scratch_label,
-            scratch_visible, ghosts):
+            elevation, beacon, label, visible, brightness, halfwidth, scratch_azimuth,
+            scratch_label, scratch_visible, ghosts):
     """Every detection of a frame before noise: direct (or partial, or moved) views, then ghosts.
 
     Fills ``world`` (azimuth in the world frame), ``elevation``, ``beacon`` (map row), ``label``,
-    ``visible`` and ``brightness`` (received flux over the detection threshold, >= 1: the visible
-    share over the squared 3-D distance, times the reflectivity for a ghost) and returns their
-    count M.
+    ``visible``, ``halfwidth`` (the angular half-width of the whole beacon) and ``brightness``
+    (received flux over the detection threshold, >= 1: the visible share over the squared 3-D
+    distance, times the reflectivity for a ghost) and returns their count M.
     """
     direct_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_range,
                 scratch_azimuth, scratch_label, scratch_visible)
@@ -254,16 +256,19 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
             dy = beacon_xyz[b, 1] - cy
             dz = beacon_xyz[b, 2] - cz
             elevation[count] = math.atan2(dz, math.hypot(dx, dy))
+            halfwidth[count] = math.atan2(0.5 * beacon_width[b], math.hypot(dx, dy))
             brightness[count] = max(1.0, scratch_visible[b] * max_range * max_range
                                     / (dx * dx + dy * dy + dz * dz))
             beacon[count] = b
             label[count] = MOVED if moved[b] else scratch_label[b]
             visible[count] = scratch_visible[b]
             count += 1
-    n_ghosts = mirror_view(cx, cy, cz, beacon_xyz, seg, min_elevation, max_range, ghosts)
+    n_ghosts = mirror_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_range,
+                           ghosts)
     for g in range(n_ghosts):
         world[count] = ghosts[g, 0]
         elevation[count] = ghosts[g, 4]
+        halfwidth[count] = ghosts[g, 5]
         brightness[count] = ghosts[g, 3]
         beacon[count] = int(ghosts[g, 1])
         label[count] = GHOST
@@ -273,12 +278,13 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
 
 
 @numba.njit(error_model="numpy", cache=True)
-def finish(world, elevation, beacon, label, visible, brightness, heading, pitch, roll, uniforms,
-           delta_d, misdecode_rate, map_ids, out_floats, out_ints):
+def finish(world, elevation, beacon, label, visible, brightness, halfwidth, heading, pitch, roll,
+           uniforms, delta_d, misdecode_rate, map_ids, out_floats, out_ints):
     """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
 
     ``out_floats`` rows get the measured azimuth, the quality (log10 of the brightness over the
-    detection threshold, >= 0), the true azimuth and the visible share;
+    detection threshold, >= 0), the true azimuth, the visible share, the elevation and the
+    beacon's angular half-width;
     ``out_ints`` rows the decoded id, beacon row and label. They may be longer than M (fixed-size
     observations): the rest is padded with id −1, beacon −1, label −1 and zeros.
 
@@ -326,6 +332,8 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
         out_label[k] = label[m]
         out_visible[k] = visible[m]
         out_quality[k] = math.log10(brightness[m])
+        out_floats[4, k] = elevation[m]
+        out_floats[5, k] = halfwidth[m]
     for k in range(count, out_ids.size):  # padding, where the outputs are longer than M
         out_ids[k] = -1
         out_measured[k] = 0.0
@@ -334,6 +342,8 @@ def finish(world, elevation, beacon, label, visible, brightness, heading, pitch,
         out_label[k] = -1
         out_visible[k] = 0.0
         out_quality[k] = 0.0
+        out_floats[4, k] = 0.0
+        out_floats[5, k] = 0.0
 
 
 @numba.njit(error_model="numpy", cache=True)

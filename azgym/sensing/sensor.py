@@ -59,10 +59,11 @@ class Sensor:
         n = len(scenario.beacons)
         self._capacity = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
         most = self._capacity
-        self._ghosts = np.empty((most, 5))
+        self._ghosts = np.empty((most, 6))
         self._scratch = (np.empty(n), np.empty(n, dtype=np.int64), np.empty(n))
         self._collected = (np.empty(most), np.empty(most), np.empty(most, dtype=np.int64),
-                           np.empty(most, dtype=np.int64), np.empty(most), np.empty(most))
+                           np.empty(most, dtype=np.int64), np.empty(most), np.empty(most),
+                           np.empty(most))
         self._buffers = FrameBuffers(most)
 
     @property
@@ -86,13 +87,14 @@ class Sensor:
         """
         camera = self.scenario.camera
         cz = camera.height if camera_height is None else camera_height
-        world, elevation, beacon, label, visible, brightness = self._collected
+        world, elevation, beacon, label, visible, brightness, halfwidth = self._collected
         count = G.collect(float(x), float(y), float(cz), self._xyz, self._width, self._moved,
                           self._segments, camera.min_elevation, camera.max_range, world,
-                          elevation, beacon, label, visible, brightness, *self._scratch,
-                          self._ghosts)
+                          elevation, beacon, label, visible, brightness, halfwidth,
+                          *self._scratch, self._ghosts)
         G.finish(world[:count], elevation[:count], beacon[:count], label[:count],
-                 visible[:count], brightness[:count], float(heading), float(tilt[0]),
+                 visible[:count], brightness[:count], halfwidth[:count], float(heading),
+                 float(tilt[0]),
                  float(tilt[1]), rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
                  self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, out.floats,
                  out.ints)
@@ -136,12 +138,13 @@ class FrameBuffers:
     Attributes:
         ids, azimuth, quality: What the camera reports (quality: log10 of the blob's brightness
             over the detection threshold, >= 0).
-        true_azimuth, beacon, label, visible: The ground truth beside it.
+        true_azimuth, beacon, label, visible, elevation, half_width: The ground truth beside it
+            (the last two are what an image renderer needs).
     """
 
     def __init__(self, size: int) -> None:
         self.size = size
-        self.floats = np.zeros((4, size))
+        self.floats = np.zeros((6, size))
         self.ints = np.full((3, size), -1, dtype=np.int64)
 
     # Views made on access (stored views would turn into copies when the object is pickled).
@@ -150,6 +153,9 @@ class FrameBuffers:
                        doc="log10 of the blob's brightness over the detection threshold (>= 0).")
     true_azimuth = property(lambda self: self.floats[2], doc="Noise-free azimuths [rad].")
     visible = property(lambda self: self.floats[3], doc="Visible share of each beacon.")
+    elevation = property(lambda self: self.floats[4], doc="Elevation above the horizon [rad].")
+    half_width = property(lambda self: self.floats[5],
+                          doc="Angular half-width of the whole beacon [rad].")
     ids = property(lambda self: self.ints[0], doc="Decoded ids, -1 for padding.")
     beacon = property(lambda self: self.ints[1], doc="Map row of the true beacon.")
     label = property(lambda self: self.ints[2], doc="Cause of each detection.")
