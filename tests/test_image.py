@@ -52,3 +52,51 @@ def test_an_empty_frame_has_no_blobs_and_two_lights_give_two():
     two = render(CAMERA, np.array([0.0, 2.0]), np.array([0.001, 2.001]), np.array([0.1, 0.2]),
                  np.array([3.0, 3.0]))
     assert len(detect(two, CAMERA)) == 2
+
+
+def test_the_image_sensor_finds_the_geometrys_lights_with_their_ids():
+    import azgym
+    from azgym.sensing.image import ImageSensor
+    from azgym.sensing.sensor import Sensor
+
+    scenario = azgym.load_scenario("warehouse-small")
+    pose = (15.0, 10.0, 0.3)
+    frame = ImageSensor(scenario, noise_sigma=0.0).observe(*pose, np.random.default_rng(0))
+    _, truth = Sensor(scenario).observe(*pose, np.random.default_rng(0))
+    assert len(frame.measurements) == len(truth.label)
+    for k in range(len(frame.measurements)):
+        nearest = np.argmin(np.abs(np.angle(np.exp(1j * (truth.azimuth
+                                                         - frame.measurements.azimuth[k])))))
+        error = abs(math.remainder(truth.azimuth[nearest] - frame.measurements.azimuth[k],
+                                   2 * math.pi))
+        assert math.degrees(error) < 0.05
+        assert frame.labels[k] == truth.label[nearest]
+    assert frame.measurements.quality.shape == (len(frame.measurements), 3)
+
+
+def test_no_visible_beacon_gives_an_empty_frame_not_an_error():
+    import dataclasses
+
+    import azgym
+    from azgym.layout import Camera
+    from azgym.sensing.image import ImageSensor
+
+    high = dataclasses.replace(azgym.load_scenario("warehouse-small"), camera=Camera(height=9.0))
+    frame = ImageSensor(high).observe(15.0, 10.0, 0.0, np.random.default_rng(0))
+    assert len(frame.measurements) == 0 and frame.blobs == []
+
+
+def test_ransac_on_detected_blobs_localizes_to_centimetres():
+    import azgym
+    from azgym.sensing.image import ImageSensor
+
+    scenario = azgym.load_scenario("warehouse-small")
+    sensor, ransac = ImageSensor(scenario), azgym.make_localizer("ransac")
+    rng = np.random.default_rng(1)
+    errors = []
+    for x, y in [(2.0, 6.0), (15.0, 10.0), (28.0, 14.0), (8.0, 1.7), (22.0, 18.3)]:
+        frame = sensor.observe(x, y, float(rng.uniform(-3, 3)), rng)
+        estimate = ransac.localize(frame.measurements, scenario.beacons)
+        if estimate.ok:
+            errors.append(math.hypot(estimate.x - x, estimate.y - y))
+    assert len(errors) >= 4 and np.median(errors) < 0.05

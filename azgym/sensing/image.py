@@ -20,8 +20,10 @@ import cv2
 import numba
 import numpy as np
 
-from azgym.core import FloatArray
+from azgym.core import FloatArray, Measurements
+from azgym.scenario import Scenario
 from azgym.sensing.fisheye import FisheyeCamera
+from azgym.sensing.sensor import Sensor
 
 PSF_SIGMA_PX = 0.8
 """Standard deviation of the lens' point spread [px]."""
@@ -141,3 +143,82 @@ def detect(image: np.ndarray, camera: FisheyeCamera, threshold: int = 25) -> lis
                           area=int(cv2.countNonZero(patch)), peak=float(patch.max()) + threshold,
                           elongation=math.sqrt(major / minor) if minor > 1e-12 else math.inf))
     return blobs
+
+
+@dataclass(frozen=True, eq=False)
+class ImageFrame:
+    """One camera frame through the image path.
+
+    Attributes:
+        image: The 8-bit fisheye frame.
+        measurements: The detected blobs' ids (``-1``: a blob no light explains), azimuths and
+            quality (area, peak, elongation).
+        labels: For each measurement, the cause label of the light that made it (-1: none).
+        blobs: The detected blobs.
+    """
+
+    image: np.ndarray
+    measurements: Measurements
+    labels: np.ndarray
+    blobs: list[Blob]
+
+
+class ImageSensor:
+    """The scenario's camera through pixels: render the geometry's lights, detect them, identify.
+
+    With ``ids="oracle"`` a blob takes the (possibly misread) id of the light whose projected
+    centre is nearest, within ``match_px``; the centre-detection error then comes from the pixels,
+    not from eq. 1's draw.
+
+    Args:
+        scenario: The site; its ``fisheye`` is the camera.
+        noise_sigma: Sensor noise [grey levels].
+        noise_frames: Size of the bank of precomputed noise frames (drawn from ``seed``).
+        threshold: Detection threshold [grey level].
+        match_px: Largest blob-to-light distance for the oracle's identification [px].
+        seed: Seed of the noise bank.
+    """
+
+    def __init__(self, scenario: Scenario, noise_sigma: float = 2.0, noise_frames: int = 8,
+                 threshold: int = 25, match_px: float = 3.0, seed: int = 0) -> None:
+        self.scenario = scenario
+        self.camera = scenario.fisheye
+        self.threshold = threshold
+        self.match_px = match_px
+        self._sensor = Sensor(scenario)
+        self._buffers = self._sensor.new_buffers()
+        width, height = self.camera.image_size
+        bank = np.random.default_rng(seed)
+        self._noise = [bank.normal(0.0, noise_sigma, (height, width)).astype(np.float32)
+                       for _ in range(noise_frames)] if noise_sigma > 0 else [None]
+
+    def observe(self, x: float, y: float, heading: float, rng: np.random.Generator,
+                tilt: tuple[float, float] = (0.0, 0.0)) -> ImageFrame:
+        """Render the frame at pose (x, y, heading), detect its blobs and identify them."""
+        out = self._buffers
+        count = self._sensor.observe_into(x, y, heading, rng, out, tilt=tilt)
+        centre = out.true_azimuth[:count]
+        half = out.visible[:count] * out.half_width[:count]
+        elevation = out.elevation[:count]
+        noise = self._noise[int(rng.integers(len(self._noise)))]
+        image = render(self.camera, centre - half, centre + half, elevation,
+                       10.0 ** out.quality[:count], noise)
+        blobs = detect(image, self.camera, self.threshold)
+        ids = np.full(len(blobs), -1, dtype=np.int64)
+        labels = np.full(len(blobs), -1, dtype=np.int64)
+        if count and blobs:
+            c = np.cos(elevation)
+            lights = self.camera.project(np.column_stack(
+                [c * np.cos(centre), c * np.sin(centre), np.sin(elevation)]))
+            found = np.array([(blob.u, blob.v) for blob in blobs])
+            distance = np.hypot(found[:, None, 0] - lights[None, :, 0],
+                                found[:, None, 1] - lights[None, :, 1])
+            nearest = distance.argmin(axis=1)
+            matched = distance[np.arange(len(blobs)), nearest] <= self.match_px
+            ids[matched] = out.ids[nearest[matched]]
+            labels[matched] = out.label[nearest[matched]]
+        quality = np.array([(b.area, b.peak, b.elongation) for b in blobs],
+                           dtype=np.float64).reshape(-1, 3)
+        quality[~np.isfinite(quality)] = 1e6  # a one-pixel-wide blob: elongation without bound
+        measurements = Measurements(ids, np.array([b.azimuth for b in blobs]), quality)
+        return ImageFrame(image=image, measurements=measurements, labels=labels, blobs=blobs)
