@@ -139,6 +139,28 @@ class Bump:
                 and abs(y - self.center[1]) <= 0.5 * self.size[1])
 
 
+@dataclass(frozen=True)
+class Light:
+    """A light that is not a beacon: a ceiling lamp, a sunny window. The image path draws it.
+
+    It never blinks a code, so it is a blob no beacon explains (a distractor); racks hide it and
+    mirrors reflect it like any light.
+
+    Attributes:
+        name: What it is, for listings.
+        xyz: Its centre (x, y, z) [m].
+        width: Horizontal extent [m].
+        tall: Vertical extent [m] (a window is tall, a lamp is not).
+        power: Its flux as a multiple of a beacon's at the same distance.
+    """
+
+    name: str
+    xyz: tuple[float, float, float]
+    width: float
+    tall: float
+    power: float
+
+
 ROUTE_CLEARANCE = 0.7
 """A route must keep this far from every rack [m]: half a forklift's width and a margin."""
 

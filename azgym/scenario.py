@@ -25,6 +25,7 @@ from azgym.layout import (
     Bump,
     Camera,
     Faults,
+    Light,
     Rack,
     Route,
     Wall,
@@ -52,6 +53,15 @@ class Scenario:
         bounds: (x_min, y_min, x_max, y_max) of the room [m].
         beacons: The beacon map.
         error_model: The camera's azimuth error model (eq. 1-3).
+        racks: Shelf racks (occluders, mirrors if reflective).
+        walls: Walls (occluders, mirrors if reflective).
+        camera: The camera on the forklift (height, elevation limit, range).
+        faults: Decoding faults (the misread rate of ids="oracle").
+        routes: Routes the forklift drives.
+        bumps: Bumpy stretches where the camera sways.
+        fisheye: The fisheye's intrinsics, for the image path.
+        lights: Lights that are not beacons (lamps, windows): distractors on the image.
+        physical_xyz: Where the beacons really are, if some were moved after mapping.
         source: The file it was loaded from.
     """
 
@@ -68,6 +78,7 @@ class Scenario:
     routes: tuple[Route, ...] = ()
     bumps: tuple[Bump, ...] = ()
     fisheye: FisheyeCamera = FisheyeCamera()
+    lights: tuple[Light, ...] = ()
     physical_xyz: FloatArray | None = None
     source: Path | None = None
 
@@ -82,13 +93,14 @@ class Scenario:
 
 _TOP_KEYS = {"name", "description", "version", "room", "error_model", "beacon_defaults",
              "beacons", "camera", "faults", "racks", "walls", "routes",
-             "bumps", "fisheye"}
+             "bumps", "fisheye", "lights"}
 _CAMERA_KEYS = {"height", "min_elevation_deg", "max_range"}
 _FAULT_KEYS = {"misdecode_rate"}
 _RACK_KEYS = {"center", "size", "angle_deg", "height", "reflectivity"}
 _WALL_KEYS = {"start", "end", "height", "reflectivity"}
 _ROUTE_KEYS = {"name", "waypoints", "reverse", "speed"}
 _BUMP_KEYS = {"center", "size", "tilt_deg"}
+_LIGHT_KEYS = {"name", "xyz", "width", "tall", "power"}
 _FISHEYE_KEYS = {"focal_px", "principal_point", "image_size", "distortion"}
 _ROOM_KEYS = {"bounds"}
 _ERROR_KEYS = {"delta_alpha_d_deg", "center_error_px", "horizon_radius_px", "coverage"}
@@ -227,6 +239,8 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
                     bumps=tuple(_parse_bump(read, entry, k) for k, entry in enumerate(
                         _array_of_tables(read, data, "bumps"))),
                     fisheye=_parse_fisheye(read, data.get("fisheye", {})),
+                    lights=tuple(_parse_light(read, entry, k, racks) for k, entry in enumerate(
+                        _array_of_tables(read, data, "lights"))),
                     camera=_parse_camera(read, data.get("camera", {})),
                     faults=_parse_faults(read, data.get("faults", {})),
                     physical_xyz=None if np.array_equal(physical_xyz, beacons.xyz)
@@ -325,6 +339,22 @@ def _parse_bump(read: _Reader, entry: dict[str, Any], k: int) -> Bump:
         raise read.fail(f"{where}tilt_deg", f"must be < 45, got {tilt}")
     return Bump(center=(center[0], center[1]), size=(size[0], size[1]),
                 tilt=math.radians(tilt))
+
+
+def _parse_light(read: _Reader, entry: dict[str, Any], k: int,
+                 racks: tuple[Rack, ...]) -> Light:
+    where = f"lights[{k}]."
+    read.keys(entry, _LIGHT_KEYS, where)
+    xyz = read.vector(read.require(entry, "xyz", where), f"{where}xyz", 3)
+    for r, rack in enumerate(racks):
+        if rack.contains(xyz[0], xyz[1]) and xyz[2] < rack.height:
+            raise read.fail(f"{where}xyz", f"({xyz[0]:g}, {xyz[1]:g}, {xyz[2]:g}) is inside "
+                            f"racks[{r}]")
+    width = read.number(entry.get("width", 0.3), f"{where}width", positive=True)
+    return Light(name=read.text(entry.get("name", f"light {k}"), f"{where}name"),
+                 xyz=(xyz[0], xyz[1], xyz[2]), width=width,
+                 tall=read.number(entry.get("tall", width), f"{where}tall", positive=True),
+                 power=read.number(entry.get("power", 20.0), f"{where}power", positive=True))
 
 
 def _parse_fisheye(read: _Reader, table: Any) -> FisheyeCamera:

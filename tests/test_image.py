@@ -56,15 +56,18 @@ def test_an_empty_frame_has_no_blobs_and_two_lights_give_two():
 
 def test_the_image_sensor_finds_the_geometrys_lights_with_their_ids():
     import azgym
-    from azgym.sensing.image import ImageSensor
+    from azgym.sensing import geometry as G
+    from azgym.sensing.image_sensor import ImageSensor
     from azgym.sensing.sensor import Sensor
 
     scenario = azgym.load_scenario("warehouse-small")
     pose = (15.0, 10.0, 0.3)
     frame = ImageSensor(scenario, noise_sigma=0.0).observe(*pose, np.random.default_rng(0))
     _, truth = Sensor(scenario).observe(*pose, np.random.default_rng(0))
-    assert len(frame.measurements) == len(truth.label)
-    for k in range(len(frame.measurements)):
+    beacons = np.flatnonzero(frame.labels != G.DISTRACTOR)  # the lamps' blobs aside
+    assert len(beacons) == len(truth.label)
+    assert np.all(frame.measurements.ids[frame.labels == G.DISTRACTOR] == -1)
+    for k in beacons:
         nearest = np.argmin(np.abs(np.angle(np.exp(1j * (truth.azimuth
                                                          - frame.measurements.azimuth[k])))))
         error = abs(math.remainder(truth.azimuth[nearest] - frame.measurements.azimuth[k],
@@ -79,7 +82,7 @@ def test_no_visible_beacon_gives_an_empty_frame_not_an_error():
 
     import azgym
     from azgym.layout import Camera
-    from azgym.sensing.image import ImageSensor
+    from azgym.sensing.image_sensor import ImageSensor
 
     high = dataclasses.replace(azgym.load_scenario("warehouse-small"), camera=Camera(height=9.0))
     frame = ImageSensor(high).observe(15.0, 10.0, 0.0, np.random.default_rng(0))
@@ -88,7 +91,7 @@ def test_no_visible_beacon_gives_an_empty_frame_not_an_error():
 
 def test_ransac_on_detected_blobs_localizes_to_centimetres():
     import azgym
-    from azgym.sensing.image import ImageSensor
+    from azgym.sensing.image_sensor import ImageSensor
 
     scenario = azgym.load_scenario("warehouse-small")
     sensor, ransac = ImageSensor(scenario), azgym.make_localizer("ransac")

@@ -27,7 +27,9 @@ from azgym.simulate import simulate
 CAUSES = ("clean", "partial", "moved", "ghost", "misidentified", "outlier")
 """Frame causes, from harmless to harmful; a frame's cause is its worst detection's."""
 
-_LABEL_CAUSE = {G.DIRECT: 0, G.PARTIAL: 1, G.MOVED: 2, G.GHOST: 3, G.MISIDENTIFIED: 4}
+# A distractor (a lamp's blob, with no id) is harmless to a localizer that ignores unknown ids.
+_LABEL_CAUSE = {G.DIRECT: 0, G.PARTIAL: 1, G.MOVED: 2, G.GHOST: 3, G.MISIDENTIFIED: 4,
+                G.DISTRACTOR: 0}
 
 
 @dataclass(frozen=True, eq=False)

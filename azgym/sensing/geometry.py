@@ -26,7 +26,8 @@ PARTIAL = 1
 GHOST = 2
 MISIDENTIFIED = 3
 MOVED = 4
-LABEL_NAMES = ("direct", "partial", "ghost", "misidentified", "moved")
+DISTRACTOR = 5  # image path only: a blob no beacon explains (a lamp, a window, their mirrors)
+LABEL_NAMES = ("direct", "partial", "ghost", "misidentified", "moved", "distractor")
 
 _EPS = 1e-9
 _MAX_COVERS = 16

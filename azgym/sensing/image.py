@@ -7,8 +7,8 @@ bright as its flux (a ghost dimmer by the reflectivity), clipped at saturation, 
 noise. A partly covered beacon is thereby really cut on the image: only its visible part is lit.
 
 ``detect`` finds the blobs again: threshold, contours, and an intensity-weighted sub-pixel
-centroid per blob, whose azimuth comes from the camera model. With ids="oracle" each blob gets
-the id of the light that made it (and the scenario's misread rate applies upstream).
+centroid per blob, whose azimuth comes from the camera model. ``image_sensor`` puts both behind
+a camera that identifies the blobs.
 """
 
 from __future__ import annotations
@@ -20,15 +20,11 @@ import cv2
 import numba
 import numpy as np
 
-from azgym.core import FloatArray, Measurements
-from azgym.scenario import Scenario
+from azgym.core import FloatArray
 from azgym.sensing.fisheye import FisheyeCamera
-from azgym.sensing.sensor import Sensor
 
 PSF_SIGMA_PX = 0.8
 """Standard deviation of the lens' point spread [px]."""
-PEAK = 220.0
-"""Grey level of an unsaturated point source at the detection threshold's flux × 100."""
 
 
 @dataclass(frozen=True)
@@ -87,8 +83,9 @@ def _draw_strip(image, cx, cy, focal, distortion, polar, azimuth_lo, azimuth_hi,
 
 
 def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray,
-           elevation: FloatArray, flux: FloatArray, noise: FloatArray | None = None) -> np.ndarray:
-    """An 8-bit frame with one lit arc per light.
+           elevation: FloatArray, flux: FloatArray, noise: FloatArray | None = None,
+           half_tall: FloatArray | None = None) -> np.ndarray:
+    """An 8-bit frame with one lit arc (a beacon) or lit patch (a lamp, a window) per light.
 
     Args:
         camera: The fisheye.
@@ -98,6 +95,8 @@ def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray
         flux: Each light's flux over the detection threshold (>= 1).
         noise: An image-sized float32 array of sensor noise to add (grey levels), or None; a
             bank of precomputed noise frames avoids the cost of fresh Gaussian noise.
+        half_tall: Each light's angular half-extent in elevation [rad], or None for LEDs (whose
+            height the point spread hides). A light taller than a pixel is drawn as a patch.
     """
     width, height = camera.image_size
     image = np.zeros((height, width), dtype=np.float32)
@@ -105,13 +104,45 @@ def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray
     distortion = np.array(camera.distortion, dtype=np.float64)
     # Total brightness of a blob: enough that a light at the threshold peaks near 60 grey levels.
     scale = 60.0 * 2.0 * math.pi * PSF_SIGMA_PX**2
-    for lo, hi, e, f in zip(azimuth_lo, azimuth_hi, elevation, flux, strict=True):
-        _draw_strip(image, cx, cy, camera.focal_px, distortion, math.pi / 2 - e, lo, hi,
-                    scale * min(f, 40.0), PSF_SIGMA_PX)
+    tall = np.zeros(len(elevation)) if half_tall is None else half_tall
+    for lo, hi, e, f, t in zip(azimuth_lo, azimuth_hi, elevation, flux, tall, strict=True):
+        if t * camera.focal_px > 0.5:
+            _draw_patch(image, camera, lo, hi, e - t, e + t, scale * f)
+        else:
+            _draw_strip(image, cx, cy, camera.focal_px, distortion, math.pi / 2 - e, lo, hi,
+                        scale * min(f, 40.0), PSF_SIGMA_PX)
     if noise is not None:
         image += noise
     np.clip(image, 0, 255, out=image)
     return image.astype(np.uint8)
+
+
+def _draw_patch(image: np.ndarray, camera: FisheyeCamera, azimuth_lo: float, azimuth_hi: float,
+                elevation_lo: float, elevation_hi: float, total: float) -> None:
+    """Add an extended light: its outline on the image filled evenly, blurred by the spread.
+
+    Its grey level is its total brightness over its area, so a bright lamp saturates.
+    """
+    azimuths = np.linspace(azimuth_lo, azimuth_hi, 9)
+    elevations = np.concatenate([np.full(9, elevation_hi), np.full(9, elevation_lo)])
+    around = np.concatenate([azimuths, azimuths[::-1]])
+    c = np.cos(elevations)
+    outline = camera.project(np.column_stack([c * np.cos(around), c * np.sin(around),
+                                              np.sin(elevations)]))
+    area = max(1.0, float(cv2.contourArea(outline.astype(np.float32))))
+    margin = int(math.ceil(4 * PSF_SIGMA_PX))
+    height, width = image.shape
+    x0 = max(0, int(outline[:, 0].min()) - margin)
+    y0 = max(0, int(outline[:, 1].min()) - margin)
+    x1 = min(width, int(outline[:, 0].max()) + margin + 2)
+    y1 = min(height, int(outline[:, 1].max()) + margin + 2)
+    if x0 >= x1 or y0 >= y1:
+        return
+    patch = np.zeros((y1 - y0, x1 - x0), dtype=np.float32)
+    shift = 4  # sub-pixel vertices: 1/16 px
+    points = np.round((outline - (x0, y0)) * 2**shift).astype(np.int32)
+    cv2.fillPoly(patch, [points], total / area, lineType=cv2.LINE_8, shift=shift)
+    image[y0:y1, x0:x1] += cv2.GaussianBlur(patch, (0, 0), PSF_SIGMA_PX)
 
 
 def detect(image: np.ndarray, camera: FisheyeCamera, threshold: int = 25) -> list[Blob]:
@@ -143,82 +174,3 @@ def detect(image: np.ndarray, camera: FisheyeCamera, threshold: int = 25) -> lis
                           area=int(cv2.countNonZero(patch)), peak=float(patch.max()) + threshold,
                           elongation=math.sqrt(major / minor) if minor > 1e-12 else math.inf))
     return blobs
-
-
-@dataclass(frozen=True, eq=False)
-class ImageFrame:
-    """One camera frame through the image path.
-
-    Attributes:
-        image: The 8-bit fisheye frame.
-        measurements: The detected blobs' ids (``-1``: a blob no light explains), azimuths and
-            quality (area, peak, elongation).
-        labels: For each measurement, the cause label of the light that made it (-1: none).
-        blobs: The detected blobs.
-    """
-
-    image: np.ndarray
-    measurements: Measurements
-    labels: np.ndarray
-    blobs: list[Blob]
-
-
-class ImageSensor:
-    """The scenario's camera through pixels: render the geometry's lights, detect them, identify.
-
-    With ``ids="oracle"`` a blob takes the (possibly misread) id of the light whose projected
-    centre is nearest, within ``match_px``; the centre-detection error then comes from the pixels,
-    not from eq. 1's draw.
-
-    Args:
-        scenario: The site; its ``fisheye`` is the camera.
-        noise_sigma: Sensor noise [grey levels].
-        noise_frames: Size of the bank of precomputed noise frames (drawn from ``seed``).
-        threshold: Detection threshold [grey level].
-        match_px: Largest blob-to-light distance for the oracle's identification [px].
-        seed: Seed of the noise bank.
-    """
-
-    def __init__(self, scenario: Scenario, noise_sigma: float = 2.0, noise_frames: int = 8,
-                 threshold: int = 25, match_px: float = 3.0, seed: int = 0) -> None:
-        self.scenario = scenario
-        self.camera = scenario.fisheye
-        self.threshold = threshold
-        self.match_px = match_px
-        self._sensor = Sensor(scenario)
-        self._buffers = self._sensor.new_buffers()
-        width, height = self.camera.image_size
-        bank = np.random.default_rng(seed)
-        self._noise = [bank.normal(0.0, noise_sigma, (height, width)).astype(np.float32)
-                       for _ in range(noise_frames)] if noise_sigma > 0 else [None]
-
-    def observe(self, x: float, y: float, heading: float, rng: np.random.Generator,
-                tilt: tuple[float, float] = (0.0, 0.0)) -> ImageFrame:
-        """Render the frame at pose (x, y, heading), detect its blobs and identify them."""
-        out = self._buffers
-        count = self._sensor.observe_into(x, y, heading, rng, out, tilt=tilt)
-        centre = out.true_azimuth[:count]
-        half = out.visible[:count] * out.half_width[:count]
-        elevation = out.elevation[:count]
-        noise = self._noise[int(rng.integers(len(self._noise)))]
-        image = render(self.camera, centre - half, centre + half, elevation,
-                       10.0 ** out.quality[:count], noise)
-        blobs = detect(image, self.camera, self.threshold)
-        ids = np.full(len(blobs), -1, dtype=np.int64)
-        labels = np.full(len(blobs), -1, dtype=np.int64)
-        if count and blobs:
-            c = np.cos(elevation)
-            lights = self.camera.project(np.column_stack(
-                [c * np.cos(centre), c * np.sin(centre), np.sin(elevation)]))
-            found = np.array([(blob.u, blob.v) for blob in blobs])
-            distance = np.hypot(found[:, None, 0] - lights[None, :, 0],
-                                found[:, None, 1] - lights[None, :, 1])
-            nearest = distance.argmin(axis=1)
-            matched = distance[np.arange(len(blobs)), nearest] <= self.match_px
-            ids[matched] = out.ids[nearest[matched]]
-            labels[matched] = out.label[nearest[matched]]
-        quality = np.array([(b.area, b.peak, b.elongation) for b in blobs],
-                           dtype=np.float64).reshape(-1, 3)
-        quality[~np.isfinite(quality)] = 1e6  # a one-pixel-wide blob: elongation without bound
-        measurements = Measurements(ids, np.array([b.azimuth for b in blobs]), quality)
-        return ImageFrame(image=image, measurements=measurements, labels=labels, blobs=blobs)

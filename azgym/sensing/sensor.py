@@ -78,13 +78,17 @@ class Sensor:
     def observe_into(
         self, x: float, y: float, heading: float, rng: np.random.Generator, out: FrameBuffers,
         camera_height: float | None = None, tilt: tuple[float, float] = (0.0, 0.0),
+        misdecode_rate: float | None = None,
     ) -> int:
         """Like :meth:`observe`, into preallocated arrays; returns the number of detections M.
 
         Entries past M are padded (id −1). If a frame has more detections than ``out`` holds,
         the ones with the largest azimuths are dropped — size the buffers with :attr:`capacity`
-        to keep them all.
+        to keep them all. ``misdecode_rate`` overrides the scenario's (the image path's blinking
+        ids set it to 0: their misreads come from decoding).
         """
+        if misdecode_rate is None:
+            misdecode_rate = self.scenario.faults.misdecode_rate
         camera = self.scenario.camera
         cz = camera.height if camera_height is None else camera_height
         world, elevation, beacon, label, visible, brightness, halfwidth = self._collected
@@ -96,7 +100,7 @@ class Sensor:
                  visible[:count], brightness[:count], halfwidth[:count], float(heading),
                  float(tilt[0]),
                  float(tilt[1]), rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
-                 self.scenario.faults.misdecode_rate, self.scenario.beacons.ids, out.floats,
+                 misdecode_rate, self.scenario.beacons.ids, out.floats,
                  out.ints)
         return min(count, out.size)
 

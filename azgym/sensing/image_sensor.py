@@ -1,0 +1,285 @@
+"""The camera through pixels: the geometry's lights rendered on the fisheye, detected, identified.
+
+Per frame, :class:`ImageSensor`
+
+1. asks the sensor geometry (``sensor.Sensor``) what the camera sees: beacons, partly covered
+   beacons, mirror ghosts, moved beacons; and the same for the scenario's other ``lights``
+   (lamps, windows), which racks hide and mirrors reflect like any light;
+2. renders them (``image.render``): beacons as LED blobs cut to their visible part, lights as
+   patches, with noise from a bank of precomputed frames;
+3. detects blobs (``image.detect``) and turns each centroid into an azimuth;
+4. identifies each blob, in one of two modes:
+
+   * ``ids="oracle"``: the id of the light whose projected centre is nearest (within
+     ``match_px``), misread at the scenario's ``faults.misdecode_rate`` — fast, for single frames;
+   * ``ids="blink"``: every beacon blinks its id's on-off code (``blink.BlinkCode``) from its own
+     phase, and a ``blink.BlobTracker`` decodes ids from the blobs' lit/dark histories over
+     frames. Frames must then be successive (call :meth:`ImageSensor.reset` between episodes);
+     dark beacons give no blob, and misidentifications come from tracking and decoding.
+
+The ground truth of every blob — which light made it and its noise-free azimuth — travels beside
+the measurements, found by the same nearest-centre matching.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from azgym.core import BeaconMap, FloatArray, IntArray, Measurements
+from azgym.errors import InvalidInputError, unknown_name
+from azgym.layout import Faults
+from azgym.scenario import Scenario
+from azgym.sensing import geometry as G
+from azgym.sensing.blink import BlinkCode, BlobTracker
+from azgym.sensing.image import Blob, detect, render
+from azgym.sensing.sensor import FrameBuffers, Sensor
+
+ID_MODES = ("oracle", "blink")
+
+
+@dataclass(frozen=True, eq=False)
+class ImageFrame:
+    """One camera frame through the image path, its detections and their ground truth.
+
+    Attributes:
+        image: The 8-bit fisheye frame.
+        measurements: The detected blobs' ids (-1: not identified), azimuths and quality
+            (columns: area [px], peak grey level, elongation).
+        blobs: The detected blobs, index for index with the measurements.
+        labels: Cause of each blob (``geometry`` labels; ``DISTRACTOR`` for a blob no beacon
+            explains — a lamp, a window, their mirrors, noise; ``MISIDENTIFIED`` for a beacon's
+            blob with a wrong id, or a distractor with an id).
+        beacon: Map row of the beacon whose light made each blob, -1 for none.
+        mirrored: Whether each blob is a mirror image (of a beacon or a lamp).
+        true_azimuth: Noise-free azimuth of the light that made each blob (the visible
+            centroid of a partly covered beacon), NaN for none [rad].
+        in_view: Map rows of the beacons in direct view this frame, lit or dark.
+        lit: How many of the geometry's beacon detections (direct and mirrored) were lit.
+    """
+
+    image: np.ndarray
+    measurements: Measurements
+    blobs: list[Blob]
+    labels: IntArray
+    beacon: IntArray
+    mirrored: np.ndarray
+    true_azimuth: FloatArray
+    in_view: IntArray
+    lit: int
+
+
+class ImageSensor:
+    """A scenario's fisheye camera, measuring beacons from rendered pixels.
+
+    Args:
+        scenario: The site; its ``fisheye`` is the camera and its ``lights`` the distractors.
+        ids: "oracle" or "blink" (see the module's docstring).
+        noise_sigma: Sensor noise [grey levels].
+        noise_frames: Size of the bank of precomputed noise frames (drawn from ``seed``).
+        threshold: Detection threshold [grey level].
+        match_px: Largest blob-to-light distance for identifying (oracle) and for the ground
+            truth [px].
+        seed: Seed of the noise bank and of the beacons' blinking phases.
+    """
+
+    def __init__(self, scenario: Scenario, ids: str = "oracle", noise_sigma: float = 2.0,
+                 noise_frames: int = 8, threshold: int = 25, match_px: float = 3.0,
+                 seed: int = 0) -> None:
+        if ids not in ID_MODES:
+            raise unknown_name("ids", ids, ID_MODES)
+        if not (math.isfinite(noise_sigma) and noise_sigma >= 0):
+            raise InvalidInputError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
+        if not 0 < threshold < 255:
+            raise InvalidInputError(f"threshold must be in (0, 255), got {threshold!r}")
+        if noise_frames < 1:
+            raise InvalidInputError(f"noise_frames must be >= 1, got {noise_frames!r}")
+        self.scenario = scenario
+        self.camera = scenario.fisheye
+        self.ids = ids
+        self.threshold = threshold
+        self.match_px = match_px
+        self._sensor = Sensor(scenario)
+        self._buffers = self._sensor.new_buffers()
+        bank = np.random.default_rng(seed)
+        width, height = self.camera.image_size
+        self._noise = [bank.normal(0.0, noise_sigma, (height, width)).astype(np.float32)
+                       for _ in range(noise_frames)] if noise_sigma > 0 else [None]
+        self._lights = _LightSource(scenario)
+        self._frame = 0
+        if ids == "blink":
+            self.code = BlinkCode.for_ids(scenario.beacons.ids)
+            self._codes = np.array([self.code.frames(int(i)) for i in scenario.beacons.ids])
+            self.phases = bank.integers(0, self.code.period, len(scenario.beacons))
+            self.tracker = BlobTracker(self.code, self.camera.principal_point)
+
+    def reset(self) -> None:
+        """Start a new sequence of frames (blinking mode: forget the tracks)."""
+        self._frame = 0
+        if self.ids == "blink":
+            self.tracker.reset()
+
+    def code_position(self, rows: IntArray) -> IntArray:
+        """Where in its codeword each beacon (map rows) is at the coming frame (blinking mode)."""
+        return (self._frame + self.phases[rows]) % self.code.period
+
+    def observe(self, x: float, y: float, heading: float, rng: np.random.Generator,
+                tilt: tuple[float, float] = (0.0, 0.0)) -> ImageFrame:
+        """Render the frame at pose (x, y, heading), detect its blobs and identify them.
+
+        Args:
+            x: Camera position, east [m].
+            y: Camera position, north [m].
+            heading: Camera heading [rad].
+            rng: The frame's random draws (misreads in oracle mode, the noise frame).
+            tilt: (pitch, roll) of the camera's axis [rad].
+        """
+        blink = self.ids == "blink"
+        out = self._buffers
+        count = self._sensor.observe_into(x, y, heading, rng, out, tilt=tilt,
+                                          misdecode_rate=0.0 if blink else None)
+        lit = np.ones(count, dtype=bool)
+        if blink:
+            rows = out.beacon[:count]
+            lit = self._codes[rows, self.code_position(rows)]
+        beacons = _Lights.from_buffers(out, count, lit)
+        lights = self._lights.observe(x, y, heading, rng, tilt)
+        every = beacons.join(lights)
+        noise = self._noise[int(rng.integers(len(self._noise)))]
+        image = render(self.camera, every.azimuth - every.half_width,
+                       every.azimuth + every.half_width, every.elevation, every.flux, noise,
+                       every.half_tall)
+        blobs = detect(image, self.camera, self.threshold)
+        pixels = np.array([(b.u, b.v) for b in blobs], dtype=np.float64).reshape(-1, 2)
+        source = self._match(pixels, every)
+        from_beacon = (source >= 0) & (source < len(beacons.azimuth))
+        labels = np.full(len(blobs), G.DISTRACTOR, dtype=np.int64)
+        beacon = np.full(len(blobs), -1, dtype=np.int64)
+        true_azimuth = np.full(len(blobs), np.nan)
+        labels[from_beacon] = beacons.label[source[from_beacon]]
+        mirrored = np.zeros(len(blobs), dtype=bool)
+        mirrored[source >= 0] = every.mirrored[source[source >= 0]]
+        beacon[from_beacon] = beacons.beacon[source[from_beacon]]
+        true_azimuth[source >= 0] = every.azimuth[source[source >= 0]]
+        if blink:
+            ids, _ = self.tracker.update(pixels)
+            true_ids = np.where(beacon >= 0, self.scenario.beacons.ids[np.maximum(beacon, 0)],
+                                -1)
+            labels[(ids >= 0) & (ids != true_ids)] = G.MISIDENTIFIED
+        else:
+            ids = np.full(len(blobs), -1, dtype=np.int64)
+            ids[from_beacon] = beacons.ids[source[from_beacon]]
+        self._frame += 1
+        quality = np.array([(b.area, b.peak, b.elongation) for b in blobs],
+                           dtype=np.float64).reshape(-1, 3)
+        quality[~np.isfinite(quality)] = 1e6  # a one-pixel-wide blob: elongation without bound
+        measurements = Measurements(ids, np.array([b.azimuth for b in blobs]), quality)
+        return ImageFrame(image=image, measurements=measurements, blobs=blobs, labels=labels,
+                          beacon=beacon, mirrored=mirrored, true_azimuth=true_azimuth,
+                          in_view=out.beacon[:count][out.label[:count] != G.GHOST].copy(),
+                          lit=int(lit.sum()))
+
+    def _match(self, pixels: FloatArray, lights: _Lights) -> IntArray:
+        """For each blob, the light whose projected centre is nearest within its reach, or -1.
+
+        A light's reach is ``match_px`` plus its own half-size on the image (a window's blob
+        is as big as the window).
+        """
+        source = np.full(len(pixels), -1, dtype=np.int64)
+        if not len(pixels) or not len(lights.azimuth):
+            return source
+        c = np.cos(lights.elevation)
+        centres = self.camera.project(np.column_stack(
+            [c * np.cos(lights.azimuth), c * np.sin(lights.azimuth), np.sin(lights.elevation)]))
+        radius = np.hypot(centres[:, 0] - self.camera.principal_point[0],
+                          centres[:, 1] - self.camera.principal_point[1])
+        reach = self.match_px + np.maximum(radius * lights.half_width,
+                                           self.camera.focal_px * lights.half_tall)
+        distance = np.hypot(pixels[:, None, 0] - centres[None, :, 0],
+                            pixels[:, None, 1] - centres[None, :, 1])
+        nearest = distance.argmin(axis=1)
+        close = distance[np.arange(len(pixels)), nearest] <= reach[nearest]
+        source[close] = nearest[close]
+        return source
+
+
+@dataclass(frozen=True)
+class _Lights:
+    """The lights of one frame as the renderer takes them (camera-frame angles)."""
+
+    azimuth: FloatArray
+    half_width: FloatArray
+    elevation: FloatArray
+    half_tall: FloatArray
+    flux: FloatArray
+    ids: IntArray
+    beacon: IntArray
+    label: IntArray
+    mirrored: np.ndarray
+
+    @classmethod
+    def from_buffers(cls, out: FrameBuffers, count: int, keep: np.ndarray) -> _Lights:
+        """The lit detections of a frame the geometry wrote into ``out`` (beacons: no height)."""
+        visible = out.visible[:count][keep]
+        return cls(azimuth=out.true_azimuth[:count][keep],
+                   half_width=visible * out.half_width[:count][keep],
+                   elevation=out.elevation[:count][keep], half_tall=np.zeros(visible.size),
+                   flux=10.0 ** out.quality[:count][keep], ids=out.ids[:count][keep],
+                   beacon=out.beacon[:count][keep], label=out.label[:count][keep],
+                   mirrored=out.label[:count][keep] == G.GHOST)
+
+    def join(self, other: _Lights) -> _Lights:
+        """These lights, then the other's."""
+        return _Lights(*(np.concatenate([getattr(self, f.name), getattr(other, f.name)])
+                         for f in dataclasses.fields(self)))
+
+
+class _LightSource:
+    """The scenario's lamps and windows through the same geometry as the beacons.
+
+    The geometry sees them as beacons of a private map, with the range stretched to the
+    brightest light's (a light of power P reaches the threshold at sqrt(P) times a beacon's
+    range); each light's flux is then scaled back by its own power.
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        lights = scenario.lights
+        self._power = np.array([light.power for light in lights])
+        self._tall = np.array([light.tall / light.width for light in lights])
+        self._sensor = None
+        if not lights:
+            return
+        strongest = float(self._power.max())
+        as_beacons = BeaconMap(np.arange(len(lights)), np.array([light.xyz for light in lights]),
+                               np.array([light.width for light in lights]))
+        camera = dataclasses.replace(scenario.camera,
+                                     max_range=scenario.camera.max_range * math.sqrt(strongest))
+        self._sensor = Sensor(dataclasses.replace(scenario, beacons=as_beacons, camera=camera,
+                                                  faults=Faults(0.0), physical_xyz=None))
+        self._buffers = self._sensor.new_buffers()
+        self._scale = self._power / strongest
+
+    def observe(self, x: float, y: float, heading: float, rng: np.random.Generator,
+                tilt: tuple[float, float]) -> _Lights:
+        """The lights the camera sees from this pose (flux >= the detection threshold)."""
+        if self._sensor is None:
+            empty = np.zeros(0)
+            none = np.zeros(0, dtype=np.int64)
+            return _Lights(empty, empty, empty, empty, empty, none, none, none,
+                           np.zeros(0, dtype=bool))
+        out = self._buffers
+        count = self._sensor.observe_into(x, y, heading, rng, out, tilt=tilt)
+        rows = out.beacon[:count]
+        flux = 10.0 ** out.quality[:count] * self._scale[rows]
+        keep = flux >= 1.0
+        half_width = out.visible[:count] * out.half_width[:count]
+        return _Lights(azimuth=out.true_azimuth[:count][keep], half_width=half_width[keep],
+                       elevation=out.elevation[:count][keep],
+                       half_tall=(out.half_width[:count] * self._tall[rows])[keep],
+                       flux=flux[keep], ids=np.full(int(keep.sum()), -1, dtype=np.int64),
+                       beacon=np.full(int(keep.sum()), -1, dtype=np.int64),
+                       label=np.full(int(keep.sum()), G.DISTRACTOR, dtype=np.int64),
+                       mirrored=(out.label[:count] == G.GHOST)[keep])

@@ -1,0 +1,1 @@
+"""Studies of azgym's models against what they model (``azgym study ...``)."""
