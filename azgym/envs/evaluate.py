@@ -16,10 +16,14 @@ from azgym.metrics import summarize_errors
 
 
 def measurements_from_observation(observation: dict[str, np.ndarray]) -> Measurements:
-    """The detections of a Localize observation (its valid entries) as Measurements."""
+    """The detections of a Localize observation (its valid entries) as Measurements.
+
+    With the image sensor, each blob's (area, peak, elongation) is the measurement's quality.
+    """
     valid = observation["valid"].astype(bool)
+    quality = observation["blob"][valid].astype(np.float64) if "blob" in observation else None
     return Measurements(observation["ids"][valid],
-                        observation["azimuth"][valid].astype(np.float64))
+                        observation["azimuth"][valid].astype(np.float64), quality)
 
 
 def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episodes: int = 1,
@@ -44,6 +48,10 @@ def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episode
         raise InvalidInputError(
             f"evaluate needs a Localize environment, got {type(inner).__name__}"
         )
+    if inner.observation == "image":
+        raise InvalidInputError(
+            'evaluate feeds a localizer measurements; this environment observes pixels '
+            '(observation="image"): use sensor="image" for detected measurements')
     agent = make_localizer(localizer) if isinstance(localizer, str) else localizer
     beacons = inner.scenario.beacons
     position, heading, ok, total = [], [], [], 0.0

@@ -13,8 +13,15 @@ from azgym.core import wrap_angle
 from azgym.envs.common import check_render_mode, reward_weights
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.scenario import Scenario, load_scenario
+from azgym.sensing.image_sensor import ID_MODES, ImageFrame, ImageSensor
 from azgym.sensing.sensor import Sensor
 from azgym.simulate import camera_trajectory, sway
+
+
+def _copy(observation: dict[str, np.ndarray] | np.ndarray) -> dict[str, np.ndarray] | np.ndarray:
+    if isinstance(observation, dict):
+        return {key: value.copy() for key, value in observation.items()}
+    return observation.copy()
 
 
 class LocalizeEnv(gym.Env):
@@ -49,6 +56,15 @@ class LocalizeEnv(gym.Env):
     | ``beacon_ids`` | ``Box(min id, max id, (N,), int64)`` | the beacon map: ids (constant) |
     | ``beacon_xyz`` | ``Box((3N,), float32)`` | the map: x, y, z of each beacon in turn [m] |
 
+    With ``sensor="image"`` the measurements come from the fisheye image path
+    (:mod:`azgym.sensing.image_sensor`): beacons rendered, detected from pixels and identified
+    (``ids="oracle"``, or ``ids="blink"``: decoded from the beacons' blinking over successive
+    frames). ``quality`` is then replaced by ``blob``, ``Box(0, inf, (K, 3), float32)``: each
+    blob's area [px], peak grey level and elongation. Blobs past K are dropped (the list is
+    sorted by azimuth). With ``observation="image"`` the observation is the frame itself,
+    ``Box(0, 255, (height, width, 1), uint8)``, whatever ``sensor`` says; the map is
+    ``env.unwrapped.scenario.beacons``.
+
     ## Rewards
 
     Named terms, each weighted by the argument of the same name, summed, and reported in
@@ -64,12 +80,15 @@ class LocalizeEnv(gym.Env):
     ## Episode End
 
     Terminated after the answer to the route's last frame (or ``episode_length`` frames for a
-    scenario without routes). There is no truncation of its own.
+    scenario without routes). There is no truncation of its own. Frames are
+    ``camera_rate_hz`` apart along the route: 10 Hz, or 30 Hz with ``ids="blink"`` (a
+    frame-rate on-off code needs small blob motion between frames; see ``azgym study ids``).
 
     ## Arguments
 
     ``gym.make("azgym/Localize-WarehouseSmall-v0", scenario=..., route=None, max_detections=32,
-    position_error=1.0, heading_error=0.1, episode_length=200, render_mode=None)``.
+    position_error=1.0, heading_error=0.1, episode_length=200, sensor="geometry", ids="oracle",
+    observation="measurements", camera_rate_hz=None, render_mode=None)``.
     ``scenario`` accepts a shipped name or the path of a user's TOML file.
 
     ``info`` holds the true ``pose`` of the answered frame and, for the returned observation,
@@ -98,9 +117,14 @@ class LocalizeEnv(gym.Env):
         position_error: float = 1.0,
         heading_error: float = 0.1,
         episode_length: int = 200,
+        sensor: str = "geometry",
+        ids: str = "oracle",
+        observation: str = "measurements",
+        camera_rate_hz: float | None = None,
         render_mode: str | None = None,
     ) -> None:
         self.scenario = load_scenario(scenario)
+        self._check_sensor_options(sensor, ids, observation, camera_rate_hz)
         names = [r.name for r in self.scenario.routes]
         if route is not None and route not in names:
             raise unknown_name("route", route, names)
@@ -114,8 +138,14 @@ class LocalizeEnv(gym.Env):
                                       heading_error=heading_error)
         self.episode_length = episode_length
         self.render_mode = render_mode
+        self.sensor = "image" if observation == "image" else sensor
+        self.observation = observation
+        self.camera_rate_hz = camera_rate_hz or (30.0 if ids == "blink" else 10.0)
         self._sensor = Sensor(self.scenario)
         self._buffers = self._sensor.new_buffers(max_detections)
+        self.image_sensor = (ImageSensor(self.scenario, ids=ids) if self.sensor == "image"
+                             else None)
+        self.image_frame: ImageFrame | None = None
         self._trajectories: dict[str, np.ndarray] = {}
         beacons = self.scenario.beacons
         ids = beacons.ids
@@ -126,17 +156,24 @@ class LocalizeEnv(gym.Env):
         z_low = float(min(0.0, beacons.xyz[:, 2].min()))
         z_high = float(beacons.xyz[:, 2].max()) + 1.0
         span = max(abs(v) for v in self.scenario.bounds) + 100.0
+        width, height = self.scenario.fisheye.image_size
+        blob_high = np.tile(np.array([width * height, 255.0, 1e6], dtype=np.float32),
+                            (max_detections, 1))  # area, peak, elongation (1e6: a 1-px line)
+        quality = (spaces.Box(np.zeros_like(blob_high), blob_high, dtype=np.float32)
+                   if self.image_sensor else spaces.Box(0.0, 10.0, (max_detections,), np.float32))
         self.observation_space = spaces.Dict({
             "ids": spaces.Box(-1, int(ids.max()), (max_detections,), np.int64),
             "azimuth": spaces.Box(-math.pi, math.pi, (max_detections,), np.float32),
             "valid": spaces.MultiBinary(max_detections),
-            "quality": spaces.Box(0.0, 10.0, (max_detections,), np.float32),
+            "blob" if self.image_sensor else "quality": quality,
             "beacon_ids": spaces.Box(int(ids.min()), int(ids.max()), (len(ids),), np.int64),
             "beacon_xyz": spaces.Box(
                 low=np.tile(np.array([-span, -span, z_low], dtype=np.float32), len(ids)),
                 high=np.tile(np.array([span, span, z_high], dtype=np.float32), len(ids)),
                 dtype=np.float32),
         })
+        if observation == "image":
+            self.observation_space = spaces.Box(0, 255, (height, width, 1), np.uint8)
         self._beacon_ids = ids.astype(np.int64)
         self._beacon_xyz = beacons.xyz.astype(np.float32).ravel()
         self._poses = np.zeros((1, 3))
@@ -149,7 +186,8 @@ class LocalizeEnv(gym.Env):
     def _trajectory(self, name: str) -> np.ndarray:
         if name not in self._trajectories:
             route = next(r for r in self.scenario.routes if r.name == name)
-            self._trajectories[name] = camera_trajectory(self.scenario, route)
+            self._trajectories[name] = camera_trajectory(self.scenario, route,
+                                                         camera_rate_hz=self.camera_rate_hz)
         return self._trajectories[name]
 
     def _random_poses(self) -> np.ndarray:
@@ -183,6 +221,8 @@ class LocalizeEnv(gym.Env):
             self._poses = self._random_poses()
         self._frame = 0
         self._estimate = None
+        if self.image_sensor is not None:
+            self.image_sensor.reset()
         observation = self._observe()
         if self.render_mode == "human":
             self.render()
@@ -203,7 +243,7 @@ class LocalizeEnv(gym.Env):
             self._frame += 1
             observation = self._observe()
         else:
-            observation = {key: value.copy() for key, value in self._observation.items()}
+            observation = _copy(self._observation)
         info = self._frame_info()
         info.update(pose=answered, rewards=rewards, position_error=position_error,
                     heading_error=heading_error)
@@ -213,10 +253,30 @@ class LocalizeEnv(gym.Env):
 
     # -- helpers -------------------------------------------------------------------------------
 
-    def _observe(self) -> dict[str, np.ndarray]:
+    def _check_sensor_options(self, sensor: str, ids: str, observation: str,
+                              camera_rate_hz: float | None) -> None:
+        if sensor not in ("geometry", "image"):
+            raise unknown_name("sensor", sensor, ("geometry", "image"))
+        if ids not in ID_MODES:
+            raise unknown_name("ids", ids, ID_MODES)
+        if observation not in ("measurements", "image"):
+            raise unknown_name("observation", observation, ("measurements", "image"))
+        if ids == "blink" and sensor != "image" and observation != "image":
+            raise InvalidInputError('ids="blink" needs the image path: sensor="image"')
+        if ids == "blink" and not self.scenario.routes:
+            raise InvalidInputError(
+                f'ids="blink" decodes ids over successive frames of a route, and scenario '
+                f'{self.scenario.name!r} has no routes')
+        if camera_rate_hz is not None and not (math.isfinite(camera_rate_hz)
+                                               and camera_rate_hz > 0):
+            raise InvalidInputError(f"camera_rate_hz must be > 0, got {camera_rate_hz!r}")
+
+    def _observe(self) -> dict[str, np.ndarray] | np.ndarray:
         x, y, heading = self._poses[self._frame]
         out = self._buffers
         tilt = sway(self.scenario, x, y, self.np_random)
+        if self.image_sensor is not None:
+            return self._observe_image(x, y, heading, tilt)
         self._sensor.observe_into(x, y, heading, self.np_random, out, tilt=tilt)
         valid = out.ids >= 0
         self._observation = {
@@ -229,10 +289,43 @@ class LocalizeEnv(gym.Env):
         }
         return self._observation
 
+    def _observe_image(self, x: float, y: float, heading: float,
+                       tilt: tuple[float, float]) -> dict[str, np.ndarray] | np.ndarray:
+        frame = self.image_sensor.observe(x, y, heading, self.np_random, tilt)
+        self.image_frame = frame
+        if self.observation == "image":
+            self._observation = frame.image[:, :, None]
+            return self._observation
+        size = self.max_detections
+        order = np.argsort(frame.measurements.azimuth, kind="stable")[:size]
+        count = len(order)
+        ids = np.full(size, -1, dtype=np.int64)
+        azimuth = np.zeros(size, dtype=np.float32)
+        blob = np.zeros((size, 3), dtype=np.float32)
+        ids[:count] = frame.measurements.ids[order]
+        azimuth[:count] = frame.measurements.azimuth[order]
+        blob[:count] = frame.measurements.quality[order]
+        valid = np.zeros(size, dtype=np.int8)
+        valid[:count] = 1
+        self._shown = order
+        self._observation = {"ids": ids, "azimuth": azimuth, "valid": valid, "blob": blob,
+                             "beacon_ids": self._beacon_ids.copy(),
+                             "beacon_xyz": self._beacon_xyz.copy()}
+        return self._observation
+
     def _frame_info(self) -> dict[str, Any]:
-        return {"frame": self._frame, "route": self._route_name,
-                "labels": self._buffers.label.copy(), "true_beacons": self._buffers.beacon.copy(),
-                "true_pose": self.true_pose()}
+        if self.image_frame is not None:
+            frame, size = self.image_frame, self.max_detections
+            order = (self._shown if self.observation == "measurements"
+                     else np.argsort(frame.measurements.azimuth, kind="stable")[:size])
+            labels = np.full(size, -1, dtype=np.int64)
+            beacons = np.full(size, -1, dtype=np.int64)
+            labels[:len(order)] = frame.labels[order]
+            beacons[:len(order)] = frame.beacon[order]
+        else:
+            labels, beacons = self._buffers.label.copy(), self._buffers.beacon.copy()
+        return {"frame": self._frame, "route": self._route_name, "labels": labels,
+                "true_beacons": beacons, "true_pose": self.true_pose()}
 
     def _check_action(self, action: Any) -> tuple[float, float, float]:
         estimate = np.asarray(action)
@@ -272,7 +365,10 @@ class LocalizeEnv(gym.Env):
         return self._estimate
 
     def render(self) -> np.ndarray | None:
-        """Draw the top-down view (see :mod:`azgym.envs.render`)."""
+        """Draw the top-down view, and the camera's frame beside it with the image sensor.
+
+        See :mod:`azgym.envs.render`.
+        """
         from azgym.envs.render import render_frame
 
         return render_frame(self, self.render_mode)

@@ -1,4 +1,13 @@
-"""Top-down drawings of the environments (OpenCV): racks, walls, beacons, the forklift, rays."""
+"""Drawings of the environments (OpenCV): the top-down view, and the camera's frame beside it.
+
+The top-down view shows racks, walls (reflective ones in gold), beacons, lamps and windows
+(yellow diamonds), the true pose, the last
+estimate and a ray per detection, coloured by its cause. With the image sensor, the fisheye
+frame is drawn on the right with every detected blob ringed: green if the last estimate explains
+it (its id is a map beacon whose azimuth from the estimated pose is within the error model's
+tolerance), red if it does not (an outlier to that estimate), yellow if it has no id, blue if
+there is no estimate yet.
+"""
 
 from __future__ import annotations
 
@@ -21,6 +30,11 @@ MIRROR = (200, 160, 40)
 BEACON = (40, 40, 200)
 TRUE_POSE = (30, 140, 30)
 ESTIMATE = (200, 60, 200)
+LIGHT = (0, 190, 240)
+ACCEPTED = (60, 200, 60)
+REJECTED = (60, 60, 230)
+UNIDENTIFIED = (0, 200, 230)
+IDENTIFIED = (230, 160, 60)
 RAY = {G.DIRECT: (80, 180, 80), G.PARTIAL: (40, 170, 230), G.GHOST: (40, 40, 220),
        G.MISIDENTIFIED: (160, 40, 160), G.MOVED: (20, 120, 240), G.DISTRACTOR: (120, 120, 120)}
 
@@ -101,19 +115,72 @@ def draw(env: Any) -> np.ndarray:
         colour = MIRROR if wall.reflectivity > 0 else WALL
         cv2.line(image, canvas.px(*wall.start), canvas.px(*wall.end), colour, 3, cv2.LINE_AA)
     x, y, heading = env.true_pose()
-    buffers = env._buffers
-    for k in np.flatnonzero(buffers.ids >= 0):
-        azimuth = heading + float(buffers.true_azimuth[k])
+    frame = getattr(env, "image_frame", None)
+    if frame is not None:
+        shown = np.isfinite(frame.true_azimuth)
+        rays = zip(frame.true_azimuth[shown], frame.labels[shown], strict=True)
+    else:
+        buffers = env._buffers
+        shown = buffers.ids >= 0
+        rays = zip(buffers.true_azimuth[shown], buffers.label[shown], strict=True)
+    for camera_azimuth, label in rays:
+        azimuth = heading + float(camera_azimuth)
         end = (x + 60.0 * math.cos(azimuth), y + 60.0 * math.sin(azimuth))
-        colour = RAY.get(int(buffers.label[k]), (0, 0, 0))
+        colour = RAY.get(int(label), (0, 0, 0))
         cv2.line(image, canvas.px(x, y), canvas.px(*end), colour, 1, cv2.LINE_AA)
+    for light in scenario.lights:
+        cv2.drawMarker(image, canvas.px(*light.xyz[:2]), LIGHT, cv2.MARKER_DIAMOND, 12, 2)
     for bx, by, _ in scenario.beacon_positions:
         cv2.circle(image, canvas.px(bx, by), 4, BEACON, -1, cv2.LINE_AA)
     _arrow(canvas, x, y, heading, TRUE_POSE)
     estimate = env.last_estimate()
     if estimate is not None:
         _arrow(canvas, *estimate, ESTIMATE)
+    if frame is not None:
+        image = np.hstack([image, _camera_panel(scenario, frame, estimate, image.shape[0])])
     return image[:, :, ::-1].copy()  # BGR drawing colours to RGB
+
+
+def _camera_panel(scenario: Any, frame: Any, estimate: tuple[float, float, float] | None,
+                  height: int) -> np.ndarray:
+    """The fisheye frame, scaled to ``height``, with each blob ringed by its status."""
+    panel = cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
+    scale = height / panel.shape[0]
+    panel = cv2.resize(panel, (int(round(panel.shape[1] * scale)), height),
+                       interpolation=cv2.INTER_AREA)
+    for blob, status in zip(frame.blobs, blob_status(scenario, frame, estimate), strict=True):
+        centre = (int(round(blob.u * scale)), int(round(blob.v * scale)))
+        cv2.circle(panel, centre, max(6, int(round(math.sqrt(blob.area) * scale))),
+                   status, 1, cv2.LINE_AA)
+    return panel
+
+
+def blob_status(scenario: Any, frame: Any,
+                estimate: tuple[float, float, float] | None) -> list[tuple[int, int, int]]:
+    """Each blob's ring colour: accepted, rejected by the estimate, unidentified, or identified.
+
+    A blob is accepted when its id is a map beacon and its azimuth is within the error model's
+    tolerance (eq. 25) of the azimuth of that beacon seen from the estimated pose.
+    """
+    beacons = scenario.beacons
+    rows = {int(beacon_id): k for k, beacon_id in enumerate(beacons.ids)}
+    colours = []
+    for beacon_id, azimuth in zip(frame.measurements.ids, frame.measurements.azimuth,
+                                  strict=True):
+        row = rows.get(int(beacon_id))
+        if row is None:
+            colours.append(UNIDENTIFIED)
+        elif estimate is None:
+            colours.append(IDENTIFIED)
+        else:
+            ex, ey, eh = estimate
+            dx, dy = beacons.xyz[row, 0] - ex, beacons.xyz[row, 1] - ey
+            predicted = math.atan2(dy, dx) - eh
+            tolerance = float(scenario.error_model.tolerance(math.hypot(dx, dy),
+                                                             beacons.width[row]))
+            error = abs(math.remainder(float(azimuth) - predicted, 2 * math.pi))
+            colours.append(ACCEPTED if error <= tolerance else REJECTED)
+    return colours
 
 
 def _arrow(canvas: _Canvas, x: float, y: float, heading: float, colour: tuple[int, int, int]):
