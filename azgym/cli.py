@@ -1,6 +1,8 @@
 """The ``azgym`` command.
 
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
+azgym study error-model [--scenario S] [--frames N] [--noise SIGMA] [--calibration-px PX]
+azgym study ids [--scenario S] [--rate HZ] [--noise SIGMA]
 azgym scenarios
 azgym localizers
 """
@@ -106,6 +108,50 @@ def _cores() -> int:
     return max(1, os.cpu_count() or 1)
 
 
+def _study_error_model(args: argparse.Namespace) -> int:
+    from azgym.study.error_model import run
+
+    summary = run(args.scenario, frames=args.frames, noise_sigma=args.noise,
+                  calibration_px=args.calibration_px, seed=args.seed, out=Path(args.out),
+                  figures=not args.no_figures)
+    centre, azimuth = summary["centre_error_px"], summary["azimuth_error_deg"]
+    calibrated = summary["azimuth_error_calibrated_deg"]
+    print(f"{summary['scenario']}: {summary['detections']} beacon detections in "
+          f"{args.frames} frames (noise {args.noise} grey levels)")
+    print(f"  eq. 1 model: centre error ±{summary['model_center_error_px']:.2f} px, "
+          f"Δα_d = {summary['model_delta_alpha_d_deg']:.3f}°")
+    print(f"  centre error [px]:         mean {centre['mean']:.3f}, p95 {centre['p95']:.3f}, "
+          f"max {centre['max']:.2f}")
+    print(f"  azimuth error [deg]:       mean {azimuth['mean']:.4f}, p95 {azimuth['p95']:.4f}; "
+          f"{100 * summary['azimuth_error_within_model']:.1f} % within Δα_d")
+    print(f"  with the principal point {args.calibration_px:g} px off: mean "
+          f"{calibrated['mean']:.3f}, p95 {calibrated['p95']:.3f}; "
+          f"{100 * summary['calibrated_within_model']:.1f} % within Δα_d")
+    if summary["coverage_over_eq2_bound"]:
+        print(f"  coverage error / eq. 2 bound ({summary['partly_covered']} partly covered): "
+              f"median {summary['coverage_over_eq2_bound']['median']:.2f}, max "
+              f"{summary['coverage_over_eq2_bound']['max']:.2f}")
+    print(f"Wrote {args.out}/error_model.json" + ("" if args.no_figures else
+                                                  f" and {args.out}/error_model.png"))
+    return 0
+
+
+def _study_ids(args: argparse.Namespace) -> int:
+    from azgym.study.identification import measure_identification
+
+    stats = measure_identification(args.scenario, camera_rate_hz=args.rate,
+                                   noise_sigma=args.noise, seed=args.seed)
+    print(f"{stats.scenario}, every route, camera {stats.camera_rate_hz:g} Hz, noise "
+          f"{stats.noise_sigma:g} grey levels: {stats.frames} frames")
+    print(f"  beacons in view for a whole codeword: {stats.eligible} blobs; right id "
+          f"{100 * stats.correct_share:.2f} %, no id "
+          f"{100 * stats.unidentified / max(1, stats.eligible):.2f} %, wrong id "
+          f"{100 * stats.misidentified / max(1, stats.eligible):.2f} %")
+    print(f"  every blob with an id: {stats.with_id}; wrong {stats.wrong_id} "
+          f"({100 * stats.misdecode_rate:.2f} %)")
+    return 0
+
+
 def _scenarios(_args: argparse.Namespace) -> int:
     from azgym.scenario import list_scenarios, load_scenario
 
@@ -170,6 +216,26 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("--seed", type=int, default=2021, help="seed of every random draw")
     paper.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     paper.set_defaults(handler=_reproduce_paper)
+
+    study = commands.add_parser("study", help="check azgym's models against what they model")
+    studies = study.add_subparsers(dest="study", required=True)
+    model = studies.add_parser("error-model", help="azimuth errors of beacons detected from "
+                               "pixels beside the paper's eq. 1-3")
+    model.add_argument("--scenario", default="warehouse-small")
+    model.add_argument("--frames", type=int, default=600, help="random poses")
+    model.add_argument("--noise", type=float, default=2.0, help="sensor noise [grey levels]")
+    model.add_argument("--calibration-px", type=float, default=1.0,
+                       help="principal point error for the calibrated comparison [px]")
+    model.add_argument("--seed", type=int, default=0)
+    model.add_argument("--out", default="results/study", help="output folder")
+    model.add_argument("--no-figures", action="store_true")
+    model.set_defaults(handler=_study_error_model)
+    ids = studies.add_parser("ids", help="how well blinking ids decode along the routes")
+    ids.add_argument("--scenario", default="warehouse-small")
+    ids.add_argument("--rate", type=float, default=30.0, help="camera frames per second")
+    ids.add_argument("--noise", type=float, default=2.0, help="sensor noise [grey levels]")
+    ids.add_argument("--seed", type=int, default=0)
+    ids.set_defaults(handler=_study_ids)
 
     commands.add_parser("scenarios", help="list the shipped scenarios").set_defaults(
         handler=_scenarios)

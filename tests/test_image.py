@@ -103,3 +103,49 @@ def test_ransac_on_detected_blobs_localizes_to_centimetres():
         if estimate.ok:
             errors.append(math.hypot(estimate.x - x, estimate.y - y))
     assert len(errors) >= 4 and np.median(errors) < 0.05
+
+
+def test_a_lamp_is_drawn_as_a_patch_centred_where_it_projects():
+    azimuth, elevation, half = math.radians(-60.0), math.radians(50.0), math.radians(3.0)
+    image = render(CAMERA, np.array([azimuth - half]), np.array([azimuth + half]),
+                   np.array([elevation]), np.array([300.0]), half_tall=np.array([half]))
+    [blob] = detect(image, CAMERA)
+    centre = CAMERA.project([direction(azimuth, elevation)])[0]
+    assert math.hypot(blob.u - centre[0], blob.v - centre[1]) < 0.5
+    assert blob.peak == 255 and blob.area > 50  # a bright, extended light saturates
+
+
+def test_lamps_and_windows_are_blobs_no_beacon_explains():
+    import azgym
+    from azgym.sensing import geometry as G
+    from azgym.sensing.image_sensor import ImageSensor
+
+    scenario = azgym.load_scenario("warehouse-small")
+    assert [light.name for light in scenario.lights].count("ceiling lamp") == 2
+    frame = ImageSensor(scenario).observe(15.0, 10.0, 0.3, np.random.default_rng(0))
+    lamps = frame.labels == G.DISTRACTOR
+    assert lamps.any() and (frame.measurements.ids[lamps] == -1).all()
+    # A lamp's blob has no beacon, but its light's true azimuth.
+    assert (frame.beacon[lamps] == -1).all() and np.isfinite(frame.true_azimuth[lamps]).all()
+    # The lamps' blobs are bigger than the beacons' (quality column 0: area).
+    area = frame.measurements.quality[:, 0]
+    assert np.median(area[lamps]) > 2 * np.median(area[~lamps])
+
+
+def test_the_error_model_study_measures_what_eq_1_and_2_assume():
+    import azgym
+    from azgym.study.error_model import measure_detections, summarize
+
+    scenario = azgym.load_scenario("warehouse-small")
+    errors = measure_detections(scenario, frames=120, calibration_px=1.0, seed=1)
+    summary = summarize(scenario, errors, 1.0)
+    # Centroids of ideal blobs at sigma = 2 grey levels are far better than eq. 1's 1 px ...
+    assert summary["centre_error_px"]["p95"] < 0.2
+    assert summary["azimuth_error_within_model"] > 0.99
+    # ... while a principal point 1 px off gives azimuth errors of about 1 px / r (times
+    # |sin| of the offset's direction, 2 / pi on average), as eq. 1 has it near the horizon.
+    whole = errors["visible"] == 1.0
+    ratio = np.abs(errors["azimuth_calibrated"][whole]) * errors["radius_px"][whole]
+    assert 0.5 < np.mean(ratio) < 0.8
+    # Coverage errors of partly covered beacons stay within eq. 2's bound.
+    assert summary["partly_covered"] > 0 and summary["coverage_within_eq2_bound"] == 1.0

@@ -246,6 +246,8 @@ EXPECTED_PROBLEMS = {
     "13-not-toml.toml": "not valid TOML",
     "14-route-leaves-room.toml": "routes[0].waypoints[1]: (15, 5) is outside the room",
     "15-negative-misdecode-rate.toml": "faults.misdecode_rate: must be >= 0",
+    "16-light-without-height.toml": "lights[0].xyz: must be a list of 3 numbers",
+    "17-light-without-power.toml": "lights[0].power: must be > 0",
 }
 
 

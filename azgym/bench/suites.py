@@ -21,8 +21,9 @@ from azgym.layout import Faults
 from azgym.reproduce.protocol import ProtocolConfig, draw_runs
 from azgym.scenario import Scenario, load_scenario
 from azgym.sensing import geometry as G
+from azgym.sensing.image_sensor import ImageSensor
 from azgym.sensing.sensor import Sensor
-from azgym.simulate import simulate
+from azgym.simulate import camera_trajectory, simulate, sway
 
 CAUSES = ("clean", "partial", "moved", "ghost", "misidentified", "outlier")
 """Frame causes, from harmless to harmful; a frame's cause is its worst detection's."""
@@ -143,6 +144,29 @@ def _warehouse_routes(seed: int, quick: bool) -> list[Frame]:
     return frames[::4] if quick else frames
 
 
+def _image_routes(seed: int, quick: bool) -> list[Frame]:
+    """The routes through the image path: rendered, detected, ids decoded from blinking.
+
+    The camera runs at 30 Hz (the blob tracker needs it, see ``azgym study ids``); every third
+    frame is scored, as a 10 Hz localizer would use them.
+    """
+    frames = []
+    for name in ("warehouse-small", "warehouse-paper"):
+        scenario = load_scenario(name)
+        routes = scenario.routes[:1] if quick else scenario.routes
+        for k, route in enumerate(routes):
+            sensor = ImageSensor(scenario, ids="blink", seed=seed + k)
+            rng = np.random.default_rng([seed, k])
+            poses = camera_trajectory(scenario, route, camera_rate_hz=30.0)
+            for index, (x, y, heading) in enumerate(poses):
+                image = sensor.observe(x, y, heading, rng, sway(scenario, x, y, rng))
+                if index % (12 if quick else 3) == 0:
+                    frames.append(Frame(name, image.measurements,
+                                        (float(x), float(y), float(heading)),
+                                        frame_cause(image.labels), f"{name}/{route.name}"))
+    return frames
+
+
 def _stress(seed: int, quick: bool) -> list[Frame]:
     rng = np.random.default_rng(seed)
     heavy = _levels(load_scenario("warehouse-large"))["heavy"]
@@ -156,6 +180,9 @@ SUITES: dict[str, Suite] = {suite.name: suite for suite in (
           "clean, as shipped and heavy", 7, _warehouse_static),
     Suite("warehouse-routes", 1, "every route of warehouse-small and warehouse-paper, frame by "
           "frame at 10 Hz", 11, _warehouse_routes),
+    Suite("image-routes", 1, "every route of warehouse-small and warehouse-paper through the "
+          "fisheye image path: blobs detected from pixels, ids decoded from blinking (30 Hz "
+          "camera, every third frame scored)", 17, _image_routes),
     Suite("stress", 1, "warehouse-large (64 beacons) with heavy faults: 5 % misreads, bright "
           "mirrors", 13, _stress),
 )}

@@ -11,7 +11,8 @@ Per frame, :class:`ImageSensor`
 4. identifies each blob, in one of two modes:
 
    * ``ids="oracle"``: the id of the light whose projected centre is nearest (within
-     ``match_px``), misread at the scenario's ``faults.misdecode_rate`` — fast, for single frames;
+     ``match_px``), misread at the scenario's ``faults.misdecode_rate`` as another map id — fast,
+     for single frames;
    * ``ids="blink"``: every beacon blinks its id's on-off code (``blink.BlinkCode``) from its own
      phase, and a ``blink.BlobTracker`` decodes ids from the blobs' lit/dark histories over
      frames. Frames must then be successive (call :meth:`ImageSensor.reset` between episodes);
@@ -55,6 +56,7 @@ class ImageFrame:
             blob with a wrong id, or a distractor with an id).
         beacon: Map row of the beacon whose light made each blob, -1 for none.
         mirrored: Whether each blob is a mirror image (of a beacon or a lamp).
+        visible: Visible share of the light that made each blob (0 for none).
         true_azimuth: Noise-free azimuth of the light that made each blob (the visible
             centroid of a partly covered beacon), NaN for none [rad].
         in_view: Map rows of the beacons in direct view this frame, lit or dark.
@@ -67,6 +69,7 @@ class ImageFrame:
     labels: IntArray
     beacon: IntArray
     mirrored: np.ndarray
+    visible: FloatArray
     true_azimuth: FloatArray
     in_view: IntArray
     lit: int
@@ -139,8 +142,10 @@ class ImageSensor:
         """
         blink = self.ids == "blink"
         out = self._buffers
+        # Misreads are drawn per blob below (oracle mode) or come from decoding (blink mode), so
+        # the geometry's labels keep what each light is (a misread ghost is still a ghost).
         count = self._sensor.observe_into(x, y, heading, rng, out, tilt=tilt,
-                                          misdecode_rate=0.0 if blink else None)
+                                          misdecode_rate=0.0)
         lit = np.ones(count, dtype=bool)
         if blink:
             rows = out.beacon[:count]
@@ -162,6 +167,8 @@ class ImageSensor:
         labels[from_beacon] = beacons.label[source[from_beacon]]
         mirrored = np.zeros(len(blobs), dtype=bool)
         mirrored[source >= 0] = every.mirrored[source[source >= 0]]
+        visible = np.zeros(len(blobs))
+        visible[source >= 0] = every.visible[source[source >= 0]]
         beacon[from_beacon] = beacons.beacon[source[from_beacon]]
         true_azimuth[source >= 0] = every.azimuth[source[source >= 0]]
         if blink:
@@ -172,15 +179,32 @@ class ImageSensor:
         else:
             ids = np.full(len(blobs), -1, dtype=np.int64)
             ids[from_beacon] = beacons.ids[source[from_beacon]]
+            self._misread(ids, labels, beacon, rng)
         self._frame += 1
         quality = np.array([(b.area, b.peak, b.elongation) for b in blobs],
                            dtype=np.float64).reshape(-1, 3)
         quality[~np.isfinite(quality)] = 1e6  # a one-pixel-wide blob: elongation without bound
         measurements = Measurements(ids, np.array([b.azimuth for b in blobs]), quality)
         return ImageFrame(image=image, measurements=measurements, blobs=blobs, labels=labels,
-                          beacon=beacon, mirrored=mirrored, true_azimuth=true_azimuth,
+                          beacon=beacon, mirrored=mirrored, visible=visible,
+                          true_azimuth=true_azimuth,
                           in_view=out.beacon[:count][out.label[:count] != G.GHOST].copy(),
                           lit=int(lit.sum()))
+
+    def _misread(self, ids: IntArray, labels: IntArray, beacon: IntArray,
+                 rng: np.random.Generator) -> None:
+        """Oracle mode: misread identified blobs' ids at the scenario's rate.
+
+        A misread id is one of the other map ids, uniformly (as the geometry sensor does).
+        """
+        rate = self.scenario.faults.misdecode_rate
+        map_ids = self.scenario.beacons.ids
+        draws = rng.random((2, len(ids)))
+        for k in np.flatnonzero((beacon >= 0) & (draws[0] < rate)):
+            if len(map_ids) > 1:
+                shift = 1 + min(int(draws[1, k] * (len(map_ids) - 1)), len(map_ids) - 2)
+                ids[k] = map_ids[(beacon[k] + shift) % len(map_ids)]
+                labels[k] = G.MISIDENTIFIED
 
     def _match(self, pixels: FloatArray, lights: _Lights) -> IntArray:
         """For each blob, the light whose projected centre is nearest within its reach, or -1.
@@ -219,6 +243,7 @@ class _Lights:
     beacon: IntArray
     label: IntArray
     mirrored: np.ndarray
+    visible: FloatArray
 
     @classmethod
     def from_buffers(cls, out: FrameBuffers, count: int, keep: np.ndarray) -> _Lights:
@@ -229,7 +254,7 @@ class _Lights:
                    elevation=out.elevation[:count][keep], half_tall=np.zeros(visible.size),
                    flux=10.0 ** out.quality[:count][keep], ids=out.ids[:count][keep],
                    beacon=out.beacon[:count][keep], label=out.label[:count][keep],
-                   mirrored=out.label[:count][keep] == G.GHOST)
+                   mirrored=out.label[:count][keep] == G.GHOST, visible=visible)
 
     def join(self, other: _Lights) -> _Lights:
         """These lights, then the other's."""
@@ -269,7 +294,7 @@ class _LightSource:
             empty = np.zeros(0)
             none = np.zeros(0, dtype=np.int64)
             return _Lights(empty, empty, empty, empty, empty, none, none, none,
-                           np.zeros(0, dtype=bool))
+                           np.zeros(0, dtype=bool), empty)
         out = self._buffers
         count = self._sensor.observe_into(x, y, heading, rng, out, tilt=tilt)
         rows = out.beacon[:count]
@@ -282,4 +307,5 @@ class _LightSource:
                        flux=flux[keep], ids=np.full(int(keep.sum()), -1, dtype=np.int64),
                        beacon=np.full(int(keep.sum()), -1, dtype=np.int64),
                        label=np.full(int(keep.sum()), G.DISTRACTOR, dtype=np.int64),
-                       mirrored=(out.label[:count] == G.GHOST)[keep])
+                       mirrored=(out.label[:count] == G.GHOST)[keep],
+                       visible=out.visible[:count][keep])
