@@ -117,19 +117,33 @@ def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray
     return image.astype(np.uint8)
 
 
+@numba.njit(cache=True)
+def _patch_outline(cx, cy, focal, distortion, azimuth_lo, azimuth_hi, elevation_lo,
+                   elevation_hi, sides):
+    """The outline of an azimuth × elevation patch on the image, (2 sides, 2) points [px]."""
+    k1, k2, k3, k4 = distortion[0], distortion[1], distortion[2], distortion[3]
+    outline = np.empty((2 * sides, 2))
+    for edge in range(2):
+        polar = math.pi / 2 - (elevation_hi if edge == 0 else elevation_lo)
+        t2 = polar * polar
+        radius = focal * polar * (1.0 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4))))
+        for k in range(sides):
+            step = k if edge == 0 else sides - 1 - k
+            azimuth = azimuth_lo + (azimuth_hi - azimuth_lo) * step / (sides - 1)
+            outline[edge * sides + k, 0] = cx + radius * math.cos(azimuth)
+            outline[edge * sides + k, 1] = cy + radius * math.sin(azimuth)
+    return outline
+
+
 def _draw_patch(image: np.ndarray, camera: FisheyeCamera, azimuth_lo: float, azimuth_hi: float,
                 elevation_lo: float, elevation_hi: float, total: float) -> None:
     """Add an extended light: its outline on the image filled evenly, blurred by the spread.
 
     Its grey level is its total brightness over its area, so a bright lamp saturates.
     """
-    azimuths = np.linspace(azimuth_lo, azimuth_hi, 9)
-    elevations = np.concatenate([np.full(9, elevation_hi), np.full(9, elevation_lo)])
-    around = np.concatenate([azimuths, azimuths[::-1]])
-    c = np.cos(elevations)
-    outline = camera.project(np.column_stack([c * np.cos(around), c * np.sin(around),
-                                              np.sin(elevations)]))
-    area = max(1.0, float(cv2.contourArea(outline.astype(np.float32))))
+    cx, cy = camera.principal_point
+    outline = _patch_outline(cx, cy, camera.focal_px, np.asarray(camera.distortion, np.float64),
+                             azimuth_lo, azimuth_hi, elevation_lo, elevation_hi, 9)
     margin = int(math.ceil(4 * PSF_SIGMA_PX))
     height, width = image.shape
     x0 = max(0, int(outline[:, 0].min()) - margin)
@@ -138,9 +152,10 @@ def _draw_patch(image: np.ndarray, camera: FisheyeCamera, azimuth_lo: float, azi
     y1 = min(height, int(outline[:, 1].max()) + margin + 2)
     if x0 >= x1 or y0 >= y1:
         return
-    patch = np.zeros((y1 - y0, x1 - x0), dtype=np.float32)
     shift = 4  # sub-pixel vertices: 1/16 px
     points = np.round((outline - (x0, y0)) * 2**shift).astype(np.int32)
+    area = max(1.0, abs(cv2.contourArea(points)) / 4**shift)
+    patch = np.zeros((y1 - y0, x1 - x0), dtype=np.float32)
     cv2.fillPoly(patch, [points], total / area, lineType=cv2.LINE_8, shift=shift)
     image[y0:y1, x0:x1] += cv2.GaussianBlur(patch, (0, 0), PSF_SIGMA_PX)
 
