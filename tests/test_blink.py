@@ -77,7 +77,7 @@ def test_the_tracker_decodes_blinking_blobs_that_turn_and_drift():
                         for i, p in zip(ids, phase, strict=True)])
         pixels = np.column_stack([240 + 200 * np.cos(azimuth[lit]),
                                   240 + 200 * np.sin(azimuth[lit])])
-        decoded, age = tracker.update(pixels)
+        decoded = tracker.update(pixels)
         if frame >= 2 * CODE.period:  # every beacon has shown a whole codeword
             assert decoded.tolist() == ids[lit].tolist()
     assert tracker.track_count == 8

@@ -293,11 +293,12 @@ class LocalizeEnv(gym.Env):
                        tilt: tuple[float, float]) -> dict[str, np.ndarray] | np.ndarray:
         frame = self.image_sensor.observe(x, y, heading, self.np_random, tilt)
         self.image_frame = frame
+        size = self.max_detections
+        # The blobs shown (and described in info): the first K by azimuth.
+        order = self._shown = np.argsort(frame.measurements.azimuth, kind="stable")[:size]
         if self.observation == "image":
             self._observation = frame.image[:, :, None]
             return self._observation
-        size = self.max_detections
-        order = np.argsort(frame.measurements.azimuth, kind="stable")[:size]
         count = len(order)
         ids = np.full(size, -1, dtype=np.int64)
         azimuth = np.zeros(size, dtype=np.float32)
@@ -307,7 +308,6 @@ class LocalizeEnv(gym.Env):
         blob[:count] = frame.measurements.quality[order]
         valid = np.zeros(size, dtype=np.int8)
         valid[:count] = 1
-        self._shown = order
         self._observation = {"ids": ids, "azimuth": azimuth, "valid": valid, "blob": blob,
                              "beacon_ids": self._beacon_ids.copy(),
                              "beacon_xyz": self._beacon_xyz.copy()}
@@ -315,9 +315,7 @@ class LocalizeEnv(gym.Env):
 
     def _frame_info(self) -> dict[str, Any]:
         if self.image_frame is not None:
-            frame, size = self.image_frame, self.max_detections
-            order = (self._shown if self.observation == "measurements"
-                     else np.argsort(frame.measurements.azimuth, kind="stable")[:size])
+            frame, size, order = self.image_frame, self.max_detections, self._shown
             labels = np.full(size, -1, dtype=np.int64)
             beacons = np.full(size, -1, dtype=np.int64)
             labels[:len(order)] = frame.labels[order]

@@ -188,12 +188,11 @@ class BlobTracker:
         best = starts[np.argmin(np.abs(candidates[starts] + 0.5 * window))]
         return self._turn + float(np.median(candidates[best:best + most]))
 
-    def update(self, pixels: FloatArray) -> tuple[IntArray, IntArray]:
-        """Take one frame's blob centres (N, 2) [px]; return each blob's id and track age.
+    def update(self, pixels: FloatArray) -> IntArray:
+        """Take one frame's blob centres (N, 2) [px]; return each blob's decoded id, shape (N,).
 
-        Returns:
-            ``ids``: the decoded id of each blob's track (-1 until a valid codeword is read, or
-            after a corrupt one); ``age``: frames each blob's track has lived, shape (N,).
+        A blob's id is its track's: -1 until the track reads a valid codeword, and again after
+        a corrupt one.
         """
         cx, cy = self.centre
         points = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
@@ -251,6 +250,4 @@ class BlobTracker:
             decoded = self.code.decode(track.history)
             if decoded is not None:
                 track.beacon_id = decoded
-        ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
-        age = np.array([len(self._tracks[t].history) for t in assignment], dtype=np.int64)
-        return ids, age
+        return np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)

@@ -107,7 +107,7 @@ def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray
     tall = np.zeros(len(elevation)) if half_tall is None else half_tall
     for lo, hi, e, f, t in zip(azimuth_lo, azimuth_hi, elevation, flux, tall, strict=True):
         if t * camera.focal_px > 0.5:
-            _draw_patch(image, camera, lo, hi, e - t, e + t, scale * f)
+            _draw_patch(image, camera, distortion, lo, hi, e - t, e + t, scale * f)
         else:
             _draw_strip(image, cx, cy, camera.focal_px, distortion, math.pi / 2 - e, lo, hi,
                         scale * min(f, 40.0), PSF_SIGMA_PX)
@@ -135,15 +135,16 @@ def _patch_outline(cx, cy, focal, distortion, azimuth_lo, azimuth_hi, elevation_
     return outline
 
 
-def _draw_patch(image: np.ndarray, camera: FisheyeCamera, azimuth_lo: float, azimuth_hi: float,
-                elevation_lo: float, elevation_hi: float, total: float) -> None:
+def _draw_patch(image: np.ndarray, camera: FisheyeCamera, distortion: FloatArray,
+                azimuth_lo: float, azimuth_hi: float, elevation_lo: float, elevation_hi: float,
+                total: float) -> None:
     """Add an extended light: its outline on the image filled evenly, blurred by the spread.
 
     Its grey level is its total brightness over its area, so a bright lamp saturates.
     """
     cx, cy = camera.principal_point
-    outline = _patch_outline(cx, cy, camera.focal_px, np.asarray(camera.distortion, np.float64),
-                             azimuth_lo, azimuth_hi, elevation_lo, elevation_hi, 9)
+    outline = _patch_outline(cx, cy, camera.focal_px, distortion, azimuth_lo, azimuth_hi,
+                             elevation_lo, elevation_hi, 9)
     margin = int(math.ceil(4 * PSF_SIGMA_PX))
     height, width = image.shape
     x0 = max(0, int(outline[:, 0].min()) - margin)

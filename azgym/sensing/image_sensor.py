@@ -60,7 +60,6 @@ class ImageFrame:
         true_azimuth: Noise-free azimuth of the light that made each blob (the visible
             centroid of a partly covered beacon), NaN for none [rad].
         in_view: Map rows of the beacons in direct view this frame, lit or dark.
-        lit: How many of the geometry's beacon detections (direct and mirrored) were lit.
     """
 
     image: np.ndarray
@@ -72,7 +71,6 @@ class ImageFrame:
     visible: FloatArray
     true_azimuth: FloatArray
     in_view: IntArray
-    lit: int
 
 
 class ImageSensor:
@@ -160,19 +158,20 @@ class ImageSensor:
         blobs = detect(image, self.camera, self.threshold)
         pixels = np.array([(b.u, b.v) for b in blobs], dtype=np.float64).reshape(-1, 2)
         source = self._match(pixels, every)
+        matched = np.flatnonzero(source >= 0)
         from_beacon = (source >= 0) & (source < len(beacons.azimuth))
         labels = np.full(len(blobs), G.DISTRACTOR, dtype=np.int64)
-        beacon = np.full(len(blobs), -1, dtype=np.int64)
-        true_azimuth = np.full(len(blobs), np.nan)
         labels[from_beacon] = beacons.label[source[from_beacon]]
-        mirrored = np.zeros(len(blobs), dtype=bool)
-        mirrored[source >= 0] = every.mirrored[source[source >= 0]]
-        visible = np.zeros(len(blobs))
-        visible[source >= 0] = every.visible[source[source >= 0]]
+        beacon = np.full(len(blobs), -1, dtype=np.int64)
         beacon[from_beacon] = beacons.beacon[source[from_beacon]]
-        true_azimuth[source >= 0] = every.azimuth[source[source >= 0]]
+        mirrored = np.zeros(len(blobs), dtype=bool)
+        mirrored[matched] = every.mirrored[source[matched]]
+        visible = np.zeros(len(blobs))
+        visible[matched] = every.visible[source[matched]]
+        true_azimuth = np.full(len(blobs), np.nan)
+        true_azimuth[matched] = every.azimuth[source[matched]]
         if blink:
-            ids, _ = self.tracker.update(pixels)
+            ids = self.tracker.update(pixels)
             true_ids = np.where(beacon >= 0, self.scenario.beacons.ids[np.maximum(beacon, 0)],
                                 -1)
             labels[(ids >= 0) & (ids != true_ids)] = G.MISIDENTIFIED
@@ -188,8 +187,7 @@ class ImageSensor:
         return ImageFrame(image=image, measurements=measurements, blobs=blobs, labels=labels,
                           beacon=beacon, mirrored=mirrored, visible=visible,
                           true_azimuth=true_azimuth,
-                          in_view=out.beacon[:count][out.label[:count] != G.GHOST].copy(),
-                          lit=int(lit.sum()))
+                          in_view=out.beacon[:count][out.label[:count] != G.GHOST].copy())
 
     def _misread(self, ids: IntArray, labels: IntArray, beacon: IntArray,
                  rng: np.random.Generator) -> None:
@@ -246,15 +244,35 @@ class _Lights:
     visible: FloatArray
 
     @classmethod
-    def from_buffers(cls, out: FrameBuffers, count: int, keep: np.ndarray) -> _Lights:
-        """The lit detections of a frame the geometry wrote into ``out`` (beacons: no height)."""
-        visible = out.visible[:count][keep]
-        return cls(azimuth=out.true_azimuth[:count][keep],
-                   half_width=visible * out.half_width[:count][keep],
-                   elevation=out.elevation[:count][keep], half_tall=np.zeros(visible.size),
-                   flux=10.0 ** out.quality[:count][keep], ids=out.ids[:count][keep],
-                   beacon=out.beacon[:count][keep], label=out.label[:count][keep],
-                   mirrored=out.label[:count][keep] == G.GHOST, visible=visible)
+    def from_buffers(cls, out: FrameBuffers, count: int, keep: np.ndarray,
+                     flux: FloatArray | None = None,
+                     tall_ratio: FloatArray | None = None) -> _Lights:
+        """The kept detections of a frame the geometry wrote into ``out``.
+
+        Args:
+            out: The geometry's buffers.
+            count: Detections in them.
+            keep: Which of the ``count`` to keep.
+            flux: Each detection's flux, if not the one the buffers hold.
+            tall_ratio: Height over width of each detection's light (None: LEDs, no height).
+        """
+        visible = out.visible[:count]
+        half_width = visible * out.half_width[:count]
+        half_tall = (np.zeros(count) if tall_ratio is None
+                     else out.half_width[:count] * tall_ratio)
+        return cls(azimuth=out.true_azimuth[:count][keep], half_width=half_width[keep],
+                   elevation=out.elevation[:count][keep], half_tall=half_tall[keep],
+                   flux=(10.0 ** out.quality[:count] if flux is None else flux)[keep],
+                   ids=out.ids[:count][keep], beacon=out.beacon[:count][keep],
+                   label=out.label[:count][keep],
+                   mirrored=out.label[:count][keep] == G.GHOST, visible=visible[keep])
+
+    def as_distractors(self) -> _Lights:
+        """The same lights as blobs no beacon explains: no id, no beacon, label DISTRACTOR."""
+        none = np.full(self.azimuth.size, -1, dtype=np.int64)
+        return dataclasses.replace(self, ids=none, beacon=none,
+                                   label=np.full(self.azimuth.size, G.DISTRACTOR,
+                                                 dtype=np.int64))
 
     def join(self, other: _Lights) -> _Lights:
         """These lights, then the other's."""
@@ -274,7 +292,9 @@ class _LightSource:
         lights = scenario.lights
         self._power = np.array([light.power for light in lights])
         self._tall = np.array([light.tall / light.width for light in lights])
-        self._sensor = None
+        self._scale = self._power  # each light's flux over the strongest's (set below)
+        self._sensor: Sensor | None = None
+        self._buffers = FrameBuffers(0)
         if not lights:
             return
         strongest = float(self._power.max())
@@ -290,22 +310,10 @@ class _LightSource:
     def observe(self, x: float, y: float, heading: float, rng: np.random.Generator,
                 tilt: tuple[float, float]) -> _Lights:
         """The lights the camera sees from this pose (flux >= the detection threshold)."""
-        if self._sensor is None:
-            empty = np.zeros(0)
-            none = np.zeros(0, dtype=np.int64)
-            return _Lights(empty, empty, empty, empty, empty, none, none, none,
-                           np.zeros(0, dtype=bool), empty)
         out = self._buffers
-        count = self._sensor.observe_into(x, y, heading, rng, out, tilt=tilt)
+        count = (0 if self._sensor is None
+                 else self._sensor.observe_into(x, y, heading, rng, out, tilt=tilt))
         rows = out.beacon[:count]
         flux = 10.0 ** out.quality[:count] * self._scale[rows]
-        keep = flux >= 1.0
-        half_width = out.visible[:count] * out.half_width[:count]
-        return _Lights(azimuth=out.true_azimuth[:count][keep], half_width=half_width[keep],
-                       elevation=out.elevation[:count][keep],
-                       half_tall=(out.half_width[:count] * self._tall[rows])[keep],
-                       flux=flux[keep], ids=np.full(int(keep.sum()), -1, dtype=np.int64),
-                       beacon=np.full(int(keep.sum()), -1, dtype=np.int64),
-                       label=np.full(int(keep.sum()), G.DISTRACTOR, dtype=np.int64),
-                       mirrored=(out.label[:count] == G.GHOST)[keep],
-                       visible=out.visible[:count][keep])
+        return _Lights.from_buffers(out, count, flux >= 1.0, flux,
+                                    self._tall[rows]).as_distractors()

@@ -107,7 +107,7 @@ def summarize(scenario: Scenario, errors: dict[str, FloatArray],
         "whole_beacons": int(whole.sum()),
         "partly_covered": int(partial.sum()),
         "model_delta_alpha_d_deg": bound,
-        "model_center_error_px": math.tan(model.delta_alpha_d) * _horizon(scenario),
+        "model_center_error_px": math.tan(model.delta_alpha_d) * scenario.fisheye.horizon_radius_px,
         "centre_error_px": _quantiles(centre),
         "azimuth_error_deg": _quantiles(azimuth),
         "azimuth_error_within_model": float(np.mean(azimuth <= bound)),
@@ -118,10 +118,6 @@ def summarize(scenario: Scenario, errors: dict[str, FloatArray],
         "coverage_within_eq2_bound": float(np.mean(coverage_ratio <= 1.0 + 1e-9))
         if partial.any() else None,
     }
-
-
-def _horizon(scenario: Scenario) -> float:
-    return scenario.fisheye.horizon_radius_px
 
 
 def _quantiles(values: FloatArray) -> dict[str, float]:
@@ -143,7 +139,7 @@ def plot(scenario: Scenario, errors: dict[str, FloatArray], calibration_px: floa
     whole = errors["visible"] == 1.0
     figure, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     centre = errors["centre_px"][whole]
-    model_px = math.tan(model.delta_alpha_d) * _horizon(scenario)
+    model_px = math.tan(model.delta_alpha_d) * scenario.fisheye.horizon_radius_px
     axes[0].hist(centre, bins=60, density=True, color="tab:blue", alpha=0.8,
                  label="rendered and detected")
     axes[0].plot([-model_px, -model_px, model_px, model_px],
@@ -158,7 +154,7 @@ def plot(scenario: Scenario, errors: dict[str, FloatArray], calibration_px: floa
     axes[1].scatter(radius, np.degrees(np.abs(errors["azimuth_calibrated"][whole])), s=3,
                     label=f"principal point off by {calibration_px:g} px", color="tab:orange",
                     alpha=0.5)
-    grid = np.linspace(max(10.0, radius.min(initial=10.0)), _horizon(scenario), 100)
+    grid = np.linspace(max(10.0, radius.min(initial=10.0)), scenario.fisheye.horizon_radius_px, 100)
     axes[1].axhline(np.degrees(model.delta_alpha_d), color="k",
                     label=f"eq. 1: Δα_d = {np.degrees(model.delta_alpha_d):.2f}°")
     axes[1].plot(grid, np.degrees(calibration_px / grid), "k--", label="δc / r")

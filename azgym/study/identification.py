@@ -86,10 +86,10 @@ def measure_identification(scenario: Scenario | str, camera_rate_hz: float = 30.
             in_view[frame.in_view] = True
             streak = np.where(in_view, streak + 1, 0)
             decoded = frame.measurements.ids
-            true_ids = np.where(frame.beacon >= 0, ids[np.maximum(frame.beacon, 0)], -1)
+            row = np.maximum(frame.beacon, 0)  # blobs of no beacon are masked out below
+            true_ids = np.where(frame.beacon >= 0, ids[row], -1)
             direct = (frame.beacon >= 0) & ~frame.mirrored
-            eligible = direct & (streak[np.maximum(frame.beacon, 0)]
-                                 >= needed[np.maximum(frame.beacon, 0)])
+            eligible = direct & (streak[row] >= needed[row])
             counts += [1, eligible.sum(), (eligible & (decoded == true_ids)).sum(),
                        (eligible & (decoded < 0)).sum(),
                        (eligible & (decoded >= 0) & (decoded != true_ids)).sum(),
