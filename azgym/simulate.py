@@ -6,7 +6,8 @@ driver, wheel odometry and the IMU at their own rates, and the camera at ``camer
 and IMU samples since the previous frame, and the true camera pose. The same seed gives the same
 frames, bit for bit: one seed is split into independent streams for the camera, the odometry and
 the IMU and the camera's sway on bumpy stretches, so that changing one sensor's settings leaves
-the others' draws alone. On a bump the camera's pitch and roll are drawn afresh each frame.
+the others' draws alone. On a bump the camera sways (:class:`~azgym.world.sway.CameraSway`: a
+damped mast that the bumps shake, so consecutive frames see nearly the same tilt).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from azgym.sensing.odometry import (
 from azgym.sensing.sensor import DetectionTruth, Sensor
 from azgym.world.driver import PurePursuit
 from azgym.world.forklift import ForkliftSpec
+from azgym.world.sway import CameraSway
 from azgym.world.world import World
 
 
@@ -71,16 +73,6 @@ def _route(scenario: Scenario, route: str | Route | None) -> Route:
     if route not in names:
         raise unknown_name("route", str(route), names)
     return names[route]
-
-
-def sway(scenario: Scenario, x: float, y: float,
-         rng: np.random.Generator) -> tuple[float, float]:
-    """The camera's (pitch, roll) at (x, y): normal with the bump's spread on a bumpy stretch."""
-    for bump in scenario.bumps:
-        if bump.contains(x, y):
-            pitch, roll = rng.normal(0.0, bump.tilt, size=2)
-            return float(pitch), float(roll)
-    return 0.0, 0.0
 
 
 def _drive(scenario: Scenario, route: Route, dt: float,
@@ -149,6 +141,7 @@ def simulate(
     odometer = Odometer(odometry or OdometryModel(), odometry_stream)
     inertial = Imu(imu or ImuModel(), imu_stream)
     period = 1.0 / camera_rate_hz
+    sway = CameraSway(scenario, period, spec)
     next_frame = 0.0
     index = 0
     contacts_seen = 0
@@ -167,7 +160,7 @@ def simulate(
         if world.time + 1e-9 >= next_frame:
             _, _, heading = forklift.pose
             cx, cy = forklift.camera_position()
-            tilt = sway(scenario, cx, cy, sway_stream)
+            tilt = sway.step(cx, cy, sway_stream)
             measurements, truth = sensor.observe(cx, cy, heading, camera_stream, tilt=tilt)
             yield Frame(index=index, time=world.time, measurements=measurements, truth=truth,
                         pose=(cx, cy, heading), odometry=odometer.take(), imu=inertial.take(),

@@ -23,7 +23,8 @@ from azgym.scenario import Scenario, load_scenario
 from azgym.sensing import geometry as G
 from azgym.sensing.image_sensor import ImageSensor
 from azgym.sensing.sensor import Sensor
-from azgym.simulate import camera_trajectory, simulate, sway
+from azgym.simulate import camera_trajectory, simulate
+from azgym.world.sway import CameraSway
 
 CAUSES = ("clean", "partial", "moved", "ghost", "misidentified", "outlier")
 """Frame causes, from harmless to harmful; a frame's cause is its worst detection's."""
@@ -158,8 +159,9 @@ def _image_routes(seed: int, quick: bool) -> list[Frame]:
             sensor = ImageSensor(scenario, ids="blink", seed=seed + k)
             rng = np.random.default_rng([seed, k])
             poses = camera_trajectory(scenario, route, camera_rate_hz=30.0)
+            sway = CameraSway(scenario, 1.0 / 30.0)
             for index, (x, y, heading) in enumerate(poses):
-                image = sensor.observe(x, y, heading, rng, sway(scenario, x, y, rng))
+                image = sensor.observe(x, y, heading, rng, sway.step(x, y, rng))
                 if index % (12 if quick else 3) == 0:
                     frames.append(Frame(name, image.measurements,
                                         (float(x), float(y), float(heading)),

@@ -15,7 +15,8 @@ from azgym.errors import InvalidInputError, unknown_name
 from azgym.scenario import Scenario, load_scenario
 from azgym.sensing.image_sensor import ID_MODES, ImageFrame, ImageSensor
 from azgym.sensing.sensor import Sensor
-from azgym.simulate import camera_trajectory, sway
+from azgym.simulate import camera_trajectory
+from azgym.world.sway import CameraSway
 
 
 def _copy(observation: dict[str, np.ndarray] | np.ndarray) -> dict[str, np.ndarray] | np.ndarray:
@@ -143,6 +144,7 @@ class LocalizeEnv(gym.Env):
         self.camera_rate_hz = camera_rate_hz or (30.0 if ids == "blink" else 10.0)
         self._sensor = Sensor(self.scenario)
         self._buffers = self._sensor.new_buffers(max_detections)
+        self._sway = CameraSway(self.scenario, 1.0 / self.camera_rate_hz)
         self.image_sensor = (ImageSensor(self.scenario, ids=ids) if self.sensor == "image"
                              else None)
         self.image_frame: ImageFrame | None = None
@@ -221,6 +223,7 @@ class LocalizeEnv(gym.Env):
             self._poses = self._random_poses()
         self._frame = 0
         self._estimate = None
+        self._sway.reset()
         if self.image_sensor is not None:
             self.image_sensor.reset()
         observation = self._observe()
@@ -274,7 +277,7 @@ class LocalizeEnv(gym.Env):
     def _observe(self) -> dict[str, np.ndarray] | np.ndarray:
         x, y, heading = self._poses[self._frame]
         out = self._buffers
-        tilt = sway(self.scenario, x, y, self.np_random)
+        tilt = self._sway.step(x, y, self.np_random)
         if self.image_sensor is not None:
             return self._observe_image(x, y, heading, tilt)
         self._sensor.observe_into(x, y, heading, self.np_random, out, tilt=tilt)

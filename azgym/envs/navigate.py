@@ -17,8 +17,13 @@ from azgym.localize.registry import SupportsLocalize, make_localizer
 from azgym.scenario import Scenario, load_scenario
 from azgym.sensing import geometry as G
 from azgym.sensing.sensor import Sensor
-from azgym.simulate import sway
+from azgym.world.sway import CameraSway
 from azgym.world.world import World
+
+PHYSICS_DT = 0.02
+"""The world's physics step [s]."""
+CONTROL_STEPS = 5
+"""Physics steps per control period: the navigator acts and the camera looks every 0.1 s."""
 
 DISCRETE_CONTROLS = np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.6, 1.0], [0.6, -1.0]],
                              dtype=np.float32)
@@ -126,6 +131,7 @@ class NavigateEnv(gym.Env):
         self.render_mode = render_mode
         self._sensor = Sensor(self.scenario)
         self._buffers = self._sensor.new_buffers()
+        self._sway = CameraSway(self.scenario, CONTROL_STEPS * PHYSICS_DT)
         self._segments = occluder_table(self.scenario.racks, self.scenario.walls)
         self._rays = np.empty(self.n_rays)
         self.spots = np.unique(np.concatenate([r.waypoints for r in self.scenario.routes]),
@@ -146,7 +152,8 @@ class NavigateEnv(gym.Env):
             if np.hypot(*(self.spots[goal] - self.spots[start])) >= 5.0:
                 break
         heading = float(self.np_random.uniform(-math.pi, math.pi))
-        self._world = World(self.scenario, (*self.spots[start], heading))
+        self._world = World(self.scenario, (*self.spots[start], heading), dt=PHYSICS_DT)
+        self._sway.reset()
         self._goal = self.spots[goal].astype(np.float64)
         self._steps = 0
         self._distance = self._true_distance()
@@ -160,7 +167,7 @@ class NavigateEnv(gym.Env):
         throttle, steer = self._controls(action)
         world = self._world
         contacts_before = len(world.contacts)
-        for _ in range(5):
+        for _ in range(CONTROL_STEPS):
             world.step(throttle, steer)
         self._steps += 1
         distance = self._true_distance()
@@ -210,7 +217,7 @@ class NavigateEnv(gym.Env):
         forklift = self._world.forklift
         x, y, heading = forklift.pose
         cx, cy = forklift.camera_position()
-        tilt = sway(self.scenario, cx, cy, self.np_random)
+        tilt = self._sway.step(cx, cy, self.np_random)
         frame = self._buffers
         count = self._sensor.observe_into(cx, cy, heading, self.np_random, frame, tilt=tilt)
         if self.localizer is None:

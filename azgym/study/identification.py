@@ -17,7 +17,8 @@ import numpy as np
 
 from azgym.scenario import Scenario, load_scenario
 from azgym.sensing.image_sensor import ImageSensor
-from azgym.simulate import camera_trajectory, sway
+from azgym.simulate import camera_trajectory
+from azgym.world.sway import CameraSway
 
 
 @dataclass(frozen=True)
@@ -78,10 +79,11 @@ def measure_identification(scenario: Scenario | str, camera_rate_hz: float = 30.
         rows = np.arange(len(ids))
         streak = np.zeros(len(ids), dtype=np.int64)
         period = sensor.code.period
+        sway = CameraSway(scenario, 1.0 / camera_rate_hz)
         for x, y, heading in camera_trajectory(scenario, route, camera_rate_hz=camera_rate_hz):
             # Frames a beacon must have been in view to have shown a whole codeword by now.
             needed = (sensor.code_position(rows) + 1) % period + period
-            frame = sensor.observe(x, y, heading, rng, sway(scenario, x, y, rng))
+            frame = sensor.observe(x, y, heading, rng, sway.step(x, y, rng))
             in_view = np.zeros(len(ids), dtype=bool)
             in_view[frame.in_view] = True
             streak = np.where(in_view, streak + 1, 0)

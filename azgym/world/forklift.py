@@ -42,6 +42,8 @@ class ForkliftSpec:
         max_force: Largest traction force the tyres transmit [N].
         max_torque: Largest yaw torque the tyres transmit [N m].
         camera_offset: Camera position in the body frame (forward, left) [m].
+        sway_hz: Natural frequency of the camera's sway on bumps (the mast's) [Hz].
+        sway_damping: Damping ratio of that sway (0 < ζ; a steel mast rings, ζ ≈ 0.3).
     """
 
     length: float = 2.4
@@ -55,10 +57,12 @@ class ForkliftSpec:
     max_force: float = 30_000.0
     max_torque: float = 60_000.0
     camera_offset: tuple[float, float] = (0.3, 0.0)
+    sway_hz: float = 2.0
+    sway_damping: float = 0.3
 
     def __post_init__(self) -> None:
         for name in ("length", "width", "mass", "wheelbase", "max_speed", "max_accel",
-                     "max_force", "max_torque"):
+                     "max_force", "max_torque", "sway_hz", "sway_damping"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise InvalidInputError(f"ForkliftSpec.{name} must be > 0, got {value!r}")
