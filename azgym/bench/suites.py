@@ -180,9 +180,9 @@ SUITES: dict[str, Suite] = {suite.name: suite for suite in (
           "K = 0, 1, 3, 5 (the runs of azgym reproduce paper)", 2021, _paper),
     Suite("warehouse-static", 1, "random poses in warehouse-small and warehouse-paper; faults "
           "clean, as shipped and heavy", 7, _warehouse_static),
-    Suite("warehouse-routes", 1, "every route of warehouse-small and warehouse-paper, frame by "
+    Suite("warehouse-routes", 2, "every route of warehouse-small and warehouse-paper, frame by "
           "frame at 10 Hz", 11, _warehouse_routes),
-    Suite("image-routes", 1, "every route of warehouse-small and warehouse-paper through the "
+    Suite("image-routes", 2, "every route of warehouse-small and warehouse-paper through the "
           "fisheye image path: blobs detected from pixels, ids decoded from blinking (30 Hz "
           "camera, every third frame scored)", 17, _image_routes),
     Suite("stress", 1, "warehouse-large (64 beacons) with heavy faults: 5 % misreads, bright "

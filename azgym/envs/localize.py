@@ -98,7 +98,9 @@ class LocalizeEnv(gym.Env):
 
     ## Version History
 
-    * v0: initial version.
+    * v0: initial version. Revised with azgym's suites warehouse-routes v2 and image-routes v2:
+      the camera's sway on bumps is a damped oscillation (consecutive frames see nearly the same
+      tilt) instead of independent draws per frame, which changes warehouse-paper's episodes.
 
     ## Example
 

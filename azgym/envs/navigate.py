@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any
 
 import gymnasium as gym
@@ -11,11 +12,12 @@ from gymnasium import spaces
 
 from azgym.core import Measurements
 from azgym.envs.common import check_render_mode, reward_weights
-from azgym.errors import InvalidInputError
+from azgym.errors import InvalidInputError, unknown_name
 from azgym.layout import occluder_table
 from azgym.localize.registry import SupportsLocalize, make_localizer
 from azgym.scenario import Scenario, load_scenario
 from azgym.sensing import geometry as G
+from azgym.sensing.image_sensor import ID_MODES, ImageFrame, ImageSensor
 from azgym.sensing.sensor import Sensor
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
@@ -32,6 +34,12 @@ DISCRETE_CONTROLS = np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.6, 1.0], [
 GOAL_SCALE = 20.0
 """Goal offsets in the observation are divided by this [m]."""
 
+SENSORS = ("geometry", "image")
+"""The camera models: the compiled geometry, or rendered and detected fisheye frames."""
+
+BLINK_CAMERA_RATE_HZ = 30.0
+"""The camera's default frame rate with ``ids="blink"`` [Hz] (the tracker needs small steps)."""
+
 
 class NavigateEnv(gym.Env):
     """Navigation: drive the forklift to a pick or drop spot, seeing only the estimated pose.
@@ -44,6 +52,22 @@ class NavigateEnv(gym.Env):
     default, any registered name or object, or ``"truth"`` as an oracle — estimates the pose. The
     goal is given in the frame of that estimate. When the localizer fails (``ok=False``) the
     observation says so and gives no goal, rather than inventing a pose.
+
+    With ``sensor="image"`` the localizer reads the fisheye image path
+    (:mod:`azgym.sensing.image_sensor`): beacons rendered, detected from pixels and identified
+    (``ids="oracle"``, or ``ids="blink"``: decoded from the beacons' blinking over successive
+    frames). It gets each frame's blobs as they are — unidentified ones with id −1, which
+    localizers ignore like any id not in the map — with their (area, peak, elongation) as the
+    quality; the last frame is ``env.unwrapped.image_frame``.
+
+    The camera takes frames at ``camera_rate_hz``, at the exact times k / rate since the start,
+    whatever the physics step: the camera pose of a frame is interpolated between the two
+    physics states around it (the heading along the shorter arc). By default it takes one frame
+    per control period, at its end; with ``ids="blink"`` 30 per second, three per period, every
+    one fed to the blob tracker. The localizer answers the period's last frame; in a period
+    without a frame (a camera slower than 10 Hz) the previous estimate stands. Frames that no one
+    reads (all but the last of a period, with a sensor that keeps no state between frames) are
+    not rendered, but the camera's sway still steps through them.
 
     ## Action Space
 
@@ -69,7 +93,8 @@ class NavigateEnv(gym.Env):
     ## Starting State
 
     Start and goal are two different spots at least 5 m apart, drawn by the environment's
-    generator; the heading is uniform. The sensor's noise comes from the same generator.
+    generator; the heading is uniform. The sensor's noise and the camera's sway come from the
+    same generator; the image sensor's tracks are reset with the episode.
 
     ## Episode End
 
@@ -80,11 +105,15 @@ class NavigateEnv(gym.Env):
 
     ``gym.make("azgym/Navigate-WarehouseSmall-v0", scenario=..., localizer="ransac",
     discrete=False, max_steps=600, progress=1.0, collision=1.0, time=0.01, success=10.0,
-    goal_radius=1.0, n_rays=8, ray_range=10.0, render_mode=None)``.
+    goal_radius=1.0, n_rays=8, ray_range=10.0, sensor="geometry", ids="oracle",
+    camera_rate_hz=None, render_mode=None)``. With ``render_mode`` and ``sensor="image"`` the
+    render shows the camera's last frame beside the top-down view.
 
     ## Version History
 
-    * v0: initial version.
+    * v0: initial version. Revised with azgym's suites warehouse-routes v2 and image-routes v2:
+      the camera's sway on bumps is a damped oscillation (consecutive frames see nearly the same
+      tilt) instead of independent draws per frame, which changes warehouse-paper's episodes.
 
     ## Example
 
@@ -109,9 +138,13 @@ class NavigateEnv(gym.Env):
         goal_radius: float = 1.0,
         n_rays: int = 8,
         ray_range: float = 10.0,
+        sensor: str = "geometry",
+        ids: str = "oracle",
+        camera_rate_hz: float | None = None,
         render_mode: str | None = None,
     ) -> None:
         self.scenario = load_scenario(scenario)
+        _check_sensor_options(sensor, ids, camera_rate_hz)
         if not self.scenario.routes:
             raise InvalidInputError(
                 f"scenario {self.scenario.name!r} has no routes, whose waypoints are the "
@@ -129,9 +162,19 @@ class NavigateEnv(gym.Env):
         self.n_rays = int(n_rays)
         self.ray_range = float(ray_range)
         self.render_mode = render_mode
+        self.sensor = sensor
+        self.ids = ids
+        self.camera_rate_hz = (float(camera_rate_hz) if camera_rate_hz is not None
+                               else BLINK_CAMERA_RATE_HZ if ids == "blink"
+                               else 1.0 / (CONTROL_STEPS * PHYSICS_DT))
+        # Physics steps per frame; the frame of index k is taken after k * this many steps.
+        self._frame_steps = 1.0 / (PHYSICS_DT * self.camera_rate_hz)
         self._sensor = Sensor(self.scenario)
         self._buffers = self._sensor.new_buffers()
-        self._sway = CameraSway(self.scenario, CONTROL_STEPS * PHYSICS_DT)
+        self._sway = CameraSway(self.scenario, 1.0 / self.camera_rate_hz)
+        self.image_sensor = ImageSensor(self.scenario, ids=ids) if sensor == "image" else None
+        self.image_frame: ImageFrame | None = None
+        self._frames = 0
         self._segments = occluder_table(self.scenario.racks, self.scenario.walls)
         self._rays = np.empty(self.n_rays)
         self.spots = np.unique(np.concatenate([r.waypoints for r in self.scenario.routes]),
@@ -154,21 +197,41 @@ class NavigateEnv(gym.Env):
         heading = float(self.np_random.uniform(-math.pi, math.pi))
         self._world = World(self.scenario, (*self.spots[start], heading), dt=PHYSICS_DT)
         self._sway.reset()
+        if self.image_sensor is not None:
+            self.image_sensor.reset()
+        self.image_frame = None
         self._goal = self.spots[goal].astype(np.float64)
         self._steps = 0
         self._distance = self._true_distance()
+        self._estimate = None
+        self._frames = 1  # frame 0 is taken now, at the start
+        self._look([self._camera_pose()])
         observation = self._observe()
         if self.render_mode == "human":
             self.render()
         return observation, self._info()
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
-        """Drive for one control period (0.1 s), then look and localize."""
+        """Drive for one control period (0.1 s), taking camera frames on the way; localize."""
         throttle, steer = self._controls(action)
         world = self._world
         contacts_before = len(world.contacts)
-        for _ in range(CONTROL_STEPS):
-            world.step(throttle, steer)
+        if self._frame_steps == CONTROL_STEPS:  # one frame a period, at its end (the default)
+            for _ in range(CONTROL_STEPS):
+                world.step(throttle, steer)
+            self._frames += 1
+            self._look([self._camera_pose()])
+        else:
+            frames = self._due_frames(world.steps)
+            # The camera poses i physics steps into the period, for the i frames fall beside.
+            needed = {i + 1 for i, _ in frames} | {i for i, fraction in frames if fraction < 1.0}
+            states = {0: self._camera_pose()} if 0 in needed else {}
+            for i in range(1, CONTROL_STEPS + 1):
+                world.step(throttle, steer)
+                if i in needed:
+                    states[i] = self._camera_pose()
+            self._look([_interpolate(states.get(i), states[i + 1], fraction)
+                        for i, fraction in frames])
         self._steps += 1
         distance = self._true_distance()
         arrived = distance < self.goal_radius
@@ -213,20 +276,63 @@ class NavigateEnv(gym.Env):
         x, y, _ = self._world.forklift.pose
         return math.hypot(self._goal[0] - x, self._goal[1] - y)
 
-    def _observe(self) -> np.ndarray:
+    def _camera_pose(self) -> tuple[float, float, float]:
         forklift = self._world.forklift
-        x, y, heading = forklift.pose
-        cx, cy = forklift.camera_position()
-        tilt = self._sway.step(cx, cy, self.np_random)
-        frame = self._buffers
-        count = self._sensor.observe_into(cx, cy, heading, self.np_random, frame, tilt=tilt)
+        return (*forklift.camera_position(), forklift.pose[2])
+
+    def _due_frames(self, start: int) -> list[tuple[int, float]]:
+        """The frames due in the control period after physics step ``start``, in time order.
+
+        Frame k (``_frames`` counts the frames taken) is due after k · ``_frame_steps``
+        physics steps, snapped to a whole step when within rounding of one. Each is given as
+        (i, fraction): it lies ``fraction`` of the way, in (0, 1], from the state i steps into
+        the period to the state i + 1 steps in.
+        """
+        frames = []
+        while True:
+            due = self._frames * self._frame_steps
+            if abs(due - round(due)) < 1e-9 * max(1.0, due):
+                due = float(round(due))
+            offset = due - start
+            if offset > CONTROL_STEPS:
+                return frames
+            i = math.ceil(offset) - 1
+            frames.append((i, offset - i))
+            self._frames += 1
+
+    def _look(self, poses: list[tuple[float, float, float]]) -> None:
+        """Take the frames at ``poses`` (in time order) and localize on the last one.
+
+        The sway steps through every frame. A sensor that keeps state between frames (the
+        blinking ids' tracker) sees every frame; otherwise only the last one is measured,
+        since nothing reads the others.
+        """
+        if not poses:
+            return  # no frame this period: the previous estimate stands
+        tracking = self.image_sensor is not None and self.ids == "blink"
+        for k, (cx, cy, heading) in enumerate(poses):
+            tilt = self._sway.step(cx, cy, self.np_random)
+            if not (tracking or k == len(poses) - 1):
+                continue
+            if self.image_sensor is not None:
+                self.image_frame = self.image_sensor.observe(cx, cy, heading, self.np_random,
+                                                             tilt)
+                measurements = self.image_frame.measurements
+            else:
+                frame = self._buffers
+                count = self._sensor.observe_into(cx, cy, heading, self.np_random, frame,
+                                                  tilt=tilt)
+                measurements = Measurements._from_valid_arrays(frame.ids[:count],
+                                                               frame.azimuth[:count])
         if self.localizer is None:
             self._estimate = (cx, cy, heading)
         else:
-            measurements = Measurements._from_valid_arrays(frame.ids[:count],
-                                                           frame.azimuth[:count])
             estimate = self.localizer.localize(measurements, self.scenario.beacons)
             self._estimate = (estimate.x, estimate.y, estimate.heading) if estimate.ok else None
+
+    def _observe(self) -> np.ndarray:
+        forklift = self._world.forklift
+        x, y, heading = forklift.pose
         G.ray_ranges(x, y, heading, self._segments, self.n_rays, self.ray_range, self._rays)
         spec = forklift.spec
         observation = np.zeros(5 + self.n_rays, dtype=np.float32)
@@ -250,16 +356,45 @@ class NavigateEnv(gym.Env):
 
     def true_pose(self) -> tuple[float, float, float]:
         """The camera's true pose."""
-        forklift = self._world.forklift
-        return (*forklift.camera_position(), forklift.pose[2])
+        return self._camera_pose()
 
     def last_estimate(self) -> tuple[float, float, float] | None:
         """The localizer's last estimate (None when it failed)."""
         return self._estimate
 
     def render(self) -> np.ndarray | None:
-        """Draw the top-down view (see :mod:`azgym.envs.render`)."""
+        """Draw the top-down view, and the camera's last frame beside it with the image sensor.
+
+        See :mod:`azgym.envs.render`.
+        """
         from azgym.envs.render import render_frame
 
         return render_frame(self, self.render_mode)
 
+
+def _check_sensor_options(sensor: str, ids: str, camera_rate_hz: float | None) -> None:
+    """Refuse an unknown sensor or id mode, blinking ids without pixels, a bad frame rate."""
+    if not isinstance(sensor, str) or sensor not in SENSORS:
+        raise unknown_name("sensor", str(sensor), SENSORS)
+    if not isinstance(ids, str) or ids not in ID_MODES:
+        raise unknown_name("ids", str(ids), ID_MODES)
+    if ids == "blink" and sensor != "image":
+        raise InvalidInputError('ids="blink" needs the image path: sensor="image"')
+    if camera_rate_hz is not None and (
+            isinstance(camera_rate_hz, bool) or not isinstance(camera_rate_hz, numbers.Real)
+            or not (math.isfinite(camera_rate_hz) and camera_rate_hz > 0)):
+        raise InvalidInputError(f"camera_rate_hz must be a finite number > 0 [Hz], got "
+                                f"{camera_rate_hz!r}")
+
+
+def _interpolate(a: tuple[float, float, float] | None, b: tuple[float, float, float],
+                 fraction: float) -> tuple[float, float, float]:
+    """The pose ``fraction`` of the way from a to b, the heading along the shorter arc.
+
+    ``fraction`` 1 gives b itself, bit for bit (and needs no a).
+    """
+    if fraction >= 1.0:
+        return b
+    turn = math.remainder(b[2] - a[2], 2.0 * math.pi)
+    return (a[0] + fraction * (b[0] - a[0]), a[1] + fraction * (b[1] - a[1]),
+            math.remainder(a[2] + fraction * turn, 2.0 * math.pi))

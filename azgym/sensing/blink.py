@@ -36,6 +36,10 @@ from azgym.errors import InvalidInputError
 MARKER = (1, 1, 1, 0)
 """The start marker: three lit frames and a dark one."""
 
+MERGE_SHARE = 0.8
+"""A blob is taken for several close beacons' merged light when its area is at least this share
+of their blobs' areas alone (areas fluctuate by about ±20 % with noise at the threshold)."""
+
 
 @dataclass(frozen=True)
 class BlinkCode:
@@ -114,6 +118,8 @@ class _Track:
     missed: int = 0
     seen: int = 1  # frames with a blob; from 2 on, the drift is measured
     beacon_id: int = -1
+    area: float = 0.0  # the blob's area when it was alone [px]; 0: not known
+    prior: bool = False  # whether the drift started from a neighbour's
 
 
 class BlobTracker:
@@ -188,14 +194,26 @@ class BlobTracker:
         best = starts[np.argmin(np.abs(candidates[starts] + 0.5 * window))]
         return self._turn + float(np.median(candidates[best:best + most]))
 
-    def update(self, pixels: FloatArray) -> IntArray:
+    def update(self, pixels: FloatArray, areas: FloatArray | None = None) -> IntArray:
         """Take one frame's blob centres (N, 2) [px]; return each blob's decoded id, shape (N,).
 
         A blob's id is its track's: -1 until the track reads a valid codeword, and again after
         a corrupt one.
+
+        Args:
+            pixels: Blob centroids (u, v) [px].
+            areas: Blob areas [px], shape (N,). With them, a blob that holds the light of
+                several close beacons (lit together, merged on the image) lights all of their
+                tracks; without them, a track left without a blob reads that frame as dark and
+                its code breaks.
         """
         cx, cy = self.centre
         points = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        if areas is not None:
+            areas = np.asarray(areas, dtype=np.float64).reshape(-1)
+            if areas.shape != (len(points),):
+                raise InvalidInputError(f"areas: one per blob ({len(points)}), got shape "
+                                        f"{areas.shape}")
         azimuth = np.arctan2(points[:, 1] - cy, points[:, 0] - cx)
         radius = np.hypot(points[:, 0] - cx, points[:, 1] - cy)
         self._turn = self._common_turn(azimuth, radius)
@@ -204,35 +222,42 @@ class BlobTracker:
             track.azimuth += self._turn + track.parallax_rate
             track.radius += track.radius_rate
         assignment = np.full(len(points), -1, dtype=np.int64)
+        taken = np.zeros(len(tracks), dtype=bool)
+        merged = np.zeros(len(points), dtype=bool)
         if tracks and len(points):
             predicted = np.array([(t.azimuth, t.radius) for t in tracks])
             px = cx + predicted[:, 1] * np.cos(predicted[:, 0])
             py = cy + predicted[:, 1] * np.sin(predicted[:, 0])
             cost = np.hypot(px[:, None] - points[None, :, 0], py[:, None] - points[None, :, 1])
             # A track seen once has no drift yet: its gate is wider.
-            gate = np.array([self.gate_px * (1.0 if t.seen >= 2 else 3.0) for t in tracks])
-            rows, cols = linear_sum_assignment(np.where(cost <= gate[:, None], cost, 1e6))
-            keep = cost[rows, cols] <= gate[rows]
-            assignment[cols[keep]] = rows[keep]
-        taken = np.zeros(len(tracks), dtype=bool)
-        taken[assignment[assignment >= 0]] = True
+            gate = np.array([self._gate(t) for t in tracks])
+            inside = cost <= gate[:, None]
+            rows, cols = self._assign(cost, gate)
+            assignment[cols] = rows
+            taken[rows] = True
+            if areas is not None:
+                self._join_merged(areas, assignment, inside, cost, taken, merged)
         for b, t in enumerate(assignment):
             if t < 0:
                 continue
             track = tracks[t]
-            gap = track.missed + 1
-            # An alpha-beta update: the blob's position, and part of the surprise into the drift
-            # (all of it at the second sighting, when the drift is first measured).
-            beta = 1.0 if track.seen == 1 else 0.5
-            track.parallax_rate += beta * math.remainder(azimuth[b] - track.azimuth,
-                                                         2 * math.pi) / gap
-            track.radius_rate += beta * (radius[b] - track.radius) / gap
-            track.azimuth, track.radius = float(azimuth[b]), float(radius[b])
-            track.missed = 0
-            track.seen += 1
-            track.history.append(1)
+            if not merged[b]:  # a merged blob's centroid mixes lights: the track coasts
+                gap = track.missed + 1
+                # An alpha-beta update: the blob's position, and part of the surprise into the
+                # drift (all of it at the second sighting, when the drift is first measured).
+                beta = 1.0 if track.seen == 1 and not track.prior else 0.5
+                track.parallax_rate += beta * math.remainder(azimuth[b] - track.azimuth,
+                                                             2 * math.pi) / gap
+                track.radius_rate += beta * (radius[b] - track.radius) / gap
+                track.azimuth, track.radius = float(azimuth[b]), float(radius[b])
+                track.seen += 1
+                if areas is not None:
+                    track.area += 0.5 * (areas[b] - track.area) if track.area else areas[b]
         for t, track in enumerate(tracks):
-            if not taken[t]:
+            if taken[t]:
+                track.missed = 0
+                track.history.append(1)
+            else:
                 track.missed += 1
                 track.history.append(0)
         survivors = [t for t in range(len(tracks)) if tracks[t].missed <= self.max_missed]
@@ -240,9 +265,13 @@ class BlobTracker:
         renumber[survivors] = np.arange(len(survivors))
         self._tracks = [tracks[t] for t in survivors]
         assignment = renumber[assignment]  # -1 stays -1 (index -1 of renumber is -1)
+        settled = [t for t in self._tracks if t.seen >= 3 and t.missed == 0]
         for b in np.flatnonzero(assignment < 0):  # a blob no track took starts one
             assignment[b] = len(self._tracks)
-            self._tracks.append(_Track(float(azimuth[b]), float(radius[b]), 0.0, 0.0, [1]))
+            flow = self._local_flow(settled, azimuth[b], radius[b])
+            self._tracks.append(_Track(float(azimuth[b]), float(radius[b]), *flow, [1],
+                                       area=0.0 if areas is None else float(areas[b]),
+                                       prior=flow != (0.0, 0.0)))
         period = self.code.period
         for track in self._tracks:
             if len(track.history) > period:
@@ -250,4 +279,72 @@ class BlobTracker:
             decoded = self.code.decode(track.history)
             if decoded is not None:
                 track.beacon_id = decoded
-        return np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
+        ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
+        ids[merged] = -1  # several beacons' light, at none's azimuth
+        return ids
+
+    def _gate(self, track: _Track) -> float:
+        """How far from its prediction a track takes a blob [px]."""
+        if track.seen < 2 and not track.prior:  # no drift yet: a wider gate
+            return 3.0 * self.gate_px
+        return self.gate_px
+
+    def _assign(self, cost: FloatArray, gate: FloatArray) -> tuple[IntArray, IntArray]:
+        """Tracks and blobs paired so that the pairs' total margin inside their gates is largest.
+
+        A track may be dark (blinking) and a blob may be new, so no pair is forced: each pair
+        gains its gate minus its distance, and the pairing with the largest total gain wins.
+        Two middling pairs then do not beat one close pair and a new track, which a plain
+        rectangular assignment of distances (pairing as many blobs as it can) would choose.
+
+        Args:
+            cost: Track-to-blob distances (T, B) [px].
+            gate: Each track's gate [px]; a track pairs only with blobs inside it.
+
+        Returns:
+            The paired (track, blob) indices.
+        """
+        margin = cost - gate[:, None]
+        inside = margin <= 0.0
+        rows, cols = linear_sum_assignment(np.where(inside, margin, 0.0))
+        keep = inside[rows, cols]
+        return rows[keep], cols[keep]
+
+    def _local_flow(self, settled: list[_Track], azimuth: float,
+                    radius: float) -> tuple[float, float]:
+        """A new track's first drift: that of the nearest settled track within 6 gates, if any.
+
+        An upward fisheye maps a light's azimuth and elevation to the image, and beacons hang at
+        similar heights, so blobs that are close on the image are at similar bearings and
+        distances and drift alike as the forklift travels.
+        """
+        best, nearest = (0.0, 0.0), (6.0 * self.gate_px) ** 2
+        for track in settled:
+            du = track.radius * math.cos(track.azimuth) - radius * math.cos(azimuth)
+            dv = track.radius * math.sin(track.azimuth) - radius * math.sin(azimuth)
+            if du * du + dv * dv < nearest:
+                best, nearest = (track.parallax_rate, track.radius_rate), du * du + dv * dv
+        return best
+
+    def _join_merged(self, areas: FloatArray, assignment: IntArray, inside: np.ndarray,
+                     cost: FloatArray, taken: np.ndarray, merged: np.ndarray) -> None:
+        """Light the tracks whose beacons merged into another track's blob (in place).
+
+        Two beacons a few pixels apart that are lit together make one blob, at their
+        flux-weighted centre and about as large as their two blobs together. A track left
+        without a blob whose gate holds such a blob is lit too: the blob's area must be at
+        least ``MERGE_SHARE`` of the areas its tracks had alone. Checked nearest first, so a
+        blob can hold three or more beacons.
+        """
+        for b in np.flatnonzero(assignment >= 0):
+            claimed = self._tracks[assignment[b]].area
+            if not claimed:
+                continue
+            for t in np.argsort(cost[:, b]):
+                if not inside[t, b]:
+                    break
+                area = self._tracks[t].area
+                if taken[t] or not area or areas[b] < MERGE_SHARE * (claimed + area):
+                    continue
+                claimed += area
+                taken[t] = merged[b] = True

@@ -171,7 +171,7 @@ class ImageSensor:
         true_azimuth = np.full(len(blobs), np.nan)
         true_azimuth[matched] = every.azimuth[source[matched]]
         if blink:
-            ids = self.tracker.update(pixels)
+            ids = self.tracker.update(pixels, np.array([b.area for b in blobs], dtype=float))
             true_ids = np.where(beacon >= 0, self.scenario.beacons.ids[np.maximum(beacon, 0)],
                                 -1)
             labels[(ids >= 0) & (ids != true_ids)] = G.MISIDENTIFIED
