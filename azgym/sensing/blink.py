@@ -118,6 +118,7 @@ class _Track:
     missed: int = 0
     seen: int = 1  # frames with a blob; from 2 on, the drift is measured
     beacon_id: int = -1
+    phase: int = -1  # with an id: where in its codeword the coming frame is
     area: float = 0.0  # the blob's area when it was alone [px]; 0: not known
     prior: bool = False  # whether the drift started from a neighbour's
 
@@ -154,6 +155,7 @@ class BlobTracker:
         self.max_turn_change = max_turn_change
         self._tracks: list[_Track] = []
         self._turn = 0.0  # the last frame's common azimuth shift [rad]
+        self._codewords: dict[int, np.ndarray] = {}
 
     def reset(self) -> None:
         """Forget every track (a new episode)."""
@@ -279,15 +281,30 @@ class BlobTracker:
             decoded = self.code.decode(track.history)
             if decoded is not None:
                 track.beacon_id = decoded
+                track.phase = 0 if decoded >= 0 else -1  # a codeword starts next frame
+            elif track.phase >= 0:
+                track.phase = (track.phase + 1) % period
         ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
         ids[merged] = -1  # several beacons' light, at none's azimuth
         return ids
 
     def _gate(self, track: _Track) -> float:
-        """How far from its prediction a track takes a blob [px]."""
+        """How far from its prediction a track takes a blob [px]; -1: it takes none.
+
+        A track with an id knows its code, so in a frame where its beacon is dark any blob
+        at its place is another light (a neighbour, a beacon just come into view).
+        """
+        if track.phase >= 0 and not self._codeword(track.beacon_id)[track.phase]:
+            return -1.0
         if track.seen < 2 and not track.prior:  # no drift yet: a wider gate
             return 3.0 * self.gate_px
         return self.gate_px
+
+    def _codeword(self, beacon_id: int) -> np.ndarray:
+        """The lit frames of one codeword of ``beacon_id`` (cached)."""
+        if beacon_id not in self._codewords:
+            self._codewords[beacon_id] = self.code.frames(beacon_id)
+        return self._codewords[beacon_id]
 
     def _assign(self, cost: FloatArray, gate: FloatArray) -> tuple[IntArray, IntArray]:
         """Tracks and blobs paired so that the pairs' total margin inside their gates is largest.
@@ -333,8 +350,10 @@ class BlobTracker:
         Two beacons a few pixels apart that are lit together make one blob, at their
         flux-weighted centre and about as large as their two blobs together. A track left
         without a blob whose gate holds such a blob is lit too: the blob's area must be at
-        least ``MERGE_SHARE`` of the areas its tracks had alone. Checked nearest first, so a
-        blob can hold three or more beacons.
+        least ``MERGE_SHARE`` of the areas its tracks had alone, and the track must have been
+        seen alone three times (noise makes short-lived specks of a few pixels, and a speck's
+        track would otherwise turn every blob beside it into a merger). Checked nearest first,
+        so a blob can hold three or more beacons.
         """
         for b in np.flatnonzero(assignment >= 0):
             claimed = self._tracks[assignment[b]].area
@@ -342,9 +361,10 @@ class BlobTracker:
                 continue
             for t in np.argsort(cost[:, b]):
                 if not inside[t, b]:
-                    break
-                area = self._tracks[t].area
-                if taken[t] or not area or areas[b] < MERGE_SHARE * (claimed + area):
                     continue
-                claimed += area
+                track = self._tracks[t]
+                if (taken[t] or track.seen < 3
+                        or areas[b] < MERGE_SHARE * (claimed + track.area)):
+                    continue
+                claimed += track.area
                 taken[t] = merged[b] = True
