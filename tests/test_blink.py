@@ -152,11 +152,12 @@ def test_blob_areas_must_match_the_blobs():
         BlobTracker(CODE, (240.0, 240.0)).update(np.zeros((2, 2)), np.ones(3))
 
 
-def test_the_image_path_decodes_ids_on_a_warehouse_route():
+@pytest.mark.parametrize("scenario, route", [("warehouse-small", "pick-and-back"),
+                                             ("warehouse-paper", "A-B-C-D")])  # over the bump
+def test_the_image_path_decodes_ids_on_a_warehouse_route(scenario, route):
     from azgym.study.identification import measure_identification
 
-    stats = measure_identification("warehouse-small", camera_rate_hz=30.0,
-                                   routes=["pick-and-back"])
+    stats = measure_identification(scenario, camera_rate_hz=30.0, routes=[route])
     assert stats.eligible > 1000
     assert stats.correct_share >= 0.99
     assert stats.misdecode_rate <= 0.01

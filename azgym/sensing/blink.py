@@ -15,7 +15,7 @@ then the pairs; a pair ``1 1`` or ``0 0`` or a parity failure rejects the codewo
 On the image a blinking beacon is a blob that comes and goes. :class:`BlobTracker` follows the
 blobs from frame to frame (in polar coordinates about the principal point, where the forklift's
 turning is a common shift of every azimuth, estimated each frame; assigned by the Hungarian
-method within a gate), records each track's lit/dark history and decodes it. A track has an id
+method within gates), records each track's lit/dark history and decodes it. A track has an id
 only once it has read a complete, valid codeword, and loses it when its latest codeword fails.
 Misidentifications then come from what really breaks codes: missed detections, tracks that swap
 between close blobs, noise blobs and lights that blink nothing.
@@ -123,14 +123,38 @@ class _Track:
     prior: bool = False  # whether the drift started from a neighbour's
 
 
+def _follow(track: _Track, azimuth: float, radius: float, area: float | None) -> None:
+    """Move a track onto the blob it took, with an alpha-beta update of its drift.
+
+    Part of the surprise goes into the drift: all of it at the second sighting of a track
+    without a prior drift, when the drift is first measured. The gap counts the dark frames
+    since the last sighting, over which the surprise built up.
+    """
+    gap = track.missed + 1
+    beta = 1.0 if track.seen == 1 and not track.prior else 0.5
+    track.parallax_rate += beta * math.remainder(azimuth - track.azimuth, 2 * math.pi) / gap
+    track.radius_rate += beta * (radius - track.radius) / gap
+    track.azimuth, track.radius = float(azimuth), float(radius)
+    track.seen += 1
+    if area is not None:
+        track.area += 0.5 * (area - track.area) if track.area else area
+
+
 class BlobTracker:
     """Blobs followed across frames and their blinking decoded into ids.
 
     Each frame, every track is moved by the common turn (every azimuth shifts by the same angle
     when the forklift turns) and by its own drift (parallax of the forklift's travel). The
     common turn is estimated first, as the densest cluster of azimuth shifts between tracks and
-    blobs at similar radii; blobs are then assigned to the moved tracks by the Hungarian method
-    within a gate. Without this, a 10 Hz camera loses every track in a brisk turn (20 px a frame).
+    blobs at similar radii; without it a 10 Hz camera loses every track in a brisk turn (20 px a
+    frame). Blobs are then assigned to the moved tracks by the Hungarian method, for the largest
+    total margin inside the gates, so no pair is forced. Far beacons down a long aisle sit a few
+    pixels apart near the horizon, and three rules keep their tracks apart:
+
+    * a track with an id knows its code and takes no blob in a frame where its beacon is dark;
+    * a blob as large as the blobs of several tracks together, lit at once and merged on the
+      image, lights all of them (and has no id: its centroid is no one beacon's);
+    * a new track starts with the drift of a settled neighbour on the image, which drifts alike.
 
     Args:
         code: The beacons' code.
@@ -231,7 +255,6 @@ class BlobTracker:
             px = cx + predicted[:, 1] * np.cos(predicted[:, 0])
             py = cy + predicted[:, 1] * np.sin(predicted[:, 0])
             cost = np.hypot(px[:, None] - points[None, :, 0], py[:, None] - points[None, :, 1])
-            # A track seen once has no drift yet: its gate is wider.
             gate = np.array([self._gate(t) for t in tracks])
             inside = cost <= gate[:, None]
             rows, cols = self._assign(cost, gate)
@@ -239,22 +262,10 @@ class BlobTracker:
             taken[rows] = True
             if areas is not None:
                 self._join_merged(areas, assignment, inside, cost, taken, merged)
-        for b, t in enumerate(assignment):
-            if t < 0:
-                continue
-            track = tracks[t]
-            if not merged[b]:  # a merged blob's centroid mixes lights: the track coasts
-                gap = track.missed + 1
-                # An alpha-beta update: the blob's position, and part of the surprise into the
-                # drift (all of it at the second sighting, when the drift is first measured).
-                beta = 1.0 if track.seen == 1 and not track.prior else 0.5
-                track.parallax_rate += beta * math.remainder(azimuth[b] - track.azimuth,
-                                                             2 * math.pi) / gap
-                track.radius_rate += beta * (radius[b] - track.radius) / gap
-                track.azimuth, track.radius = float(azimuth[b]), float(radius[b])
-                track.seen += 1
-                if areas is not None:
-                    track.area += 0.5 * (areas[b] - track.area) if track.area else areas[b]
+        # A merged blob's centroid mixes lights: its tracks coast on their predictions.
+        for b in np.flatnonzero((assignment >= 0) & ~merged):
+            _follow(tracks[assignment[b]], azimuth[b], radius[b],
+                    None if areas is None else areas[b])
         for t, track in enumerate(tracks):
             if taken[t]:
                 track.missed = 0
@@ -274,6 +285,13 @@ class BlobTracker:
             self._tracks.append(_Track(float(azimuth[b]), float(radius[b]), *flow, [1],
                                        area=0.0 if areas is None else float(areas[b]),
                                        prior=flow != (0.0, 0.0)))
+        self._decode()
+        ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
+        ids[merged] = -1  # several beacons' light, at none's azimuth
+        return ids
+
+    def _decode(self) -> None:
+        """Read the codeword that ends now on every track; keep the phase of those with an id."""
         period = self.code.period
         for track in self._tracks:
             if len(track.history) > period:
@@ -284,9 +302,6 @@ class BlobTracker:
                 track.phase = 0 if decoded >= 0 else -1  # a codeword starts next frame
             elif track.phase >= 0:
                 track.phase = (track.phase + 1) % period
-        ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
-        ids[merged] = -1  # several beacons' light, at none's azimuth
-        return ids
 
     def _gate(self, track: _Track) -> float:
         """How far from its prediction a track takes a blob [px]; -1: it takes none.
