@@ -294,5 +294,5 @@ def test_image_options_are_checked():
         gym.make("azgym/Localize-WarehouseSmall-v0", ids="blink")
     with pytest.raises(InvalidInputError, match="has no routes"):
         gym.make("azgym/Localize-PaperRoom-v0", sensor="image", ids="blink")
-    with pytest.raises(InvalidInputError, match="camera_rate_hz must be > 0"):
+    with pytest.raises(InvalidInputError, match="camera_rate_hz must be a finite number > 0"):
         gym.make("azgym/Localize-WarehouseSmall-v0", camera_rate_hz=0.0)

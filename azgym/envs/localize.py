@@ -10,10 +10,10 @@ import numpy as np
 from gymnasium import spaces
 
 from azgym.core import wrap_angle
-from azgym.envs.common import check_render_mode, reward_weights
+from azgym.envs.common import check_render_mode, check_sensor_options, reward_weights
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.scenario import Scenario, load_scenario
-from azgym.sensing.image_sensor import ID_MODES, ImageFrame, ImageSensor
+from azgym.sensing.image_sensor import ImageFrame, ImageSensor
 from azgym.sensing.sensor import Sensor
 from azgym.simulate import camera_trajectory
 from azgym.world.sway import CameraSway
@@ -260,21 +260,14 @@ class LocalizeEnv(gym.Env):
 
     def _check_sensor_options(self, sensor: str, ids: str, observation: str,
                               camera_rate_hz: float | None) -> None:
-        if sensor not in ("geometry", "image"):
-            raise unknown_name("sensor", sensor, ("geometry", "image"))
-        if ids not in ID_MODES:
-            raise unknown_name("ids", ids, ID_MODES)
         if observation not in ("measurements", "image"):
             raise unknown_name("observation", observation, ("measurements", "image"))
-        if ids == "blink" and sensor != "image" and observation != "image":
-            raise InvalidInputError('ids="blink" needs the image path: sensor="image"')
+        check_sensor_options(sensor, ids, camera_rate_hz,
+                             pixels=sensor == "image" or observation == "image")
         if ids == "blink" and not self.scenario.routes:
             raise InvalidInputError(
                 f'ids="blink" decodes ids over successive frames of a route, and scenario '
                 f'{self.scenario.name!r} has no routes')
-        if camera_rate_hz is not None and not (math.isfinite(camera_rate_hz)
-                                               and camera_rate_hz > 0):
-            raise InvalidInputError(f"camera_rate_hz must be > 0, got {camera_rate_hz!r}")
 
     def _observe(self) -> dict[str, np.ndarray] | np.ndarray:
         x, y, heading = self._poses[self._frame]

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import numbers
 from typing import Any
 
 import gymnasium as gym
@@ -11,13 +10,13 @@ import numpy as np
 from gymnasium import spaces
 
 from azgym.core import Measurements
-from azgym.envs.common import check_render_mode, reward_weights
-from azgym.errors import InvalidInputError, unknown_name
+from azgym.envs.common import check_render_mode, check_sensor_options, reward_weights
+from azgym.errors import InvalidInputError
 from azgym.layout import occluder_table
 from azgym.localize.registry import SupportsLocalize, make_localizer
 from azgym.scenario import Scenario, load_scenario
 from azgym.sensing import geometry as G
-from azgym.sensing.image_sensor import ID_MODES, ImageFrame, ImageSensor
+from azgym.sensing.image_sensor import ImageFrame, ImageSensor
 from azgym.sensing.sensor import Sensor
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
@@ -33,9 +32,6 @@ DISCRETE_CONTROLS = np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.6, 1.0], [
 
 GOAL_SCALE = 20.0
 """Goal offsets in the observation are divided by this [m]."""
-
-SENSORS = ("geometry", "image")
-"""The camera models: the compiled geometry, or rendered and detected fisheye frames."""
 
 BLINK_CAMERA_RATE_HZ = 30.0
 """The camera's default frame rate with ``ids="blink"`` [Hz] (the tracker needs small steps)."""
@@ -144,7 +140,7 @@ class NavigateEnv(gym.Env):
         render_mode: str | None = None,
     ) -> None:
         self.scenario = load_scenario(scenario)
-        _check_sensor_options(sensor, ids, camera_rate_hz)
+        check_sensor_options(sensor, ids, camera_rate_hz, pixels=sensor == "image")
         if not self.scenario.routes:
             raise InvalidInputError(
                 f"scenario {self.scenario.name!r} has no routes, whose waypoints are the "
@@ -370,21 +366,6 @@ class NavigateEnv(gym.Env):
         from azgym.envs.render import render_frame
 
         return render_frame(self, self.render_mode)
-
-
-def _check_sensor_options(sensor: str, ids: str, camera_rate_hz: float | None) -> None:
-    """Refuse an unknown sensor or id mode, blinking ids without pixels, a bad frame rate."""
-    if not isinstance(sensor, str) or sensor not in SENSORS:
-        raise unknown_name("sensor", str(sensor), SENSORS)
-    if not isinstance(ids, str) or ids not in ID_MODES:
-        raise unknown_name("ids", str(ids), ID_MODES)
-    if ids == "blink" and sensor != "image":
-        raise InvalidInputError('ids="blink" needs the image path: sensor="image"')
-    if camera_rate_hz is not None and (
-            isinstance(camera_rate_hz, bool) or not isinstance(camera_rate_hz, numbers.Real)
-            or not (math.isfinite(camera_rate_hz) and camera_rate_hz > 0)):
-        raise InvalidInputError(f"camera_rate_hz must be a finite number > 0 [Hz], got "
-                                f"{camera_rate_hz!r}")
 
 
 def _interpolate(a: tuple[float, float, float] | None, b: tuple[float, float, float],
