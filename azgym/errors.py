@@ -46,8 +46,13 @@ def unknown_name(kind: str, name: str, known: Iterable[str]) -> UnknownNameError
     close = difflib.get_close_matches(name, known, n=1)
     hint = f" Did you mean {close[0]!r}?" if close else ""
     return UnknownNameError(
-        f"unknown {kind} {name!r}.{hint} Valid {kind}s: {', '.join(known) or '(none)'}."
+        f"unknown {kind} {name!r}.{hint} Valid {_plural(kind)}: {', '.join(known) or '(none)'}."
     )
+
+
+def _plural(kind: str) -> str:
+    """"localizer" -> "localizers"; a kind already plural ("ids") stays as it is."""
+    return kind if kind.endswith("s") else kind + "s"
 
 
 def require(module: str, extra: str) -> None:
