@@ -13,8 +13,9 @@ damped mast that the bumps shake, so consecutive frames see nearly the same tilt
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -35,6 +36,9 @@ from azgym.world.driver import PurePursuit
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
+
+if TYPE_CHECKING:
+    from azgym.sensing.image_sensor import ImageFrame, ImageSensor
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,6 +108,25 @@ def camera_trajectory(scenario: Scenario, route: Route, camera_rate_hz: float = 
             if done or world.time > max_time:
                 break
     return np.array(poses)
+
+
+def image_drive(sensor: ImageSensor, route: Route, seed: int | Sequence[int],
+                camera_rate_hz: float = 30.0) -> Iterator[tuple[tuple[float, float, float],
+                                                             ImageFrame]]:
+    """Drive ``route`` and look through the image ``sensor`` at every frame.
+
+    The drive is :func:`camera_trajectory`'s; the frames' random draws (noise, misreads, sway)
+    come from ``np.random.default_rng(seed)``, and the camera sways on the scenario's bumps.
+
+    Yields:
+        The camera pose (x, y, heading) and the frame seen there.
+    """
+    scenario = sensor.scenario
+    rng = np.random.default_rng(seed)
+    sway = CameraSway(scenario, 1.0 / camera_rate_hz)
+    for x, y, heading in camera_trajectory(scenario, route, camera_rate_hz=camera_rate_hz):
+        pose = (float(x), float(y), float(heading))
+        yield pose, sensor.observe(*pose, rng, sway.step(x, y, rng))
 
 
 def simulate(

@@ -180,7 +180,7 @@ def test_heading_is_interpolated_along_the_shorter_arc():
     a, b = (0.0, 0.0, math.pi - 0.1), (1.0, 2.0, -math.pi + 0.1)
     x, y, heading = _interpolate(a, b, 0.5)
     assert (x, y) == (0.5, 1.0) and abs(abs(heading) - math.pi) < 1e-12
-    assert _interpolate(None, b, 1.0) is b
+    assert _interpolate(a, b, 1.0) is b
 
 
 @pytest.mark.parametrize("ids", ["oracle", "blink"])

@@ -23,8 +23,7 @@ from azgym.scenario import Scenario, load_scenario
 from azgym.sensing import geometry as G
 from azgym.sensing.image_sensor import ImageSensor
 from azgym.sensing.sensor import Sensor
-from azgym.simulate import camera_trajectory, simulate
-from azgym.world.sway import CameraSway
+from azgym.simulate import image_drive, simulate
 
 CAUSES = ("clean", "partial", "moved", "ghost", "misidentified", "outlier")
 """Frame causes, from harmless to harmful; a frame's cause is its worst detection's."""
@@ -157,14 +156,10 @@ def _image_routes(seed: int, quick: bool) -> list[Frame]:
         routes = scenario.routes[:1] if quick else scenario.routes
         for k, route in enumerate(routes):
             sensor = ImageSensor(scenario, ids="blink", seed=seed + k)
-            rng = np.random.default_rng([seed, k])
-            poses = camera_trajectory(scenario, route, camera_rate_hz=30.0)
-            sway = CameraSway(scenario, 1.0 / 30.0)
-            for index, (x, y, heading) in enumerate(poses):
-                image = sensor.observe(x, y, heading, rng, sway.step(x, y, rng))
+            drive = image_drive(sensor, route, [seed, k], camera_rate_hz=30.0)
+            for index, (pose, image) in enumerate(drive):
                 if index % (12 if quick else 3) == 0:
-                    frames.append(Frame(name, image.measurements,
-                                        (float(x), float(y), float(heading)),
+                    frames.append(Frame(name, image.measurements, pose,
                                         frame_cause(image.labels), f"{name}/{route.name}"))
     return frames
 

@@ -212,22 +212,12 @@ class NavigateEnv(gym.Env):
         throttle, steer = self._controls(action)
         world = self._world
         contacts_before = len(world.contacts)
-        if self._frame_steps == CONTROL_STEPS:  # one frame a period, at its end (the default)
-            for _ in range(CONTROL_STEPS):
-                world.step(throttle, steer)
-            self._frames += 1
-            self._look([self._camera_pose()])
-        else:
-            frames = self._due_frames(world.steps)
-            # The camera poses i physics steps into the period, for the i frames fall beside.
-            needed = {i + 1 for i, _ in frames} | {i for i, fraction in frames if fraction < 1.0}
-            states = {0: self._camera_pose()} if 0 in needed else {}
-            for i in range(1, CONTROL_STEPS + 1):
-                world.step(throttle, steer)
-                if i in needed:
-                    states[i] = self._camera_pose()
-            self._look([_interpolate(states.get(i), states[i + 1], fraction)
-                        for i, fraction in frames])
+        frames = self._due_frames(world.steps)
+        states = [self._camera_pose()]  # the camera pose i physics steps into the period
+        for _ in range(CONTROL_STEPS):
+            world.step(throttle, steer)
+            states.append(self._camera_pose())
+        self._look([_interpolate(states[i], states[i + 1], fraction) for i, fraction in frames])
         self._steps += 1
         distance = self._true_distance()
         arrived = distance < self.goal_radius
@@ -368,11 +358,11 @@ class NavigateEnv(gym.Env):
         return render_frame(self, self.render_mode)
 
 
-def _interpolate(a: tuple[float, float, float] | None, b: tuple[float, float, float],
+def _interpolate(a: tuple[float, float, float], b: tuple[float, float, float],
                  fraction: float) -> tuple[float, float, float]:
     """The pose ``fraction`` of the way from a to b, the heading along the shorter arc.
 
-    ``fraction`` 1 gives b itself, bit for bit (and needs no a).
+    ``fraction`` 1 gives b itself, bit for bit.
     """
     if fraction >= 1.0:
         return b

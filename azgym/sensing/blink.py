@@ -140,6 +140,26 @@ def _follow(track: _Track, azimuth: float, radius: float, area: float | None) ->
         track.area += 0.5 * (area - track.area) if track.area else area
 
 
+def _assign(margin: FloatArray, inside: np.ndarray) -> tuple[IntArray, IntArray]:
+    """Tracks and blobs paired so that the pairs' total margin inside their gates is largest.
+
+    A track may be dark (blinking) and a blob may be new, so no pair is forced: each pair gains
+    its gate minus its distance, and the pairing with the largest total gain wins. Two middling
+    pairs then do not beat one close pair and a new track, which a plain rectangular assignment
+    of distances (pairing as many blobs as it can) would choose.
+
+    Args:
+        margin: Track-to-blob distance minus the track's gate, shape (T, B) [px].
+        inside: Where the margin is <= 0: the pairs allowed.
+
+    Returns:
+        The paired (track, blob) indices.
+    """
+    rows, cols = linear_sum_assignment(np.where(inside, margin, 0.0))
+    keep = inside[rows, cols]
+    return rows[keep], cols[keep]
+
+
 class BlobTracker:
     """Blobs followed across frames and their blinking decoded into ids.
 
@@ -255,13 +275,14 @@ class BlobTracker:
             px = cx + predicted[:, 1] * np.cos(predicted[:, 0])
             py = cy + predicted[:, 1] * np.sin(predicted[:, 0])
             cost = np.hypot(px[:, None] - points[None, :, 0], py[:, None] - points[None, :, 1])
-            gate = np.array([self._gate(t) for t in tracks])
-            inside = cost <= gate[:, None]
-            rows, cols = self._assign(cost, gate)
+            margin = cost - np.array([self._gate(t) for t in tracks])[:, None]
+            inside = margin <= 0.0  # each track pairs only with blobs inside its gate
+            rows, cols = _assign(margin, inside)
             assignment[cols] = rows
             taken[rows] = True
             if areas is not None:
-                self._join_merged(areas, assignment, inside, cost, taken, merged)
+                self._join_merged(areas, assignment, inside & ~taken[:, None], cost, taken,
+                                  merged)
         # A merged blob's centroid mixes lights: its tracks coast on their predictions.
         for b in np.flatnonzero((assignment >= 0) & ~merged):
             _follow(tracks[assignment[b]], azimuth[b], radius[b],
@@ -278,13 +299,14 @@ class BlobTracker:
         renumber[survivors] = np.arange(len(survivors))
         self._tracks = [tracks[t] for t in survivors]
         assignment = renumber[assignment]  # -1 stays -1 (index -1 of renumber is -1)
-        settled = [t for t in self._tracks if t.seen >= 3 and t.missed == 0]
-        for b in np.flatnonzero(assignment < 0):  # a blob no track took starts one
+        new = np.flatnonzero(assignment < 0)  # blobs no track took start tracks
+        settled = [t for t in self._tracks if t.seen >= 3 and t.missed == 0] if len(new) else []
+        for b in new:
             assignment[b] = len(self._tracks)
             flow = self._local_flow(settled, azimuth[b], radius[b])
-            self._tracks.append(_Track(float(azimuth[b]), float(radius[b]), *flow, [1],
-                                       area=0.0 if areas is None else float(areas[b]),
-                                       prior=flow != (0.0, 0.0)))
+            self._tracks.append(_Track(float(azimuth[b]), float(radius[b]), *(flow or (0.0, 0.0)),
+                                       [1], area=0.0 if areas is None else float(areas[b]),
+                                       prior=flow is not None))
         self._decode()
         ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
         ids[merged] = -1  # several beacons' light, at none's azimuth
@@ -321,36 +343,15 @@ class BlobTracker:
             self._codewords[beacon_id] = self.code.frames(beacon_id)
         return self._codewords[beacon_id]
 
-    def _assign(self, cost: FloatArray, gate: FloatArray) -> tuple[IntArray, IntArray]:
-        """Tracks and blobs paired so that the pairs' total margin inside their gates is largest.
-
-        A track may be dark (blinking) and a blob may be new, so no pair is forced: each pair
-        gains its gate minus its distance, and the pairing with the largest total gain wins.
-        Two middling pairs then do not beat one close pair and a new track, which a plain
-        rectangular assignment of distances (pairing as many blobs as it can) would choose.
-
-        Args:
-            cost: Track-to-blob distances (T, B) [px].
-            gate: Each track's gate [px]; a track pairs only with blobs inside it.
-
-        Returns:
-            The paired (track, blob) indices.
-        """
-        margin = cost - gate[:, None]
-        inside = margin <= 0.0
-        rows, cols = linear_sum_assignment(np.where(inside, margin, 0.0))
-        keep = inside[rows, cols]
-        return rows[keep], cols[keep]
-
     def _local_flow(self, settled: list[_Track], azimuth: float,
-                    radius: float) -> tuple[float, float]:
+                    radius: float) -> tuple[float, float] | None:
         """A new track's first drift: that of the nearest settled track within 6 gates, if any.
 
         An upward fisheye maps a light's azimuth and elevation to the image, and beacons hang at
         similar heights, so blobs that are close on the image are at similar bearings and
         distances and drift alike as the forklift travels.
         """
-        best, nearest = (0.0, 0.0), (6.0 * self.gate_px) ** 2
+        best, nearest = None, (6.0 * self.gate_px) ** 2
         for track in settled:
             du = track.radius * math.cos(track.azimuth) - radius * math.cos(azimuth)
             dv = track.radius * math.sin(track.azimuth) - radius * math.sin(azimuth)
@@ -358,7 +359,7 @@ class BlobTracker:
                 best, nearest = (track.parallax_rate, track.radius_rate), du * du + dv * dv
         return best
 
-    def _join_merged(self, areas: FloatArray, assignment: IntArray, inside: np.ndarray,
+    def _join_merged(self, areas: FloatArray, assignment: IntArray, free: np.ndarray,
                      cost: FloatArray, taken: np.ndarray, merged: np.ndarray) -> None:
         """Light the tracks whose beacons merged into another track's blob (in place).
 
@@ -369,14 +370,21 @@ class BlobTracker:
         seen alone three times (noise makes short-lived specks of a few pixels, and a speck's
         track would otherwise turn every blob beside it into a merger). Checked nearest first,
         so a blob can hold three or more beacons.
+
+        Args:
+            areas: Each blob's area [px].
+            assignment: Each blob's track, -1 for none.
+            free: (T, B): the track took no blob and the blob is inside its gate.
+            cost: (T, B) track-to-blob distances [px].
+            taken: Each track's "lit this frame", updated.
+            merged: Each blob's "merged", updated.
         """
-        for b in np.flatnonzero(assignment >= 0):
+        for b in np.flatnonzero((assignment >= 0) & free.any(axis=0)):
             claimed = self._tracks[assignment[b]].area
             if not claimed:
                 continue
-            for t in np.argsort(cost[:, b]):
-                if not inside[t, b]:
-                    continue
+            candidates = np.flatnonzero(free[:, b])
+            for t in candidates[np.argsort(cost[candidates, b])]:
                 track = self._tracks[t]
                 if (taken[t] or track.seen < 3
                         or areas[b] < MERGE_SHARE * (claimed + track.area)):

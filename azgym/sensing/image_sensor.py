@@ -170,8 +170,10 @@ class ImageSensor:
         visible[matched] = every.visible[source[matched]]
         true_azimuth = np.full(len(blobs), np.nan)
         true_azimuth[matched] = every.azimuth[source[matched]]
+        quality = np.array([(b.area, b.peak, b.elongation) for b in blobs],
+                           dtype=np.float64).reshape(-1, 3)
         if blink:
-            ids = self.tracker.update(pixels, np.array([b.area for b in blobs], dtype=float))
+            ids = self.tracker.update(pixels, quality[:, 0])
             true_ids = np.where(beacon >= 0, self.scenario.beacons.ids[np.maximum(beacon, 0)],
                                 -1)
             labels[(ids >= 0) & (ids != true_ids)] = G.MISIDENTIFIED
@@ -180,8 +182,6 @@ class ImageSensor:
             ids[from_beacon] = beacons.ids[source[from_beacon]]
             self._misread(ids, labels, beacon, rng)
         self._frame += 1
-        quality = np.array([(b.area, b.peak, b.elongation) for b in blobs],
-                           dtype=np.float64).reshape(-1, 3)
         quality[~np.isfinite(quality)] = 1e6  # a one-pixel-wide blob: elongation without bound
         measurements = Measurements(ids, np.array([b.azimuth for b in blobs]), quality)
         return ImageFrame(image=image, measurements=measurements, blobs=blobs, labels=labels,

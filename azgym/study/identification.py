@@ -17,8 +17,7 @@ import numpy as np
 
 from azgym.scenario import Scenario, load_scenario
 from azgym.sensing.image_sensor import ImageSensor
-from azgym.simulate import camera_trajectory
-from azgym.world.sway import CameraSway
+from azgym.simulate import image_drive
 
 
 @dataclass(frozen=True)
@@ -75,15 +74,12 @@ def measure_identification(scenario: Scenario | str, camera_rate_hz: float = 30.
     ids = scenario.beacons.ids
     for k, route in enumerate(chosen):
         sensor = ImageSensor(scenario, ids="blink", noise_sigma=noise_sigma, seed=seed + k)
-        rng = np.random.default_rng([seed, k])
         rows = np.arange(len(ids))
         streak = np.zeros(len(ids), dtype=np.int64)
-        period = sensor.code.period
-        sway = CameraSway(scenario, 1.0 / camera_rate_hz)
-        for x, y, heading in camera_trajectory(scenario, route, camera_rate_hz=camera_rate_hz):
-            # Frames a beacon must have been in view to have shown a whole codeword by now.
-            needed = (sensor.code_position(rows) + 1) % period + period
-            frame = sensor.observe(x, y, heading, rng, sway.step(x, y, rng))
+        for _, frame in image_drive(sensor, route, [seed, k], camera_rate_hz=camera_rate_hz):
+            # Frames a beacon must have been in view to have shown a whole codeword by now: a
+            # period, plus this frame's position in its codeword (the coming frame's is one on).
+            needed = sensor.code_position(rows) + sensor.code.period
             in_view = np.zeros(len(ids), dtype=bool)
             in_view[frame.in_view] = True
             streak = np.where(in_view, streak + 1, 0)
