@@ -6,11 +6,20 @@ The public API in one place::
     scenario = azgym.load_scenario("paper-room")
     localizer = azgym.make_localizer("ransac")
     estimate = localizer.localize(measurements, scenario.beacons)
+
+Importing azgym does no work and loads no heavy library: each name below is imported when it is
+first used (PEP 562), and the Gymnasium environment ids are registered when Gymnasium itself is
+imported (before or after azgym; see :mod:`azgym.envs.registration`).
 """
 
-from azgym.core import BeaconMap, Estimate, Measurements, wrap_angle
-from azgym.envs.evaluate import evaluate
-from azgym.envs.registration import ENV_IDS
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING, Any
+
+from azgym.core import BeaconMap, Estimate, Measurements, pose_error, wrap_angle
+from azgym.envs.registration import register_when_gymnasium_loads
 from azgym.errors import (
     AzgymError,
     DependencyNotInstalled,
@@ -18,17 +27,52 @@ from azgym.errors import (
     ScenarioError,
     UnknownNameError,
 )
-from azgym.localize.base import Localizer
-from azgym.localize.checks import LocalizerCheckError, check_localizer
-from azgym.localize.registry import (
-    list_localizers,
-    make_localizer,
-    register_localizer,
-)
-from azgym.scenario import Scenario, list_scenarios, load_scenario
-from azgym.sensing.error_model import ErrorModel
 
-__version__ = "0.1.0"
+try:
+    __version__ = version("azgym")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree never installed
+    __version__ = "0.0.0+unknown"
+
+_LAZY = {
+    "ENV_IDS": "azgym.envs.registration",
+    "ErrorModel": "azgym.site.error_model",
+    "Localizer": "azgym.localize.base",
+    "LocalizerCheckError": "azgym.localize.checks",
+    "Scenario": "azgym.site.scenario",
+    "check_localizer": "azgym.localize.checks",
+    "evaluate": "azgym.envs.evaluate",
+    "list_localizers": "azgym.localize.registry",
+    "list_scenarios": "azgym.site.load",
+    "load_scenario": "azgym.site.load",
+    "make_localizer": "azgym.localize.registry",
+    "register_localizer": "azgym.localize.registry",
+}
+
+if TYPE_CHECKING:
+    from azgym.envs.evaluate import evaluate
+    from azgym.envs.registration import ENV_IDS
+    from azgym.localize.base import Localizer
+    from azgym.localize.checks import LocalizerCheckError, check_localizer
+    from azgym.localize.registry import list_localizers, make_localizer, register_localizer
+    from azgym.site.error_model import ErrorModel
+    from azgym.site.load import list_scenarios, load_scenario
+    from azgym.site.scenario import Scenario
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name's module when the name is first used."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'azgym' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+register_when_gymnasium_loads()
 
 __all__ = [
     "ENV_IDS",
@@ -51,6 +95,7 @@ __all__ = [
     "list_scenarios",
     "load_scenario",
     "make_localizer",
+    "pose_error",
     "register_localizer",
     "wrap_angle",
 ]

@@ -19,10 +19,11 @@ from azgym.errors import AzgymError
 
 
 def _reproduce_paper(args: argparse.Namespace) -> int:
-    from azgym.reproduce.paper import default_workers, reproduce, time_exhaustive_mex
-    from azgym.reproduce.protocol import ProtocolConfig
-    from azgym.reproduce.report import write_outputs
-    from azgym.scenario import load_scenario
+    from azgym.bench.runner import default_workers
+    from azgym.bench.suites.paper import ProtocolConfig
+    from azgym.experiments.paper.report import write_outputs
+    from azgym.experiments.paper.reproduce import reproduce, time_exhaustive_mex
+    from azgym.site import load_scenario
 
     config = ProtocolConfig.quick(seed=args.seed) if args.quick else ProtocolConfig(seed=args.seed)
     workers = args.workers or default_workers()
@@ -48,15 +49,16 @@ DEFAULT_SUITE = "warehouse-static"
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from azgym.bench.runner import Contender, default_contenders, ranked_table, run_benchmark
+    from azgym.bench.runner import Contender, default_contenders, default_workers, run_benchmark
     from azgym.bench.suites import get_suite
+    from azgym.bench.table import ranked_table
 
     # With no suite named, the default suite runs in its quick size: the README's main job.
     quick = args.quick or args.suite is None
     suite = get_suite(args.suite or DEFAULT_SUITE)
     contenders = ([Contender(spec, spec) for spec in args.localizer] if args.localizer
                   else default_contenders())
-    workers = args.workers or _cores()
+    workers = args.workers or default_workers()
     started = time.perf_counter()
     result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
                            progress=_progress_printer())
@@ -102,14 +104,8 @@ def _progress_printer():
     return show
 
 
-def _cores() -> int:
-    import os
-
-    return max(1, os.cpu_count() or 1)
-
-
 def _study_error_model(args: argparse.Namespace) -> int:
-    from azgym.study.error_model import run
+    from azgym.experiments.error_model import run
 
     summary = run(args.scenario, frames=args.frames, noise_sigma=args.noise,
                   calibration_px=args.calibration_px, seed=args.seed, out=Path(args.out),
@@ -137,9 +133,10 @@ def _study_error_model(args: argparse.Namespace) -> int:
 
 
 def _study_ids(args: argparse.Namespace) -> int:
-    from azgym.study.identification import measure_identification
+    from azgym.experiments.identification import measure_identification
+    from azgym.sensing.image.blink import BLINK_CAMERA_RATE_HZ
 
-    stats = measure_identification(args.scenario, camera_rate_hz=args.rate,
+    stats = measure_identification(args.scenario, camera_rate_hz=args.rate or BLINK_CAMERA_RATE_HZ,
                                    noise_sigma=args.noise, seed=args.seed)
     print(f"{stats.scenario}, every route, camera {stats.camera_rate_hz:g} Hz, noise "
           f"{stats.noise_sigma:g} grey levels: {stats.frames} frames")
@@ -153,7 +150,7 @@ def _study_ids(args: argparse.Namespace) -> int:
 
 
 def _scenarios(_args: argparse.Namespace) -> int:
-    from azgym.scenario import list_scenarios, load_scenario
+    from azgym.site import list_scenarios, load_scenario
 
     for name in list_scenarios():
         print(f"{name:<20} {load_scenario(name).description}")
@@ -232,7 +229,8 @@ def build_parser() -> argparse.ArgumentParser:
     model.set_defaults(handler=_study_error_model)
     ids = studies.add_parser("ids", help="how well blinking ids decode along the routes")
     ids.add_argument("--scenario", default="warehouse-small")
-    ids.add_argument("--rate", type=float, default=30.0, help="camera frames per second")
+    ids.add_argument("--rate", type=float, default=None,
+                     help="camera frames per second (default: the blinking camera's 30)")
     ids.add_argument("--noise", type=float, default=2.0, help="sensor noise [grey levels]")
     ids.add_argument("--seed", type=int, default=0)
     ids.set_defaults(handler=_study_ids)

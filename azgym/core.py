@@ -21,6 +21,8 @@ from azgym.errors import InvalidInputError
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
+Pose = tuple[float, float, float]
+"""A camera pose (x, y, heading) [m, m, rad]."""
 
 
 def wrap_angle(angle: ArrayLike) -> Any:
@@ -39,6 +41,20 @@ def wrap_angle(angle: ArrayLike) -> Any:
     # np.mod can round a tiny negative remainder up to 2π, which would give −π: map it to π.
     wrapped = np.where(wrapped <= -np.pi, np.pi, wrapped)
     return float(wrapped) if wrapped.ndim == 0 else wrapped
+
+
+def pose_error(estimate: Pose, truth: Pose) -> tuple[float, float]:
+    """How far an estimated pose is from the true one: the only definition azgym uses.
+
+    Args:
+        estimate: The estimated (x, y, heading) [m, m, rad].
+        truth: The true (x, y, heading).
+
+    Returns:
+        The 2-D position error [m] and the absolute heading error, wrapped to [0, π] [rad].
+    """
+    return (math.hypot(estimate[0] - truth[0], estimate[1] - truth[1]),
+            abs(wrap_angle(float(estimate[2]) - truth[2])))
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -250,6 +266,11 @@ class Estimate:
             reason=reason,
             diagnostics=dict(diagnostics or {}),
         )
+
+    @property
+    def pose(self) -> Pose:
+        """(x, y, heading) [m, m, rad]; NaN for a failed estimate."""
+        return self.x, self.y, self.heading
 
     @property
     def position(self) -> FloatArray:

@@ -21,10 +21,11 @@ from collections.abc import Callable
 import numpy as np
 
 import azgym
-from azgym.sensing.fisheye import FisheyeCamera
-from azgym.sensing.image import detect, render
-from azgym.sensing.image_sensor import ImageSensor
-from azgym.simulate import camera_trajectory
+from azgym.sensing.image.detect import detect
+from azgym.sensing.image.render import render
+from azgym.sensing.image.sensor import ImageSensor
+from azgym.site.fisheye import FisheyeCamera
+from azgym.world.drive import camera_trajectory
 
 
 def _timed(work: Callable[[int], object], count: int) -> float:

@@ -2,7 +2,7 @@
 
     python baselines/warehouse.py [--seed 0] [--out results/warehouse.json]
 
-Accuracy: every route of ``warehouse-small`` is driven (``azgym.simulate``). The frames are
+Accuracy: every route of ``warehouse-small`` is driven (``azgym.world.drive``). The frames are
 localized by ``ransac`` and ``lsq`` under two conditions: as shipped, with reflections (glass wall,
 metal racks), misread ids and a moved beacon, and "clean", with reflectivities, the misread rate
 and the move set to zero. ``warehouse-paper`` and ``warehouse-large`` follow, as shipped. The
@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 import azgym
-from azgym.layout import Faults
-from azgym.sensing.sensor import Sensor
-from azgym.simulate import simulate
+from azgym.sensing.geometry.sensor import Sensor
+from azgym.site.elements import Faults
+from azgym.world.drive import simulate
 from azgym.world.world import World
 
 

@@ -1,1 +1,1 @@
-"""The scenario files shipped with azgym (installed as the package ``azgym.scenarios``)."""
+"""The scenario files shipped with azgym (installed as the package ``azgym.site.scenarios``)."""

@@ -31,16 +31,14 @@ from typing import Any
 import jsonschema
 import numpy as np
 
+from azgym.bench.metrics import summarize_errors
+from azgym.bench.results import FRAME_COLUMNS
 from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import SUITES, get_suite
+from azgym.bench.table import rank_key
 from azgym.errors import AzgymError
-from azgym.metrics import summarize_errors
 
 ENTRY_FORMAT = 1
-FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
-                 "heading_error_rad", "micros", "error"]
-RANK_BY = "p75_cm"
-"""Boards rank by the 75th percentile of the position error, the EvAAL competitions' headline."""
 
 
 class LeaderboardError(AzgymError, ValueError):
@@ -205,8 +203,7 @@ def _load_all(entries_dir: Path) -> list[tuple[dict[str, Any], str]]:
 
 def _ranked(entries: list[dict[str, Any]], suite: str) -> list[dict[str, Any]]:
     rows = [e for e in entries if e["suite"] == suite]
-    return sorted(rows, key=lambda e: (e["metrics"]["all"][RANK_BY] is None,
-                                       e["metrics"]["all"][RANK_BY] or 0.0))
+    return sorted(rows, key=lambda e: rank_key(e["metrics"]["all"], e["name"]))
 
 
 def _interval(bounds: list[float] | None) -> str:

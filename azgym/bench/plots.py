@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from azgym.bench.suites import CAUSES, Frame
-from azgym.scenario import load_scenario
+from azgym.bench.suites import CAUSES, Case
+from azgym.site import load_scenario
+
+if TYPE_CHECKING:
+    from azgym.bench.results import Outcome
 
 
-def write_figures(summary: dict[str, Any], frames: list[Frame],
-                  outcomes: dict[str, dict[str, Any]], out: Path) -> list[Path]:
+def write_figures(summary: dict[str, Any], frames: list[Case],
+                  outcomes: dict[str, Outcome], out: Path) -> list[Path]:
     """cdf.png, causes.png and one error_map_<scenario>.png per scenario (needs matplotlib)."""
     import matplotlib
 
@@ -26,7 +29,7 @@ def write_figures(summary: dict[str, Any], frames: list[Frame],
     for label in labels:
         outcome = outcomes[label]
         # A missing estimate is a failure: it sits at +inf, never at zero error.
-        errors = np.sort(np.where(outcome["ok"], outcome["position"] * 100, np.inf))
+        errors = np.sort(np.where(outcome.ok, outcome.position * 100, np.inf))
         axes.step(errors, np.arange(1, errors.size + 1) / errors.size, where="post", label=label)
     axes.set_xscale("log")
     axes.set_xlim(left=0.1)
@@ -63,7 +66,7 @@ def write_figures(summary: dict[str, Any], frames: list[Frame],
         norm = matplotlib.colors.LogNorm(vmin=0.5, vmax=1000.0)
         for axes, label in zip(grid.ravel(), labels, strict=False):
             outcome = outcomes[label]
-            error = np.where(outcome["ok"][rows], outcome["position"][rows] * 100, 1000.0)
+            error = np.where(outcome.ok[rows], outcome.position[rows] * 100, 1000.0)
             for rack in scenario.racks:
                 axes.fill(*rack.corners().T, color="0.75")
             for wall in scenario.walls:

@@ -1,15 +1,16 @@
-"""Argument checks shared by the environments."""
+"""What the environments share: argument checks and the fixed-size view of an observation."""
 
 from __future__ import annotations
 
 import math
 import numbers
+from dataclasses import dataclass
 
-from azgym.errors import InvalidInputError, unknown_name
-from azgym.sensing.image_sensor import ID_MODES
+import numpy as np
 
-SENSORS = ("geometry", "image")
-"""The camera models: the compiled geometry, or rendered and detected fisheye frames."""
+from azgym.core import IntArray
+from azgym.errors import InvalidInputError
+from azgym.sensing.protocol import Observation
 
 
 def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
@@ -31,24 +32,53 @@ def reward_weights(**weights: float) -> dict[str, float]:
     return {name: float(value) for name, value in weights.items()}
 
 
-def check_sensor_options(sensor: str, ids: str, camera_rate_hz: float | None,
-                         pixels: bool) -> None:
-    """Refuse an unknown sensor or id mode, blinking ids without pixels, a bad frame rate.
-
-    Args:
-        sensor: "geometry" or "image".
-        ids: One of the image sensor's ``ID_MODES``.
-        camera_rate_hz: Frames per second, or None for the environment's default.
-        pixels: Whether the environment renders frames (blinking needs them).
-    """
-    if not isinstance(sensor, str) or sensor not in SENSORS:
-        raise unknown_name("sensor", str(sensor), SENSORS)
-    if not isinstance(ids, str) or ids not in ID_MODES:
-        raise unknown_name("ids", str(ids), ID_MODES)
-    if ids == "blink" and not pixels:
-        raise InvalidInputError('ids="blink" needs the image path: sensor="image"')
+def check_camera_rate(camera_rate_hz: float | None) -> None:
+    """Refuse a frame rate that is not a finite number > 0 (None: the sensor's own rate)."""
     if camera_rate_hz is not None and (
             isinstance(camera_rate_hz, bool) or not isinstance(camera_rate_hz, numbers.Real)
             or not (math.isfinite(camera_rate_hz) and camera_rate_hz > 0)):
         raise InvalidInputError(f"camera_rate_hz must be a finite number > 0 [Hz], got "
                                 f"{camera_rate_hz!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class Shown:
+    """The first K detections of a frame by azimuth, padded to K: what an agent is shown.
+
+    Attributes:
+        ids: Decoded ids, −1 for padding, shape (K,).
+        azimuth: Azimuths [rad], 0 for padding, shape (K,).
+        quality: Quality columns, 0 for padding, shape (K,) for one column, else (K, Q).
+        valid: 1 for a detection, 0 for padding, shape (K,).
+        labels: Ground-truth labels, −1 for padding, shape (K,).
+        beacons: Ground-truth map rows, −1 for padding, shape (K,).
+    """
+
+    ids: IntArray
+    azimuth: np.ndarray
+    quality: np.ndarray
+    valid: np.ndarray
+    labels: IntArray
+    beacons: IntArray
+
+
+def show(observation: Observation, size: int, quality_columns: int) -> Shown:
+    """The first ``size`` detections by azimuth (a stable order), padded (see :class:`Shown`)."""
+    measurements, truth = observation.measurements, observation.truth
+    order = np.argsort(measurements.azimuth, kind="stable")[:size]
+    count = order.size
+    ids = np.full(size, -1, dtype=np.int64)
+    azimuth = np.zeros(size, dtype=np.float32)
+    quality = np.zeros((size, quality_columns), dtype=np.float32)
+    valid = np.zeros(size, dtype=np.int8)
+    labels = np.full(size, -1, dtype=np.int64)
+    beacons = np.full(size, -1, dtype=np.int64)
+    ids[:count] = measurements.ids[order]
+    azimuth[:count] = measurements.azimuth[order]
+    if measurements.quality is not None:
+        quality[:count] = measurements.quality[order].reshape(count, quality_columns)
+    valid[:count] = 1
+    labels[:count] = truth.label[order]
+    beacons[:count] = truth.beacon[order]
+    return Shown(ids, azimuth, quality[:, 0] if quality_columns == 1 else quality, valid,
+                 labels, beacons)

@@ -8,22 +8,23 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from azgym.core import Measurements, wrap_angle
+from azgym.bench.metrics import summarize_errors
+from azgym.core import Measurements, pose_error
 from azgym.envs.localize import LocalizeEnv
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
-from azgym.metrics import summarize_errors
 
 
 def measurements_from_observation(observation: dict[str, np.ndarray]) -> Measurements:
     """The detections of a Localize observation (its valid entries) as Measurements.
 
-    With the image sensor, each blob's (area, peak, elongation) is the measurement's quality.
+    The ``quality`` entries are the measurements' quality (with the image sensor, each blob's
+    area, peak and elongation).
     """
     valid = observation["valid"].astype(bool)
-    quality = observation["blob"][valid].astype(np.float64) if "blob" in observation else None
     return Measurements(observation["ids"][valid],
-                        observation["azimuth"][valid].astype(np.float64), quality)
+                        observation["azimuth"][valid].astype(np.float64),
+                        observation["quality"][valid].astype(np.float64))
 
 
 def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episodes: int = 1,
@@ -61,11 +62,11 @@ def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episode
         done = False
         while not done:
             estimate = agent.localize(measurements_from_observation(observation), beacons)
-            x, y, true_heading = info["true_pose"]
             ok.append(bool(estimate.ok))
             if estimate.ok:
-                position.append(math.hypot(estimate.x - x, estimate.y - y))
-                heading.append(abs(wrap_angle(estimate.heading - true_heading)))
+                position_error, heading_error = pose_error(estimate.pose, info["true_pose"])
+                position.append(position_error)
+                heading.append(heading_error)
                 action = inner.pose_to_action(estimate.x, estimate.y, estimate.heading)
             else:
                 position.append(math.nan)

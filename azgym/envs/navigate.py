@@ -9,15 +9,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from azgym.core import Measurements
-from azgym.envs.common import check_render_mode, check_sensor_options, reward_weights
+from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
 from azgym.errors import InvalidInputError
-from azgym.layout import occluder_table
 from azgym.localize.registry import SupportsLocalize, make_localizer
-from azgym.scenario import Scenario, load_scenario
-from azgym.sensing import geometry as G
-from azgym.sensing.image_sensor import ImageFrame, ImageSensor
-from azgym.sensing.sensor import Sensor
+from azgym.sensing.catalog import make_sensor
+from azgym.sensing.geometry import kernels as G
+from azgym.sensing.protocol import Observation
+from azgym.site import Scenario, load_scenario
+from azgym.site.elements import occluder_table
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
 
@@ -33,8 +32,6 @@ DISCRETE_CONTROLS = np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.6, 1.0], [
 GOAL_SCALE = 20.0
 """Goal offsets in the observation are divided by this [m]."""
 
-BLINK_CAMERA_RATE_HZ = 30.0
-"""The camera's default frame rate with ``ids="blink"`` [Hz] (the tracker needs small steps)."""
 
 
 class NavigateEnv(gym.Env):
@@ -50,20 +47,19 @@ class NavigateEnv(gym.Env):
     observation says so and gives no goal, rather than inventing a pose.
 
     With ``sensor="image"`` the localizer reads the fisheye image path
-    (:mod:`azgym.sensing.image_sensor`): beacons rendered, detected from pixels and identified
+    (:mod:`azgym.sensing.image.sensor`): beacons rendered, detected from pixels and identified
     (``ids="oracle"``, or ``ids="blink"``: decoded from the beacons' blinking over successive
     frames). It gets each frame's blobs as they are — unidentified ones with id −1, which
     localizers ignore like any id not in the map — with their (area, peak, elongation) as the
-    quality; the last frame is ``env.unwrapped.image_frame``.
+    quality; the last frame is ``env.unwrapped.last_observation``.
 
     The camera takes frames at ``camera_rate_hz``, at the exact times k / rate since the start,
     whatever the physics step: the camera pose of a frame is interpolated between the two
     physics states around it (the heading along the shorter arc). By default it takes one frame
     per control period, at its end; with ``ids="blink"`` 30 per second, three per period, every
-    one fed to the blob tracker. The localizer answers the period's last frame; in a period
-    without a frame (a camera slower than 10 Hz) the previous estimate stands. Frames that no one
-    reads (all but the last of a period, with a sensor that keeps no state between frames) are
-    not rendered, but the camera's sway still steps through them.
+    one fed to the blob tracker. Every frame is observed (a sensor may keep state between
+    frames, as the blinking ids' tracker does), and the localizer answers the period's last
+    frame; in a period without a frame (a camera slower than 10 Hz) the previous estimate stands.
 
     ## Action Space
 
@@ -140,7 +136,7 @@ class NavigateEnv(gym.Env):
         render_mode: str | None = None,
     ) -> None:
         self.scenario = load_scenario(scenario)
-        check_sensor_options(sensor, ids, camera_rate_hz, pixels=sensor == "image")
+        check_camera_rate(camera_rate_hz)
         if not self.scenario.routes:
             raise InvalidInputError(
                 f"scenario {self.scenario.name!r} has no routes, whose waypoints are the "
@@ -158,18 +154,12 @@ class NavigateEnv(gym.Env):
         self.n_rays = int(n_rays)
         self.ray_range = float(ray_range)
         self.render_mode = render_mode
-        self.sensor = sensor
-        self.ids = ids
-        self.camera_rate_hz = (float(camera_rate_hz) if camera_rate_hz is not None
-                               else BLINK_CAMERA_RATE_HZ if ids == "blink"
-                               else 1.0 / (CONTROL_STEPS * PHYSICS_DT))
+        self.camera = make_sensor(self.scenario, sensor, ids)
+        self.camera_rate_hz = float(camera_rate_hz or self.camera.frame_rate_hz)
         # Physics steps per frame; the frame of index k is taken after k * this many steps.
         self._frame_steps = 1.0 / (PHYSICS_DT * self.camera_rate_hz)
-        self._sensor = Sensor(self.scenario)
-        self._buffers = self._sensor.new_buffers()
         self._sway = CameraSway(self.scenario, 1.0 / self.camera_rate_hz)
-        self.image_sensor = ImageSensor(self.scenario, ids=ids) if sensor == "image" else None
-        self.image_frame: ImageFrame | None = None
+        self.last_observation: Observation | None = None
         self._frames = 0
         self._segments = occluder_table(self.scenario.racks, self.scenario.walls)
         self._rays = np.empty(self.n_rays)
@@ -193,9 +183,8 @@ class NavigateEnv(gym.Env):
         heading = float(self.np_random.uniform(-math.pi, math.pi))
         self._world = World(self.scenario, (*self.spots[start], heading), dt=PHYSICS_DT)
         self._sway.reset()
-        if self.image_sensor is not None:
-            self.image_sensor.reset()
-        self.image_frame = None
+        self.camera.reset(self.np_random)
+        self.last_observation = None
         self._goal = self.spots[goal].astype(np.float64)
         self._steps = 0
         self._distance = self._true_distance()
@@ -289,32 +278,20 @@ class NavigateEnv(gym.Env):
     def _look(self, poses: list[tuple[float, float, float]]) -> None:
         """Take the frames at ``poses`` (in time order) and localize on the last one.
 
-        The sway steps through every frame. A sensor that keeps state between frames (the
-        blinking ids' tracker) sees every frame; otherwise only the last one is measured,
-        since nothing reads the others.
+        The sway steps through every frame, and the camera observes every one (a sensor may keep
+        state between frames, as the blinking ids' tracker does).
         """
         if not poses:
             return  # no frame this period: the previous estimate stands
-        tracking = self.image_sensor is not None and self.ids == "blink"
-        for k, (cx, cy, heading) in enumerate(poses):
-            tilt = self._sway.step(cx, cy, self.np_random)
-            if not (tracking or k == len(poses) - 1):
-                continue
-            if self.image_sensor is not None:
-                self.image_frame = self.image_sensor.observe(cx, cy, heading, self.np_random,
-                                                             tilt)
-                measurements = self.image_frame.measurements
-            else:
-                frame = self._buffers
-                count = self._sensor.observe_into(cx, cy, heading, self.np_random, frame,
-                                                  tilt=tilt)
-                measurements = Measurements._from_valid_arrays(frame.ids[:count],
-                                                               frame.azimuth[:count])
+        for pose in poses:
+            tilt = self._sway.step(pose[0], pose[1], self.np_random)
+            self.last_observation = self.camera.observe(pose, self.np_random, tilt)
         if self.localizer is None:
-            self._estimate = (cx, cy, heading)
+            self._estimate = pose
         else:
-            estimate = self.localizer.localize(measurements, self.scenario.beacons)
-            self._estimate = (estimate.x, estimate.y, estimate.heading) if estimate.ok else None
+            estimate = self.localizer.localize(self.last_observation.measurements,
+                                               self.scenario.beacons)
+            self._estimate = estimate.pose if estimate.ok else None
 
     def _observe(self) -> np.ndarray:
         forklift = self._world.forklift

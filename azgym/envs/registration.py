@@ -1,16 +1,24 @@
-"""Register an environment id for every shipped scenario (``azgym.ENV_IDS``).
+"""Register an environment id for every shipped scenario (``azgym.ENV_IDS``), when it is needed.
 
 Each scenario file in ``envs/`` gives ``azgym/Localize-<Scenario>-v0`` and, when it has routes
 (whose waypoints are the pick and drop spots), ``azgym/Navigate-<Scenario>-v0`` and
 ``azgym/NavigateDiscrete-<Scenario>-v0``. ``gym.make(id, scenario="path/to/my.toml")`` runs an
 id's environment on a user's file instead.
+
+Registering needs Gymnasium and reads the scenario files, so it is not done when azgym is
+imported: it is done as soon as Gymnasium is imported (whether before or after azgym), or when
+``azgym.ENV_IDS`` is first read. Gymnasium 1.x has no plug-in entry point to do it with.
 """
 
 from __future__ import annotations
 
-import gymnasium as gym
-
-from azgym.scenario import list_scenarios, load_scenario
+import functools
+import importlib.abc
+import importlib.util
+import sys
+from collections.abc import Sequence
+from types import ModuleType
+from typing import Any
 
 NAMESPACE = "azgym"
 
@@ -20,13 +28,17 @@ def camel_case(name: str) -> str:
     return "".join(part.capitalize() for part in name.replace("_", "-").split("-"))
 
 
-def register_environments() -> list[str]:
+@functools.cache
+def register_environments() -> tuple[str, ...]:
     """Register every environment id (once) and return the ids."""
+    import gymnasium as gym
+
+    from azgym.site import list_scenarios, load_scenario
+
     ids = []
     for name in list_scenarios():
-        scenario = load_scenario(name)
         entries = [("Localize", "azgym.envs.localize:LocalizeEnv", {})]
-        if scenario.routes:
+        if load_scenario(name).routes:
             entries += [("Navigate", "azgym.envs.navigate:NavigateEnv", {}),
                         ("NavigateDiscrete", "azgym.envs.navigate:NavigateEnv",
                          {"discrete": True})]
@@ -34,10 +46,42 @@ def register_environments() -> list[str]:
             env_id = f"{NAMESPACE}/{task}-{camel_case(name)}-v0"
             if env_id not in gym.registry:
                 gym.register(id=env_id, entry_point=entry_point,
-                             kwargs={"scenario": name, **extra},
-                             max_episode_steps=None)
+                             kwargs={"scenario": name, **extra}, max_episode_steps=None)
             ids.append(env_id)
-    return ids
+    return tuple(ids)
 
 
-ENV_IDS = register_environments()
+class _AfterGymnasiumImport(importlib.abc.MetaPathFinder):
+    """Registers the ids right after Gymnasium's module has run (a one-shot post-import hook)."""
+
+    def find_spec(self, fullname: str, path: Sequence[str] | None,
+                  target: ModuleType | None = None) -> Any:
+        if fullname != "gymnasium":
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(fullname)
+        if spec is None or spec.loader is None:
+            return spec
+        run = spec.loader.exec_module
+
+        def exec_then_register(module: ModuleType) -> None:
+            run(module)
+            register_environments()
+
+        spec.loader.exec_module = exec_then_register  # type: ignore[method-assign]
+        return spec
+
+
+def register_when_gymnasium_loads() -> None:
+    """Register the ids now if Gymnasium is loaded, else as soon as it is imported."""
+    if "gymnasium" in sys.modules:
+        register_environments()
+    elif not any(isinstance(finder, _AfterGymnasiumImport) for finder in sys.meta_path):
+        sys.meta_path.insert(0, _AfterGymnasiumImport())
+
+
+def __getattr__(name: str) -> Any:
+    """``ENV_IDS``: every registered id (registering them first)."""
+    if name == "ENV_IDS":
+        return list(register_environments())
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

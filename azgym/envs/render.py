@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from azgym.errors import AzgymError, require
-from azgym.sensing import geometry as G
+from azgym.sensing.labels import DIRECT, DISTRACTOR, GHOST, MISIDENTIFIED, MOVED, PARTIAL
 
 SIZE = 640
 BACKGROUND = (245, 245, 245)
@@ -35,8 +35,8 @@ ACCEPTED = (60, 200, 60)
 REJECTED = (60, 60, 230)
 UNIDENTIFIED = (0, 200, 230)
 IDENTIFIED = (230, 160, 60)
-RAY = {G.DIRECT: (80, 180, 80), G.PARTIAL: (40, 170, 230), G.GHOST: (40, 40, 220),
-       G.MISIDENTIFIED: (160, 40, 160), G.MOVED: (20, 120, 240), G.DISTRACTOR: (120, 120, 120)}
+RAY = {DIRECT: (80, 180, 80), PARTIAL: (40, 170, 230), GHOST: (40, 40, 220),
+       MISIDENTIFIED: (160, 40, 160), MOVED: (20, 120, 240), DISTRACTOR: (120, 120, 120)}
 
 
 class _Canvas:
@@ -115,14 +115,10 @@ def draw(env: Any) -> np.ndarray:
         colour = MIRROR if wall.reflectivity > 0 else WALL
         cv2.line(image, canvas.px(*wall.start), canvas.px(*wall.end), colour, 3, cv2.LINE_AA)
     x, y, heading = env.true_pose()
-    frame = getattr(env, "image_frame", None)
-    if frame is not None:
-        shown = np.isfinite(frame.true_azimuth)
-        rays = zip(frame.true_azimuth[shown], frame.labels[shown], strict=True)
-    else:
-        buffers = env._buffers
-        shown = buffers.ids >= 0
-        rays = zip(buffers.true_azimuth[shown], buffers.label[shown], strict=True)
+    frame = env.last_observation
+    truth = frame.truth if frame is not None else None
+    shown = np.isfinite(truth.azimuth) if truth is not None else np.zeros(0, dtype=bool)
+    rays = zip(truth.azimuth[shown], truth.label[shown], strict=True) if truth is not None else ()
     for camera_azimuth, label in rays:
         azimuth = heading + float(camera_azimuth)
         end = (x + 60.0 * math.cos(azimuth), y + 60.0 * math.sin(azimuth))
@@ -136,7 +132,7 @@ def draw(env: Any) -> np.ndarray:
     estimate = env.last_estimate()
     if estimate is not None:
         _arrow(canvas, *estimate, ESTIMATE)
-    if frame is not None:
+    if frame is not None and frame.image is not None:
         image = np.hstack([image, _camera_panel(scenario, frame, estimate, image.shape[0])])
     return image[:, :, ::-1].copy()  # BGR drawing colours to RGB
 

@@ -10,7 +10,7 @@ from azgym.core import Estimate
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range
 from azgym.localize.lsq import fit_subset
 from azgym.localize.refinement import finish
-from azgym.sensing.error_model import ErrorModel
+from azgym.site.error_model import ErrorModel
 
 
 class LeaveOneOut(Localizer):

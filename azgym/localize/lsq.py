@@ -11,7 +11,7 @@ from azgym.core import Estimate
 from azgym.localize import _kernels as K
 from azgym.localize.base import Localizer, Problem, check_range
 from azgym.localize.refinement import finish
-from azgym.sensing.error_model import ErrorModel
+from azgym.site.error_model import ErrorModel
 
 
 @numba.njit(error_model="numpy", cache=True)

@@ -13,7 +13,7 @@ from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Mea
 from azgym.localize import _kernels as K
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range, gather
 from azgym.localize.refinement import package, refine_with_covariance
-from azgym.sensing.error_model import ErrorModel
+from azgym.site.error_model import ErrorModel
 
 
 def n_trials(n_measurements: int, n_good: int, pr_hit: float, p_star: float) -> int:

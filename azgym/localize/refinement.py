@@ -16,7 +16,7 @@ import numpy as np
 from azgym.core import BoolArray, Estimate, FloatArray
 from azgym.localize import _kernels as K
 from azgym.localize.base import Problem
-from azgym.sensing.error_model import ErrorModel
+from azgym.site.error_model import ErrorModel
 
 
 @numba.njit(error_model="numpy", cache=True)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from azgym.core import FloatArray, wrap_angle
-from azgym.layout import Route
+from azgym.site.elements import Route
 from azgym.world.forklift import ForkliftSpec
 
 

@@ -22,7 +22,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from azgym.errors import InvalidInputError
-from azgym.scenario import Scenario
+from azgym.site import Scenario
 from azgym.world.forklift import ForkliftSpec
 
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import pymunk
 
-from azgym.scenario import Scenario
+from azgym.site import Scenario
 from azgym.world.forklift import FORKLIFT_COLLISION_TYPE, Forklift, ForkliftSpec
 
 STATIC_COLLISION_TYPE = 2

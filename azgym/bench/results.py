@@ -1,0 +1,152 @@
+"""A run's results: each contender's per-case outcome, the summary, and the files they are kept in.
+
+``results.json`` holds the summary (overall, by cause, by group, runtimes); ``frames.csv`` every
+case's outcome, in the columns of :data:`FRAME_COLUMNS`, which the leaderboard's per-frame
+files share.
+"""
+
+from __future__ import annotations
+
+import csv
+import importlib.util
+import json
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from azgym.bench.metrics import confidence_intervals, summarize_errors
+from azgym.bench.suites import CAUSES, Case, Suite
+
+if TYPE_CHECKING:
+    from azgym.bench.runner import Contender
+
+FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
+                 "heading_error_rad", "micros", "error"]
+"""The columns of a per-frame results file (``frames.csv``, and a leaderboard entry's)."""
+
+
+@dataclass
+class Outcome:
+    """One contender's outcome on each case.
+
+    Attributes:
+        ok: Whether it gave an estimate, shape (C,).
+        position: Position error [m], NaN without an estimate, shape (C,).
+        heading: Absolute heading error [rad], NaN without an estimate, shape (C,).
+        micros: Time of the call [µs], NaN when it raised, shape (C,).
+        errors: The exception it raised, "" for none, one per case.
+    """
+
+    ok: np.ndarray
+    position: np.ndarray
+    heading: np.ndarray
+    micros: np.ndarray
+    errors: list[str]
+
+    @classmethod
+    def empty(cls, count: int) -> Outcome:
+        """No estimate yet on any of ``count`` cases."""
+        return cls(np.zeros(count, dtype=bool), np.full(count, np.nan), np.full(count, np.nan),
+                   np.full(count, np.nan), [""] * count)
+
+    @classmethod
+    def concatenate(cls, parts: Sequence[Outcome]) -> Outcome:
+        """The outcomes of consecutive chunks of cases, joined."""
+        return cls(*(np.concatenate([getattr(p, key) for p in parts])
+                     for key in ("ok", "position", "heading", "micros")),
+                   [error for p in parts for error in p.errors])
+
+    def select(self, which: np.ndarray) -> Outcome:
+        """The outcome on some cases: a boolean mask over them, or their indices."""
+        index = np.flatnonzero(which) if which.dtype == bool else which
+        return Outcome(self.ok[index], self.position[index], self.heading[index],
+                       self.micros[index], [self.errors[k] for k in index])
+
+    def stats(self) -> dict[str, Any]:
+        """The error statistics (:func:`~azgym.bench.metrics.summarize_errors`)."""
+        return summarize_errors(self.position, self.heading, self.ok)
+
+
+def summarize(suite: Suite, split: str, seed: int, quick: bool,
+              contenders: Sequence[Contender], cases: Sequence[Case],
+              outcomes: dict[str, Outcome], reference: str) -> dict[str, Any]:
+    """The metrics of every contender, overall, by cause and by group, with runtimes.
+
+    Args:
+        suite: The suite run.
+        split: "dev" or "test".
+        seed: The seed the cases were drawn from.
+        quick: Whether the suite's small version was run.
+        contenders: Who ran.
+        cases: The cases.
+        outcomes: Each contender's outcome, by label.
+        reference: The label whose median runtime the others are compared with.
+    """
+    causes = np.array([case.cause for case in cases])
+    groups = np.array([case.group for case in cases])
+    reference_us = float(np.nanmedian(outcomes[reference].micros))
+    results: dict[str, Any] = {}
+    for contender in contenders:
+        outcome = outcomes[contender.label]
+        timed = outcome.micros[np.isfinite(outcome.micros)]
+        median_us = float(np.median(timed)) if timed.size else math.nan
+        results[contender.label] = {
+            "spec": contender.spec, "params": contender.params,
+            "all": outcome.stats(),
+            "ci95": confidence_intervals(outcome.position, outcome.ok),
+            "by_cause": {c: outcome.select(causes == c).stats() for c in CAUSES
+                         if (causes == c).any()},
+            "by_group": {g: outcome.select(groups == g).stats() for g in dict.fromkeys(groups)},
+            "runtime_us": {"median": median_us,
+                           "p99": float(np.percentile(timed, 99)) if timed.size else math.nan,
+                           "ratio_to_ransac": median_us / reference_us},
+            "crashes": sum(1 for e in outcome.errors if e),
+            "first_error": next((e for e in outcome.errors if e), ""),
+        }
+    return {"suite": suite.name, "suite_version": suite.version, "split": split, "seed": seed,
+            "quick": quick, "n_frames": len(cases), "azgym_version": _version(),
+            "python": sys.version.split()[0], "localizers": results}
+
+
+def frame_rows(label: str, cases: Sequence[Case], outcome: Outcome) -> list[list[str]]:
+    """One contender's rows of a per-frame results file (:data:`FRAME_COLUMNS`)."""
+    return [[label, str(k), case.scenario, case.group, case.cause, str(int(outcome.ok[k])),
+             f"{outcome.position[k]:.17g}", f"{outcome.heading[k]:.17g}",
+             f"{outcome.micros[k]:.3f}", outcome.errors[k]] for k, case in enumerate(cases)]
+
+
+@dataclass
+class BenchResult:
+    """A benchmark run: the summary (results.json) and every case's outcome (frames.csv)."""
+
+    summary: dict[str, Any]
+    cases: list[Case]
+    outcomes: dict[str, Outcome]
+
+    def write(self, out: Path, figures: bool = True) -> list[Path]:
+        """Write results.json, frames.csv and, with matplotlib installed, the figures."""
+        out.mkdir(parents=True, exist_ok=True)
+        summary_path, frames_path = out / "results.json", out / "frames.csv"
+        summary_path.write_text(json.dumps(self.summary, indent=1) + "\n", encoding="utf-8")
+        with frames_path.open("w", newline="", encoding="utf-8") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(FRAME_COLUMNS)
+            for label, outcome in self.outcomes.items():
+                writer.writerows(frame_rows(label, self.cases, outcome))
+        written = [summary_path, frames_path]
+        if figures and importlib.util.find_spec("matplotlib") is not None:
+            from azgym.bench.plots import write_figures
+
+            written += write_figures(self.summary, self.cases, self.outcomes, out)
+        return written
+
+
+def _version() -> str:
+    from azgym import __version__
+
+    return __version__

@@ -1,0 +1,75 @@
+"""The warehouse suites: random poses and driven routes, seen by the geometry sensor."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from azgym.bench.suites.base import Case, frame_cause
+from azgym.sensing.geometry.sensor import GeometrySensor
+from azgym.site import Scenario, load_scenario
+from azgym.site.elements import Faults
+from azgym.site.sampling import random_free_pose
+from azgym.world.drive import simulate
+
+SCENARIOS = ("warehouse-small", "warehouse-paper")
+"""The warehouses of the static and route suites."""
+
+
+def fault_levels(scenario: Scenario) -> dict[str, Scenario]:
+    """The scenario clean, as shipped, and with heavy faults (5 % misreads, mirrors ×2.5)."""
+    def mirrors(factor: float) -> Scenario:
+        return dataclasses.replace(
+            scenario,
+            racks=tuple(dataclasses.replace(r, reflectivity=min(1.0, r.reflectivity * factor))
+                        for r in scenario.racks),
+            walls=tuple(dataclasses.replace(w, reflectivity=min(1.0, w.reflectivity * factor))
+                        for w in scenario.walls))
+
+    clean = dataclasses.replace(mirrors(0.0), faults=Faults(0.0), physical_xyz=None)
+    heavy = dataclasses.replace(mirrors(2.5), faults=Faults(0.05))
+    return {"clean": clean, "as shipped": scenario, "heavy": heavy}
+
+
+def static_cases(scenario: Scenario, count: int, rng: np.random.Generator,
+                 group: str) -> list[Case]:
+    """Frames at random free poses (:func:`~azgym.site.sampling.random_free_pose`)."""
+    sensor = GeometrySensor(scenario)
+    cases = []
+    for _ in range(count):
+        pose = random_free_pose(scenario, rng)
+        observation = sensor.observe(pose, rng)
+        cases.append(Case(scenario.name, observation.measurements, pose,
+                          frame_cause(observation.truth.label), group))
+    return cases
+
+
+def static(seed: int, quick: bool) -> list[Case]:
+    """warehouse-static: random poses in each warehouse at each fault level."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for name in SCENARIOS:
+        for level, scenario in fault_levels(load_scenario(name)).items():
+            cases += static_cases(scenario, 40 if quick else 400, rng, f"{name}, {level}")
+    return cases
+
+
+def routes(seed: int, quick: bool) -> list[Case]:
+    """warehouse-routes: every route driven, every 10 Hz frame (quick: one route, every 4th)."""
+    cases = []
+    for name in SCENARIOS:
+        scenario = load_scenario(name)
+        chosen = scenario.routes[:1] if quick else scenario.routes
+        for k, route in enumerate(chosen):
+            for frame in simulate(scenario, route, seed=seed + k):
+                cases.append(Case(name, frame.measurements, frame.pose,
+                                  frame_cause(frame.truth.label), f"{name}/{route.name}"))
+    return cases[::4] if quick else cases
+
+
+def stress(seed: int, quick: bool) -> list[Case]:
+    """stress: random poses in warehouse-large with heavy faults."""
+    rng = np.random.default_rng(seed)
+    heavy = fault_levels(load_scenario("warehouse-large"))["heavy"]
+    return static_cases(heavy, 60 if quick else 600, rng, "warehouse-large, heavy")

@@ -1,0 +1,44 @@
+"""Ranking, the one rule, and the ranked text table ``azgym bench`` prints."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+RANK_BY = "p75_cm"
+"""Boards rank by the 75th percentile of the position error, the EvAAL competitions' headline."""
+
+
+def rank_key(stats: Mapping[str, Any], name: str) -> tuple[float, float, str]:
+    """Sort key of a contender: p75 error (missing last), then availability (higher first), name.
+
+    Args:
+        stats: Its overall statistics (``summarize_errors``; NaN or None where missing).
+        name: Its name, the last tie-break, so that the order never depends on input order.
+    """
+    p75 = stats.get(RANK_BY)
+    availability = stats.get("availability")
+    return (math.inf if p75 is None or math.isnan(p75) else p75,
+            -(availability or 0.0), name)
+
+
+def ranked_table(summary: dict[str, Any]) -> str:
+    """The contenders of a run, ranked (:func:`rank_key`), as a text table."""
+    rows = sorted(summary["localizers"].items(), key=lambda item: rank_key(item[1]["all"],
+                                                                           item[0]))
+    lines = [f"{summary['suite']} v{summary['suite_version']} ({summary['split']}, seed "
+             f"{summary['seed']}{', quick' if summary['quick'] else ''}): "
+             f"{summary['n_frames']} frames; errors in cm",
+             f"{'#':>2} {'localizer':<18} {'avail':>6} {'mean':>8} {'median':>8} {'p75':>8} "
+             f"{'p75 95% CI':>15} {'p95':>8} {'fail':>6} {'µs':>9} {'×ransac':>8}"]
+    for rank, (label, row) in enumerate(rows, 1):
+        a, t = row["all"], row["runtime_us"]
+        low, high = row["ci95"].get("p75_cm", [math.nan, math.nan])
+        lines.append(f"{rank:>2} {label:<18} {100 * a['availability']:5.1f}% {a['mean_cm']:8.2f} "
+                     f"{a['median_cm']:8.2f} {a['p75_cm']:8.2f} {f'{low:.2f}-{high:.2f}':>15} "
+                     f"{a['p95_cm']:8.1f} {100 * a['failure_rate']:5.1f}% {t['median']:9.1f} "
+                     f"{t['ratio_to_ransac']:8.2f}")
+        if row["crashes"]:
+            lines.append(f"   ! {row['crashes']} frames raised: {row['first_error']}")
+    return "\n".join(lines)

@@ -1,0 +1,1 @@
+"""Experiments on top of the benchmark: the paper's reproduction and the studies of the models."""

@@ -1,0 +1,1 @@
+"""Rátosi & Simon (2021), Sec. 3, reproduced: the paper suite through the runner, and a report."""

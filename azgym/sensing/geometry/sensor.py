@@ -1,0 +1,158 @@
+"""The geometry sensor: one camera frame of a scenario, seen from a pose, with ground truth beside.
+
+Faults come from the scene: racks hide beacons (2.5-D line of sight), rack edges cover part of a
+beacon (its azimuth moves to the visible part's centroid), reflective faces show mirror ghosts
+with the real beacon's id, and beacons moved after the map was made appear where they really
+are. Decoding faults (a misread id) come from a rate. On top of all of this, every detection gets
+the centre-detection error of eq. 1, uniform on ±Δα_d; the coverage error of eq. 2 is not drawn,
+since partial occlusion now produces it. The kernels are in :mod:`azgym.sensing.geometry.kernels`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from azgym.core import Measurements, Pose
+from azgym.sensing.geometry import kernels as G
+from azgym.sensing.protocol import (
+    CAMERA_RATE_HZ,
+    LEVEL,
+    DetectionTruth,
+    Observation,
+    Seed,
+    Tilt,
+)
+from azgym.site import Scenario
+from azgym.site.elements import occluder_table
+
+
+class GeometrySensor:
+    """Frames of one scenario's camera, computed from the geometry (a :class:`Sensor`).
+
+    ``Measurements.quality`` is log10 of each detection's brightness over the detection threshold.
+
+    Args:
+        scenario: The site (racks, walls, beacons, camera, faults, error model).
+    """
+
+    quality_names = ("log_brightness",)
+    quality_high = (10.0,)
+    frame_rate_hz = CAMERA_RATE_HZ
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self._segments = occluder_table(scenario.racks, scenario.walls)
+        self._xyz = np.ascontiguousarray(scenario.beacon_positions)
+        self._width = scenario.beacons.width
+        self._moved = np.any(self._xyz != scenario.beacons.xyz, axis=1)
+        n = len(scenario.beacons)
+        self._capacity = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
+        most = self._capacity
+        self._ghosts = np.empty((most, 6))
+        self._scratch = (np.empty(n), np.empty(n, dtype=np.int64), np.empty(n))
+        self._collected = (np.empty(most), np.empty(most), np.empty(most, dtype=np.int64),
+                           np.empty(most, dtype=np.int64), np.empty(most), np.empty(most),
+                           np.empty(most))
+        self._buffers = FrameBuffers(most)
+
+    @property
+    def capacity(self) -> int:
+        """The most detections a frame can have: every beacon, and its mirror in every mirror."""
+        return self._capacity
+
+    def new_buffers(self, size: int | None = None) -> FrameBuffers:
+        """Arrays for :meth:`observe_into`, ``size`` long (default: :attr:`capacity`)."""
+        return FrameBuffers(self.capacity if size is None else size)
+
+    def reset(self, seed: Seed = None) -> None:
+        """Nothing to forget or seed: every frame's draws come from ``observe``'s generator."""
+
+    def observe_into(
+        self, pose: Pose, rng: np.random.Generator, out: FrameBuffers, tilt: Tilt = LEVEL,
+        camera_height: float | None = None, misdecode_rate: float | None = None,
+    ) -> int:
+        """Like :meth:`observe`, into preallocated arrays; returns the number of detections M.
+
+        Entries past M are padded (id −1). If a frame has more detections than ``out`` holds,
+        the ones with the largest azimuths are dropped — size the buffers with :attr:`capacity`
+        to keep them all. ``misdecode_rate`` overrides the scenario's (the image path's blinking
+        ids set it to 0: their misreads come from decoding).
+        """
+        if misdecode_rate is None:
+            misdecode_rate = self.scenario.faults.misdecode_rate
+        x, y, heading = pose
+        camera = self.scenario.camera
+        cz = camera.height if camera_height is None else camera_height
+        world, elevation, beacon, label, visible, brightness, halfwidth = self._collected
+        count = G.collect(float(x), float(y), float(cz), self._xyz, self._width, self._moved,
+                          self._segments, camera.min_elevation, camera.max_range, world,
+                          elevation, beacon, label, visible, brightness, halfwidth,
+                          *self._scratch, self._ghosts)
+        G.finish(world[:count], elevation[:count], beacon[:count], label[:count],
+                 visible[:count], brightness[:count], halfwidth[:count], float(heading),
+                 float(tilt[0]), float(tilt[1]), rng.random((3, count)),
+                 self.scenario.error_model.delta_alpha_d, misdecode_rate,
+                 self.scenario.beacons.ids, out.floats, out.ints)
+        return min(count, out.size)
+
+    def observe(self, pose: Pose, rng: np.random.Generator, tilt: Tilt = LEVEL,
+                camera_height: float | None = None) -> Observation:
+        """One frame from the camera at ``pose`` = (x, y, heading).
+
+        Args:
+            pose: Camera position east and north [m] and heading φ [rad].
+            rng: The generator every random draw of the frame comes from (3 uniforms per
+                detection: its noise, whether its id is misread, and as which).
+            tilt: (pitch, roll) of the camera's axis from the vertical [rad], e.g. on a bump.
+            camera_height: Lens height [m]; default the scenario's camera height.
+
+        Returns:
+            The measurements (sorted by azimuth, as a detector scanning the image would list
+            them) and the ground truth of each.
+        """
+        out = self._buffers
+        count = self.observe_into(pose, rng, out, tilt, camera_height)
+        return out.observation(count)
+
+
+class FrameBuffers:
+    """Fixed-size arrays one frame is written into (see :meth:`GeometrySensor.observe_into`).
+
+    Two packed arrays, ``floats`` (6, size) and ``ints`` (4, size), which the compiled kernel
+    fills in one call; the named rows are views of them.
+
+    Attributes:
+        ids, azimuth, quality: What the camera reports (quality: log10 of the blob's brightness
+            over the detection threshold, >= 0).
+        true_azimuth, beacon, label, mirrored, visible, elevation, half_width: The ground truth
+            beside it (the last two are what an image renderer needs).
+    """
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.floats = np.zeros((6, size))
+        self.ints = np.full((4, size), -1, dtype=np.int64)
+
+    # Views made on access (stored views would turn into copies when the object is pickled).
+    azimuth = property(lambda self: self.floats[0], doc="Measured azimuths [rad].")
+    quality = property(lambda self: self.floats[1],
+                       doc="log10 of the blob's brightness over the detection threshold (>= 0).")
+    true_azimuth = property(lambda self: self.floats[2], doc="Noise-free azimuths [rad].")
+    visible = property(lambda self: self.floats[3], doc="Visible share of each beacon.")
+    elevation = property(lambda self: self.floats[4], doc="Elevation above the horizon [rad].")
+    half_width = property(lambda self: self.floats[5],
+                          doc="Angular half-width of the whole beacon [rad].")
+    ids = property(lambda self: self.ints[0], doc="Decoded ids, -1 for padding.")
+    beacon = property(lambda self: self.ints[1], doc="Map row of the true beacon.")
+    label = property(lambda self: self.ints[2], doc="Cause of each detection.")
+    mirrored = property(lambda self: self.ints[3], doc="1 for a mirror image, else 0.")
+
+    def observation(self, count: int) -> Observation:
+        """The first ``count`` entries as an :class:`Observation` (copies, frozen)."""
+        mirrored = self.mirrored[:count] == 1
+        truth = DetectionTruth(label=self.label[:count].copy(), beacon=self.beacon[:count].copy(),
+                               azimuth=self.true_azimuth[:count].copy(),
+                               visible=self.visible[:count].copy(), mirrored=mirrored)
+        measurements = Measurements._from_valid_arrays(self.ids[:count], self.azimuth[:count],
+                                                       self.quality[:count])
+        return Observation(measurements, truth, in_view=truth.beacon[~mirrored])

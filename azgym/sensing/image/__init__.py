@@ -1,0 +1,1 @@
+"""The fisheye image path: lights rendered, blobs detected, ids identified or decoded."""

@@ -1,0 +1,396 @@
+"""Beacon identities from blinking: each beacon's on-off code over frames, tracked and decoded.
+
+The paper's beacons transmit their ids by visible light communication, sampled by the camera
+frame by frame (RUPSOOK, its ref. [14]). azgym's code is an on-off keying at the frame rate:
+
+* a start marker ``1 1 1 0`` (three lit frames, one dark),
+* then the id's bits, most significant first, and an even-parity bit, each Manchester coded
+  (1 → lit, dark; 0 → dark, lit).
+
+Manchester pairs never hold three equal frames in a row, so a run of three or more lit frames
+happens only at a marker, and a beacon is never dark for more than two frames running. The
+decoder reads a codeword as it completes: a marker right before the last 2 (bits + 1) frames,
+then the pairs; a pair ``1 1`` or ``0 0`` or a parity failure rejects the codeword.
+
+On the image a blinking beacon is a blob that comes and goes. :class:`BlobTracker` follows the
+blobs from frame to frame (in polar coordinates about the principal point, where the forklift's
+turning is a common shift of every azimuth, estimated each frame; assigned by the Hungarian
+method within gates), records each track's lit/dark history and decodes it. A track has an id
+only once it has read a complete, valid codeword, and loses it when its latest codeword fails.
+Misidentifications then come from what really breaks codes: missed detections, tracks that swap
+between close blobs, noise blobs and lights that blink nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.optimize import linear_sum_assignment
+
+from azgym.core import FloatArray, IntArray
+from azgym.errors import InvalidInputError
+
+MARKER = (1, 1, 1, 0)
+"""The start marker: three lit frames and a dark one."""
+BLINK_CAMERA_RATE_HZ = 30.0
+"""The camera's frame rate for blinking ids [Hz]: the code changes every frame, and the tracker
+needs blobs to move little between frames (see ``azgym study ids``)."""
+
+MERGE_SHARE = 0.8
+"""A blob is taken for several close beacons' merged light when its area is at least this share
+of their blobs' areas alone (areas fluctuate by about ±20 % with noise at the threshold)."""
+
+
+@dataclass(frozen=True)
+class BlinkCode:
+    """The on-off code of ids of ``bits`` bits (see the module's docstring).
+
+    Attributes:
+        bits: Bits per id; ids 0 .. 2**bits - 1 can be sent.
+    """
+
+    bits: int
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.bits, int) and 1 <= self.bits <= 30):
+            raise InvalidInputError(f"BlinkCode.bits must be an integer in [1, 30], got "
+                                    f"{self.bits!r}")
+
+    @classmethod
+    def for_ids(cls, ids: ArrayLike) -> BlinkCode:
+        """The shortest code that sends every one of ``ids`` (non-negative integers)."""
+        values = np.asarray(ids)
+        if values.size == 0 or values.min() < 0:
+            raise InvalidInputError("ids: blinking codes send non-negative ids only, got "
+                                    f"{values.min() if values.size else 'none'}")
+        return cls(max(1, int(values.max()).bit_length()))
+
+    @property
+    def period(self) -> int:
+        """Frames per codeword: the marker and two frames per data and parity bit."""
+        return len(MARKER) + 2 * (self.bits + 1)
+
+    def frames(self, beacon_id: int) -> np.ndarray:
+        """The lit (True) and dark frames of one codeword of ``beacon_id``, shape (period,)."""
+        if not 0 <= beacon_id < 2**self.bits:
+            raise InvalidInputError(f"beacon_id: {beacon_id} does not fit in {self.bits} bits")
+        data = [(beacon_id >> (self.bits - 1 - k)) & 1 for k in range(self.bits)]
+        data.append(sum(data) % 2)  # even parity
+        lit = list(MARKER)
+        for bit in data:
+            lit += [1, 0] if bit else [0, 1]
+        return np.array(lit, dtype=bool)
+
+    def decode(self, history: ArrayLike) -> int | None:
+        """The id of the codeword that ends at the last frame of a lit/dark history, if one does.
+
+        A tracker calls this every frame, so every codeword is read once, as it completes.
+
+        Args:
+            history: Lit (1) and dark (0) frames of one blob, oldest first.
+
+        Returns:
+            The id; -1 if the codeword is corrupt (a pair ``1 1`` or ``0 0``, or bad parity);
+            None if no codeword ends at the last frame (no marker right before its data).
+        """
+        lit = np.asarray(history, dtype=bool)
+        d = len(lit) - 1 - 2 * (self.bits + 1)  # where the marker's dark frame must be
+        if d < 3 or lit[d] or not (lit[d - 1] and lit[d - 2] and lit[d - 3]):
+            return None
+        first, second = lit[d + 1::2], lit[d + 2::2]
+        if np.any(first == second):
+            return -1
+        if np.count_nonzero(first) % 2:
+            return -1
+        value = 0
+        for bit in first[:-1]:
+            value = (value << 1) | int(bit)
+        return value
+
+
+@dataclass
+class _Track:
+    azimuth: float  # predicted for the current frame [rad]
+    radius: float  # [px]
+    parallax_rate: float  # own azimuth change per frame beyond the common turn [rad]
+    radius_rate: float  # [px per frame]
+    history: list[int] = field(default_factory=list)
+    missed: int = 0
+    seen: int = 1  # frames with a blob; from 2 on, the drift is measured
+    beacon_id: int = -1
+    phase: int = -1  # with an id: where in its codeword the coming frame is
+    area: float = 0.0  # the blob's area when it was alone [px]; 0: not known
+    prior: bool = False  # whether the drift started from a neighbour's
+
+
+def _follow(track: _Track, azimuth: float, radius: float, area: float | None) -> None:
+    """Move a track onto the blob it took, with an alpha-beta update of its drift.
+
+    Part of the surprise goes into the drift: all of it at the second sighting of a track
+    without a prior drift, when the drift is first measured. The gap counts the dark frames
+    since the last sighting, over which the surprise built up.
+    """
+    gap = track.missed + 1
+    beta = 1.0 if track.seen == 1 and not track.prior else 0.5
+    track.parallax_rate += beta * math.remainder(azimuth - track.azimuth, 2 * math.pi) / gap
+    track.radius_rate += beta * (radius - track.radius) / gap
+    track.azimuth, track.radius = float(azimuth), float(radius)
+    track.seen += 1
+    if area is not None:
+        track.area += 0.5 * (area - track.area) if track.area else area
+
+
+def _assign(margin: FloatArray, inside: np.ndarray) -> tuple[IntArray, IntArray]:
+    """Tracks and blobs paired so that the pairs' total margin inside their gates is largest.
+
+    A track may be dark (blinking) and a blob may be new, so no pair is forced: each pair gains
+    its gate minus its distance, and the pairing with the largest total gain wins. Two middling
+    pairs then do not beat one close pair and a new track, which a plain rectangular assignment
+    of distances (pairing as many blobs as it can) would choose.
+
+    Args:
+        margin: Track-to-blob distance minus the track's gate, shape (T, B) [px].
+        inside: Where the margin is <= 0: the pairs allowed.
+
+    Returns:
+        The paired (track, blob) indices.
+    """
+    rows, cols = linear_sum_assignment(np.where(inside, margin, 0.0))
+    keep = inside[rows, cols]
+    return rows[keep], cols[keep]
+
+
+class BlobTracker:
+    """Blobs followed across frames and their blinking decoded into ids.
+
+    Each frame, every track is moved by the common turn (every azimuth shifts by the same angle
+    when the forklift turns) and by its own drift (parallax of the forklift's travel). The
+    common turn is estimated first, as the densest cluster of azimuth shifts between tracks and
+    blobs at similar radii; without it a 10 Hz camera loses every track in a brisk turn (20 px a
+    frame). Blobs are then assigned to the moved tracks by the Hungarian method, for the largest
+    total margin inside the gates, so no pair is forced. Far beacons down a long aisle sit a few
+    pixels apart near the horizon, and three rules keep their tracks apart:
+
+    * a track with an id knows its code and takes no blob in a frame where its beacon is dark;
+    * a blob as large as the blobs of several tracks together, lit at once and merged on the
+      image, lights all of them (and has no id: its centroid is no one beacon's);
+    * a new track starts with the drift of a settled neighbour on the image, which drifts alike.
+
+    Args:
+        code: The beacons' code.
+        principal_point: (c_x, c_y) of the camera [px]: the centre of the polar prediction.
+        gate_px: Largest distance between a track's predicted position and a blob it takes [px].
+        max_missed: Dark frames in a row after which a track is dropped (the code has at most
+            two; one more tolerates a missed detection).
+        max_turn_change: Largest change of the common turn from one frame to the next [rad].
+    """
+
+    def __init__(self, code: BlinkCode, principal_point: tuple[float, float],
+                 gate_px: float = 8.0, max_missed: int = 3,
+                 max_turn_change: float = 0.1) -> None:
+        if not gate_px > 0 or max_missed < 2 or not 0 < max_turn_change < math.pi:
+            raise InvalidInputError(
+                f"gate_px must be > 0, max_missed >= 2 and max_turn_change in (0, pi), got "
+                f"{gate_px}, {max_missed}, {max_turn_change}")
+        self.code = code
+        self.centre = principal_point
+        self.gate_px = gate_px
+        self.max_missed = max_missed
+        self.max_turn_change = max_turn_change
+        self._tracks: list[_Track] = []
+        self._turn = 0.0  # the last frame's common azimuth shift [rad]
+        self._codewords: dict[int, np.ndarray] = {}
+
+    def reset(self) -> None:
+        """Forget every track (a new episode)."""
+        self._tracks = []
+        self._turn = 0.0
+
+    @property
+    def track_count(self) -> int:
+        """Tracks alive now."""
+        return len(self._tracks)
+
+    def _common_turn(self, azimuth: FloatArray, radius: FloatArray) -> float:
+        """The frame's common azimuth shift: the densest cluster of track-to-blob shifts.
+
+        Shifts are searched within ``max_turn_change`` of the last frame's turn (a forklift's
+        turn rate changes smoothly); a cluster needs two supporters, else the last turn stays.
+        """
+        tracks = self._tracks
+        if not tracks or not len(azimuth):
+            return self._turn
+        own = np.array([(t.azimuth + t.parallax_rate, t.radius + t.radius_rate)
+                        for t in tracks])
+        shift = np.remainder(azimuth[None, :] - own[:, 0:1] - self._turn + math.pi,
+                             2 * math.pi) - math.pi
+        near = (np.abs(radius[None, :] - own[:, 1:2]) <= self.gate_px) & \
+            (np.abs(shift) <= self.max_turn_change)
+        candidates = np.sort(shift[near])
+        if candidates.size < 2:
+            return self._turn
+        window = 0.02  # [rad]: about 4 px at the horizon
+        support = np.searchsorted(candidates, candidates + window, side="right") - \
+            np.arange(candidates.size)
+        most = support.max()
+        if most < 2:
+            return self._turn
+        # Among the densest windows, the one nearest the last turn.
+        starts = np.flatnonzero(support == most)
+        best = starts[np.argmin(np.abs(candidates[starts] + 0.5 * window))]
+        return self._turn + float(np.median(candidates[best:best + most]))
+
+    def update(self, pixels: FloatArray, areas: FloatArray | None = None) -> IntArray:
+        """Take one frame's blob centres (N, 2) [px]; return each blob's decoded id, shape (N,).
+
+        A blob's id is its track's: -1 until the track reads a valid codeword, and again after
+        a corrupt one.
+
+        Args:
+            pixels: Blob centroids (u, v) [px].
+            areas: Blob areas [px], shape (N,). With them, a blob that holds the light of
+                several close beacons (lit together, merged on the image) lights all of their
+                tracks; without them, a track left without a blob reads that frame as dark and
+                its code breaks.
+        """
+        cx, cy = self.centre
+        points = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        if areas is not None:
+            areas = np.asarray(areas, dtype=np.float64).reshape(-1)
+            if areas.shape != (len(points),):
+                raise InvalidInputError(f"areas: one per blob ({len(points)}), got shape "
+                                        f"{areas.shape}")
+        azimuth = np.arctan2(points[:, 1] - cy, points[:, 0] - cx)
+        radius = np.hypot(points[:, 0] - cx, points[:, 1] - cy)
+        self._turn = self._common_turn(azimuth, radius)
+        tracks = self._tracks
+        for track in tracks:  # move every track to where it should be now
+            track.azimuth += self._turn + track.parallax_rate
+            track.radius += track.radius_rate
+        assignment = np.full(len(points), -1, dtype=np.int64)
+        taken = np.zeros(len(tracks), dtype=bool)
+        merged = np.zeros(len(points), dtype=bool)
+        if tracks and len(points):
+            predicted = np.array([(t.azimuth, t.radius) for t in tracks])
+            px = cx + predicted[:, 1] * np.cos(predicted[:, 0])
+            py = cy + predicted[:, 1] * np.sin(predicted[:, 0])
+            cost = np.hypot(px[:, None] - points[None, :, 0], py[:, None] - points[None, :, 1])
+            margin = cost - np.array([self._gate(t) for t in tracks])[:, None]
+            inside = margin <= 0.0  # each track pairs only with blobs inside its gate
+            rows, cols = _assign(margin, inside)
+            assignment[cols] = rows
+            taken[rows] = True
+            if areas is not None:
+                self._join_merged(areas, assignment, inside & ~taken[:, None], cost, taken,
+                                  merged)
+        # A merged blob's centroid mixes lights: its tracks coast on their predictions.
+        for b in np.flatnonzero((assignment >= 0) & ~merged):
+            _follow(tracks[assignment[b]], azimuth[b], radius[b],
+                    None if areas is None else areas[b])
+        for t, track in enumerate(tracks):
+            if taken[t]:
+                track.missed = 0
+                track.history.append(1)
+            else:
+                track.missed += 1
+                track.history.append(0)
+        survivors = [t for t in range(len(tracks)) if tracks[t].missed <= self.max_missed]
+        renumber = np.full(len(tracks) + 1, -1, dtype=np.int64)
+        renumber[survivors] = np.arange(len(survivors))
+        self._tracks = [tracks[t] for t in survivors]
+        assignment = renumber[assignment]  # -1 stays -1 (index -1 of renumber is -1)
+        new = np.flatnonzero(assignment < 0)  # blobs no track took start tracks
+        settled = [t for t in self._tracks if t.seen >= 3 and t.missed == 0] if len(new) else []
+        for b in new:
+            assignment[b] = len(self._tracks)
+            flow = self._local_flow(settled, azimuth[b], radius[b])
+            self._tracks.append(_Track(float(azimuth[b]), float(radius[b]), *(flow or (0.0, 0.0)),
+                                       [1], area=0.0 if areas is None else float(areas[b]),
+                                       prior=flow is not None))
+        self._decode()
+        ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
+        ids[merged] = -1  # several beacons' light, at none's azimuth
+        return ids
+
+    def _decode(self) -> None:
+        """Read the codeword that ends now on every track; keep the phase of those with an id."""
+        period = self.code.period
+        for track in self._tracks:
+            if len(track.history) > period:
+                del track.history[:-period]
+            decoded = self.code.decode(track.history)
+            if decoded is not None:
+                track.beacon_id = decoded
+                track.phase = 0 if decoded >= 0 else -1  # a codeword starts next frame
+            elif track.phase >= 0:
+                track.phase = (track.phase + 1) % period
+
+    def _gate(self, track: _Track) -> float:
+        """How far from its prediction a track takes a blob [px]; -1: it takes none.
+
+        A track with an id knows its code, so in a frame where its beacon is dark any blob
+        at its place is another light (a neighbour, a beacon just come into view).
+        """
+        if track.phase >= 0 and not self._codeword(track.beacon_id)[track.phase]:
+            return -1.0
+        if track.seen < 2 and not track.prior:  # no drift yet: a wider gate
+            return 3.0 * self.gate_px
+        return self.gate_px
+
+    def _codeword(self, beacon_id: int) -> np.ndarray:
+        """The lit frames of one codeword of ``beacon_id`` (cached)."""
+        if beacon_id not in self._codewords:
+            self._codewords[beacon_id] = self.code.frames(beacon_id)
+        return self._codewords[beacon_id]
+
+    def _local_flow(self, settled: list[_Track], azimuth: float,
+                    radius: float) -> tuple[float, float] | None:
+        """A new track's first drift: that of the nearest settled track within 6 gates, if any.
+
+        An upward fisheye maps a light's azimuth and elevation to the image, and beacons hang at
+        similar heights, so blobs that are close on the image are at similar bearings and
+        distances and drift alike as the forklift travels.
+        """
+        best, nearest = None, (6.0 * self.gate_px) ** 2
+        for track in settled:
+            du = track.radius * math.cos(track.azimuth) - radius * math.cos(azimuth)
+            dv = track.radius * math.sin(track.azimuth) - radius * math.sin(azimuth)
+            if du * du + dv * dv < nearest:
+                best, nearest = (track.parallax_rate, track.radius_rate), du * du + dv * dv
+        return best
+
+    def _join_merged(self, areas: FloatArray, assignment: IntArray, free: np.ndarray,
+                     cost: FloatArray, taken: np.ndarray, merged: np.ndarray) -> None:
+        """Light the tracks whose beacons merged into another track's blob (in place).
+
+        Two beacons a few pixels apart that are lit together make one blob, at their
+        flux-weighted centre and about as large as their two blobs together. A track left
+        without a blob whose gate holds such a blob is lit too: the blob's area must be at
+        least ``MERGE_SHARE`` of the areas its tracks had alone, and the track must have been
+        seen alone three times (noise makes short-lived specks of a few pixels, and a speck's
+        track would otherwise turn every blob beside it into a merger). Checked nearest first,
+        so a blob can hold three or more beacons.
+
+        Args:
+            areas: Each blob's area [px].
+            assignment: Each blob's track, -1 for none.
+            free: (T, B): the track took no blob and the blob is inside its gate.
+            cost: (T, B) track-to-blob distances [px].
+            taken: Each track's "lit this frame", updated.
+            merged: Each blob's "merged", updated.
+        """
+        for b in np.flatnonzero((assignment >= 0) & free.any(axis=0)):
+            claimed = self._tracks[assignment[b]].area
+            if not claimed:
+                continue
+            candidates = np.flatnonzero(free[:, b])
+            for t in candidates[np.argsort(cost[candidates, b])]:
+                track = self._tracks[t]
+                if (taken[t] or track.seen < 3
+                        or areas[b] < MERGE_SHARE * (claimed + track.area)):
+                    continue
+                claimed += track.area
+                taken[t] = merged[b] = True

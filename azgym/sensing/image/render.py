@@ -1,0 +1,138 @@
+"""Fisheye frames from the sensor geometry: every light the camera sees drawn as OpenCV would.
+
+``render`` draws every detection the geometry found — direct, partly covered or mirrored — as
+an LED blob: the visible part of the beacon's width (its azimuth extent, from W and the
+distance, times the visible share) at its elevation, blurred by the lens' point spread, as
+bright as its flux (a ghost dimmer by the reflectivity), clipped at saturation, plus sensor
+noise. A partly covered beacon is thereby really cut on the image: only its visible part is lit.
+
+:mod:`azgym.sensing.image.detect` finds the blobs again; :mod:`azgym.sensing.image.sensor` puts
+both behind a camera that identifies the blobs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numba
+import numpy as np
+
+from azgym.core import FloatArray
+from azgym.site.fisheye import FisheyeCamera
+
+PSF_SIGMA_PX = 0.8
+"""Standard deviation of the lens' point spread [px]."""
+
+
+@numba.njit(cache=True)
+def _splat(image, u, v, sigma, amplitude):
+    """Add a sub-pixel Gaussian of the given amplitude centred at (u, v) (pixel centres)."""
+    radius = int(math.ceil(3.5 * sigma))
+    height, width = image.shape
+    u0 = int(math.floor(u))
+    v0 = int(math.floor(v))
+    inv = 1.0 / (2.0 * sigma * sigma)
+    for row in range(max(0, v0 - radius), min(height, v0 + radius + 2)):
+        dv = row - v
+        for column in range(max(0, u0 - radius), min(width, u0 + radius + 2)):
+            du = column - u
+            image[row, column] += amplitude * math.exp(-(du * du + dv * dv) * inv)
+
+
+@numba.njit(cache=True)
+def _draw_strip(image, cx, cy, focal, distortion, polar, azimuth_lo, azimuth_hi, amplitude,
+                sigma):
+    """Light the arc of polar angle ``polar`` between two azimuths.
+
+    The arc is a row of Gaussians a fifth of a pixel apart whose total is ``amplitude`` (a point
+    source if the arc is tiny).
+    """
+    k1, k2, k3, k4 = distortion[0], distortion[1], distortion[2], distortion[3]
+    t2 = polar * polar
+    radius = focal * polar * (1.0 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4))))
+    length = radius * (azimuth_hi - azimuth_lo)
+    count = max(1, int(math.ceil(length / 0.2)))
+    for k in range(count):
+        azimuth = azimuth_lo + (azimuth_hi - azimuth_lo) * (k + 0.5) / count
+        _splat(image, cx + radius * math.cos(azimuth), cy + radius * math.sin(azimuth), sigma,
+               amplitude / count)
+
+
+def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray,
+           elevation: FloatArray, flux: FloatArray, noise: FloatArray | None = None,
+           half_tall: FloatArray | None = None) -> np.ndarray:
+    """An 8-bit frame with one lit arc (a beacon) or lit patch (a lamp, a window) per light.
+
+    Args:
+        camera: The fisheye.
+        azimuth_lo: Start of each light's visible azimuth extent, camera frame [rad].
+        azimuth_hi: End of it [rad].
+        elevation: Each light's elevation above the horizon [rad].
+        flux: Each light's flux over the detection threshold (>= 1).
+        noise: An image-sized float32 array of sensor noise to add (grey levels), or None; a
+            bank of precomputed noise frames avoids the cost of fresh Gaussian noise.
+        half_tall: Each light's angular half-extent in elevation [rad], or None for LEDs (whose
+            height the point spread hides). A light taller than a pixel is drawn as a patch.
+    """
+    width, height = camera.image_size
+    image = np.zeros((height, width), dtype=np.float32)
+    cx, cy = camera.principal_point
+    distortion = np.array(camera.distortion, dtype=np.float64)
+    # Total brightness of a blob: enough that a light at the threshold peaks near 60 grey levels.
+    scale = 60.0 * 2.0 * math.pi * PSF_SIGMA_PX**2
+    tall = np.zeros(len(elevation)) if half_tall is None else half_tall
+    for lo, hi, e, f, t in zip(azimuth_lo, azimuth_hi, elevation, flux, tall, strict=True):
+        if t * camera.focal_px > 0.5:
+            _draw_patch(image, camera, distortion, lo, hi, e - t, e + t, scale * f)
+        else:
+            _draw_strip(image, cx, cy, camera.focal_px, distortion, math.pi / 2 - e, lo, hi,
+                        scale * min(f, 40.0), PSF_SIGMA_PX)
+    if noise is not None:
+        image += noise
+    np.clip(image, 0, 255, out=image)
+    return image.astype(np.uint8)
+
+
+@numba.njit(cache=True)
+def _patch_outline(cx, cy, focal, distortion, azimuth_lo, azimuth_hi, elevation_lo,
+                   elevation_hi, sides):
+    """The outline of an azimuth × elevation patch on the image, (2 sides, 2) points [px]."""
+    k1, k2, k3, k4 = distortion[0], distortion[1], distortion[2], distortion[3]
+    outline = np.empty((2 * sides, 2))
+    for edge in range(2):
+        polar = math.pi / 2 - (elevation_hi if edge == 0 else elevation_lo)
+        t2 = polar * polar
+        radius = focal * polar * (1.0 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4))))
+        for k in range(sides):
+            step = k if edge == 0 else sides - 1 - k
+            azimuth = azimuth_lo + (azimuth_hi - azimuth_lo) * step / (sides - 1)
+            outline[edge * sides + k, 0] = cx + radius * math.cos(azimuth)
+            outline[edge * sides + k, 1] = cy + radius * math.sin(azimuth)
+    return outline
+
+
+def _draw_patch(image: np.ndarray, camera: FisheyeCamera, distortion: FloatArray,
+                azimuth_lo: float, azimuth_hi: float, elevation_lo: float, elevation_hi: float,
+                total: float) -> None:
+    """Add an extended light: its outline on the image filled evenly, blurred by the spread.
+
+    Its grey level is its total brightness over its area, so a bright lamp saturates.
+    """
+    cx, cy = camera.principal_point
+    outline = _patch_outline(cx, cy, camera.focal_px, distortion, azimuth_lo, azimuth_hi,
+                             elevation_lo, elevation_hi, 9)
+    margin = int(math.ceil(4 * PSF_SIGMA_PX))
+    height, width = image.shape
+    x0 = max(0, int(outline[:, 0].min()) - margin)
+    y0 = max(0, int(outline[:, 1].min()) - margin)
+    x1 = min(width, int(outline[:, 0].max()) + margin + 2)
+    y1 = min(height, int(outline[:, 1].max()) + margin + 2)
+    if x0 >= x1 or y0 >= y1:
+        return
+    shift = 4  # sub-pixel vertices: 1/16 px
+    points = np.round((outline - (x0, y0)) * 2**shift).astype(np.int32)
+    area = max(1.0, abs(cv2.contourArea(points)) / 4**shift)
+    patch = np.zeros((y1 - y0, x1 - x0), dtype=np.float32)
+    cv2.fillPoly(patch, [points], total / area, lineType=cv2.LINE_8, shift=shift)
+    image[y0:y1, x0:x1] += cv2.GaussianBlur(patch, (0, 0), PSF_SIGMA_PX)

@@ -1,0 +1,322 @@
+"""The camera through pixels: the geometry's lights rendered on the fisheye, detected, identified.
+
+Per frame, :class:`ImageSensor`
+
+1. asks the sensor geometry (``sensor.Sensor``) what the camera sees: beacons, partly covered
+   beacons, mirror ghosts, moved beacons; and the same for the scenario's other ``lights``
+   (lamps, windows), which racks hide and mirrors reflect like any light;
+2. renders them (``image.render``): beacons as LED blobs cut to their visible part, lights as
+   patches, with noise from a bank of precomputed frames;
+3. detects blobs (``image.detect``) and turns each centroid into an azimuth;
+4. identifies each blob, in one of two modes:
+
+   * ``ids="oracle"``: the id of the light whose projected centre is nearest (within
+     ``match_px``), misread at the scenario's ``faults.misdecode_rate`` as another map id — fast,
+     for single frames;
+   * ``ids="blink"``: every beacon blinks its id's on-off code (``blink.BlinkCode``) from its own
+     phase, and a ``blink.BlobTracker`` decodes ids from the blobs' lit/dark histories over
+     frames. Frames must then be successive (call :meth:`ImageSensor.reset` between episodes);
+     dark beacons give no blob, and misidentifications come from tracking and decoding.
+
+The ground truth of every blob — which light made it and its noise-free azimuth — travels beside
+the measurements, found by the same nearest-centre matching.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from azgym.core import BeaconMap, FloatArray, IntArray, Measurements, Pose
+from azgym.errors import InvalidInputError, unknown_name
+from azgym.sensing.catalog import ID_MODES
+from azgym.sensing.geometry.sensor import FrameBuffers, GeometrySensor
+from azgym.sensing.image.blink import BLINK_CAMERA_RATE_HZ, BlinkCode, BlobTracker
+from azgym.sensing.image.detect import detect
+from azgym.sensing.image.render import render
+from azgym.sensing.labels import DISTRACTOR, MISIDENTIFIED
+from azgym.sensing.misread import misread_row
+from azgym.sensing.protocol import (
+    CAMERA_RATE_HZ,
+    LEVEL,
+    DetectionTruth,
+    Observation,
+    Seed,
+    Tilt,
+)
+from azgym.site import Scenario
+from azgym.site.elements import Faults
+
+
+class ImageSensor:
+    """A scenario's fisheye camera, measuring beacons from rendered pixels.
+
+    Args:
+        scenario: The site; its ``fisheye`` is the camera and its ``lights`` the distractors.
+        ids: "oracle" or "blink" (see the module's docstring).
+        noise_sigma: Sensor noise [grey levels].
+        noise_frames: Size of the bank of precomputed noise frames (drawn from ``seed``).
+        threshold: Detection threshold [grey level].
+        match_px: Largest blob-to-light distance for identifying (oracle) and for the ground
+            truth [px].
+
+    Call :meth:`reset` with a seed before the first frame: it draws the bank of noise frames and
+    the beacons' blinking phases.
+    """
+
+    quality_names = ("area_px", "peak", "elongation")
+    elongation_cap = 1e6
+    """The elongation reported for a one-pixel-wide blob (whose minor axis is 0)."""
+
+    def __init__(self, scenario: Scenario, ids: str = "oracle", noise_sigma: float = 2.0,
+                 noise_frames: int = 8, threshold: int = 25, match_px: float = 3.0) -> None:
+        if ids not in ID_MODES:
+            raise unknown_name("ids", ids, ID_MODES)
+        if not (math.isfinite(noise_sigma) and noise_sigma >= 0):
+            raise InvalidInputError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
+        if not 0 < threshold < 255:
+            raise InvalidInputError(f"threshold must be in (0, 255), got {threshold!r}")
+        if noise_frames < 1:
+            raise InvalidInputError(f"noise_frames must be >= 1, got {noise_frames!r}")
+        self.scenario = scenario
+        self.camera = scenario.fisheye
+        self.ids = ids
+        self.threshold = threshold
+        self.match_px = match_px
+        self.noise_sigma = noise_sigma
+        self.noise_frames = noise_frames
+        self.frame_rate_hz = BLINK_CAMERA_RATE_HZ if ids == "blink" else CAMERA_RATE_HZ
+        self._geometry = GeometrySensor(scenario)
+        self._buffers = self._geometry.new_buffers()
+        self._noise: list[np.ndarray | None] = []
+        self._lights = _LightSource(scenario)
+        self._frame = 0
+        if ids == "blink":
+            self.code = BlinkCode.for_ids(scenario.beacons.ids)
+            self._codes = np.array([self.code.frames(int(i)) for i in scenario.beacons.ids])
+            self.phases = np.zeros(len(scenario.beacons), dtype=np.int64)
+            self.tracker = BlobTracker(self.code, self.camera.principal_point)
+
+    def reset(self, seed: Seed = None) -> None:
+        """Start a new sequence of frames: draw the noise bank and blinking phases from ``seed``.
+
+        In blinking mode the tracks are forgotten too.
+        """
+        bank = np.random.default_rng(seed)
+        width, height = self.camera.image_size
+        self._noise = ([bank.normal(0.0, self.noise_sigma, (height, width)).astype(np.float32)
+                        for _ in range(self.noise_frames)] if self.noise_sigma > 0 else [None])
+        self._frame = 0
+        if self.ids == "blink":
+            self.phases = bank.integers(0, self.code.period, len(self.scenario.beacons))
+            self.tracker.reset()
+
+    @property
+    def quality_high(self) -> tuple[float, float, float]:
+        """The largest blob: the whole image, saturated, a one-pixel-wide line."""
+        width, height = self.camera.image_size
+        return float(width * height), 255.0, self.elongation_cap
+
+    def code_position(self, rows: IntArray) -> IntArray:
+        """Where in its codeword each beacon (map rows) is at the coming frame (blinking mode)."""
+        return (self._frame + self.phases[rows]) % self.code.period
+
+    def observe(self, pose: Pose, rng: np.random.Generator, tilt: Tilt = LEVEL) -> Observation:
+        """Render the frame at ``pose`` = (x, y, heading), detect its blobs and identify them.
+
+        Args:
+            pose: Camera position east and north [m] and heading [rad].
+            rng: The frame's random draws (misreads in oracle mode, the noise frame).
+            tilt: (pitch, roll) of the camera's axis [rad].
+
+        Raises:
+            InvalidInputError: :meth:`reset` was never called.
+
+        Returns:
+            The blobs' ids (-1: not identified), azimuths and quality (columns: area [px], peak
+            grey level, elongation), their ground truth (DISTRACTOR for a blob no beacon
+            explains — a lamp, a window, their mirrors, noise; MISIDENTIFIED for a beacon's
+            blob with a wrong id, or a distractor with an id), the image and the blobs.
+        """
+        if not self._noise:
+            raise InvalidInputError("ImageSensor: call reset(seed) before the first observe")
+        blink = self.ids == "blink"
+        out = self._buffers
+        # Misreads are drawn per blob below (oracle mode) or come from decoding (blink mode), so
+        # the geometry's labels keep what each light is (a misread ghost is still a ghost).
+        count = self._geometry.observe_into(pose, rng, out, tilt=tilt, misdecode_rate=0.0)
+        lit = np.ones(count, dtype=bool)
+        if blink:
+            rows = out.beacon[:count]
+            lit = self._codes[rows, self.code_position(rows)]
+        beacons = _Lights.from_buffers(out, count, lit)
+        lights = self._lights.observe(pose, rng, tilt)
+        every = beacons.join(lights)
+        noise = self._noise[int(rng.integers(len(self._noise)))]
+        image = render(self.camera, every.azimuth - every.half_width,
+                       every.azimuth + every.half_width, every.elevation, every.flux, noise,
+                       every.half_tall)
+        blobs = detect(image, self.camera, self.threshold)
+        pixels = np.array([(b.u, b.v) for b in blobs], dtype=np.float64).reshape(-1, 2)
+        source = self._match(pixels, every)
+        matched = np.flatnonzero(source >= 0)
+        from_beacon = (source >= 0) & (source < len(beacons.azimuth))
+        labels = np.full(len(blobs), DISTRACTOR, dtype=np.int64)
+        labels[from_beacon] = beacons.label[source[from_beacon]]
+        beacon = np.full(len(blobs), -1, dtype=np.int64)
+        beacon[from_beacon] = beacons.beacon[source[from_beacon]]
+        mirrored = np.zeros(len(blobs), dtype=bool)
+        mirrored[matched] = every.mirrored[source[matched]]
+        visible = np.zeros(len(blobs))
+        visible[matched] = every.visible[source[matched]]
+        true_azimuth = np.full(len(blobs), np.nan)
+        true_azimuth[matched] = every.azimuth[source[matched]]
+        quality = np.array([(b.area, b.peak, b.elongation) for b in blobs],
+                           dtype=np.float64).reshape(-1, 3)
+        if blink:
+            ids = self.tracker.update(pixels, quality[:, 0])
+            true_ids = np.where(beacon >= 0, self.scenario.beacons.ids[np.maximum(beacon, 0)],
+                                -1)
+            labels[(ids >= 0) & (ids != true_ids)] = MISIDENTIFIED
+        else:
+            ids = np.full(len(blobs), -1, dtype=np.int64)
+            ids[from_beacon] = beacons.ids[source[from_beacon]]
+            self._misread(ids, labels, beacon, rng)
+        self._frame += 1
+        quality[~np.isfinite(quality)] = self.elongation_cap  # a one-pixel-wide blob
+        measurements = Measurements(ids, np.array([b.azimuth for b in blobs]), quality)
+        truth = DetectionTruth(label=labels, beacon=beacon, azimuth=true_azimuth,
+                               visible=visible, mirrored=mirrored)
+        in_view = out.beacon[:count][out.mirrored[:count] == 0].copy()
+        return Observation(measurements, truth, in_view, image=image, blobs=tuple(blobs))
+
+    def _misread(self, ids: IntArray, labels: IntArray, beacon: IntArray,
+                 rng: np.random.Generator) -> None:
+        """Oracle mode: misread identified blobs' ids at the scenario's rate.
+
+        A misread id is one of the other map ids, uniformly (as the geometry sensor does).
+        """
+        rate = self.scenario.faults.misdecode_rate
+        map_ids = self.scenario.beacons.ids
+        draws = rng.random((2, len(ids)))
+        if len(map_ids) < 2:
+            return
+        for k in np.flatnonzero((beacon >= 0) & (draws[0] < rate)):
+            ids[k] = map_ids[misread_row(int(beacon[k]), float(draws[1, k]), len(map_ids))]
+            labels[k] = MISIDENTIFIED
+
+    def _match(self, pixels: FloatArray, lights: _Lights) -> IntArray:
+        """For each blob, the light whose projected centre is nearest within its reach, or -1.
+
+        A light's reach is ``match_px`` plus its own half-size on the image (a window's blob
+        is as big as the window).
+        """
+        source = np.full(len(pixels), -1, dtype=np.int64)
+        if not len(pixels) or not len(lights.azimuth):
+            return source
+        c = np.cos(lights.elevation)
+        centres = self.camera.project(np.column_stack(
+            [c * np.cos(lights.azimuth), c * np.sin(lights.azimuth), np.sin(lights.elevation)]))
+        radius = np.hypot(centres[:, 0] - self.camera.principal_point[0],
+                          centres[:, 1] - self.camera.principal_point[1])
+        reach = self.match_px + np.maximum(radius * lights.half_width,
+                                           self.camera.focal_px * lights.half_tall)
+        distance = np.hypot(pixels[:, None, 0] - centres[None, :, 0],
+                            pixels[:, None, 1] - centres[None, :, 1])
+        nearest = distance.argmin(axis=1)
+        close = distance[np.arange(len(pixels)), nearest] <= reach[nearest]
+        source[close] = nearest[close]
+        return source
+
+
+@dataclass(frozen=True)
+class _Lights:
+    """The lights of one frame as the renderer takes them (camera-frame angles)."""
+
+    azimuth: FloatArray
+    half_width: FloatArray
+    elevation: FloatArray
+    half_tall: FloatArray
+    flux: FloatArray
+    ids: IntArray
+    beacon: IntArray
+    label: IntArray
+    mirrored: np.ndarray
+    visible: FloatArray
+
+    @classmethod
+    def from_buffers(cls, out: FrameBuffers, count: int, keep: np.ndarray,
+                     flux: FloatArray | None = None,
+                     tall_ratio: FloatArray | None = None) -> _Lights:
+        """The kept detections of a frame the geometry wrote into ``out``.
+
+        Args:
+            out: The geometry's buffers.
+            count: Detections in them.
+            keep: Which of the ``count`` to keep.
+            flux: Each detection's flux, if not the one the buffers hold.
+            tall_ratio: Height over width of each detection's light (None: LEDs, no height).
+        """
+        visible = out.visible[:count]
+        half_width = visible * out.half_width[:count]
+        half_tall = (np.zeros(count) if tall_ratio is None
+                     else out.half_width[:count] * tall_ratio)
+        return cls(azimuth=out.true_azimuth[:count][keep], half_width=half_width[keep],
+                   elevation=out.elevation[:count][keep], half_tall=half_tall[keep],
+                   flux=(10.0 ** out.quality[:count] if flux is None else flux)[keep],
+                   ids=out.ids[:count][keep], beacon=out.beacon[:count][keep],
+                   label=out.label[:count][keep],
+                   mirrored=out.mirrored[:count][keep] == 1, visible=visible[keep])
+
+    def as_distractors(self) -> _Lights:
+        """The same lights as blobs no beacon explains: no id, no beacon, label DISTRACTOR."""
+        none = np.full(self.azimuth.size, -1, dtype=np.int64)
+        return dataclasses.replace(self, ids=none, beacon=none,
+                                   label=np.full(self.azimuth.size, DISTRACTOR,
+                                                 dtype=np.int64))
+
+    def join(self, other: _Lights) -> _Lights:
+        """These lights, then the other's."""
+        return _Lights(*(np.concatenate([getattr(self, f.name), getattr(other, f.name)])
+                         for f in dataclasses.fields(self)))
+
+
+class _LightSource:
+    """The scenario's lamps and windows through the same geometry as the beacons.
+
+    The geometry sees them as beacons of a private map, with the range stretched to the
+    brightest light's (a light of power P reaches the threshold at sqrt(P) times a beacon's
+    range); each light's flux is then scaled back by its own power.
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        lights = scenario.lights
+        self._power = np.array([light.power for light in lights])
+        self._tall = np.array([light.tall / light.width for light in lights])
+        self._scale = self._power  # each light's flux over the strongest's (set below)
+        self._sensor: GeometrySensor | None = None
+        self._buffers = FrameBuffers(0)
+        if not lights:
+            return
+        strongest = float(self._power.max())
+        as_beacons = BeaconMap(np.arange(len(lights)), np.array([light.xyz for light in lights]),
+                               np.array([light.width for light in lights]))
+        camera = dataclasses.replace(scenario.camera,
+                                     max_range=scenario.camera.max_range * math.sqrt(strongest))
+        self._sensor = GeometrySensor(dataclasses.replace(
+            scenario, beacons=as_beacons, camera=camera, faults=Faults(0.0), physical_xyz=None))
+        self._buffers = self._sensor.new_buffers()
+        self._scale = self._power / strongest
+
+    def observe(self, pose: Pose, rng: np.random.Generator, tilt: Tilt) -> _Lights:
+        """The lights the camera sees from this pose (flux >= the detection threshold)."""
+        out = self._buffers
+        count = (0 if self._sensor is None
+                 else self._sensor.observe_into(pose, rng, out, tilt=tilt))
+        rows = out.beacon[:count]
+        flux = 10.0 ** out.quality[:count] * self._scale[rows]
+        return _Lights.from_buffers(out, count, flux >= 1.0, flux,
+                                    self._tall[rows]).as_distractors()

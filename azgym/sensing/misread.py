@@ -1,0 +1,18 @@
+"""The misread rule: a decoded id mistaken for another map beacon's, the same in every sensor.
+
+A misread detection of the beacon in map row ``b`` is read as one of the other N − 1 map
+beacons, uniformly: row ``(b + shift) % N`` with ``shift`` = 1 + ⌊u (N − 1)⌋ for a uniform u in
+[0, 1), clipped to N − 1 against rounding. Compiled, so the geometry kernels call it in their
+loop; Python code calls it the same way.
+"""
+
+from __future__ import annotations
+
+import numba
+
+
+@numba.njit(inline="always", error_model="numpy", cache=True)
+def misread_row(row: int, uniform: float, n_map: int) -> int:
+    """The map row a misread of map row ``row`` is read as (needs ``n_map`` >= 2)."""
+    shift = 1 + int(uniform * (n_map - 1))
+    return (row + min(shift, n_map - 1)) % n_map

@@ -1,0 +1,7 @@
+"""The site: the scenario model, its validated TOML files, and sampling poses on its floor."""
+
+from azgym.site.load import list_scenarios, load_scenario
+from azgym.site.parse import parse_scenario
+from azgym.site.scenario import Scenario
+
+__all__ = ["Scenario", "list_scenarios", "load_scenario", "parse_scenario"]

@@ -1,0 +1,31 @@
+"""Random camera poses on a site's floor: one rule for every suite, study and environment."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from azgym.core import Pose
+from azgym.site.scenario import Scenario
+
+WALL_CLEARANCE = 0.5
+"""A random pose keeps this far inside the room's bounds [m]."""
+RACK_CLEARANCE = 0.8
+"""A random pose keeps this far from every rack's footprint [m]: where a forklift can stand."""
+
+
+def random_free_pose(scenario: Scenario, rng: np.random.Generator) -> Pose:
+    """A pose uniform over the free floor, with a uniform heading.
+
+    The position is drawn uniformly in the room shrunk by ``WALL_CLEARANCE`` until it is
+    ``RACK_CLEARANCE`` clear of every rack (rejection sampling: uniform over the free floor);
+    then the heading is drawn uniformly from [−π, π).
+    """
+    x_min, y_min, x_max, y_max = scenario.bounds
+    low = (x_min + WALL_CLEARANCE, y_min + WALL_CLEARANCE)
+    high = (x_max - WALL_CLEARANCE, y_max - WALL_CLEARANCE)
+    while True:
+        x, y = rng.uniform(low, high)
+        if not any(rack.contains(x, y, margin=-RACK_CLEARANCE) for rack in scenario.racks):
+            return float(x), float(y), float(rng.uniform(-math.pi, math.pi))

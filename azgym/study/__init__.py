@@ -1,1 +1,0 @@
-"""Studies of azgym's models against what they model (``azgym study ...``)."""

@@ -1,0 +1,149 @@
+"""Leaderboard entries: what a sound entry is, and every way a bad one is caught."""
+
+from __future__ import annotations
+
+import gzip
+import html
+import json
+import re
+import shutil
+import subprocess
+
+import pytest
+
+from azgym.bench import leaderboard as L
+from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.suites import get_suite
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench")
+    run_benchmark(get_suite("stress"), [Contender("ransac", "ransac"), Contender("lsq", "lsq")],
+                  quick=True).write(out)
+    return out
+
+
+@pytest.fixture
+def entry_path(results, tmp_path):
+    return L.submit(results, "lsq", tmp_path / "entries", name="lsq-ref", version="1.0",
+                    authors=["A. Author"], link="https://example.org")
+
+
+def test_a_submitted_entry_validates_builds_and_reproduces(entry_path, tmp_path):
+    entry = L.load_entry(entry_path)
+    assert entry["name"] == "lsq-ref" and entry["localizer"] == {"spec": "lsq", "params": {}}
+    assert (entry_path.parent / "lsq-ref.frames.csv.gz").is_file()
+    readme, page = L.build(entry_path.parent, tmp_path / "board")
+    assert "| 1 | lsq-ref | 1.0 | A. Author |" in readme.read_text()
+    text = page.read_text()
+    assert "data:image/png;base64," in text  # the suite's error CDFs, embedded
+    assert "<table class=\"board\"" in text and "<script>" in text and "http" not in text.split(
+        "<script>")[1]  # self-contained: no external resources
+    assert L.verify(entry_path) == {}
+
+
+def rewrite(path, change):
+    entry = json.loads(path.read_text())
+    change(entry)
+    path.write_text(json.dumps(entry))
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda e: e.pop("authors"), "(top level): 'authors' is a required property"),
+        (lambda e: e.update(seed="7"), "seed: '7' is not of type 'integer'"),
+        (lambda e: e["metrics"]["all"].update(mean_cm=1.0),
+         "metrics/all/mean_cm: the entry says 1.0, its per-frame results give"),
+        (lambda e: e.update(suite_version=99), "suite_version: stress is at version 1"),
+        (lambda e: e.update(suite="nonsense"), "suite: unknown suite 'nonsense'"),
+        (lambda e: e.update(results_sha256="0" * 64), "results_sha256: the per-frame results"),
+        (lambda e: e.update(name="bad name!"), "name: 'bad name!' does not match"),
+    ],
+)
+def test_malformed_or_tampered_entries_are_rejected_with_the_reason(entry_path, change, message):
+    rewrite(entry_path, change)
+    with pytest.raises(L.LeaderboardError, match=re.escape(message)):
+        L.load_entry(entry_path)
+
+
+def test_a_tampered_frames_file_is_caught(entry_path):
+    frames = entry_path.parent / "lsq-ref.frames.csv.gz"
+    lines = gzip.decompress(frames.read_bytes()).decode().splitlines()
+    cells = lines[1].split(",")
+    cells[6] = "0.0"  # claim a perfect estimate on the first frame
+    frames.write_bytes(gzip.compress(("\n".join([lines[0], ",".join(cells), *lines[2:]])
+                                      + "\n").encode()))
+    with pytest.raises(L.LeaderboardError, match="results_sha256: the per-frame results file"):
+        L.load_entry(entry_path)
+
+
+def test_missing_frames_file_and_invalid_json(entry_path):
+    (entry_path.parent / "lsq-ref.frames.csv.gz").unlink()
+    with pytest.raises(L.LeaderboardError, match="results_file: lsq-ref.frames.csv.gz is missing"):
+        L.load_entry(entry_path)
+    entry_path.write_text("{not json")
+    with pytest.raises(L.LeaderboardError, match="not valid JSON"):
+        L.load_entry(entry_path)
+
+
+def test_submit_refuses_unknown_localizers_and_overwrites(results, entry_path):
+    with pytest.raises(L.LeaderboardError, match="no localizer 'mex' in the results"):
+        L.submit(results, "mex", entry_path.parent, name="x", version="1", authors=["a"])
+    with pytest.raises(L.LeaderboardError, match="an entry of that name exists"):
+        L.submit(results, "lsq", entry_path.parent, name="lsq-ref", version="1", authors=["a"])
+
+
+
+def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, tmp_path):
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run installs it)")
+    entries = tmp_path / "entries"
+    for label in ("ransac", "lsq"):
+        L.submit(results, label, entries, name=f"{label}-ref", version="1", authors=["a"])
+    _, page = L.build(entries, tmp_path / "board")
+    column = [c for c, _ in L.COLUMNS].index("p75 cm")
+    probe = f"""<script>
+      var header = document.querySelectorAll("table.board th")[{column}];
+      function names() {{
+        return Array.prototype.map.call(document.querySelectorAll("table.board tbody tr"),
+          function (row) {{ return row.cells[1].textContent; }}).join(",");
+      }}
+      header.click(); var up = names(); header.click(); var down = names();
+      document.body.setAttribute("data-up", up); document.body.setAttribute("data-down", down);
+      document.body.setAttribute("data-errors", JSON.stringify(window.pageErrors));
+    </script>"""
+    catcher = ('<script>window.pageErrors = []; window.addEventListener("error", function (e) '
+               '{ window.pageErrors.push(e.message); });</script>')
+    text = page.read_text().replace("<title>", catcher + "<title>").replace(
+        "</body>", probe + "</body>")
+    harness = tmp_path / "harness.html"
+    harness.write_text(text)
+    completed = subprocess.run(
+        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--disable-background-networking", "--disable-component-update", "--no-first-run",
+         "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom",
+         harness.as_uri()],
+        capture_output=True, text=True, timeout=120, check=True)
+    body = re.search(r"<body([^>]*)>", completed.stdout).group(1)
+    attributes = dict(re.findall(r'data-(\w+)="([^"]*)"', body))
+    assert html.unescape(attributes["errors"]) == "[]"
+    p75 = {label: json.loads((entries / f"{label}-ref.json").read_text())["metrics"]["all"][
+        "p75_cm"] for label in ("ransac", "lsq")}
+    best, worst = sorted(p75, key=p75.get)
+    assert attributes["up"] == f"{best}-ref,{worst}-ref"
+    assert attributes["down"] == f"{worst}-ref,{best}-ref"
+
+
+def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(tmp_path):
+    root = L.Path(__file__).parents[2] / "leaderboard"
+    entries = L.load_entries(root / "entries")
+    builtins = {"ransac", "ransac-weighted", "loo", "lsq", "triplet", "mex"}
+    for suite in L.SUITES:
+        assert {e["name"].removesuffix(f"-{suite}") for e in entries
+                if e["suite"] == suite} == builtins, suite
+    readme, _ = L.build(root / "entries", tmp_path)
+    assert readme.read_text() == (root / "README.md").read_text(), \
+        "leaderboard/README.md is stale: run python baselines/leaderboard_entries.py"

@@ -1,0 +1,30 @@
+"""Helpers the tests share: noise-free frames seen from a known pose, small beacon maps."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import azgym
+from azgym.core import BeaconMap, Measurements, pose_error
+from azgym.sensing.synthetic import ideal_azimuths
+
+__all__ = ["beacon_map", "ideal_frame", "pose_error_of"]
+
+
+def ideal_frame(x: float, y: float, heading: float, beacons: BeaconMap) -> Measurements:
+    """Every beacon measured once, without error, from the pose (x, y, heading)."""
+    azimuth, _ = ideal_azimuths(x, y, heading, beacons)
+    return Measurements(beacons.ids, azimuth)
+
+
+def pose_error_of(estimate: azgym.Estimate, x: float, y: float,
+                  heading: float) -> tuple[float, float]:
+    """(position error [m], absolute wrapped heading error [rad]) of an estimate."""
+    return pose_error(estimate.pose, (x, y, heading))
+
+
+def beacon_map(xy, width: float = 0.03, first_id: int = 1) -> BeaconMap:
+    """A beacon map from horizontal positions, ids counting up from ``first_id``, z = 2.5 m."""
+    xy = np.asarray(xy, dtype=float)
+    return BeaconMap(np.arange(first_id, first_id + len(xy)), np.c_[xy, np.full(len(xy), 2.5)],
+                     width=width)

@@ -1,0 +1,277 @@
+"""The localizer registry: names, specs, plug-ins and scikit-learn style parameters."""
+
+from __future__ import annotations
+
+import math
+import re
+import textwrap
+import uuid
+
+import numpy as np
+import pytest
+from helpers import ideal_frame
+
+import azgym
+from azgym import InvalidInputError, Localizer, UnknownNameError
+from azgym.localize import registry
+from azgym.localize.loo import LeaveOneOut
+from azgym.localize.lsq import LeastSquares
+from azgym.localize.mex import Mex
+from azgym.localize.ransac import Ransac
+from azgym.localize.triplet import Triplet
+
+BUILTINS = {"triplet": Triplet, "ransac": Ransac, "mex": Mex, "lsq": LeastSquares,
+            "loo": LeaveOneOut}
+
+PLUGIN_SOURCE = textwrap.dedent('''
+    """A plug-in localizer: least squares with a counter, for the registry tests."""
+
+    import azgym
+    from azgym.localize.lsq import LeastSquares
+
+
+    class Wrapped(azgym.Localizer):
+        name = "wrapped"
+
+        def __init__(self, *, max_iter=50, tag="plain"):
+            self.max_iter = max_iter
+            self.tag = tag
+            self.calls = 0
+
+        def _localize(self, problem):
+            self.calls += 1
+            return LeastSquares(max_iter=self.max_iter)._localize(problem)
+
+
+    def not_a_localizer():
+        return 42
+''')
+
+
+@pytest.fixture
+def clean_registry(monkeypatch):
+    """Registrations made by a test are forgotten afterwards."""
+    monkeypatch.setattr(registry, "_REGISTERED", {})
+
+
+def test_builtins_are_listed():
+    assert set(BUILTINS) <= set(azgym.list_localizers())
+    assert azgym.list_localizers() == sorted(azgym.list_localizers())
+
+
+@pytest.mark.parametrize(("name", "cls"), sorted(BUILTINS.items()))
+def test_builtins_build_their_class(name, cls):
+    localizer = azgym.make_localizer(name)
+    assert type(localizer) is cls
+    assert cls.name == name
+
+
+def test_unknown_name_suggests_the_closest():
+    with pytest.raises(UnknownNameError, match=re.escape("Did you mean 'ransac'?")) as info:
+        azgym.make_localizer("ransak")
+    assert "lsq" in str(info.value)  # the valid names are listed
+
+
+def test_unknown_name_without_a_close_match():
+    with pytest.raises(UnknownNameError, match=re.escape("unknown localizer 'qqqqqqqq'")) as info:
+        azgym.make_localizer("qqqqqqqq")
+    assert "Did you mean" not in str(info.value)
+
+
+def test_name_must_be_a_string():
+    with pytest.raises(InvalidInputError, match=re.escape("localizer name must be a string")):
+        azgym.make_localizer(3)
+
+
+def test_a_bad_keyword_raises_invalid_input():
+    with pytest.raises(InvalidInputError, match=re.escape("localizer 'ransac'")) as info:
+        azgym.make_localizer("ransac", pr_hti=0.99)
+    assert "pr_hti" in str(info.value)
+
+
+def test_hyperparameters_are_keyword_only():
+    with pytest.raises(TypeError):
+        Ransac(0.01)
+
+
+def test_keywords_reach_the_localizer():
+    localizer = azgym.make_localizer("ransac", weighted=True, max_iter=7)
+    params = localizer.get_params()
+    assert params["weighted"] is True and params["max_iter"] == 7
+    assert params["pr_hit"] == 0.999  # defaults untouched
+
+
+def plugin_file(tmp_path):
+    path = tmp_path / f"plugin_{uuid.uuid4().hex[:8]}.py"
+    path.write_text(PLUGIN_SOURCE, encoding="utf-8")
+    return path
+
+
+def check_plugin_works(localizer, beacons):
+    assert isinstance(localizer, Localizer)
+    assert localizer.get_params() == {"max_iter": 9, "tag": "x"}
+    estimate = localizer.localize(ideal_frame(1.0, -2.0, 0.4, beacons), beacons)
+    assert estimate.ok
+    assert math.hypot(estimate.x - 1.0, estimate.y + 2.0) < 1e-8
+    assert localizer.calls == 1
+
+
+def test_file_spec_loads_a_plugin(tmp_path, paper_beacons):
+    path = plugin_file(tmp_path)
+    localizer = azgym.make_localizer(f"{path}:Wrapped", max_iter=9, tag="x")
+    check_plugin_works(localizer, paper_beacons)
+    # Loading the same file again gives the same class (the module is imported once).
+    assert type(azgym.make_localizer(f"{path}:Wrapped")) is type(localizer)
+
+
+def test_module_spec_loads_a_plugin(tmp_path, monkeypatch, paper_beacons):
+    path = plugin_file(tmp_path)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    localizer = azgym.make_localizer(f"{path.stem}:Wrapped", max_iter=9, tag="x")
+    check_plugin_works(localizer, paper_beacons)
+    assert type(localizer).__module__ == path.stem
+
+
+def test_module_spec_of_a_builtin_class():
+    assert type(azgym.make_localizer("azgym.localize.lsq:LeastSquares")) is LeastSquares
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("azgym.localize.lsq:NoSuchClass", "has no attribute 'NoSuchClass'"),
+        ("no_such_module_for_azgym_tests:Foo", "cannot import 'no_such_module_for_azgym_tests'"),
+        ("/no/such/dir/plugin.py:Foo", "no file"),
+    ],
+)
+def test_bad_specs_raise_invalid_input(spec, message):
+    with pytest.raises(InvalidInputError, match=re.escape(message)):
+        azgym.make_localizer(spec)
+
+
+def test_a_factory_without_localize_is_rejected(tmp_path):
+    path = plugin_file(tmp_path)
+    with pytest.raises(InvalidInputError,
+                       match=re.escape("has no localize(measurements, beacons)")):
+        azgym.make_localizer(f"{path}:not_a_localizer")
+
+
+def test_a_bad_keyword_for_a_plugin(tmp_path):
+    path = plugin_file(tmp_path)
+    with pytest.raises(InvalidInputError, match="unexpected keyword argument 'nope'"):
+        azgym.make_localizer(f"{path}:Wrapped", nope=1)
+
+
+def test_register_a_factory(clean_registry, paper_beacons):
+    azgym.register_localizer("lsq-light", lambda **kw: LeastSquares(max_iter=5, **kw))
+    assert "lsq-light" in azgym.list_localizers()
+    localizer = azgym.make_localizer("lsq-light", weighted=True)
+    assert localizer.get_params()["max_iter"] == 5 and localizer.get_params()["weighted"]
+    estimate = localizer.localize(ideal_frame(2.0, 3.0, -1.0, paper_beacons), paper_beacons)
+    assert estimate.ok and math.hypot(estimate.x - 2.0, estimate.y - 3.0) < 1e-8
+
+
+def test_register_a_taken_name_raises(clean_registry):
+    with pytest.raises(InvalidInputError, match=re.escape("'ransac' is already registered")):
+        azgym.register_localizer("ransac", LeastSquares)
+    azgym.register_localizer("mine", LeastSquares)
+    with pytest.raises(InvalidInputError, match=re.escape("'mine' is already registered")):
+        azgym.register_localizer("mine", Triplet)
+    assert type(azgym.make_localizer("mine")) is LeastSquares  # the first one stays
+
+
+@pytest.mark.parametrize("name", ["", None, 5])
+def test_register_needs_a_name(clean_registry, name):
+    with pytest.raises(InvalidInputError, match=re.escape("non-empty string")):
+        azgym.register_localizer(name, LeastSquares)
+
+
+def test_registrations_do_not_leak_between_tests():
+    assert "mine" not in azgym.list_localizers()
+    assert "lsq-light" not in azgym.list_localizers()
+
+
+@pytest.mark.parametrize(
+    "localizer",
+    [
+        Ransac(),
+        Ransac(weighted=True, pr_hit=0.95, random_state=3, delta_alpha_d=0.01),
+        Mex(step=0.02, bounds=(-1.0, -2.0, 3.0, 4.0), coarse_step=0.1),
+        LeaveOneOut(z_max=1e-4, k_min=5),
+        LeastSquares(coverage=False),
+        Triplet(degeneracy_tol=1e-6),
+    ],
+    ids=repr,
+)
+def test_repr_round_trips_the_parameters(localizer):
+    namespace = {cls.__name__: cls for cls in BUILTINS.values()}
+    rebuilt = eval(repr(localizer), namespace)  # noqa: S307 - repr of our own objects
+    assert type(rebuilt) is type(localizer)
+    assert rebuilt.get_params() == localizer.get_params()
+    assert repr(rebuilt) == repr(localizer)
+
+
+def test_get_params_lists_every_keyword_unchanged():
+    bounds = (0.0, 0.0, 1.0, 1.0)
+    mex = Mex(step=0.5, bounds=bounds)
+    assert mex.get_params() == {"step": 0.5, "bounds": bounds, "coarse_step": None,
+                                "n_candidates": 8}
+    assert mex.get_params()["bounds"] is bounds  # stored as given, not converted
+    assert repr(Triplet()) == "Triplet(degeneracy_tol=1e-09)"
+
+
+def test_hyperparameters_are_validated_when_called_not_when_built(paper_beacons):
+    localizer = Ransac(pr_hit=2.0)  # no error yet: scikit-learn style
+    frame = ideal_frame(0.0, 0.0, 0.0, paper_beacons)
+    with pytest.raises(InvalidInputError, match=re.escape("Ransac.pr_hit")):
+        localizer.localize(frame, paper_beacons)
+    localizer.pr_hit = 0.99
+    assert localizer.localize(frame, paper_beacons).ok
+    # Changing a parameter after a successful call is validated again.
+    localizer.max_iter = 0
+    with pytest.raises(InvalidInputError, match=re.escape("Ransac.max_iter")):
+        localizer.localize(frame, paper_beacons)
+
+
+def test_random_state_generator_is_kept_as_given():
+    rng = np.random.default_rng(0)
+    assert Ransac(random_state=rng).get_params()["random_state"] is rng
+
+
+def test_editing_a_kernel_module_drops_the_whole_kernel_cache(tmp_path):
+    # numba keys a cached function on its own file only; a caller in another module would keep
+    # running an edited callee's old code. drop_stale_cache hashes every kernel module instead.
+    from azgym.localize._cache import KERNEL_MODULES, drop_stale_cache
+
+    for name in KERNEL_MODULES:
+        (tmp_path / f"{name}.py").write_text(f"# {name}\n")
+    cache = tmp_path / "__pycache__"
+    cache.mkdir()
+    assert drop_stale_cache(tmp_path) is False  # nothing cached yet; the hash is recorded
+    (cache / "ransac._search-10.py311.nbi").write_text("index")
+    (cache / "other.f-1.py311.nbi").write_text("not ours")
+    assert drop_stale_cache(tmp_path) is False  # sources unchanged: the cache is kept
+    assert (cache / "ransac._search-10.py311.nbi").exists()
+    (tmp_path / "_kernels.py").write_text("# edited\n")
+    assert drop_stale_cache(tmp_path) is True
+    assert not (cache / "ransac._search-10.py311.nbi").exists()
+    assert (cache / "other.f-1.py311.nbi").exists()
+
+
+def test_entry_point_plugins_are_listed_and_built(monkeypatch):
+    from importlib.metadata import EntryPoint
+
+    from azgym.localize import registry
+
+    plugin = EntryPoint(name="vendor-lsq", value="azgym.localize.lsq:LeastSquares",
+                        group=registry.ENTRY_POINT_GROUP)
+
+    def fake_entry_points(*, group):
+        return [plugin] if group == registry.ENTRY_POINT_GROUP else []
+
+    monkeypatch.setattr(registry, "entry_points", fake_entry_points)
+    assert "vendor-lsq" in azgym.list_localizers()
+    localizer = azgym.make_localizer("vendor-lsq", max_iter=7)
+    assert type(localizer).__name__ == "LeastSquares" and localizer.max_iter == 7
+    with pytest.raises(azgym.UnknownNameError, match=re.escape("Did you mean 'vendor-lsq'?")):
+        azgym.make_localizer("vendor-lsk")

@@ -1,0 +1,159 @@
+"""Fisheye frames: blobs rendered from the geometry are detected where the geometry says."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from azgym.sensing.image.detect import detect
+from azgym.sensing.image.render import render
+from azgym.site.fisheye import FisheyeCamera
+
+CAMERA = FisheyeCamera(focal_px=150.0, principal_point=(240.0, 240.0),
+                       distortion=(-0.01, 0.002, 0.0, 0.0))
+
+
+def direction(azimuth, elevation):
+    c = math.cos(elevation)
+    return [c * math.cos(azimuth), c * math.sin(azimuth), math.sin(elevation)]
+
+
+
+def seeded(sensor):
+    """The sensor, reset with seed 0 (its noise bank and blinking phases drawn)."""
+    sensor.reset(0)
+    return sensor
+
+
+@pytest.mark.parametrize(("azimuth_deg", "elevation_deg"), [(30.0, 10.0), (-135.0, 25.0),
+                                                            (91.0, 2.0)])
+def test_a_single_blob_is_detected_within_a_twentieth_of_a_degree(azimuth_deg, elevation_deg):
+    azimuth, elevation = math.radians(azimuth_deg), math.radians(elevation_deg)
+    half = math.atan2(0.015, 10.0)  # a 3 cm LED 10 m away
+    image = render(CAMERA, np.array([azimuth - half]), np.array([azimuth + half]),
+                   np.array([elevation]), np.array([5.0]))
+    [blob] = detect(image, CAMERA)
+    error = math.degrees(abs(math.remainder(blob.azimuth - azimuth, 2 * math.pi)))
+    assert error < 0.05
+    assert blob.area >= 4 and blob.elongation < 1.5
+
+
+def test_a_half_covered_beacon_is_detected_at_its_visible_halfs_centroid():
+    # A beacon whose extent spans 0.1 rad (about 20 px on the image), its lower half covered: the
+    # geometry (see test_sensor) puts the azimuth at the visible half's centroid, h / 2.
+    azimuth, elevation, half = math.radians(40.0), math.radians(8.0), 0.05
+    full = detect(render(CAMERA, np.array([azimuth - half]), np.array([azimuth + half]),
+                         np.array([elevation]), np.array([5.0])), CAMERA)
+    cut = detect(render(CAMERA, np.array([azimuth]), np.array([azimuth + half]),
+                        np.array([elevation]), np.array([5.0])), CAMERA)
+    predicted = CAMERA.project([direction(azimuth + half / 2, elevation)])[0]
+    [blob] = cut
+    assert math.hypot(blob.u - predicted[0], blob.v - predicted[1]) < 0.5
+    assert blob.azimuth > full[0].azimuth  # shifted toward the visible half
+
+
+def test_an_empty_frame_has_no_blobs_and_two_lights_give_two():
+    empty = render(CAMERA, np.array([]), np.array([]), np.array([]), np.array([]))
+    assert detect(empty, CAMERA) == []
+    two = render(CAMERA, np.array([0.0, 2.0]), np.array([0.001, 2.001]), np.array([0.1, 0.2]),
+                 np.array([3.0, 3.0]))
+    assert len(detect(two, CAMERA)) == 2
+
+
+def test_the_image_sensor_finds_the_geometrys_lights_with_their_ids():
+    import azgym
+    from azgym.sensing.geometry.sensor import GeometrySensor
+    from azgym.sensing.image.sensor import ImageSensor
+    from azgym.sensing.labels import DISTRACTOR
+
+    scenario = azgym.load_scenario("warehouse-small")
+    pose = (15.0, 10.0, 0.3)
+    frame = seeded(ImageSensor(scenario, noise_sigma=0.0)).observe(pose, np.random.default_rng(0))
+    truth = GeometrySensor(scenario).observe(pose, np.random.default_rng(0)).truth
+    beacons = np.flatnonzero(frame.truth.label != DISTRACTOR)  # the lamps' blobs aside
+    assert len(beacons) == len(truth.label)
+    assert np.all(frame.measurements.ids[frame.truth.label == DISTRACTOR] == -1)
+    for k in beacons:
+        nearest = np.argmin(np.abs(np.angle(np.exp(1j * (truth.azimuth
+                                                         - frame.measurements.azimuth[k])))))
+        error = abs(math.remainder(truth.azimuth[nearest] - frame.measurements.azimuth[k],
+                                   2 * math.pi))
+        assert math.degrees(error) < 0.05
+        assert frame.truth.label[k] == truth.label[nearest]
+    assert frame.measurements.quality.shape == (len(frame.measurements), 3)
+
+
+def test_no_visible_beacon_gives_an_empty_frame_not_an_error():
+    import dataclasses
+
+    import azgym
+    from azgym.sensing.image.sensor import ImageSensor
+    from azgym.site.elements import Camera
+
+    high = dataclasses.replace(azgym.load_scenario("warehouse-small"), camera=Camera(height=9.0))
+    frame = seeded(ImageSensor(high)).observe((15.0, 10.0, 0.0), np.random.default_rng(0))
+    assert len(frame.measurements) == 0 and frame.blobs == ()
+
+
+def test_ransac_on_detected_blobs_localizes_to_centimetres():
+    import azgym
+    from azgym.sensing.image.sensor import ImageSensor
+
+    scenario = azgym.load_scenario("warehouse-small")
+    sensor, ransac = seeded(ImageSensor(scenario)), azgym.make_localizer("ransac")
+    rng = np.random.default_rng(1)
+    errors = []
+    for x, y in [(2.0, 6.0), (15.0, 10.0), (28.0, 14.0), (8.0, 1.7), (22.0, 18.3)]:
+        frame = sensor.observe((x, y, float(rng.uniform(-3, 3))), rng)
+        estimate = ransac.localize(frame.measurements, scenario.beacons)
+        if estimate.ok:
+            errors.append(math.hypot(estimate.x - x, estimate.y - y))
+    assert len(errors) >= 4 and np.median(errors) < 0.05
+
+
+def test_a_lamp_is_drawn_as_a_patch_centred_where_it_projects():
+    azimuth, elevation, half = math.radians(-60.0), math.radians(50.0), math.radians(3.0)
+    image = render(CAMERA, np.array([azimuth - half]), np.array([azimuth + half]),
+                   np.array([elevation]), np.array([300.0]), half_tall=np.array([half]))
+    [blob] = detect(image, CAMERA)
+    centre = CAMERA.project([direction(azimuth, elevation)])[0]
+    assert math.hypot(blob.u - centre[0], blob.v - centre[1]) < 0.5
+    assert blob.peak == 255 and blob.area > 50  # a bright, extended light saturates
+
+
+def test_lamps_and_windows_are_blobs_no_beacon_explains():
+    import azgym
+    from azgym.sensing.image.sensor import ImageSensor
+    from azgym.sensing.labels import DISTRACTOR
+
+    scenario = azgym.load_scenario("warehouse-small")
+    assert [light.name for light in scenario.lights].count("ceiling lamp") == 2
+    frame = seeded(ImageSensor(scenario)).observe((15.0, 10.0, 0.3), np.random.default_rng(0))
+    lamps = frame.truth.label == DISTRACTOR
+    assert lamps.any() and (frame.measurements.ids[lamps] == -1).all()
+    # A lamp's blob has no beacon, but its light's true azimuth.
+    assert (frame.truth.beacon[lamps] == -1).all() and np.isfinite(frame.truth.azimuth[lamps]).all()
+    # The lamps' blobs are bigger than the beacons' (quality column 0: area).
+    area = frame.measurements.quality[:, 0]
+    assert np.median(area[lamps]) > 2 * np.median(area[~lamps])
+
+
+def test_the_error_model_study_measures_what_eq_1_and_2_assume():
+    import azgym
+    from azgym.experiments.error_model import measure_detections, summarize
+
+    scenario = azgym.load_scenario("warehouse-small")
+    errors = measure_detections(scenario, frames=120, calibration_px=1.0, seed=1)
+    summary = summarize(scenario, errors, 1.0)
+    # Centroids of ideal blobs at sigma = 2 grey levels are far better than eq. 1's 1 px ...
+    assert summary["centre_error_px"]["p95"] < 0.2
+    assert summary["azimuth_error_within_model"] > 0.99
+    # ... while a principal point 1 px off gives azimuth errors of about 1 px / r (times
+    # |sin| of the offset's direction, 2 / pi on average), as eq. 1 has it near the horizon.
+    whole = errors["visible"] == 1.0
+    ratio = np.abs(errors["azimuth_calibrated"][whole]) * errors["radius_px"][whole]
+    assert 0.5 < np.mean(ratio) < 0.8
+    # Coverage errors of partly covered beacons stay within eq. 2's bound.
+    assert summary["partly_covered"] > 0 and summary["coverage_within_eq2_bound"] == 1.0
