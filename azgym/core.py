@@ -1,9 +1,9 @@
 """The types every part of azgym speaks: beacon map, a frame's measurements, pose estimate.
 
-Conventions (see DESIGN.md): SI units and radians; world frame x east, y north, z up; the heading
-φ is the direction of the camera's x-axis in the world, counter-clockwise; the azimuth of beacon i
-in the camera frame is α_i = atan2(y_i − y, x_i − x) − φ (Rátosi & Simon, eq. 19-22). Every angle
-difference goes through :func:`wrap_angle`.
+Conventions (docs/architecture.md): SI units and radians; world frame x east, y north, z up; the
+heading φ is the direction of the camera's x-axis in the world, counter-clockwise; the azimuth of
+beacon i in the camera frame is α_i = atan2(y_i − y, x_i − x) − φ (Rátosi & Simon, eq. 19-22).
+Every angle difference goes through :func:`wrap_angle` (or its scalar and compiled twins).
 """
 
 from __future__ import annotations
@@ -25,6 +25,19 @@ Pose = tuple[float, float, float]
 """A camera pose (x, y, heading) [m, m, rad]."""
 
 
+TWO_PI = 2.0 * math.pi
+
+
+def wrap_scalar(angle: float) -> float:
+    """Wrap one angle to (−π, π] [rad]: the formula every wrap in azgym uses.
+
+    Compiled kernels call its twin :data:`azgym.jit.wrap_compiled` (the same function compiled),
+    arrays go through :func:`wrap_angle`.
+    """
+    wrapped = math.pi - (math.pi - angle) % TWO_PI
+    return wrapped if wrapped > -math.pi else math.pi
+
+
 def wrap_angle(angle: ArrayLike) -> Any:
     """Wrap angles to the interval (−π, π].
 
@@ -35,9 +48,8 @@ def wrap_angle(angle: ArrayLike) -> Any:
         The wrapped angle(s), a float for a scalar input.
     """
     if isinstance(angle, (float, int)):  # the same formula without numpy's overhead
-        wrapped_scalar = math.pi - (math.pi - angle) % (2.0 * math.pi)
-        return wrapped_scalar if wrapped_scalar > -math.pi else math.pi
-    wrapped = np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), 2.0 * np.pi)
+        return wrap_scalar(angle)
+    wrapped = np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), TWO_PI)
     # np.mod can round a tiny negative remainder up to 2π, which would give −π: map it to π.
     wrapped = np.where(wrapped <= -np.pi, np.pi, wrapped)
     return float(wrapped) if wrapped.ndim == 0 else wrapped

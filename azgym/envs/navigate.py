@@ -9,6 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from azgym.core import wrap_angle
 from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
@@ -343,6 +344,6 @@ def _interpolate(a: tuple[float, float, float], b: tuple[float, float, float],
     """
     if fraction >= 1.0:
         return b
-    turn = math.remainder(b[2] - a[2], 2.0 * math.pi)
+    turn = wrap_angle(b[2] - a[2])
     return (a[0] + fraction * (b[0] - a[0]), a[1] + fraction * (b[1] - a[1]),
-            math.remainder(a[2] + fraction * turn, 2.0 * math.pi))
+            wrap_angle(a[2] + fraction * turn))

@@ -19,6 +19,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from azgym.core import wrap_angle
 from azgym.errors import AzgymError, require
 from azgym.sensing.labels import DIRECT, DISTRACTOR, GHOST, MISIDENTIFIED, MOVED, PARTIAL
 
@@ -174,7 +175,7 @@ def blob_status(scenario: Any, frame: Any,
             predicted = math.atan2(dy, dx) - eh
             tolerance = float(scenario.error_model.tolerance(math.hypot(dx, dy),
                                                              beacons.width[row]))
-            error = abs(math.remainder(float(azimuth) - predicted, 2 * math.pi))
+            error = abs(wrap_angle(float(azimuth) - predicted))
             colours.append(ACCEPTED if error <= tolerance else REJECTED)
     return colours
 

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.core import FloatArray
+from azgym.core import FloatArray, wrap_angle
 from azgym.sensing.image.sensor import ImageSensor
 from azgym.sensing.labels import MOVED
 from azgym.site import Scenario, load_scenario
@@ -70,15 +70,15 @@ def measure_detections(scenario: Scenario | str, frames: int = 300, noise_sigma:
             dx, dy = beacon[0] - x, beacon[1] - y
             whole = math.atan2(dy, dx) - heading
             radius = math.hypot(blob.u - cx, blob.v - cy)
-            centre = math.remainder(blob.azimuth - truth.azimuth[k], 2 * math.pi)
+            centre = wrap_angle(blob.azimuth - truth.azimuth[k])
             rows["distance"].append(math.hypot(dx, dy))
             rows["radius_px"].append(radius)
             rows["visible"].append(float(truth.visible[k]))
             rows["centre_px"].append(centre * radius)
-            rows["azimuth"].append(math.remainder(blob.azimuth - whole, 2 * math.pi))
-            rows["coverage"].append(math.remainder(truth.azimuth[k] - whole, 2 * math.pi))
+            rows["azimuth"].append(wrap_angle(blob.azimuth - whole))
+            rows["coverage"].append(wrap_angle(truth.azimuth[k] - whole))
             shifted = math.atan2(blob.v - by, blob.u - bx)
-            rows["azimuth_calibrated"].append(math.remainder(shifted - whole, 2 * math.pi))
+            rows["azimuth_calibrated"].append(wrap_angle(shifted - whole))
     return {key: np.array(values) for key, values in rows.items()}
 
 

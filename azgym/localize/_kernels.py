@@ -13,8 +13,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from azgym.jit import jit
 
 HALF_PI = 0.5 * math.pi
 QUARTER_PI = 0.25 * math.pi
@@ -26,7 +27,7 @@ MAX_ITER = 1
 SINGULAR = 2
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def fast_atan2(y: float, x: float) -> float:
     """atan2 accurate to a few ulp (Cephes' rational approximation), cheaper than libm's.
 
@@ -70,7 +71,7 @@ def fast_atan2(y: float, x: float) -> float:
     return -r if y < 0.0 else r
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def small_angle(cross: float, dot: float) -> float:
     """atan2(cross, dot) for a direction within a few degrees of ``dot``'s: one division.
 
@@ -85,7 +86,7 @@ def small_angle(cross: float, dot: float) -> float:
     return fast_atan2(cross, dot)
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def solve3(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> float:
     """Solve the 3×3 system ``a @ out = b`` by Cramer's rule; returns det(a) (0 → not solved)."""
     c00 = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
@@ -106,7 +107,7 @@ def solve3(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> float:
     return det
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def circle_row(xi, yi, xj, yj, ci, si, cj, sj):
     """The inscribed-angle circle of a beacon pair as a linear equation in (x, y, q = x² + y²).
 
@@ -131,7 +132,7 @@ def circle_row(xi, yi, xj, yj, ci, si, cj, sj):
     )
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def pair_table(bx, by, ca, sa):
     """The circle equation (``circle_row``) of every pair of measurements, computed once a frame.
 
@@ -167,7 +168,7 @@ def pair_table(bx, by, ca, sa):
     return rows, ox, oy, scale
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k, degeneracy_tol):
     """Camera position from three azimuths (Sec. 2.5, eq. 7-18) and heading (eq. 19-20).
 
@@ -211,7 +212,7 @@ def solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k, degeneracy_tol):
     return True, x, y, hx, hy, det * det / hadamard_sq
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def information(bx, by, use, weight, x, y, unit_rows, out):
     """``out`` = Σ_i w_i j_i j_iᵀ over ``use``, with j_i = ∂ε_i/∂(x, y, φ) = (−Δy/D², Δx/D², 1).
 
@@ -236,7 +237,7 @@ def information(bx, by, use, weight, x, y, unit_rows, out):
                 out[r, c] += w * j[r] * j[c]
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def singular_at(bx, by, use, x, y):
     """Whether the azimuths of the beacons in ``use`` leave the pose at (x, y) undetermined.
 
@@ -256,7 +257,7 @@ def singular_at(bx, by, use, x, y):
     return not (diag > 0.0 and abs(det) > 1e-12 * diag)
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def residuals(bx, by, ca, sa, weight, use, x, y, ch, sh, eps):
     """ε_i of eq. 23/30 at pose (x, y, φ) into ``eps`` (for ``use[i]``); returns Σ w_i ε_i²."""
     cost = 0.0
@@ -273,7 +274,7 @@ def residuals(bx, by, ca, sa, weight, use, x, y, ch, sh, eps):
     return cost
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix):
     """Levenberg-Marquardt on the mean squared azimuth error (eq. 28-33).
 

@@ -15,17 +15,17 @@ import math
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
-import numba
 import numpy as np
 
 from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Measurements
 from azgym.errors import InvalidInputError
+from azgym.jit import jit
 
 MIN_MEASUREMENTS = 3
 """A 2-D position and a heading are three unknowns: three azimuths are the minimum."""
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def gather(ids, azimuth, sorted_ids, sorted_order, xyz, width):
     """Look up each measured id in the map (binary search); gather the usable measurements.
 

@@ -4,17 +4,17 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from azgym.core import Estimate
+from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize.base import Localizer, Problem, check_range
 from azgym.localize.refinement import finish
 from azgym.site.error_model import ErrorModel
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
     """Closed-form pose from all measurements in ``use``: the triplet method's circles, pooled.
 
@@ -88,7 +88,7 @@ def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
     return True
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def fit_subset(bx, by, ca, sa, beacon_index, use, max_iter, out):
     """Algebraic start plus unweighted refinement on ``use``; returns the mean squared residual.
 

@@ -4,18 +4,18 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from azgym.core import Estimate, FloatArray
 from azgym.errors import InvalidInputError
+from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize.base import Localizer, Problem, check_range
 
 _VECTOR_MATH = {"reassoc", "nsz", "arcp", "contract"}
 
 
-@numba.njit(fastmath=_VECTOR_MATH, error_model="numpy", cache=True)
+@jit(fastmath=_VECTOR_MATH)
 def _row_costs(bx, by, ca, sa, y, x0, step, nx, ux, uy, mean, cost):
     """E_ref (eq. 34) at the grid points (x0 + i·step, y), i < nx, written into ``cost``.
 
@@ -57,7 +57,7 @@ def _row_costs(bx, by, ca, sa, y, x0, step, nx, ux, uy, mean, cost):
         cost[i] = spread if ux[i] * ux[i] + uy[i] * uy[i] > 1e-18 * n * n else np.inf
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def grid_search(bx, by, ca, sa, x0, y0, step, nx, ny, costs_out):
     """Exhaustive minimum of eq. 34 on the nx × ny grid from (x0, y0); row by row, O(nx) memory.
 

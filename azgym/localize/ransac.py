@@ -6,10 +6,10 @@ import math
 from functools import lru_cache
 from itertools import combinations
 
-import numba
 import numpy as np
 
 from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Measurements
+from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range, gather
 from azgym.localize.refinement import package, refine_with_covariance
@@ -44,7 +44,7 @@ def _random_triplets(n: int, count: int, rng: np.random.Generator) -> IntArray:
     return np.sort(np.argpartition(keys, 3, axis=1)[:, :3], axis=1).astype(np.int64)
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def _inside_tolerance(cross, dot, d2, w, tan_d, wide_d2):
     """|ε| <= Δα = 2(Δα_d + Δα_c) (eq. 25-26) from the direction vectors, without sqrt or atan.
 
@@ -66,7 +66,7 @@ def _inside_tolerance(cross, dot, d2, w, tan_d, wide_d2):
     return inside, wide
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def _wide_d2(w, tan_d):
     """D² below which Δα_d + Δα_c >= π/4 (tolerance >= π/2): D <= W(1 + t) / 2(1 − t)."""
     if tan_d >= 1.0:
@@ -75,7 +75,7 @@ def _wide_d2(w, tan_d):
     return limit * limit
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage):
     """Inlier test |ε_m| <= Δα_m = 2(Δα_d + Δα_c,m) (eq. 23-26); returns (inlier, ε_m).
 
@@ -102,7 +102,7 @@ def _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage)
 _VECTOR_MATH = {"reassoc", "nsz", "arcp", "contract"}
 
 
-@numba.njit(fastmath=_VECTOR_MATH, error_model="numpy", cache=True)
+@jit(fastmath=_VECTOR_MATH)
 def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, special):
     """Supporters NS_t and Σε² of every candidate pose t at once (the fast path of _is_inlier).
 
@@ -140,7 +140,7 @@ def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, s
             special[t] += wide | (inlier & (z > 0.0025))
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def _score_exact(bx, by, ca, sa, width, x, y, ch, sh, tan_d, delta_d, coverage):
     """Supporters and Σε² of one candidate pose, measurement by measurement (eq. 26-27)."""
     ns = 0
@@ -153,7 +153,7 @@ def _score_exact(bx, by, ca, sa, width, x, y, ch, sh, tan_d, delta_d, coverage):
     return ns, sq
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, degeneracy_tol,
             best_pose, best_mask):
     """Steps 1-5: solve, score and rank every triplet.
@@ -223,7 +223,7 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
     return best_ns, best_e, n_valid
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def _ransac(floats, ints, triplets, settings, out, mask, cov):
     """Steps 1-6 in one compiled call on a Problem's packed arrays.
 
@@ -256,7 +256,7 @@ def _ransac(floats, ints, triplets, settings, out, mask, cov):
             mask[ints[0, m]] = support[m]
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def _ransac_frame(ids, azimuth, sorted_ids, sorted_order, xyz, width, triplets, settings, out,
                   mask, cov):
     """The id lookup (``gather``) and steps 1-6 in one compiled call, for exhaustive triplets.

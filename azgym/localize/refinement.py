@@ -10,22 +10,22 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numba
 import numpy as np
 
 from azgym.core import BoolArray, Estimate, FloatArray
+from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize.base import Problem
 from azgym.site.error_model import ErrorModel
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def _model_variance(width, dist, delta_d, coverage):
     c = K.fast_atan2(0.5 * width, dist) if coverage else 0.0
     return (delta_d * delta_d + c * c) / 3.0
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, coverage, start,
                            max_iter, out, cov):
     """Refine ``start`` = (x, y, cos φ, sin φ) on ``use``; fill ``out`` (as K.refine), ``cov``."""

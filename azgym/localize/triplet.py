@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from azgym.core import Estimate
+from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize.base import Localizer, Problem, check_range
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def _best_triplet(bx, by, ca, sa, beacon_index, degeneracy_tol, pose, chosen):
     """Solve every triplet of distinct beacons; keep the best-conditioned one."""
     n = bx.size

@@ -8,10 +8,10 @@ loop; Python code calls it the same way.
 
 from __future__ import annotations
 
-import numba
+from azgym.jit import jit
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def misread_row(row: int, uniform: float, n_map: int) -> int:
     """The map row a misread of map row ``row`` is read as (needs ``n_map`` >= 2)."""
     shift = 1 + int(uniform * (n_map - 1))

@@ -238,26 +238,6 @@ def test_random_state_generator_is_kept_as_given():
     assert Ransac(random_state=rng).get_params()["random_state"] is rng
 
 
-def test_editing_a_kernel_module_drops_the_whole_kernel_cache(tmp_path):
-    # numba keys a cached function on its own file only; a caller in another module would keep
-    # running an edited callee's old code. drop_stale_cache hashes every kernel module instead.
-    from azgym.localize._cache import KERNEL_MODULES, drop_stale_cache
-
-    for name in KERNEL_MODULES:
-        (tmp_path / f"{name}.py").write_text(f"# {name}\n")
-    cache = tmp_path / "__pycache__"
-    cache.mkdir()
-    assert drop_stale_cache(tmp_path) is False  # nothing cached yet; the hash is recorded
-    (cache / "ransac._search-10.py311.nbi").write_text("index")
-    (cache / "other.f-1.py311.nbi").write_text("not ours")
-    assert drop_stale_cache(tmp_path) is False  # sources unchanged: the cache is kept
-    assert (cache / "ransac._search-10.py311.nbi").exists()
-    (tmp_path / "_kernels.py").write_text("# edited\n")
-    assert drop_stale_cache(tmp_path) is True
-    assert not (cache / "ransac._search-10.py311.nbi").exists()
-    assert (cache / "other.f-1.py311.nbi").exists()
-
-
 def test_entry_point_plugins_are_listed_and_built(monkeypatch):
     from importlib.metadata import EntryPoint
 

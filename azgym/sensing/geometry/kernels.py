@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from azgym.jit import jit
 from azgym.sensing.labels import DIRECT, GHOST, MISIDENTIFIED, MOVED, PARTIAL
 from azgym.sensing.misread import misread_row
 
@@ -27,7 +27,7 @@ _EPS = 1e-9
 _MAX_COVERS = 16
 
 
-@numba.njit(inline="always", error_model="numpy", cache=True)
+@jit(inline="always")
 def _crossing(px, py, qx, qy, ax, ay, bx, by):
     """Where segment P→Q crosses segment A→B: (t along PQ, u along AB), or (-1, -1) if not."""
     rx = qx - px
@@ -44,7 +44,7 @@ def _crossing(px, py, qx, qy, ax, ay, bx, by):
     return t, u
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def blocked(px, py, pz, qx, qy, qz, seg, skip):
     """Whether the straight ray from P to Q (with heights) is blocked by an occluder.
 
@@ -62,7 +62,7 @@ def blocked(px, py, pz, qx, qy, qz, seg, skip):
     return False
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def direct_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_range, out_azimuth,
                 out_label, out_visible):
     """Azimuth (world frame) and label of every beacon seen directly from the camera.
@@ -162,7 +162,7 @@ def direct_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_ra
         out_label[b] = PARTIAL
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def mirror_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_range, out):
     """Ghosts: mirror images of beacons in reflective occluders. Returns how many were found.
 
@@ -230,7 +230,7 @@ def mirror_view(cx, cy, cz, beacon_xyz, beacon_width, seg, min_elevation, max_ra
     return found
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max_range, world,
             elevation, beacon, label, visible, brightness, halfwidth, scratch_azimuth,
             scratch_label, scratch_visible, ghosts):
@@ -272,7 +272,7 @@ def collect(cx, cy, cz, beacon_xyz, beacon_width, moved, seg, min_elevation, max
     return count
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def finish(world, elevation, beacon, label, visible, brightness, halfwidth, heading, pitch, roll,
            uniforms, delta_d, misdecode_rate, map_ids, out_floats, out_ints):
     """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
@@ -346,7 +346,7 @@ def finish(world, elevation, beacon, label, visible, brightness, halfwidth, head
         out_floats[5, k] = 0.0
 
 
-@numba.njit(error_model="numpy", cache=True)
+@jit
 def ray_ranges(x, y, heading, seg, count, max_range, out):
     """Distances to the nearest occluder along ``count`` rays around (x, y): a range sensor.
 

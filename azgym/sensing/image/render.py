@@ -15,17 +15,17 @@ from __future__ import annotations
 import math
 
 import cv2
-import numba
 import numpy as np
 
 from azgym.core import FloatArray
+from azgym.jit import jit
 from azgym.site.fisheye import FisheyeCamera
 
 PSF_SIGMA_PX = 0.8
 """Standard deviation of the lens' point spread [px]."""
 
 
-@numba.njit(cache=True)
+@jit(error_model="python")
 def _splat(image, u, v, sigma, amplitude):
     """Add a sub-pixel Gaussian of the given amplitude centred at (u, v) (pixel centres)."""
     radius = int(math.ceil(3.5 * sigma))
@@ -40,7 +40,7 @@ def _splat(image, u, v, sigma, amplitude):
             image[row, column] += amplitude * math.exp(-(du * du + dv * dv) * inv)
 
 
-@numba.njit(cache=True)
+@jit(error_model="python")
 def _draw_strip(image, cx, cy, focal, distortion, polar, azimuth_lo, azimuth_hi, amplitude,
                 sigma):
     """Light the arc of polar angle ``polar`` between two azimuths.
@@ -94,7 +94,7 @@ def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray
     return image.astype(np.uint8)
 
 
-@numba.njit(cache=True)
+@jit(error_model="python")
 def _patch_outline(cx, cy, focal, distortion, azimuth_lo, azimuth_hi, elevation_lo,
                    elevation_hi, sides):
     """The outline of an azimuth × elevation patch on the image, (2 sides, 2) points [px]."""

@@ -1,0 +1,116 @@
+"""Compiling azgym's kernels: one decorator, and a consistent on-disk cache.
+
+Every compiled kernel is declared with :func:`jit`: numba's ``njit`` with its result cached on
+disk (``cache=True``, so only the first run on a machine pays the compile time) and numpy's error
+model (a division by zero gives inf or NaN, as in numpy, and needs no check in the loop).
+
+numba keys each cached function on the timestamp of its own source file only. A kernel in one
+module that calls a kernel in another (``ransac.py`` → ``_kernels.py``) therefore keeps running
+the old callee from the cache after the callee's file is edited, or updated by ``git pull`` in an
+editable install. When this module is first imported (by the first kernel module, never by
+``import azgym``), :func:`drop_stale_cache` hashes the sources of every module with kernels and,
+when the hash differs from the one recorded beside the cache, deletes those modules' cache files:
+only azgym's own, in azgym's own cache folders.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numba
+from numba.misc.appdirs import AppDirs
+
+from azgym.core import wrap_scalar
+
+PACKAGE_DIR = Path(__file__).parent
+KERNEL_MODULES = (
+    "core.py", "jit.py", "localize/_kernels.py", "localize/base.py", "localize/loo.py",
+    "localize/lsq.py", "localize/mex.py", "localize/ransac.py", "localize/refinement.py",
+    "localize/triplet.py", "sensing/geometry/kernels.py", "sensing/image/render.py",
+    "sensing/misread.py",
+)
+"""The modules (relative to the package) whose functions are compiled with :func:`jit`."""
+STAMP_NAME = "azgym-kernels.sha256"
+
+
+def jit(function: Callable[..., Any] | None = None, **options: Any) -> Any:
+    """``numba.njit`` with ``cache=True`` and ``error_model="numpy"`` unless told otherwise.
+
+    Use it bare (``@jit``) or with numba's options (``@jit(inline="always")``).
+    """
+    options = {"cache": True, "error_model": "numpy", **options}
+    if function is None:
+        return numba.njit(**options)
+    return numba.njit(**options)(function)
+
+
+wrap_compiled = jit(inline="always")(wrap_scalar)
+"""The compiled twin of :func:`azgym.core.wrap_scalar`, for kernels: wrap to (−π, π]."""
+
+
+def numba_subfolder(source_dir: Path) -> str:
+    """The folder numba gives a source folder's cache inside a shared cache directory.
+
+    numba's own rule (``_CacheLocator.get_suitable_cache_subpath``): the folder's name, an
+    underscore and the SHA-1 of its absolute path.
+    """
+    path = os.path.abspath(source_dir)
+    return f"{os.path.basename(path)}_{hashlib.sha1(path.encode()).hexdigest()}"
+
+
+def _cache_dirs(package_dir: Path) -> list[Path]:
+    """The folders numba may keep azgym's cache in.
+
+    Each kernel module's ``__pycache__``; its subfolder of ``NUMBA_CACHE_DIR`` when that is set;
+    and its subfolder of the user-wide cache numba falls back to when ``__pycache__`` is not
+    writable. Nothing else: other projects' caches sit in other subfolders.
+    """
+    folders = {(package_dir / module).parent for module in KERNEL_MODULES}
+    shared = [Path(os.environ["NUMBA_CACHE_DIR"])] if os.environ.get("NUMBA_CACHE_DIR") else []
+    shared.append(Path(AppDirs("numba", appauthor=False).user_cache_dir))
+    dirs = [folder / "__pycache__" for folder in folders]
+    dirs += [root / numba_subfolder(folder) for root in shared for folder in folders]
+    return sorted(dirs)
+
+
+def drop_stale_cache(package_dir: Path = PACKAGE_DIR) -> bool:
+    """Delete azgym's cached kernels if any kernel source changed; True if it did.
+
+    Args:
+        package_dir: The installed package's folder (the tests give a copy).
+    """
+    digest = hashlib.sha256()
+    for module in KERNEL_MODULES:
+        digest.update((package_dir / module).read_bytes())
+    stamp = digest.hexdigest()
+    names = {Path(module).stem for module in KERNEL_MODULES}
+    record = package_dir / "__pycache__" / STAMP_NAME
+    try:
+        if record.is_file() and record.read_text() == stamp:
+            return False
+    except OSError:
+        return False
+    dropped = False
+    for folder in _cache_dirs(package_dir):
+        if not folder.is_dir():
+            continue
+        for path in folder.glob("*.nb[ic]"):  # numba names them <module>.<function>-<line>...
+            if path.name.split(".")[0] in names:
+                try:
+                    path.unlink()
+                    dropped = True
+                except OSError:
+                    continue  # a read-only install: numba then caches elsewhere or not at all
+    try:
+        record.parent.mkdir(parents=True, exist_ok=True)
+        record.write_text(stamp)
+    except OSError:
+        pass
+    return dropped
+
+
+drop_stale_cache()

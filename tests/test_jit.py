@@ -1,0 +1,51 @@
+"""The kernel cache: an edited kernel module drops azgym's cached kernels, and nobody else's."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from azgym.jit import KERNEL_MODULES, drop_stale_cache, numba_subfolder
+
+
+def test_editing_a_kernel_module_drops_the_whole_kernel_cache(tmp_path, monkeypatch):
+    # numba keys a cached function on its own file only; a caller in another module would keep
+    # running an edited callee's old code. drop_stale_cache hashes every kernel module instead.
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    for module in KERNEL_MODULES:
+        (tmp_path / module).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / module).write_text(f"# {module}\n")
+    cache = tmp_path / "localize" / "__pycache__"
+    cache.mkdir()
+    assert drop_stale_cache(tmp_path) is False  # nothing cached yet; the hash is recorded
+    (cache / "ransac._search-10.py311.nbi").write_text("index")
+    (cache / "other.f-1.py311.nbi").write_text("not ours")
+    assert drop_stale_cache(tmp_path) is False  # sources unchanged: the cache is kept
+    assert (cache / "ransac._search-10.py311.nbi").exists()
+    (tmp_path / "localize" / "_kernels.py").write_text("# edited\n")
+    assert drop_stale_cache(tmp_path) is True
+    assert not (cache / "ransac._search-10.py311.nbi").exists()
+    assert (cache / "other.f-1.py311.nbi").exists()
+
+
+def test_with_a_shared_cache_folder_only_azgyms_own_subfolders_are_touched(tmp_path, monkeypatch):
+    package = tmp_path / "site-packages" / "azgym"
+    for module in KERNEL_MODULES:
+        (package / module).parent.mkdir(parents=True, exist_ok=True)
+        (package / module).write_text(f"# {module}\n")
+    shared = tmp_path / "numba-cache"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(shared))
+    ours = shared / numba_subfolder(package / "localize")
+    theirs = shared / "elsewhere" / "project"
+    for folder in (ours, theirs):
+        folder.mkdir(parents=True)
+        (folder / "ransac._search-10.py311.nbi").write_text("index")
+    assert drop_stale_cache(package) is True  # no hash recorded yet: treated as changed
+    assert not (ours / "ransac._search-10.py311.nbi").exists()
+    assert (theirs / "ransac._search-10.py311.nbi").exists()  # another project's ransac.py
+
+
+def test_the_shared_cache_subfolder_is_numbas_own():
+    from numba.core.caching import _CacheLocator
+
+    source = "/some/where/azgym/localize/ransac.py"
+    assert numba_subfolder(Path(source).parent) == _CacheLocator.get_suitable_cache_subpath(source)
