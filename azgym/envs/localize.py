@@ -133,20 +133,8 @@ class LocalizeEnv(gym.Env):
         render_mode: str | None = None,
     ) -> None:
         self.scenario = load_scenario(scenario)
-        if observation not in ("measurements", "image"):
-            raise unknown_name("observation", observation, ("measurements", "image"))
-        check_camera_rate(camera_rate_hz)
-        if ids == "blink" and not self.scenario.routes:
-            raise InvalidInputError(
-                f'ids="blink" decodes ids over successive frames of a route, and scenario '
-                f'{self.scenario.name!r} has no routes')
-        names = [r.name for r in self.scenario.routes]
-        if route is not None and route not in names:
-            raise unknown_name("route", route, names)
-        check_render_mode(render_mode, self.metadata["render_modes"])
-        if not (isinstance(max_detections, int) and max_detections >= 3):
-            raise InvalidInputError(f"max_detections must be an integer >= 3, got "
-                                    f"{max_detections!r}")
+        self._check_options(route, max_detections, ids, observation, camera_rate_hz,
+                            render_mode)
         self.route = route
         self.max_detections = max_detections
         self.weights = reward_weights(position_error=position_error,
@@ -161,24 +149,55 @@ class LocalizeEnv(gym.Env):
         self.last_observation: Observation | None = None
         self._shown: Shown | None = None
         self._trajectories: dict[str, np.ndarray] = {}
-        beacons = self.scenario.beacons
-        ids = beacons.ids
         x_min, y_min, x_max, y_max = self.scenario.bounds
         self._centre = ((x_min + x_max) / 2, (y_min + y_max) / 2, 0.0)
         self._half = ((x_max - x_min) / 2, (y_max - y_min) / 2, math.pi)
         self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
-        z_low = float(min(0.0, beacons.xyz[:, 2].min()))
-        z_high = float(beacons.xyz[:, 2].max()) + 1.0
-        span = max(abs(v) for v in self.scenario.bounds) + 100.0
-        width, height = self.scenario.fisheye.image_size
-        high = np.tile(np.array(self.camera.quality_high, dtype=np.float32), (max_detections, 1))
+        self.observation_space = self._observation_space()
+        self._beacon_ids = self.scenario.beacons.ids.astype(np.int64)
+        self._beacon_xyz = self.scenario.beacons.xyz.astype(np.float32).ravel()
+        self._poses = np.zeros((1, 3))
+        self._frame = 0
+        self._route_name: str | None = None
+        self._estimate: tuple[float, float, float] | None = None
+
+    def _check_options(self, route: str | None, max_detections: int, ids: str,
+                       observation: str, camera_rate_hz: float | None,
+                       render_mode: str | None) -> None:
+        """Refuse bad arguments, naming them (the sensor's own are checked by make_sensor)."""
+        if observation not in ("measurements", "image"):
+            raise unknown_name("observation", observation, ("measurements", "image"))
+        check_camera_rate(camera_rate_hz)
+        if ids == "blink" and not self.scenario.routes:
+            raise InvalidInputError(
+                f'ids="blink" decodes ids over successive frames of a route, and scenario '
+                f'{self.scenario.name!r} has no routes')
+        names = [r.name for r in self.scenario.routes]
+        if route is not None and route not in names:
+            raise unknown_name("route", route, names)
+        check_render_mode(render_mode, self.metadata["render_modes"])
+        if not (isinstance(max_detections, int) and max_detections >= 3):
+            raise InvalidInputError(f"max_detections must be an integer >= 3, got "
+                                    f"{max_detections!r}")
+
+    def _observation_space(self) -> spaces.Space:
+        """The frame's pixels, or the padded detections with the map (see the class)."""
+        if self.observation == "image":
+            width, height = self.scenario.fisheye.image_size
+            return spaces.Box(0, 255, (height, width, 1), np.uint8)
+        size, beacons = self.max_detections, self.scenario.beacons
+        ids = beacons.ids
+        high = np.tile(np.array(self.camera.quality_high, dtype=np.float32), (size, 1))
         quality = spaces.Box(np.zeros_like(high), high, dtype=np.float32)
         if len(self.camera.quality_names) == 1:
             quality = spaces.Box(0.0, high[:, 0], dtype=np.float32)
-        self.observation_space = spaces.Dict({
-            "ids": spaces.Box(-1, int(ids.max()), (max_detections,), np.int64),
-            "azimuth": spaces.Box(-math.pi, math.pi, (max_detections,), np.float32),
-            "valid": spaces.MultiBinary(max_detections),
+        z_low = float(min(0.0, beacons.xyz[:, 2].min()))
+        z_high = float(beacons.xyz[:, 2].max()) + 1.0
+        span = max(abs(v) for v in self.scenario.bounds) + 100.0
+        return spaces.Dict({
+            "ids": spaces.Box(-1, int(ids.max()), (size,), np.int64),
+            "azimuth": spaces.Box(-math.pi, math.pi, (size,), np.float32),
+            "valid": spaces.MultiBinary(size),
             "quality": quality,
             "beacon_ids": spaces.Box(int(ids.min()), int(ids.max()), (len(ids),), np.int64),
             "beacon_xyz": spaces.Box(
@@ -186,14 +205,6 @@ class LocalizeEnv(gym.Env):
                 high=np.tile(np.array([span, span, z_high], dtype=np.float32), len(ids)),
                 dtype=np.float32),
         })
-        if observation == "image":
-            self.observation_space = spaces.Box(0, 255, (height, width, 1), np.uint8)
-        self._beacon_ids = ids.astype(np.int64)
-        self._beacon_xyz = beacons.xyz.astype(np.float32).ravel()
-        self._poses = np.zeros((1, 3))
-        self._frame = 0
-        self._route_name: str | None = None
-        self._estimate: tuple[float, float, float] | None = None
 
     # -- episode -------------------------------------------------------------------------------
 

@@ -15,7 +15,7 @@ a damped mast that the bumps shake, so consecutive frames see nearly the same ti
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,16 +86,70 @@ def _route(scenario: Scenario, route: str | Route | None) -> Route:
     return names[route]
 
 
-def _drive(scenario: Scenario, route: Route, dt: float,
-           spec: ForkliftSpec | None) -> Iterator[tuple[World, bool]]:
-    """Step the world along the route: yields (world, route done) before each physics step."""
+STOPPED_SPEED = 0.05
+"""Below this speed [m/s] a forklift at the end of its route has stopped: the drive is over."""
+FRAME_TIME_TOLERANCE = 1e-9
+"""A physics step ending this close before a frame's time [s] takes the frame (rounding)."""
+
+
+class _Motion:
+    """Wheel odometry and the IMU, sampled after every physics step of a drive."""
+
+    def __init__(self, odometry: OdometryModel, imu: ImuModel, odometry_rng: np.random.Generator,
+                 imu_rng: np.random.Generator, dt: float) -> None:
+        self._odometer = Odometer(odometry, odometry_rng)
+        self._imu = Imu(imu, imu_rng)
+        self._dt = dt
+        self._velocity = None
+
+    def step(self, world: World) -> None:
+        """Sample the step just taken (nothing before the first one)."""
+        forklift = world.forklift
+        velocity = forklift.body.velocity
+        if self._velocity is not None:
+            ax = (velocity.x - self._velocity.x) / self._dt
+            ay = (velocity.y - self._velocity.y) / self._dt
+            heading = forklift.body.angle
+            c, s = math.cos(heading), math.sin(heading)
+            self._odometer.update(world.time, forklift.speed, forklift.steer)
+            self._imu.update(world.time, forklift.body.angular_velocity,
+                             (c * ax + s * ay, -s * ax + c * ay), heading)
+        self._velocity = velocity
+
+    def take(self) -> tuple[OdometrySamples, ImuSamples]:
+        """The samples since the last call."""
+        return self._odometer.take(), self._imu.take()
+
+
+def _frames(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
+            spec: ForkliftSpec | None, max_time: float,
+            on_step: Callable[[World], None] | None = None) -> Iterator[World]:
+    """Drive the route; yield the world at every camera frame time k / ``camera_rate_hz``.
+
+    ``on_step`` sees the world after every physics step (and at the start). The drive ends at
+    the frame after the forklift has stopped at the route's end, or after ``max_time``.
+    """
     world = World(scenario, route.start_pose(), spec, dt)
     forklift = world.forklift
     driver = PurePursuit(route, forklift.spec)
+    period = 1.0 / camera_rate_hz
+    next_frame = 0.0
     while True:
-        yield world, driver.done and abs(forklift.speed) < 0.05
+        if on_step is not None:
+            on_step(world)
+        if world.time + FRAME_TIME_TOLERANCE >= next_frame:
+            done = driver.done and abs(forklift.speed) < STOPPED_SPEED
+            yield world
+            next_frame += period
+            if done or world.time > max_time:
+                return
         x, y, heading = forklift.pose
         world.step(*driver.command(x, y, heading, forklift.speed))
+
+
+def _camera_pose(world: World) -> Pose:
+    x, y = world.forklift.camera_position()
+    return x, y, world.forklift.pose[2]
 
 
 def camera_trajectory(scenario: Scenario, route: Route, camera_rate_hz: float = 10.0,
@@ -106,15 +160,8 @@ def camera_trajectory(scenario: Scenario, route: Route, camera_rate_hz: float = 
     The drive is deterministic (no random draw), the same for every seed; ``simulate`` adds the
     sensors along it.
     """
-    poses = []
-    next_frame = 0.0
-    for world, done in _drive(scenario, route, dt, spec):
-        if world.time + 1e-9 >= next_frame:
-            poses.append((*world.forklift.camera_position(), world.forklift.pose[2]))
-            next_frame += 1.0 / camera_rate_hz
-            if done or world.time > max_time:
-                break
-    return np.array(poses)
+    return np.array([_camera_pose(world) for world in _frames(
+        scenario, route, camera_rate_hz, dt, spec, max_time)])
 
 
 def simulate(
@@ -150,40 +197,20 @@ def simulate(
     if not camera_rate_hz > 0 or not dt > 0:
         raise InvalidInputError(f"camera_rate_hz and dt must be > 0, got {camera_rate_hz}, {dt}")
     streams = np.random.SeedSequence(seed).spawn(5)
-    camera_stream, odometry_stream, imu_stream, sway_stream = (
+    camera_rng, odometry_rng, imu_rng, sway_rng = (
         np.random.default_rng(stream) for stream in streams[:4])
     sensor = sensor or GeometrySensor(scenario)
     sensor.reset(streams[4])
-    odometer = Odometer(odometry or OdometryModel(), odometry_stream)
-    inertial = Imu(imu or ImuModel(), imu_stream)
-    period = 1.0 / camera_rate_hz
-    sway = CameraSway(scenario, period, spec)
-    next_frame = 0.0
-    index = 0
+    motion = _Motion(odometry or OdometryModel(), imu or ImuModel(), odometry_rng, imu_rng, dt)
+    sway = CameraSway(scenario, 1.0 / camera_rate_hz, spec)
     contacts_seen = 0
-    velocity = None
-    for world, done in _drive(scenario, chosen, dt, spec):
-        forklift = world.forklift
-        if velocity is not None:  # the sensors of the step just taken
-            new_velocity = forklift.body.velocity
-            ax, ay = (new_velocity.x - velocity.x) / dt, (new_velocity.y - velocity.y) / dt
-            heading = forklift.body.angle
-            c, s = math.cos(heading), math.sin(heading)
-            odometer.update(world.time, forklift.speed, forklift.steer)
-            inertial.update(world.time, forklift.body.angular_velocity,
-                            (c * ax + s * ay, -s * ax + c * ay), heading)
-        velocity = forklift.body.velocity
-        if world.time + 1e-9 >= next_frame:
-            _, _, heading = forklift.pose
-            cx, cy = forklift.camera_position()
-            tilt = sway.step(cx, cy, sway_stream)
-            pose = (cx, cy, heading)
-            yield Frame(index=index, time=world.time,
-                        observation=sensor.observe(pose, camera_stream, tilt), pose=pose,
-                        odometry=odometer.take(), imu=inertial.take(),
-                        contacts=len(world.contacts) - contacts_seen)
-            contacts_seen = len(world.contacts)
-            index += 1
-            next_frame += period
-            if done or world.time > max_time:
-                return
+    for index, world in enumerate(_frames(scenario, chosen, camera_rate_hz, dt, spec, max_time,
+                                          on_step=motion.step)):
+        pose = _camera_pose(world)
+        tilt = sway.step(pose[0], pose[1], sway_rng)
+        odometry_samples, imu_samples = motion.take()
+        observation = sensor.observe(pose, camera_rng, tilt)
+        yield Frame(index=index, time=world.time, observation=observation, pose=pose,
+                    odometry=odometry_samples, imu=imu_samples,
+                    contacts=len(world.contacts) - contacts_seen)
+        contacts_seen = len(world.contacts)
