@@ -1,0 +1,32 @@
+"""Importing azgym does no work: no heavy library, and the environment ids register on demand."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+
+def run(code: str) -> str:
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout.strip()
+
+
+def test_import_azgym_loads_no_heavy_library():
+    loaded = run("import sys, azgym; print(sorted(m for m in ('gymnasium', 'pymunk', 'cv2', "
+                 "'numba', 'scipy', 'matplotlib', 'torch') if m in sys.modules))")
+    assert loaded == "[]"
+
+
+def test_environment_ids_register_whether_gymnasium_comes_first_or_second():
+    make = ("env = gym.make('azgym/Localize-WarehouseSmall-v0'); "
+            "print(type(env.unwrapped).__name__)")
+    assert run("import gymnasium as gym, azgym; " + make) == "LocalizeEnv"
+    assert run("import azgym; import gymnasium as gym; " + make) == "LocalizeEnv"
+    assert run("import azgym; print(len(azgym.ENV_IDS))") == "10"
+
+
+def test_public_names_resolve_lazily_and_unknown_ones_fail_cleanly():
+    assert run("import azgym; print(azgym.make_localizer('ransac').name)") == "ransac"
+    assert "has no attribute 'nope'" in subprocess.run(
+        [sys.executable, "-c", "import azgym; azgym.nope"], capture_output=True,
+        text=True).stderr
