@@ -1,4 +1,4 @@
-"""Steps per second of the environments (issue #4's targets), best of several rounds.
+"""Steps per second of the environments (Localize >= 20k, Navigate >= 5k), best of several rounds.
 
     python baselines/env_speed.py [--seconds 1.0] [--rounds 5]
 

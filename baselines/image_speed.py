@@ -1,4 +1,4 @@
-"""Speed of the fisheye image path (issue #6's target: render + detect >= 1000 frames/s).
+"""Speed of the fisheye image path (target: render + detect >= 1000 frames/s).
 
     python baselines/image_speed.py [--frames 400] [--rounds 5]
 

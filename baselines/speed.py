@@ -1,4 +1,4 @@
-"""Speed benchmark of the localizers (issue #2's targets), with a reference timed in the same run.
+"""Speed benchmark of the localizers, with a reference timed in the same run.
 
     python baselines/speed.py [--calls 3000] [--rounds 5] [--out results/speed.json]
 

@@ -1,4 +1,4 @@
-"""Issue #3's measurements: localizers on warehouse frames, and the speed of the sensor and world.
+"""The warehouse's figures: localizers on warehouse frames, and the speed of the sensor and world.
 
     python baselines/warehouse.py [--seed 0] [--out results/warehouse.json]
 

@@ -23,7 +23,7 @@ import math
 import os
 import platform
 import sys
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -105,7 +105,7 @@ def make_entry(results_dir: Path, label: str, *, name: str, version: str, author
                                                      "runtime_us")}),
         "machine": {"platform": platform.platform(), "processor": platform.processor() or
                     platform.machine(), "cpus": os.cpu_count(), "python": sys.version.split()[0]},
-        "timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
         "results_file": f"{name}.frames.csv.gz",
         "results_sha256": hashlib.sha256(text.encode()).hexdigest(),
     }

@@ -41,7 +41,7 @@ def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episode
         seed: Seed of the first episode (then seed + 1, ...); None: unseeded.
 
     Returns:
-        The statistics of :func:`azgym.metrics.summarize_errors` over every frame, and the
+        The statistics of :func:`azgym.bench.metrics.summarize_errors` over every frame, and the
         episodes' total reward.
     """
     inner = env.unwrapped

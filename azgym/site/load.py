@@ -5,7 +5,7 @@ Nothing is read at import: a file is read and validated when it is loaded.
 
 from __future__ import annotations
 
-import sys
+import tomllib
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -13,11 +13,6 @@ from typing import Any
 from azgym.errors import ScenarioError, unknown_name
 from azgym.site.parse import parse_scenario
 from azgym.site.scenario import Scenario
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on Python 3.10 only
-    import tomli as tomllib
 
 SCENARIO_PACKAGE = "azgym.site.scenarios"
 """The package the shipped scenario files are installed as (the repository's ``envs/``)."""

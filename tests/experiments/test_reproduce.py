@@ -1,7 +1,7 @@
 """The reproduction of Rátosi & Simon (2021), Sec. 3: protocol, paper statistics, outputs.
 
 The statistical tests run a reduced protocol (every grid point, fewer realisations) with a fixed
-seed. Tolerances: the paper's 2.65 cm ± 5 % (issue #2); the per-run error has a standard deviation
+seed. Tolerances: the paper's 2.65 cm ± 5 %; the per-run error has a standard deviation
 of about 1.7 cm, so with ~2000 runs the sampling error of the mean is ~1.4 %, well inside 5 %.
 """
 

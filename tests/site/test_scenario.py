@@ -14,7 +14,7 @@ from azgym import ScenarioError, UnknownNameError
 from azgym.site import load_scenario, parse_scenario
 
 THIRD = 22.0 / 3.0
-# DESIGN.md: counter-clockwise from the east wall, three per wall at offsets −22/3, 0, +22/3 m.
+# docs/paper-room.md: counter-clockwise from the east wall, three a wall at −22/3, 0, +22/3 m.
 PAPER_XY = {
     1: (11.0, -THIRD), 2: (11.0, 0.0), 3: (11.0, THIRD),
     4: (THIRD, 11.0), 5: (0.0, 11.0), 6: (-THIRD, 11.0),
