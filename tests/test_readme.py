@@ -7,6 +7,8 @@ import shlex
 import sys
 from pathlib import Path
 
+import pytest
+
 import azgym
 from azgym.cli import main
 
@@ -39,3 +41,20 @@ def test_the_plugin_example_checks_benchmarks_and_submits(tmp_path, monkeypatch,
     assert (tmp_path / "leaderboard" / "entries" / "median-of-triplets.json").is_file()
     assert "median-of-triplets" in (tmp_path / "leaderboard" / "README.md").read_text()
     sys.modules.pop("my_localizer", None)
+
+
+def python_blocks() -> list[tuple[str, str]]:
+    """Every python example of the README outside the plug-in section, with its section."""
+    text = README.read_text(encoding="utf-8").split("## Plug in your localizer", 1)[0]
+    blocks = []
+    for section in text.split("\n## ")[1:]:
+        title = section.splitlines()[0]
+        blocks += [(title, code) for code in re.findall(r"```python\n(.*?)```", section, re.S)]
+    return blocks
+
+
+@pytest.mark.parametrize(("section", "code"), python_blocks(),
+                         ids=[title for title, _ in python_blocks()])
+def test_every_python_example_runs_as_written(section, code, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, f"README.md ({section})", "exec"), {"__name__": "__readme__"})
