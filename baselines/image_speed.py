@@ -75,12 +75,13 @@ def main() -> None:
     poses = camera_trajectory(scenario, scenario.routes[0], camera_rate_hz=30.0)
     for ids in ("oracle", "blink"):
         sensor = ImageSensor(scenario, ids=ids)
+        sensor.reset(0)
         generator = np.random.default_rng(1)
-        sensor.observe(*poses[0], generator)
+        sensor.observe(tuple(poses[0]), generator)
 
         def observe(k: int, sensor: ImageSensor = sensor,
                     generator: np.random.Generator = generator) -> object:
-            return sensor.observe(*poses[k % len(poses)], generator)
+            return sensor.observe(tuple(poses[k % len(poses)]), generator)
 
         seconds, ratio = best_round(observe, args.frames, args.rounds)
         print(f"ImageSensor frame, warehouse-small, ids={ids}: {seconds * 1e3:.2f} ms "

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 import azgym
-from azgym.sensing.geometry.sensor import Sensor
+from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.site.elements import Faults
 from azgym.world.drive import simulate
 from azgym.world.world import World
@@ -79,13 +79,13 @@ def speed() -> dict:
     result = {}
     for name in ("warehouse-small", "warehouse-large"):
         scenario = azgym.load_scenario(name)
-        sensor = Sensor(scenario)
+        sensor = GeometrySensor(scenario)
         rng = np.random.default_rng(0)
         poses = [frame.pose for route in scenario.routes
                  for frame in simulate(scenario, route, seed=0)][::3]
-        sensor.observe(*poses[0], rng)
+        sensor.observe(tuple(poses[0]), rng)
         result[f"sensor frame, {name} (µs)"] = best_round_us(
-            lambda k, p=poses, s=sensor, g=rng: s.observe(*p[k % len(p)], g), 2000)
+            lambda k, p=poses, s=sensor, g=rng: s.observe(tuple(p[k % len(p)]), g), 2000)
     scenario = azgym.load_scenario("warehouse-small")
     world = World(scenario, scenario.routes[0].start_pose())
     result["world step, warehouse-small (µs)"] = best_round_us(
