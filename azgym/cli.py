@@ -171,7 +171,16 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``azgym`` command."""
     parser = argparse.ArgumentParser(prog="azgym", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
+    _add_bench(commands)
+    _add_leaderboard(commands)
+    _add_reproduce(commands)
+    _add_study(commands)
+    _add_listings(commands)
+    return parser
 
+
+def _add_bench(commands: argparse._SubParsersAction) -> None:
+    """``azgym bench``: score localizers on a suite."""
     bench = commands.add_parser("bench", help="score localizers on a benchmark suite")
     bench.add_argument("--suite", help=f"suite name (default: {DEFAULT_SUITE}, quick)")
     bench.add_argument("--localizer", action="append", default=[],
@@ -184,6 +193,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--out", default="results/bench", help="output folder")
     bench.set_defaults(handler=_bench)
 
+
+def _add_leaderboard(commands: argparse._SubParsersAction) -> None:
+    """``azgym leaderboard submit|build|verify``: make, publish and check entries."""
     board = commands.add_parser("leaderboard", help="submit, build or verify entries")
     actions = board.add_subparsers(dest="action", required=True)
     submit = actions.add_parser("submit", help="make an entry from an azgym bench output")
@@ -203,6 +215,9 @@ def build_parser() -> argparse.ArgumentParser:
     verify.add_argument("--workers", type=int, default=1)
     board.set_defaults(handler=_leaderboard)
 
+
+def _add_reproduce(commands: argparse._SubParsersAction) -> None:
+    """``azgym reproduce paper``: the paper's Sec. 3 study."""
     reproduce = commands.add_parser("reproduce", help="reproduce a paper's study")
     target = reproduce.add_subparsers(dest="target", required=True)
     paper = target.add_parser("paper", help="Rátosi & Simon (2021), Sec. 3")
@@ -214,6 +229,9 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     paper.set_defaults(handler=_reproduce_paper)
 
+
+def _add_study(commands: argparse._SubParsersAction) -> None:
+    """``azgym study error-model|ids``: check azgym's models against what they model."""
     study = commands.add_parser("study", help="check azgym's models against what they model")
     studies = study.add_subparsers(dest="study", required=True)
     model = studies.add_parser("error-model", help="azimuth errors of beacons detected from "
@@ -235,11 +253,13 @@ def build_parser() -> argparse.ArgumentParser:
     ids.add_argument("--seed", type=int, default=0)
     ids.set_defaults(handler=_study_ids)
 
+
+def _add_listings(commands: argparse._SubParsersAction) -> None:
+    """``azgym scenarios`` and ``azgym localizers``: what ships with azgym."""
     commands.add_parser("scenarios", help="list the shipped scenarios").set_defaults(
         handler=_scenarios)
     commands.add_parser("localizers", help="list the registered localizers").set_defaults(
         handler=_localizers)
-    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:

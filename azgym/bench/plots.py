@@ -22,11 +22,19 @@ def write_figures(summary: dict[str, Any], frames: list[Case],
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    labels = list(summary["localizers"])
-    written = []
+    written = [_error_cdfs(plt, summary, outcomes, out / "cdf.png"),
+               _p75_by_cause(plt, summary, out / "causes.png")]
+    for scenario_name in dict.fromkeys(f.scenario for f in frames):
+        written.append(_error_map(plt, summary, frames, outcomes, scenario_name,
+                                  out / f"error_map_{scenario_name}.png"))
+    return written
 
+
+def _error_cdfs(plt: Any, summary: dict[str, Any], outcomes: dict[str, Outcome],
+                path: Path) -> Path:
+    """One curve per localizer: the share of frames within each position error."""
     figure, axes = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
-    for label in labels:
+    for label in summary["localizers"]:
         outcome = outcomes[label]
         # A missing estimate is a failure: it sits at +inf, never at zero error.
         errors = np.sort(np.where(outcome.ok, outcome.position * 100, np.inf))
@@ -38,8 +46,12 @@ def write_figures(summary: dict[str, Any], frames: list[Case],
     axes.set_title(f"{summary['suite']} ({summary['split']}): error CDF")
     axes.grid(True, which="both", alpha=0.3)
     axes.legend(fontsize=8, loc="lower right")
-    written.append(_save(figure, out / "cdf.png", plt))
+    return _save(figure, path, plt)
 
+
+def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
+    """Bars of each localizer's p75 position error per fault cause, for the causes that occur."""
+    labels = list(summary["localizers"])
     causes = [c for c in CAUSES if any(c in summary["localizers"][lab]["by_cause"]
                                        for lab in labels)]
     figure, axes = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
@@ -53,36 +65,43 @@ def write_figures(summary: dict[str, Any], frames: list[Case],
     axes.set_ylabel("p75 position error [cm]")
     axes.set_title("by the worst fault in the frame")
     axes.legend(fontsize=8)
-    written.append(_save(figure, out / "causes.png", plt))
+    return _save(figure, path, plt)
 
-    for scenario_name in dict.fromkeys(f.scenario for f in frames):
-        scenario = load_scenario(scenario_name)
-        rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
-        xy = np.array([frames[k].pose[:2] for k in rows])
-        columns = min(3, len(labels))
-        lines = -(-len(labels) // columns)
-        figure, grid = plt.subplots(lines, columns, figsize=(4.6 * columns, 3.6 * lines),
-                                    squeeze=False, constrained_layout=True)
-        norm = matplotlib.colors.LogNorm(vmin=0.5, vmax=1000.0)
-        for axes, label in zip(grid.ravel(), labels, strict=False):
-            outcome = outcomes[label]
-            error = np.where(outcome.ok[rows], outcome.position[rows] * 100, 1000.0)
-            for rack in scenario.racks:
-                axes.fill(*rack.corners().T, color="0.75")
-            for wall in scenario.walls:
-                axes.plot(*zip(wall.start, wall.end, strict=True), color="0.3")
-            shown = axes.scatter(xy[:, 0], xy[:, 1], c=np.clip(error, 0.5, 1000.0), s=8,
-                                 norm=norm, cmap="viridis")
-            axes.set_title(label, fontsize=9)
-            axes.set_aspect("equal")
-        for axes in grid.ravel()[len(labels):]:
-            axes.set_axis_off()
-        figure.colorbar(shown, ax=grid.ravel().tolist(), label="position error [cm] (none: top)")
-        written.append(_save(figure, out / f"error_map_{scenario_name}.png", plt))
-    return written
+
+def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
+               outcomes: dict[str, Outcome], scenario_name: str, path: Path) -> Path:
+    """One floor plan per localizer: its position error at each of the scenario's frames."""
+    from matplotlib.colors import LogNorm
+
+    scenario = load_scenario(scenario_name)
+    labels = list(summary["localizers"])
+    rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
+    xy = np.array([frames[k].pose[:2] for k in rows])
+    columns = min(3, len(labels))
+    lines = -(-len(labels) // columns)
+    figure, grid = plt.subplots(lines, columns, figsize=(4.6 * columns, 3.6 * lines),
+                                squeeze=False, constrained_layout=True)
+    norm = LogNorm(vmin=0.5, vmax=1000.0)
+    for axes, label in zip(grid.ravel(), labels, strict=False):
+        outcome = outcomes[label]
+        # A missing estimate is drawn at the top of the scale, 1000 cm.
+        error = np.where(outcome.ok[rows], outcome.position[rows] * 100, 1000.0)
+        for rack in scenario.racks:
+            axes.fill(*rack.corners().T, color="0.75")
+        for wall in scenario.walls:
+            axes.plot(*zip(wall.start, wall.end, strict=True), color="0.3")
+        shown = axes.scatter(xy[:, 0], xy[:, 1], c=np.clip(error, 0.5, 1000.0), s=8,
+                             norm=norm, cmap="viridis")
+        axes.set_title(label, fontsize=9)
+        axes.set_aspect("equal")
+    for axes in grid.ravel()[len(labels):]:
+        axes.set_axis_off()
+    figure.colorbar(shown, ax=grid.ravel().tolist(), label="position error [cm] (none: top)")
+    return _save(figure, path, plt)
 
 
 def _save(figure: Any, path: Path, plt: Any) -> Path:
+    """Write the figure to ``path`` and close it (pyplot keeps open figures alive)."""
     figure.savefig(path, dpi=100)
     plt.close(figure)
     return path

@@ -203,6 +203,17 @@ MALFORMED = [
                  id="blank-name"),
     pytest.param(VALID.replace("[room]\nbounds = [-5.0, -4.0, 5.0, 4.0]\n", ""), "room: missing",
                  id="missing-room"),
+    pytest.param(VALID.replace("version = 2", "version = true"),
+                 "version: must be an integer >= 1, got True", id="version-boolean"),
+    pytest.param(VALID.replace("version = 2", "version = 2\nfaults = 0.5"),
+                 "faults: must be a table", id="faults-not-a-table"),
+    pytest.param(VALID + "\n[faults]\nmisdecode_rate = 1.5\n",
+                 "faults.misdecode_rate: must be in [0, 1], got 1.5", id="rate-above-one"),
+    pytest.param(VALID + "\n[[racks]]\ncenter = [0.0, -2.0]\nsize = [1.0, 1.0]\nheight = 2.0\n"
+                 "reflectivity = -0.5\n", "racks[0].reflectivity: must be >= 0, got -0.5",
+                 id="negative-reflectivity"),
+    pytest.param(VALID + "\n[[bumps]]\ncenter = [0.0, -2.0]\nsize = [1.0, 1.0]\ntilt_deg = 50\n",
+                 "bumps[0].tilt_deg: must be < 45, got 50.0", id="steep-bump"),
 ]
 
 

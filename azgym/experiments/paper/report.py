@@ -95,44 +95,51 @@ def write_outputs(reproduction: Reproduction, out: Path, figures: bool = True) -
 
 
 def _figures(reproduction: Reproduction, out: Path) -> list[Path]:
-    results = reproduction.results
+    """error_map_k0.png and error_map_k1.png (RANSAC and MEX), then error_cdf.png (every K)."""
     require("matplotlib", "plot")
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    written = []
-    per_point = results["per_point"]
+    per_point = reproduction.results["per_point"]
     labels = [label for label in ("ransac", "mex") if label in per_point]
-    for k in ("0", "1"):
-        if not labels or k not in per_point[labels[0]]:
-            continue
-        fig, axes = plt.subplots(1, len(labels), figsize=(5.2 * len(labels), 4.4),
-                                 squeeze=False, constrained_layout=True)
-        highest = max(float(np.nanmax(per_point[label][k]["mean_cm"])) for label in labels)
-        # One colour scale for every panel; errors below 0.5 cm are shown as 0.5 cm.
-        norm = matplotlib.colors.LogNorm(vmin=0.5, vmax=max(10.0, highest))
-        for ax, label in zip(axes[0], labels, strict=False):
-            data = per_point[label][k]
-            xs, ys = np.array(data["x"]), np.array(data["y"])
-            grid_x, grid_y = np.unique(xs), np.unique(ys)
-            image = np.full((grid_y.size, grid_x.size), np.nan)
-            image[np.searchsorted(grid_y, ys), np.searchsorted(grid_x, xs)] = np.maximum(
-                np.array(data["mean_cm"], dtype=float), norm.vmin)
-            shown = ax.pcolormesh(grid_x, grid_y, image, shading="nearest", cmap="viridis",
-                                  norm=norm)
-            ax.set_title(f"{label}, K = {k}")
-            ax.set_xlabel("x [m]")
-            ax.set_ylabel("y [m]")
-            ax.set_aspect("equal")
-        fig.colorbar(shown, ax=axes[0].tolist(), label="mean position error per point [cm]")
-        path = out / f"error_map_k{k}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        written.append(path)
-    path = out / "error_cdf.png"
-    ks = list(results["limit"])
+    written = [_error_map(plt, per_point, labels, k, out / f"error_map_k{k}.png")
+               for k in ("0", "1") if labels and k in per_point[labels[0]]]
+    written.append(_error_cdfs(plt, reproduction, out / "error_cdf.png"))
+    return written
+
+
+def _error_map(plt: Any, per_point: dict[str, Any], labels: list[str], k: str,
+               path: Path) -> Path:
+    """One panel per localizer: its mean position error at each grid point, with K outliers."""
+    from matplotlib.colors import LogNorm
+
+    fig, axes = plt.subplots(1, len(labels), figsize=(5.2 * len(labels), 4.4),
+                             squeeze=False, constrained_layout=True)
+    highest = max(float(np.nanmax(per_point[label][k]["mean_cm"])) for label in labels)
+    # One colour scale for every panel; errors below 0.5 cm are shown as 0.5 cm.
+    norm = LogNorm(vmin=0.5, vmax=max(10.0, highest))
+    for ax, label in zip(axes[0], labels, strict=False):
+        data = per_point[label][k]
+        xs, ys = np.array(data["x"]), np.array(data["y"])
+        grid_x, grid_y = np.unique(xs), np.unique(ys)
+        image = np.full((grid_y.size, grid_x.size), np.nan)
+        image[np.searchsorted(grid_y, ys), np.searchsorted(grid_x, xs)] = np.maximum(
+            np.array(data["mean_cm"], dtype=float), norm.vmin)
+        shown = ax.pcolormesh(grid_x, grid_y, image, shading="nearest", cmap="viridis",
+                              norm=norm)
+        ax.set_title(f"{label}, K = {k}")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_aspect("equal")
+    fig.colorbar(shown, ax=axes[0].tolist(), label="mean position error per point [cm]")
+    return _save(fig, path, plt)
+
+
+def _error_cdfs(plt: Any, reproduction: Reproduction, path: Path) -> Path:
+    """One panel per outlier count K: each localizer's share of runs within each error."""
+    ks = list(reproduction.results["limit"])
     fig, axes = plt.subplots(1, len(ks), figsize=(4.2 * len(ks), 3.8), squeeze=False,
                              constrained_layout=True, sharey=True)
     for ax, k in zip(axes[0], ks, strict=False):
@@ -151,7 +158,11 @@ def _figures(reproduction: Reproduction, out: Path) -> list[Path]:
         ax.grid(True, which="both", alpha=0.3)
     axes[0][0].set_ylabel("share of runs")
     axes[0][-1].legend(loc="lower right", fontsize=8)
+    return _save(fig, path, plt)
+
+
+def _save(fig: Any, path: Path, plt: Any) -> Path:
+    """Write the figure to ``path`` and close it (pyplot keeps open figures alive)."""
     fig.savefig(path, dpi=110)
     plt.close(fig)
-    written.append(path)
-    return written
+    return path

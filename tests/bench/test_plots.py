@@ -1,0 +1,30 @@
+"""The benchmark's figures: one file per figure, written even for a localizer that never answers."""
+
+from __future__ import annotations
+
+import pytest
+
+from azgym.bench.plots import write_figures
+from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.suites import get_suite
+
+pytest.importorskip("matplotlib")
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def test_write_figures_draws_the_cdf_the_causes_and_one_error_map_per_scenario(tmp_path):
+    # "absent" fails on every frame: its errors sit at +inf on the CDF and at the map's top.
+    result = run_benchmark(get_suite("warehouse-static"),
+                           [Contender("ransac", "ransac"),
+                            Contender("absent", f"{tmp_path}/no_such_file.py:Nothing")],
+                           quick=True)
+    assert result.summary["localizers"]["absent"]["all"]["availability"] == 0.0
+    written = write_figures(result.summary, result.cases, result.outcomes, tmp_path)
+    scenarios = list(dict.fromkeys(case.scenario for case in result.cases))
+    assert len(scenarios) > 1
+    assert [path.name for path in written] == (
+        ["cdf.png", "causes.png"] + [f"error_map_{name}.png" for name in scenarios])
+    for path in written:
+        assert path.parent == tmp_path
+        assert path.read_bytes().startswith(PNG_SIGNATURE)
