@@ -221,19 +221,18 @@ class Measurements:
         return int(self.ids.size)
 
     @classmethod
-    def _from_valid_arrays(
+    def _from_frozen(
         cls, ids: IntArray, azimuth: FloatArray, quality: FloatArray | None = None
     ) -> Measurements:
-        """Wrap arrays azgym's own sensor produced, skipping the checks (a hot path).
+        """Wrap read-only arrays azgym's own sensors produced, skipping the checks (a hot path).
 
-        Only for int64 ids and finite float64 azimuths of equal length, which the compiled
-        sensor guarantees; the arrays are copied and frozen like in ``__init__``.
+        Only for read-only int64 ids and finite float64 azimuths of equal length, which the
+        compiled sensor guarantees; they are kept, not copied.
         """
         measurements = object.__new__(cls)
-        object.__setattr__(measurements, "ids", _frozen(ids.copy()))
-        object.__setattr__(measurements, "azimuth", _frozen(azimuth.copy()))
-        object.__setattr__(measurements, "quality",
-                           None if quality is None else _frozen(quality.copy()))
+        object.__setattr__(measurements, "ids", ids)
+        object.__setattr__(measurements, "azimuth", azimuth)
+        object.__setattr__(measurements, "quality", quality)
         return measurements
 
 

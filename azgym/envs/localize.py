@@ -288,7 +288,7 @@ class LocalizeEnv(gym.Env):
 
     def _frame_info(self) -> dict[str, Any]:
         return {"frame": self._frame, "route": self._route_name,
-                "labels": self._shown.labels.copy(), "true_beacons": self._shown.beacons.copy(),
+                "labels": self._shown.labels, "true_beacons": self._shown.beacons,
                 "true_pose": self.true_pose()}
 
     def _check_action(self, action: Any) -> tuple[float, float, float]:

@@ -67,7 +67,8 @@ class Observation:
     """One camera frame: the measurements, their ground truth, and the image if there is one.
 
     Attributes:
-        measurements: What a localizer gets.
+        measurements: What a localizer gets, listed by azimuth (as a detector scanning the
+            image around its centre lists them).
         truth: The ground truth of each measurement.
         in_view: Map rows of the beacons in direct view (whether or not detected: a blinking
             beacon may be dark), shape (V,).

@@ -148,11 +148,18 @@ class FrameBuffers:
     mirrored = property(lambda self: self.ints[3], doc="1 for a mirror image, else 0.")
 
     def observation(self, count: int) -> Observation:
-        """The first ``count`` entries as an :class:`Observation` (copies, frozen)."""
-        mirrored = self.mirrored[:count] == 1
-        truth = DetectionTruth(label=self.label[:count].copy(), beacon=self.beacon[:count].copy(),
-                               azimuth=self.true_azimuth[:count].copy(),
-                               visible=self.visible[:count].copy(), mirrored=mirrored)
-        measurements = Measurements._from_valid_arrays(self.ids[:count], self.azimuth[:count],
-                                                       self.quality[:count])
-        return Observation(measurements, truth, in_view=truth.beacon[~mirrored])
+        """The first ``count`` entries as an :class:`Observation` (one frozen copy of each array).
+
+        The packed arrays are copied once and frozen; the observation's arrays are views of the
+        copies, so building it costs two copies however many rows there are (a hot path).
+        """
+        floats = self.floats[:, :count].copy()
+        ints = self.ints[:, :count].copy()
+        floats.setflags(write=False)
+        ints.setflags(write=False)
+        mirrored = ints[3] == 1
+        mirrored.setflags(write=False)
+        truth = DetectionTruth(label=ints[2], beacon=ints[1], azimuth=floats[2],
+                               visible=floats[3], mirrored=mirrored)
+        measurements = Measurements._from_frozen(ints[0], floats[0], floats[1])
+        return Observation(measurements, truth, in_view=ints[1][~mirrored])
