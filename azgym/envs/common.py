@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass
 
 import numpy as np
 
-from azgym.core import IntArray
 from azgym.errors import InvalidInputError
-from azgym.sensing.protocol import Observation
+from azgym.sensing.protocol import AZIMUTH, BEACON, ID, LABEL, Observation
 
 
 def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
@@ -41,44 +39,33 @@ def check_camera_rate(camera_rate_hz: float | None) -> None:
                                 f"{camera_rate_hz!r}")
 
 
-@dataclass(frozen=True, eq=False)
-class Shown:
-    """The first K detections of a frame (sensors list them by azimuth), padded to K.
+class Padder:
+    """The first K detections of every frame, padded to K: what an agent is shown.
 
-    Attributes:
-        ids: Decoded ids, −1 for padding, shape (K,).
-        azimuth: Azimuths [rad], 0 for padding, shape (K,).
-        quality: Quality columns, 0 for padding, shape (K,) for one column, else (K, Q).
-        valid: 1 for a detection, 0 for padding, shape (K,).
-        labels: Ground-truth labels, −1 for padding, shape (K,).
-        beacons: Ground-truth map rows, −1 for padding, shape (K,).
+    Args:
+        size: K.
+        quality_columns: Q, the sensor's number of quality columns.
     """
 
-    ids: IntArray
-    azimuth: np.ndarray
-    quality: np.ndarray
-    valid: np.ndarray
-    labels: IntArray
-    beacons: IntArray
+    def __init__(self, size: int, quality_columns: int) -> None:
+        self.size = size
+        self.quality_columns = quality_columns
+        self._ints = np.full((4, size), -1, dtype=np.int64)
+        self._floats = np.zeros((1 + quality_columns, size), dtype=np.float32)
+        self._valid = np.zeros(size, dtype=np.int8)
 
+    def pad(self, observation: Observation) -> dict[str, np.ndarray]:
+        """Fresh arrays of the frame, −1 or 0 where padded.
 
-def show(observation: Observation, size: int, quality_columns: int) -> Shown:
-    """The first ``size`` detections, padded (see :class:`Shown`); fresh arrays every call.
-
-    A step's hot path: the arrays are rows of two packed arrays, filled in a few numpy calls.
-    """
-    measurements, truth = observation.measurements, observation.truth
-    count = min(len(measurements), size)
-    ints = np.full((4, size), -1, dtype=np.int64)  # ids, labels, beacons, valid
-    ints[0, :count] = measurements.ids[:count]
-    ints[1, :count] = truth.label[:count]
-    ints[2, :count] = truth.beacon[:count]
-    valid = np.zeros(size, dtype=np.int8)
-    valid[:count] = 1
-    floats = np.zeros((size, 1 + quality_columns), dtype=np.float32)  # azimuth, quality...
-    floats[:count, 0] = measurements.azimuth[:count]
-    if measurements.quality is not None:
-        floats[:count, 1:] = measurements.quality[:count].reshape(count, quality_columns)
-    quality = floats[:, 1] if quality_columns == 1 else floats[:, 1:]
-    return Shown(ids=ints[0], azimuth=floats[:, 0], quality=quality, valid=valid,
-                 labels=ints[1], beacons=ints[2])
+        ``ids``, ``azimuth``, ``valid``, ``quality`` ((K,) for one column, else (K, Q)), and the
+        truth's ``labels`` and ``beacons``. A step's hot path: each packed array is padded in one
+        call.
+        """
+        count = min(len(observation), self.size)
+        ints, floats, valid = self._ints.copy(), self._floats.copy(), self._valid.copy()
+        ints[:, :count] = observation.ints[:, :count]
+        floats[:, :count] = observation.measured[:, :count]
+        valid[:count] = 1
+        quality = floats[1] if self.quality_columns == 1 else floats[1:].T.copy()
+        return {"ids": ints[ID], "azimuth": floats[AZIMUTH], "valid": valid, "quality": quality,
+                "labels": ints[LABEL], "beacons": ints[BEACON]}

@@ -10,7 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from azgym.core import pose_error, wrap_angle
-from azgym.envs.common import Shown, check_camera_rate, check_render_mode, reward_weights, show
+from azgym.envs.common import Padder, check_camera_rate, check_render_mode, reward_weights
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.catalog import make_sensor
 from azgym.sensing.protocol import Observation
@@ -147,7 +147,8 @@ class LocalizeEnv(gym.Env):
         self.camera_rate_hz = camera_rate_hz or self.camera.frame_rate_hz
         self._sway = CameraSway(self.scenario, 1.0 / self.camera_rate_hz)
         self.last_observation: Observation | None = None
-        self._shown: Shown | None = None
+        self._padder = Padder(max_detections, len(self.camera.quality_names))
+        self._shown: dict[str, np.ndarray] = {}
         self._trajectories: dict[str, np.ndarray] = {}
         x_min, y_min, x_max, y_max = self.scenario.bounds
         self._centre = ((x_min + x_max) / 2, (y_min + y_max) / 2, 0.0)
@@ -275,20 +276,19 @@ class LocalizeEnv(gym.Env):
         tilt = self._sway.step(x, y, self.np_random)
         observed = self.camera.observe((x, y, heading), self.np_random, tilt)
         self.last_observation = observed
-        self._shown = show(observed, self.max_detections, len(self.camera.quality_names))
+        shown = self._shown = self._padder.pad(observed)
         if self.observation == "image":
             self._observation = observed.image[:, :, None]
         else:
-            shown = self._shown
-            self._observation = {"ids": shown.ids, "azimuth": shown.azimuth,
-                                 "valid": shown.valid, "quality": shown.quality,
+            self._observation = {"ids": shown["ids"], "azimuth": shown["azimuth"],
+                                 "valid": shown["valid"], "quality": shown["quality"],
                                  "beacon_ids": self._beacon_ids.copy(),
                                  "beacon_xyz": self._beacon_xyz.copy()}
         return self._observation
 
     def _frame_info(self) -> dict[str, Any]:
         return {"frame": self._frame, "route": self._route_name,
-                "labels": self._shown.labels, "true_beacons": self._shown.beacons,
+                "labels": self._shown["labels"], "true_beacons": self._shown["beacons"],
                 "true_pose": self.true_pose()}
 
     def _check_action(self, action: Any) -> tuple[float, float, float]:

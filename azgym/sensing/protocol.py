@@ -62,25 +62,91 @@ class DetectionTruth:
         return [LABEL_NAMES[k] for k in self.label]
 
 
-@dataclass(frozen=True, eq=False)
+ID, BEACON, LABEL, MIRRORED = range(4)
+"""Rows of ``Observation.ints``: decoded id, true beacon's map row (−1: none), label, mirrored."""
+AZIMUTH = 0
+"""Row of ``Observation.measured`` holding the azimuths; the quality columns follow it."""
+TRUE_AZIMUTH, VISIBLE = range(2)
+"""Rows of ``Observation.true``: the light's noise-free azimuth (NaN: none), visible share."""
+
+
 class Observation:
     """One camera frame: the measurements, their ground truth, and the image if there is one.
 
+    The frame is kept as three packed arrays, M columns each, listed by azimuth (as a detector
+    scanning the image around its centre lists them); ``measurements`` and ``truth`` are read-only
+    views of them, built when first read. One copy per array makes a frame, and an environment
+    pads all rows of an array in one call, which keeps a step cheap.
+
     Attributes:
-        measurements: What a localizer gets, listed by azimuth (as a detector scanning the
-            image around its centre lists them).
-        truth: The ground truth of each measurement.
-        in_view: Map rows of the beacons in direct view (whether or not detected: a blinking
-            beacon may be dark), shape (V,).
+        measured: Rows azimuth [rad], then each quality column, shape (1 + Q, M), float64.
+        true: Rows ``TRUE_AZIMUTH`` and ``VISIBLE``, shape (2, M), float64.
+        ints: Rows ``ID``, ``BEACON``, ``LABEL``, ``MIRRORED`` (0 or 1), shape (4, M), int64.
         image: The 8-bit frame (image sensors only).
         blobs: The detected blobs, index for index with the measurements (image sensors only).
     """
 
-    measurements: Measurements
-    truth: DetectionTruth
-    in_view: IntArray
-    image: np.ndarray | None = None
-    blobs: tuple[Blob, ...] = ()
+    __slots__ = ("measured", "true", "ints", "image", "blobs", "_in_view", "_measurements",
+                 "_truth")
+
+    def __init__(self, measured: FloatArray, true: FloatArray, ints: IntArray, *,
+                 in_view: IntArray | None = None, image: np.ndarray | None = None,
+                 blobs: tuple[Blob, ...] = ()) -> None:
+        for array in (measured, true, ints):
+            array.setflags(write=False)
+        self.measured, self.true, self.ints = measured, true, ints
+        self.image, self.blobs = image, blobs
+        self._in_view = in_view
+        self._measurements: Measurements | None = None
+        self._truth: DetectionTruth | None = None
+
+    @classmethod
+    def from_columns(cls, *, ids: IntArray, azimuth: FloatArray, quality: FloatArray,
+                     label: IntArray, beacon: IntArray, true_azimuth: FloatArray,
+                     visible: FloatArray, mirrored: BoolArray, in_view: IntArray | None = None,
+                     image: np.ndarray | None = None, blobs: tuple[Blob, ...] = ()
+                     ) -> Observation:
+        """A frame from one array per field (M each; quality (M,) or (M, Q)), sorted by azimuth."""
+        order = np.argsort(azimuth, kind="stable")
+        columns = quality[:, None] if quality.ndim == 1 else quality
+        measured = np.vstack([azimuth[None, :], columns.T])
+        return cls(measured[:, order], np.vstack([true_azimuth, visible])[:, order],
+                   np.vstack([ids, beacon, label, mirrored.astype(np.int64)])[:, order],
+                   in_view=in_view, image=image, blobs=tuple(blobs[k] for k in order))
+
+    def __len__(self) -> int:
+        return int(self.ints.shape[1])
+
+    @property
+    def measurements(self) -> Measurements:
+        """What a localizer gets: ids, azimuths and quality ((M,) for one column, else (M, Q))."""
+        if self._measurements is None:
+            quality = self.measured[AZIMUTH + 1:]
+            self._measurements = Measurements._from_frozen(
+                self.ints[ID], self.measured[AZIMUTH], quality[0] if len(quality) == 1
+                else quality.T)
+        return self._measurements
+
+    @property
+    def truth(self) -> DetectionTruth:
+        """The ground truth of each measurement."""
+        if self._truth is None:
+            mirrored = self.ints[MIRRORED] == 1
+            mirrored.setflags(write=False)
+            self._truth = DetectionTruth(label=self.ints[LABEL], beacon=self.ints[BEACON],
+                                         azimuth=self.true[TRUE_AZIMUTH],
+                                         visible=self.true[VISIBLE], mirrored=mirrored)
+        return self._truth
+
+    @property
+    def in_view(self) -> IntArray:
+        """Map rows of the beacons in direct view, detected or not (a blinking one may be dark).
+
+        By default, the beacons of the non-mirrored detections.
+        """
+        if self._in_view is None:
+            self._in_view = self.ints[BEACON][self.ints[MIRRORED] == 0]
+        return self._in_view
 
 
 @runtime_checkable

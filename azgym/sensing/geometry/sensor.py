@@ -12,12 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from azgym.core import Measurements, Pose
+from azgym.core import Pose
 from azgym.sensing.geometry import kernels as G
 from azgym.sensing.protocol import (
     CAMERA_RATE_HZ,
     LEVEL,
-    DetectionTruth,
     Observation,
     Seed,
     Tilt,
@@ -148,18 +147,6 @@ class FrameBuffers:
     mirrored = property(lambda self: self.ints[3], doc="1 for a mirror image, else 0.")
 
     def observation(self, count: int) -> Observation:
-        """The first ``count`` entries as an :class:`Observation` (one frozen copy of each array).
-
-        The packed arrays are copied once and frozen; the observation's arrays are views of the
-        copies, so building it costs two copies however many rows there are (a hot path).
-        """
-        floats = self.floats[:, :count].copy()
-        ints = self.ints[:, :count].copy()
-        floats.setflags(write=False)
-        ints.setflags(write=False)
-        mirrored = ints[3] == 1
-        mirrored.setflags(write=False)
-        truth = DetectionTruth(label=ints[2], beacon=ints[1], azimuth=floats[2],
-                               visible=floats[3], mirrored=mirrored)
-        measurements = Measurements._from_frozen(ints[0], floats[0], floats[1])
-        return Observation(measurements, truth, in_view=ints[1][~mirrored])
+        """The first ``count`` entries as an :class:`Observation` (one copy of each array)."""
+        return Observation(self.floats[:2, :count].copy(), self.floats[2:4, :count].copy(),
+                           self.ints[:, :count].copy())

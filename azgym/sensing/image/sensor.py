@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from azgym.core import BeaconMap, FloatArray, IntArray, Measurements, Pose
+from azgym.core import BeaconMap, FloatArray, IntArray, Pose
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.catalog import ID_MODES
 from azgym.sensing.geometry.sensor import FrameBuffers, GeometrySensor
@@ -42,7 +42,6 @@ from azgym.sensing.misread import misread_row
 from azgym.sensing.protocol import (
     CAMERA_RATE_HZ,
     LEVEL,
-    DetectionTruth,
     Observation,
     Seed,
     Tilt,
@@ -187,11 +186,11 @@ class ImageSensor:
             self._misread(ids, labels, beacon, rng)
         self._frame += 1
         quality[~np.isfinite(quality)] = self.elongation_cap  # a one-pixel-wide blob
-        measurements = Measurements(ids, np.array([b.azimuth for b in blobs]), quality)
-        truth = DetectionTruth(label=labels, beacon=beacon, azimuth=true_azimuth,
-                               visible=visible, mirrored=mirrored)
-        in_view = out.beacon[:count][out.mirrored[:count] == 0].copy()
-        return Observation(measurements, truth, in_view, image=image, blobs=tuple(blobs))
+        return Observation.from_columns(
+            ids=ids, azimuth=np.array([b.azimuth for b in blobs]), quality=quality, label=labels,
+            beacon=beacon, true_azimuth=true_azimuth, visible=visible, mirrored=mirrored,
+            in_view=out.beacon[:count][out.mirrored[:count] == 0].copy(), image=image,
+            blobs=tuple(blobs))
 
     def _misread(self, ids: IntArray, labels: IntArray, beacon: IntArray,
                  rng: np.random.Generator) -> None:
