@@ -28,6 +28,7 @@ def quick_static():
                                                          Contender("lsq", "lsq")], quick=True)
 
 
+@pytest.mark.slow
 def test_two_workers_give_the_same_figures_as_one(quick_static):
     parallel = run_benchmark(get_suite("warehouse-static"), [Contender("ransac", "ransac"),
                                                              Contender("lsq", "lsq")],
@@ -42,6 +43,7 @@ def test_the_dev_split_is_fixed_and_the_test_split_draws_a_reported_seed(quick_s
     assert test.summary["split"] == "test" and isinstance(test.summary["seed"], int)
 
 
+@pytest.mark.slow
 def test_every_suite_draws_frames_with_known_causes():
     for name, suite in SUITES.items():
         frames = suite.build(suite.dev_seed, True)

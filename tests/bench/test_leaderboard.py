@@ -96,6 +96,7 @@ def test_submit_refuses_unknown_localizers_and_overwrites(results, entry_path):
 
 
 
+@pytest.mark.slow
 def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, tmp_path):
     chromium = shutil.which("chromium") or shutil.which("chromium-browser")
     if chromium is None:
@@ -137,6 +138,7 @@ def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, 
     assert attributes["down"] == f"{worst}-ref,{best}-ref"
 
 
+@pytest.mark.slow
 def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(tmp_path):
     root = L.Path(__file__).parents[2] / "leaderboard"
     entries = L.load_entries(root / "entries")

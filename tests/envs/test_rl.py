@@ -23,6 +23,7 @@ def test_stable_baselines3_check_env_passes_without_warnings(env_id):
         check_env(gym.make(env_id).unwrapped, warn=True, skip_render_check=True)
 
 
+@pytest.mark.slow
 def test_ppo_trains_on_a_navigation_environment():
     torch.set_num_threads(1)  # one core: the other is busy (docs/performance.md)
     env = gym.make("azgym/Navigate-WarehouseSmall-v0", max_steps=200)

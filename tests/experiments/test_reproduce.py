@@ -98,6 +98,7 @@ def test_non_robust_methods_break_down_with_outliers():
             assert by_k[k]["all"]["mean_cm"] >= 10 * clean, (label, k)
 
 
+@pytest.mark.slow
 def test_cli_quick_run_writes_every_output(tmp_path, capsys):
     out = tmp_path / "paper"
     assert main(["reproduce", "paper", "--quick", "--out", str(out), "--workers", "1"]) == 0
