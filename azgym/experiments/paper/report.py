@@ -34,14 +34,14 @@ def markdown_table(results: dict[str, Any]) -> str:
         "Position errors in cm, heading errors in degrees. *all*: every grid point; "
         "*far*: grid points within 0.5 m of a beacon left out. Failure: no estimate, or error "
         "> 1 m. Limit: mean error of optimally weighted least squares on the correctly "
-        "measured beacons (see `azgym/reproduce/bound.py`); *× limit* is mean / limit (far).",
+        "measured beacons (see `azgym/experiments/paper/bound.py`); *× limit* is mean / limit (far).",
         "",
     ]
     if "mex_exhaustive_ms" in results:
         lines += [f"Exhaustive 1 cm MEX over the room: {results['mex_exhaustive_ms']:.0f} ms per "
                   f"estimate (paper: {PAPER_RUNTIME_US['mex'] / 1000:.0f} ms in Matlab); the "
                   "table's MEX runs coarse-to-fine, which returns the same grid point "
-                  "(tests/test_mex.py).", ""]
+                  "(tests/localize/test_mex.py).", ""]
     for k in results["limit"]:
         limit = results["limit"][k]
         lines += [
