@@ -34,7 +34,8 @@ def markdown_table(results: dict[str, Any]) -> str:
         "Position errors in cm, heading errors in degrees. *all*: every grid point; "
         "*far*: grid points within 0.5 m of a beacon left out. Failure: no estimate, or error "
         "> 1 m. Limit: mean error of optimally weighted least squares on the correctly "
-        "measured beacons (see `azgym/experiments/paper/bound.py`); *× limit* is mean / limit (far).",
+        "measured beacons (see `azgym/experiments/paper/bound.py`); *× limit* is mean / limit "
+        "(far).",
         "",
     ]
     if "mex_exhaustive_ms" in results:
