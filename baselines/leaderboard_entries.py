@@ -13,8 +13,9 @@ import argparse
 from pathlib import Path
 
 from azgym.bench import leaderboard
-from azgym.bench.runner import default_contenders, ranked_table, run_benchmark
+from azgym.bench.runner import default_contenders, run_benchmark
 from azgym.bench.suites import SUITES
+from azgym.bench.table import ranked_table
 
 ROOT = Path(__file__).resolve().parent.parent
 
