@@ -21,10 +21,81 @@ HALF_PI = 0.5 * math.pi
 QUARTER_PI = 0.25 * math.pi
 TAN_PI_8 = math.tan(math.pi / 8.0)
 
+VECTOR_MATH = {"reassoc", "nsz", "arcp", "contract"}
+"""numba ``fastmath`` flags for loops over many candidates (ransac's scoring, mex's grid rows).
+
+Reassociation lets LLVM vectorise such a loop (4 values at a time); the sums then depend on the
+compiled code, which is fixed for a machine, so results stay bit-for-bit repeatable.
+"""
+
+SMALL_ANGLE_TAN = 0.1
+"""|tan ε| up to which :func:`small_angle` sums atan's Taylor series instead of calling atan2.
+
+At |u| = 0.1 (5.7°) the series to u¹⁷ is exact to 1e-18 rad: as accurate as
+:func:`fast_atan2`, and cheaper (one division). Residuals of inliers are far inside this range.
+"""
+SINGULAR_RATIO = 1e-12
+"""A 3×3 normal matrix whose determinant is at most this fraction of its diagonal's product
+counts as singular.
+
+The diagonal product is the largest value the determinant of a positive semi-definite matrix
+can take (Hadamard's bound), so the ratio is a scale-free conditioning measure; below 1e-12 the
+solution would be mostly rounding error.
+"""
+
+# Pose arrays (a start pose, a triplet's or the refinement's answer) hold (x, y, cos φ, sin φ) in
+# these slots; the refinement's output continues with its cost, iterations and status. Every
+# reader and writer indexes them by name, so the layout is stated here once.
+POSE_X = 0
+"""Slot of a pose array: the camera's x [m]."""
+POSE_Y = 1
+"""Slot of a pose array: the camera's y [m]."""
+POSE_COS = 2
+"""Slot of a pose array: cos φ of the heading φ."""
+POSE_SIN = 3
+"""Slot of a pose array: sin φ."""
+POSE_SIZE = 4
+"""Length of a pose array."""
+REFINED_COST = POSE_SIZE
+"""Slot of :func:`refine`'s output: the final cost Σ w_i ε_i² [rad²]."""
+REFINED_ITERATIONS = POSE_SIZE + 1
+"""Slot of :func:`refine`'s output: the number of Levenberg-Marquardt iterations."""
+REFINED_STATUS = POSE_SIZE + 2
+"""Slot of :func:`refine`'s output: CONVERGED, MAX_ITER or SINGULAR."""
+REFINED_SIZE = POSE_SIZE + 3
+"""Length of :func:`refine`'s output."""
+
 # Status codes of the refinement (kept as ints so the kernels stay simple).
 CONVERGED = 0
+"""Refinement status: a step no longer changed the pose or the cost, or none lowered the cost."""
 MAX_ITER = 1
+"""Refinement status: stopped at the iteration limit before converging."""
 SINGULAR = 2
+"""Refinement status: the measurements used do not determine the pose at the answer."""
+
+# Levenberg-Marquardt (Marquardt's scaling: λ multiplies the diagonal of JᵀWJ).
+INITIAL_DAMPING = 1e-4
+"""λ of the first step: small, so a start near the minimum takes almost a Gauss-Newton step."""
+DAMPING_UP = 10.0
+"""Factor on λ after a step that raises the cost (or a system that cannot be solved)."""
+DAMPING_DOWN = 0.1
+"""Factor on λ after a step that lowers the cost."""
+DAMPING_FLOOR = 1e-9
+"""Smallest λ after a successful step, so a few rejections can bring it back up."""
+DAMPING_LIMIT = 1e12
+"""λ at which the search for a cost-lowering step stops: the step is then a gradient step shrunk
+about 1e12-fold, and if even that does not lower the cost the pose is a (numerical) minimum."""
+DIAGONAL_FLOOR = 1e-300
+"""Added to each damped diagonal entry to keep it positive: a parameter no measurement constrains
+(a zero row and column of JᵀWJ) then gets a zero step instead of making the system singular. It
+is far below any real entry."""
+FLAT_COST = 1e-15
+"""Relative cost decrease below which a step counts as converged: a few ulp of the cost, so the
+decrease is rounding noise."""
+STEP_POSITION_TOL = 1e-7
+"""Position part of the converged-step test [m] (:func:`settled`): |δx| + |δy| at most this."""
+STEP_HEADING_TOL = 1e-9
+"""Heading part of the converged-step test [rad] (:func:`settled`): |δφ| at most this."""
 
 
 @jit(inline="always")
@@ -75,10 +146,10 @@ def fast_atan2(y: float, x: float) -> float:
 def small_angle(cross: float, dot: float) -> float:
     """atan2(cross, dot) for a direction within a few degrees of ``dot``'s: one division.
 
-    For |u| = |cross/dot| <= 0.1 (5.7°) the Taylor series of atan to u¹⁷ is exact to 1e-18;
-    wider angles go through :func:`fast_atan2`.
+    For |u| = |cross/dot| <= SMALL_ANGLE_TAN (5.7°) the Taylor series of atan to u¹⁷ is exact to
+    1e-18; wider angles go through :func:`fast_atan2`.
     """
-    if dot > 0.0 and abs(cross) <= 0.1 * dot:
+    if dot > 0.0 and abs(cross) <= SMALL_ANGLE_TAN * dot:
         u = cross / dot
         z = u * u
         return u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
@@ -169,6 +240,16 @@ def pair_table(bx, by, ca, sa):
 
 
 @jit(inline="always")
+def distinct_beacons(a, b, c):
+    """Whether three measurements, of the beacons in map rows a, b and c, are of three beacons.
+
+    Two detections of one beacon (a ghost and its beacon) say nothing about the position, so a
+    triplet with them is not solved.
+    """
+    return a != b and b != c and a != c
+
+
+@jit(inline="always")
 def solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k, degeneracy_tol):
     """Camera position from three azimuths (Sec. 2.5, eq. 7-18) and heading (eq. 19-20).
 
@@ -212,6 +293,29 @@ def solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k, degeneracy_tol):
     return True, x, y, hx, hy, det * det / hadamard_sq
 
 
+@jit(inline="always")
+def position_gradient(dx, dy):
+    """(∂ε/∂x, ∂ε/∂y) = (−Δy/D², Δx/D²) for a beacon at (Δx, Δy) from the camera; ∂ε/∂φ = 1.
+
+    Returns (ok, ∂ε/∂x, ∂ε/∂y); not ok for a beacon at the camera itself, whose direction (and so
+    its residual's gradient) is undefined.
+    """
+    d2 = dx * dx + dy * dy
+    if d2 == 0.0:
+        return False, 0.0, 0.0
+    return True, -dy / d2, dx / d2
+
+
+@jit(inline="always")
+def determined(det, diag):
+    """Whether a 3×3 normal matrix is regular: ``det`` above SINGULAR_RATIO of ``diag``.
+
+    ``det`` is its determinant, ``diag`` the product of its diagonal (the largest value the
+    determinant of such a positive semi-definite matrix can take).
+    """
+    return diag > 0.0 and abs(det) > SINGULAR_RATIO * diag
+
+
 @jit
 def information(bx, by, use, weight, x, y, unit_rows, out):
     """``out`` = Σ_i w_i j_i j_iᵀ over ``use``, with j_i = ∂ε_i/∂(x, y, φ) = (−Δy/D², Δx/D², 1).
@@ -223,12 +327,10 @@ def information(bx, by, use, weight, x, y, unit_rows, out):
     for m in range(bx.size):
         if not use[m]:
             continue
-        dx = bx[m] - x
-        dy = by[m] - y
-        d2 = dx * dx + dy * dy
-        if d2 == 0.0:
+        ok, jx, jy = position_gradient(bx[m] - x, by[m] - y)
+        if not ok:
             continue
-        j = (-dy / d2, dx / d2, 1.0)
+        j = (jx, jy, 1.0)
         w = weight[m]
         if unit_rows:
             w /= j[0] * j[0] + j[1] * j[1] + 1.0
@@ -243,9 +345,9 @@ def singular_at(bx, by, use, x, y):
 
     The test is on the rank of the Jacobian, scale-free: its rows j_i are normalised to unit
     length (so one beacon very close to the camera, whose row is huge, cannot make the others look
-    negligible), and the pose is undetermined when det(Σ ĵ_i ĵ_iᵀ) is below 1e-12 of the product
-    of its diagonal. That happens when every beacon lies on one line through the camera, or when
-    the camera is on a circle through all of them (the "danger circle" of three beacons).
+    negligible), and the pose is undetermined unless :func:`determined` accepts Σ ĵ_i ĵ_iᵀ. That
+    happens when every beacon lies on one line through the camera, or when the camera is on a
+    circle through all of them (the "danger circle" of three beacons).
     """
     matrix = np.empty((3, 3))
     information(bx, by, use, np.ones(bx.size), x, y, True, matrix)
@@ -254,7 +356,7 @@ def singular_at(bx, by, use, x, y):
     c01 = matrix[1, 2] * matrix[2, 0] - matrix[1, 0] * matrix[2, 2]
     c02 = matrix[1, 0] * matrix[2, 1] - matrix[1, 1] * matrix[2, 0]
     det = matrix[0, 0] * c00 + matrix[0, 1] * c01 + matrix[0, 2] * c02
-    return not (diag > 0.0 and abs(det) > 1e-12 * diag)
+    return not determined(det, diag)
 
 
 @jit(inline="always")
@@ -274,106 +376,126 @@ def residuals(bx, by, ca, sa, weight, use, x, y, ch, sh, eps):
     return cost
 
 
+@jit(inline="always")
+def normal_equations(bx, by, weight, use, eps, x, y, jtj, rhs):
+    """The Gauss-Newton system at (x, y): JᵀWJ into ``jtj``, −JᵀWε into ``rhs``.
+
+    ε are the residuals ``eps`` at (x, y); the rows of J are (∂ε_i/∂x, ∂ε_i/∂y) of
+    :func:`position_gradient` and ∂ε_i/∂φ = 1 (eq. 28-33).
+    """
+    jtj[:, :] = 0.0
+    g0 = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    for m in range(bx.size):
+        if not use[m]:
+            continue
+        ok, j0, j1 = position_gradient(bx[m] - x, by[m] - y)
+        if not ok:
+            continue
+        w = weight[m]
+        e = eps[m]
+        jtj[0, 0] += w * j0 * j0
+        jtj[0, 1] += w * j0 * j1
+        jtj[0, 2] += w * j0
+        jtj[1, 1] += w * j1 * j1
+        jtj[1, 2] += w * j1
+        jtj[2, 2] += w
+        g0 += w * j0 * e
+        g1 += w * j1 * e
+        g2 += w * e
+    jtj[1, 0] = jtj[0, 1]
+    jtj[2, 0] = jtj[0, 2]
+    jtj[2, 1] = jtj[1, 2]
+    rhs[0] = -g0
+    rhs[1] = -g1
+    rhs[2] = -g2
+
+
+@jit(inline="always")
+def store_refined(out, x, y, ch, sh, cost, iterations, status):
+    """Write the refinement's answer into its output array, slot by slot."""
+    out[POSE_X] = x
+    out[POSE_Y] = y
+    out[POSE_COS] = ch
+    out[POSE_SIN] = sh
+    out[REFINED_COST] = cost
+    out[REFINED_ITERATIONS] = iterations
+    out[REFINED_STATUS] = status
+
+
+@jit(inline="always")
+def settled(cost, new_cost, dx, dy, dphi):
+    """Whether a step (dx, dy, dphi) that lowered the cost to ``new_cost`` ends the iteration.
+
+    It does when the cost dropped by no more than rounding (FLAT_COST), or when the step moved the
+    position by at most STEP_POSITION_TOL and the heading by at most STEP_HEADING_TOL. Near the
+    minimum each Gauss-Newton step shrinks the distance to it by about the size of the residuals
+    (~1e-3 rad), so the pose is then within ~1e-10 m of the minimum; on noise-free data the
+    residuals vanish and convergence is quadratic.
+    """
+    flat = cost - new_cost <= FLAT_COST * cost
+    return flat or (abs(dx) + abs(dy) <= STEP_POSITION_TOL and abs(dphi) <= STEP_HEADING_TOL)
+
+
 @jit
 def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix):
     """Levenberg-Marquardt on the mean squared azimuth error (eq. 28-33).
 
     Minimises Σ w_i ε_i(x, y, φ)² over the measurements with ``use[i]``; eliminating φ first gives
     eq. 29-31's φ'(x, y), so the minimiser is the same as eq. 32-33, but the joint 3-parameter
-    problem has a cheap exact Jacobian: ∂ε/∂x = −(y_i − y)/D², ∂ε/∂y = (x_i − x)/D², ∂ε/∂φ = 1.
-    Stops when a step moves the position by less than 1e-7 m and the heading by less than 1e-9 rad,
-    or when no step lowers the cost any more. Near the minimum each Gauss-Newton step shrinks the
-    distance to it by about the size of the residuals (~1e-3 rad), so the pose is then within
-    ~1e-10 m of the minimum; on noise-free data the residuals vanish and convergence is quadratic.
+    problem has a cheap exact Jacobian (:func:`position_gradient`, ∂ε/∂φ = 1). Each step solves
+    (JᵀWJ + λ diag JᵀWJ) δ = −JᵀWε with Marquardt's damping λ, raised until the cost drops; it
+    stops when a step is :func:`settled`, or when no step lowers the cost any more.
 
-    Writes (x, y, cos φ, sin φ, cost, iterations, status) into ``out`` and JᵀWJ at the solution
-    into ``info_matrix``.
+    Writes the pose (``POSE_*`` slots) and the cost, iterations and status (``REFINED_*`` slots)
+    into ``out`` (length REFINED_SIZE) and JᵀWJ at the solution into ``info_matrix``.
     """
-    n = bx.size
     phi = math.atan2(sh, ch)
     norm = math.hypot(ch, sh)
     ch /= norm
     sh /= norm
-    eps = np.empty(n)
-    trial_eps = np.empty(n)
-    jtj = info_matrix
-    jtr = np.empty(3)
-    trial = np.empty((3, 3))
-    step = np.empty(3)
+    eps = np.empty(bx.size)  # the residuals at the current pose
+    trial_eps = np.empty(bx.size)  # the residuals at the pose a step leads to
     rhs = np.empty(3)
+    damped = np.empty((3, 3))
+    step = np.empty(3)
     cost = residuals(bx, by, ca, sa, weight, use, x, y, ch, sh, eps)
-    lam = 1e-4
+    lam = INITIAL_DAMPING
     status = MAX_ITER
     it = 0
     while True:
-        jtj[:, :] = 0.0
-        jtr[:] = 0.0
-        for m in range(n):
-            if not use[m]:
-                continue
-            dx = bx[m] - x
-            dy = by[m] - y
-            d2 = dx * dx + dy * dy
-            if d2 == 0.0:
-                continue
-            w = weight[m]
-            j0 = -dy / d2
-            j1 = dx / d2
-            e = eps[m]
-            jtj[0, 0] += w * j0 * j0
-            jtj[0, 1] += w * j0 * j1
-            jtj[0, 2] += w * j0
-            jtj[1, 1] += w * j1 * j1
-            jtj[1, 2] += w * j1
-            jtj[2, 2] += w
-            jtr[0] += w * j0 * e
-            jtr[1] += w * j1 * e
-            jtr[2] += w * e
-        jtj[1, 0] = jtj[0, 1]
-        jtj[2, 0] = jtj[0, 2]
-        jtj[2, 1] = jtj[1, 2]
+        normal_equations(bx, by, weight, use, eps, x, y, info_matrix, rhs)
         if status == CONVERGED or it >= max_iter:
             break  # JᵀWJ is now evaluated at the final pose
         it += 1
-        rhs[0] = -jtr[0]
-        rhs[1] = -jtr[1]
-        rhs[2] = -jtr[2]
         accepted = False
-        while lam < 1e12:
-            trial[:, :] = jtj
+        # The search for λ stays inline: as a helper taking these arrays it made refine 10 % slower.
+        while lam < DAMPING_LIMIT:
+            damped[:, :] = info_matrix
             for r in range(3):
-                trial[r, r] += lam * jtj[r, r] + 1e-300
-            if solve3(trial, rhs, step) == 0.0:
-                lam *= 10.0
+                damped[r, r] += lam * info_matrix[r, r] + DIAGONAL_FLOOR
+            if solve3(damped, rhs, step) == 0.0:
+                lam *= DAMPING_UP
                 continue
-            nphi = phi + step[2]
-            nch = math.cos(nphi)
-            nsh = math.sin(nphi)
-            ncost = residuals(bx, by, ca, sa, weight, use, x + step[0], y + step[1], nch, nsh,
-                              trial_eps)
-            if ncost <= cost:
+            new_phi = phi + step[2]
+            new_ch = math.cos(new_phi)
+            new_sh = math.sin(new_phi)
+            new_cost = residuals(bx, by, ca, sa, weight, use, x + step[0], y + step[1], new_ch,
+                                 new_sh, trial_eps)
+            if new_cost <= cost:
                 accepted = True
+                if settled(cost, new_cost, step[0], step[1], step[2]):
+                    status = CONVERGED
                 x += step[0]
                 y += step[1]
-                phi = nphi
-                ch = nch
-                sh = nsh
-                flat = cost - ncost <= 1e-15 * cost
-                cost = ncost
+                phi, ch, sh, cost = new_phi, new_ch, new_sh, new_cost
                 eps, trial_eps = trial_eps, eps
-                lam = max(lam * 0.1, 1e-9)
-                if flat or (abs(step[0]) + abs(step[1]) <= 1e-7 and abs(step[2]) <= 1e-9):
-                    status = CONVERGED
+                lam = max(lam * DAMPING_DOWN, DAMPING_FLOOR)
                 break
-            lam *= 10.0
+            lam *= DAMPING_UP
         if not accepted:  # no step lowers the cost any more: a (numerical) minimum
             status = CONVERGED
     if singular_at(bx, by, use, x, y):
         status = SINGULAR
-    out[0] = x
-    out[1] = y
-    out[2] = ch
-    out[3] = sh
-    out[4] = cost
-    out[5] = it
-    out[6] = status
+    store_refined(out, x, y, ch, sh, cost, it, status)

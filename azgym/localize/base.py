@@ -24,14 +24,39 @@ from azgym.jit import jit
 MIN_MEASUREMENTS = 3
 """A 2-D position and a heading are three unknowns: three azimuths are the minimum."""
 
+# The rows of Problem.floats. Kernels index the packed array by these names, never by number, so
+# the layout is stated here once and a reordering cannot silently swap, say, x and width.
+ROW_AZIMUTH = 0
+"""Row of ``Problem.floats``: the measured azimuth α [rad]."""
+ROW_COS_AZ = 1
+"""Row of ``Problem.floats``: cos α, computed once per frame for every kernel."""
+ROW_SIN_AZ = 2
+"""Row of ``Problem.floats``: sin α."""
+ROW_BX = 3
+"""Row of ``Problem.floats``: east coordinate x_i of the measured beacon [m]."""
+ROW_BY = 4
+"""Row of ``Problem.floats``: north coordinate y_i of the measured beacon [m]."""
+ROW_WIDTH = 5
+"""Row of ``Problem.floats``: width W_i of the measured beacon [m] (the coverage error, eq. 2)."""
+FLOAT_ROWS = 6
+"""Number of rows of ``Problem.floats``."""
+
+ROW_SOURCE = 0
+"""Row of ``Problem.ints``: position of the measurement in the frame's Measurements."""
+ROW_BEACON_INDEX = 1
+"""Row of ``Problem.ints``: row of the measured beacon in the map (repeated for a ghost)."""
+INT_ROWS = 2
+"""Number of rows of ``Problem.ints``."""
+
 
 @jit
 def gather(ids, azimuth, sorted_ids, sorted_order, xyz, width):
     """Look up each measured id in the map (binary search); gather the usable measurements.
 
-    Returns a (6, K) float array (azimuth, cos, sin, beacon x, beacon y, width), a (2, K) int
-    array (position in the frame, beacon row) and the number of distinct beacons: two arrays
-    rather than eight, because handing each array back to Python costs about a microsecond.
+    Returns the (FLOAT_ROWS, K) float array and the (INT_ROWS, K) int array of a
+    :class:`Problem` (rows named by the ``ROW_*`` constants) and the number of distinct beacons:
+    two arrays rather than eight, because handing each array back to Python costs about a
+    microsecond.
     """
     m = ids.size
     n = sorted_ids.size
@@ -44,8 +69,8 @@ def gather(ids, azimuth, sorted_ids, sorted_order, xyz, width):
             usable += 1
         else:
             index[t] = -1
-    floats = np.empty((6, usable))
-    ints = np.empty((2, usable), dtype=np.int64)
+    floats = np.empty((FLOAT_ROWS, usable))
+    ints = np.empty((INT_ROWS, usable), dtype=np.int64)
     seen = np.zeros(n, dtype=np.bool_)
     distinct = 0
     u = 0
@@ -53,14 +78,14 @@ def gather(ids, azimuth, sorted_ids, sorted_order, xyz, width):
         b = index[t]
         if b < 0:
             continue
-        ints[0, u] = t
-        ints[1, u] = b
-        floats[0, u] = azimuth[t]
-        floats[1, u] = math.cos(azimuth[t])
-        floats[2, u] = math.sin(azimuth[t])
-        floats[3, u] = xyz[b, 0]
-        floats[4, u] = xyz[b, 1]
-        floats[5, u] = width[b]
+        ints[ROW_SOURCE, u] = t
+        ints[ROW_BEACON_INDEX, u] = b
+        floats[ROW_AZIMUTH, u] = azimuth[t]
+        floats[ROW_COS_AZ, u] = math.cos(azimuth[t])
+        floats[ROW_SIN_AZ, u] = math.sin(azimuth[t])
+        floats[ROW_BX, u] = xyz[b, 0]
+        floats[ROW_BY, u] = xyz[b, 1]
+        floats[ROW_WIDTH, u] = width[b]
         if not seen[b]:
             seen[b] = True
             distinct += 1
@@ -71,13 +96,16 @@ def gather(ids, azimuth, sorted_ids, sorted_order, xyz, width):
 class Problem:
     """One frame reduced to the measurements a localizer can use: those with ids in the map.
 
-    The data lives in two packed arrays, ``floats`` (6, K) and ``ints`` (2, K), which compiled
-    kernels take whole; the named rows are views of them.
+    The data lives in two packed arrays, ``floats`` (FLOAT_ROWS, K) and ``ints`` (INT_ROWS, K),
+    which compiled kernels take whole and index by the ``ROW_*`` constants; the named rows below
+    are views of them.
 
     Attributes:
-        floats: Rows azimuth [rad], cos and sin of it, beacon x and y [m], beacon width W [m].
-        ints: Rows source (position of each usable measurement in the original Measurements) and
-            beacon_index (row of its beacon in the map; repeated for a ghost).
+        floats: Each usable measurement's azimuth [rad], its cos and sin, its beacon's x and y
+            [m] and width W [m], one row each (rows ``ROW_AZIMUTH`` to ``ROW_WIDTH``).
+        ints: Each usable measurement's source (position in the original Measurements) and
+            beacon_index (row of its beacon in the map; repeated for a ghost), one row each
+            (rows ``ROW_SOURCE`` and ``ROW_BEACON_INDEX``).
         n_measurements: M, the number of measurements in the frame, usable or not.
         n_distinct: How many different beacons the usable measurements refer to.
     """
@@ -102,14 +130,16 @@ class Problem:
         """K, the number of usable measurements."""
         return int(self.floats.shape[1])
 
-    azimuth = property(lambda self: self.floats[0], doc="Usable azimuths [rad], shape (K,).")
-    cos_az = property(lambda self: self.floats[1], doc="cos of ``azimuth``.")
-    sin_az = property(lambda self: self.floats[2], doc="sin of ``azimuth``.")
-    bx = property(lambda self: self.floats[3], doc="East coordinate of each beacon [m].")
-    by = property(lambda self: self.floats[4], doc="North coordinate of each beacon [m].")
-    width = property(lambda self: self.floats[5], doc="Width W of each beacon [m].")
-    source = property(lambda self: self.ints[0], doc="Position in the original Measurements.")
-    beacon_index = property(lambda self: self.ints[1], doc="Row of each beacon in the map.")
+    azimuth = property(lambda self: self.floats[ROW_AZIMUTH], doc="Usable azimuths [rad], (K,).")
+    cos_az = property(lambda self: self.floats[ROW_COS_AZ], doc="cos of ``azimuth``.")
+    sin_az = property(lambda self: self.floats[ROW_SIN_AZ], doc="sin of ``azimuth``.")
+    bx = property(lambda self: self.floats[ROW_BX], doc="East coordinate of each beacon [m].")
+    by = property(lambda self: self.floats[ROW_BY], doc="North coordinate of each beacon [m].")
+    width = property(lambda self: self.floats[ROW_WIDTH], doc="Width W of each beacon [m].")
+    source = property(lambda self: self.ints[ROW_SOURCE],
+                      doc="Position in the original Measurements.")
+    beacon_index = property(lambda self: self.ints[ROW_BEACON_INDEX],
+                            doc="Row of each beacon in the map.")
 
     def expand(self, mask: BoolArray) -> BoolArray:
         """Turn a mask over the K usable measurements into one over all M measurements."""

@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, Measurements, wrap_angle
+from azgym.core import BeaconMap, Estimate, Measurements, Pose, pose_error, wrap_scalar
 from azgym.errors import AzgymError
 from azgym.localize.base import Localizer
 from azgym.localize.registry import SupportsLocalize
@@ -32,7 +32,7 @@ def _room(rotation: float = 0.0, shift: tuple[float, float] = (0.0, 0.0)) -> Bea
     return BeaconMap(np.arange(10, 18), np.c_[xy, np.full(8, 2.5)], width=0.03)
 
 
-def _frame(beacons: BeaconMap, pose: tuple[float, float, float]) -> Measurements:
+def _frame(beacons: BeaconMap, pose: Pose) -> Measurements:
     azimuth, _ = ideal_azimuths(*pose, beacons)
     return Measurements(beacons.ids, azimuth)
 
@@ -40,11 +40,6 @@ def _frame(beacons: BeaconMap, pose: tuple[float, float, float]) -> Measurements
 def _expect(condition: bool, check: str, detail: str) -> None:
     if not condition:
         raise LocalizerCheckError(f"check_localizer: {check}: {detail}")
-
-
-def _pose_error(estimate: Estimate, pose: tuple[float, float, float]) -> tuple[float, float]:
-    return (math.hypot(estimate.x - pose[0], estimate.y - pose[1]),
-            abs(wrap_angle(estimate.heading - pose[2])))
 
 
 def check_localizer(
@@ -68,22 +63,41 @@ def check_localizer(
     beacons = _room()
     poses = [(0.4, -0.7, 0.3), (-1.5, 1.2, -2.5), (1.9, 1.6, math.pi)]
     for pose in poses:
-        estimate = localizer.localize(_frame(beacons, pose), beacons)
-        _expect(isinstance(estimate, Estimate), "returns an Estimate",
-                f"got {type(estimate).__name__}")
-        inliers = np.asarray(estimate.inliers)
-        _expect(inliers.shape == (len(beacons),) and inliers.dtype == bool, "inlier mask",
-                f"expected bool array of shape ({len(beacons)},), got {inliers.dtype} "
-                f"{inliers.shape}")
-        _expect(estimate.ok, "noise-free recovery", f"failed at pose {pose}: {estimate.reason}")
-        position_error, heading_error = _pose_error(estimate, pose)
-        _expect(position_error <= position_tol and heading_error <= heading_tol,
-                "noise-free recovery",
-                f"pose {pose}: position error {position_error:.3g} m (tol {position_tol}), "
-                f"heading error {heading_error:.3g} rad (tol {heading_tol})")
-
+        _check_recovery(localizer, beacons, pose, position_tol, heading_tol)
     pose = poses[0]
     frame = _frame(beacons, pose)
+    _check_determinism_and_permutation(localizer, beacons, frame, position_tol)
+    _check_scene_invariance(localizer, pose, position_tol, heading_tol)
+    _check_unusable_measurements(localizer, beacons, frame)
+    if isinstance(localizer, Localizer):
+        _expect_raises(lambda: localizer.localize((frame.ids, frame.azimuth), beacons),
+                       "wrong argument type")
+
+
+def _check_recovery(
+    localizer: SupportsLocalize, beacons: BeaconMap, pose: Pose, position_tol: float,
+    heading_tol: float,
+) -> None:
+    """An Estimate with a boolean inlier mask over the frame, and the pose, from ideal azimuths."""
+    estimate = localizer.localize(_frame(beacons, pose), beacons)
+    _expect(isinstance(estimate, Estimate), "returns an Estimate",
+            f"got {type(estimate).__name__}")
+    inliers = np.asarray(estimate.inliers)
+    _expect(inliers.shape == (len(beacons),) and inliers.dtype == bool, "inlier mask",
+            f"expected bool array of shape ({len(beacons)},), got {inliers.dtype} "
+            f"{inliers.shape}")
+    _expect(estimate.ok, "noise-free recovery", f"failed at pose {pose}: {estimate.reason}")
+    position_error, heading_error = pose_error(estimate.pose, pose)
+    _expect(position_error <= position_tol and heading_error <= heading_tol,
+            "noise-free recovery",
+            f"pose {pose}: position error {position_error:.3g} m (tol {position_tol}), "
+            f"heading error {heading_error:.3g} rad (tol {heading_tol})")
+
+
+def _check_determinism_and_permutation(
+    localizer: SupportsLocalize, beacons: BeaconMap, frame: Measurements, position_tol: float,
+) -> None:
+    """The same frame twice gives the same answer; permuted measurements permute the inliers."""
     first = localizer.localize(frame, beacons)
     again = localizer.localize(frame, beacons)
     _expect((first.x, first.y, first.heading) == (again.x, again.y, again.heading)
@@ -96,8 +110,11 @@ def check_localizer(
             and np.array_equal(np.asarray(permuted.inliers), np.asarray(first.inliers)[order]),
             "permutation invariance", "permuting the measurements changed the answer")
 
-    _check_scene_invariance(localizer, pose, position_tol, heading_tol)
 
+def _check_unusable_measurements(
+    localizer: SupportsLocalize, beacons: BeaconMap, frame: Measurements,
+) -> None:
+    """An id not in the map is never an inlier; fewer than three usable measurements fail."""
     ghost_ids = np.append(frame.ids, 999)
     ghost = localizer.localize(Measurements(ghost_ids, np.append(frame.azimuth, 0.5)), beacons)
     _expect(ghost.ok and not bool(np.asarray(ghost.inliers)[-1]), "unknown ids",
@@ -109,22 +126,18 @@ def check_localizer(
                 "too few measurements",
                 f"{count} measurements gave ok={few.ok}, reason={few.reason!r}, x={few.x}")
 
-    if isinstance(localizer, Localizer):
-        _expect_raises(lambda: localizer.localize((frame.ids, frame.azimuth), beacons),
-                       "wrong argument type")
-
 
 def _check_scene_invariance(
-    localizer: SupportsLocalize, pose: tuple[float, float, float], position_tol: float,
-    heading_tol: float,
+    localizer: SupportsLocalize, pose: Pose, position_tol: float, heading_tol: float,
 ) -> None:
+    """The whole scene rotated and shifted: the estimate moves with it."""
     rotation, shift = 0.7, (5.0, -3.0)
     moved = _room(rotation, shift)
     c, s = math.cos(rotation), math.sin(rotation)
     moved_pose = (c * pose[0] - s * pose[1] + shift[0], s * pose[0] + c * pose[1] + shift[1],
-                  float(wrap_angle(pose[2] + rotation)))
+                  wrap_scalar(pose[2] + rotation))
     estimate = localizer.localize(_frame(moved, moved_pose), moved)
-    position_error, heading_error = _pose_error(estimate, moved_pose)
+    position_error, heading_error = pose_error(estimate.pose, moved_pose)
     _expect(estimate.ok and position_error <= position_tol and heading_error <= heading_tol,
             "rotation/translation invariance",
             f"rotated and shifted scene: position error {position_error:.3g} m, heading "

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from azgym.core import Estimate
+from azgym.localize import _kernels as K
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range
 from azgym.localize.lsq import fit_subset
 from azgym.localize.refinement import finish
@@ -65,10 +66,10 @@ class LeaveOneOut(Localizer):
         z_max = self.delta_alpha_d**2 if self.z_max is None else self.z_max
         args = (problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.beacon_index)
         use = np.ones(problem.size, dtype=np.bool_)
-        pose = np.empty(4)
+        pose = np.empty(K.POSE_SIZE)
         z = fit_subset(*args, use, self.max_iter, pose)
         removed: list[int] = []
-        trial_pose = np.empty(4)
+        trial_pose = np.empty(K.POSE_SIZE)
         while (z > z_max or not math.isfinite(z)) and use.sum() > self.k_min \
                 and len(removed) < self.r_max:
             best_z, best_m, best_pose = math.inf, -1, pose

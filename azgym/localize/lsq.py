@@ -9,41 +9,19 @@ import numpy as np
 from azgym.core import Estimate
 from azgym.jit import jit
 from azgym.localize import _kernels as K
-from azgym.localize.base import Localizer, Problem, check_range
+from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range
 from azgym.localize.refinement import finish
 from azgym.site.error_model import ErrorModel
 
 
-@jit
-def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
-    """Closed-form pose from all measurements in ``use``: the triplet method's circles, pooled.
+@jit(inline="always")
+def _pool_circles(bx, by, ca, sa, beacon_index, use, ox, oy, scale, ata, atb):
+    """Add every pair's circle equation (``K.circle_row``) to the normal equations AᵀA s = Aᵀb.
 
-    Every pair of measured beacons gives the linear circle equation of ``K.circle_row`` in
-    (x, y, q = x² + y²); all pairs are solved together by linear least squares (q treated as a
-    third unknown). With three beacons this is the triplet solution of Sec. 2.5. The heading is the
-    circular mean of β_i − α_i. Writes (x, y, cos φ, sin φ) and returns False when singular.
+    The unknowns are s = (x, y, q) in coordinates relative to (ox, oy) and divided by ``scale``. A
+    pair of two detections of one beacon (a ghost) says nothing about the position and is skipped.
     """
     n = bx.size
-    ox = 0.0
-    oy = 0.0
-    count = 0
-    for m in range(n):
-        if use[m]:
-            ox += bx[m]
-            oy += by[m]
-            count += 1
-    if count < 3:
-        return False
-    ox /= count
-    oy /= count
-    scale = 0.0
-    for m in range(n):
-        if use[m]:
-            scale = max(scale, abs(bx[m] - ox), abs(by[m] - oy))
-    if scale == 0.0:
-        return False
-    ata = np.zeros((3, 3))
-    atb = np.zeros(3)
     for i in range(n):
         if not use[i]:
             continue
@@ -60,16 +38,18 @@ def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
                 atb[a] -= row[a] * r3
                 for b in range(3):
                     ata[a, b] += row[a] * row[b]
-    sol = np.empty(3)
-    diag = ata[0, 0] * ata[1, 1] * ata[2, 2]
-    det = K.solve3(ata, atb, sol)
-    if not abs(det) > 1e-12 * diag:
-        return False
-    x = sol[0] * scale + ox
-    y = sol[1] * scale + oy
+
+
+@jit(inline="always")
+def _heading_sum(bx, by, ca, sa, use, x, y):
+    """Σ over ``use`` of the unit vectors along β_i − α_i seen from (x, y): (h_x, h_y).
+
+    Its direction is the circular mean of β_i − α_i, the heading of eq. 19-20 pooled over every
+    measurement with equal weights. A beacon at (x, y) itself has no direction and is left out.
+    """
     hx = 0.0
     hy = 0.0
-    for m in range(n):
+    for m in range(bx.size):
         if not use[m]:
             continue
         dx = bx[m] - x
@@ -78,13 +58,57 @@ def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
         if d > 0.0:
             hx += (dx * ca[m] + dy * sa[m]) / d
             hy += (dy * ca[m] - dx * sa[m]) / d
+    return hx, hy
+
+
+@jit
+def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
+    """Closed-form pose from all measurements in ``use``: the triplet method's circles, pooled.
+
+    Every pair of measured beacons gives the linear circle equation of ``K.circle_row`` in
+    (x, y, q = x² + y²); all pairs are solved together by linear least squares (q treated as a
+    third unknown). With three beacons this is the triplet solution of Sec. 2.5. The heading is the
+    circular mean of β_i − α_i. Writes the pose array (``K.POSE_*`` slots) into ``out`` and
+    returns False when the measurements do not determine the pose.
+
+    As in ``K.pair_table``, coordinates are taken relative to the beacons' centroid and divided by
+    their extent L, so the unknowns (x/L, y/L, q/L²) are all of order one.
+    """
+    ox = 0.0
+    oy = 0.0
+    count = 0
+    for m in range(bx.size):
+        if use[m]:
+            ox += bx[m]
+            oy += by[m]
+            count += 1
+    if count < MIN_MEASUREMENTS:
+        return False
+    ox /= count
+    oy /= count
+    scale = 0.0
+    for m in range(bx.size):
+        if use[m]:
+            scale = max(scale, abs(bx[m] - ox), abs(by[m] - oy))
+    if scale == 0.0:
+        return False
+    ata = np.zeros((3, 3))
+    atb = np.zeros(3)
+    _pool_circles(bx, by, ca, sa, beacon_index, use, ox, oy, scale, ata, atb)
+    sol = np.empty(3)
+    diag = ata[0, 0] * ata[1, 1] * ata[2, 2]
+    if not K.determined(K.solve3(ata, atb, sol), diag):
+        return False
+    x = sol[0] * scale + ox
+    y = sol[1] * scale + oy
+    hx, hy = _heading_sum(bx, by, ca, sa, use, x, y)
     hn = math.sqrt(hx * hx + hy * hy)
     if not (hn > 0.0 and math.isfinite(x) and math.isfinite(y)):
         return False
-    out[0] = x
-    out[1] = y
-    out[2] = hx / hn
-    out[3] = hy / hn
+    out[K.POSE_X] = x
+    out[K.POSE_Y] = y
+    out[K.POSE_COS] = hx / hn
+    out[K.POSE_SIN] = hy / hn
     return True
 
 
@@ -92,18 +116,20 @@ def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
 def fit_subset(bx, by, ca, sa, beacon_index, use, max_iter, out):
     """Algebraic start plus unweighted refinement on ``use``; returns the mean squared residual.
 
-    Writes (x, y, cos φ, sin φ) into ``out``; returns inf when the subset is singular.
+    Writes the pose array (``K.POSE_*`` slots) into ``out``; returns inf when the subset is
+    singular.
     """
     if not algebraic_start(bx, by, ca, sa, beacon_index, use, out):
         return np.inf
-    result = np.empty(7)
+    result = np.empty(K.REFINED_SIZE)
     info = np.empty((3, 3))
     weight = np.ones(bx.size)
-    K.refine(bx, by, ca, sa, weight, use, out[0], out[1], out[2], out[3], max_iter, result, info)
-    if result[6] == K.SINGULAR:
+    K.refine(bx, by, ca, sa, weight, use, out[K.POSE_X], out[K.POSE_Y], out[K.POSE_COS],
+             out[K.POSE_SIN], max_iter, result, info)
+    if result[K.REFINED_STATUS] == K.SINGULAR:
         return np.inf
-    out[:4] = result[:4]
-    return result[4] / np.count_nonzero(use)
+    out[:K.POSE_SIZE] = result[:K.POSE_SIZE]
+    return result[K.REFINED_COST] / np.count_nonzero(use)
 
 
 class LeastSquares(Localizer):
@@ -143,7 +169,7 @@ class LeastSquares(Localizer):
 
     def _localize(self, problem: Problem) -> Estimate:
         use = np.ones(problem.size, dtype=np.bool_)
-        start = np.empty(4)
+        start = np.empty(K.POSE_SIZE)
         if not algebraic_start(problem.bx, problem.by, problem.cos_az, problem.sin_az,
                                problem.beacon_index, use, start):
             return Estimate.failure(

@@ -12,10 +12,27 @@ from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize.base import Localizer, Problem, check_range
 
-_VECTOR_MATH = {"reassoc", "nsz", "arcp", "contract"}
+CANCELLED = 1e-18
+"""|Σ unit vectors|² below this times n² leaves a grid point's heading (and E_ref) undefined.
+
+The n unit vectors along β_b − α_b then cancel to within 1e-9 of their count: their mean
+direction is rounding noise.
+"""
+STEP_ROUNDING = 1e-9
+"""A length divided by the grid step within this of an integer counts as that integer.
+
+So a bound that lies on a grid line up to rounding is inside the grid, and a coarse step that is
+a multiple of the step up to rounding is accepted.
+"""
+SEED_MOVES = 64
+"""Most moves of a coarse minimum's window on the fine grid: a cap on the descent's run time (a
+descent normally stops after a few moves of one coarse step)."""
+BEACON_SEED_MOVES = 1
+"""Moves of a beacon's window: one. It is there for a basin at the beacon, and a descent that
+leaves the window is heading for a minimum that a coarse seed covers."""
 
 
-@jit(fastmath=_VECTOR_MATH)
+@jit(fastmath=K.VECTOR_MATH)
 def _row_costs(bx, by, ca, sa, y, x0, step, nx, ux, uy, mean, cost):
     """E_ref (eq. 34) at the grid points (x0 + i·step, y), i < nx, written into ``cost``.
 
@@ -54,7 +71,7 @@ def _row_costs(bx, by, ca, sa, y, x0, step, nx, ux, uy, mean, cost):
         m = mean[i] * inv_n
         spread = cost[i] * inv_n - m * m
         # Directions that cancel (|u| ≈ 0) leave the heading, and so E_ref, undefined.
-        cost[i] = spread if ux[i] * ux[i] + uy[i] * uy[i] > 1e-18 * n * n else np.inf
+        cost[i] = spread if ux[i] * ux[i] + uy[i] * uy[i] > CANCELLED * n * n else np.inf
 
 
 @jit
@@ -148,7 +165,7 @@ class Mex(Localizer):
         if self.coarse_step is not None:
             check_range(name, "coarse_step", self.coarse_step, low=self.step)
             ratio = self.coarse_step / self.step
-            if abs(ratio - round(ratio)) > 1e-9:
+            if abs(ratio - round(ratio)) > STEP_ROUNDING:
                 raise InvalidInputError(
                     f"{name}.coarse_step must be a multiple of step={self.step}, "
                     f"got {self.coarse_step}"
@@ -161,8 +178,8 @@ class Mex(Localizer):
         else:
             x_min, x_max = float(problem.bx.min()), float(problem.bx.max())
             y_min, y_max = float(problem.by.min()), float(problem.by.max())
-        nx = int(math.floor((x_max - x_min) / self.step + 1e-9)) + 1
-        ny = int(math.floor((y_max - y_min) / self.step + 1e-9)) + 1
+        nx = int(math.floor((x_max - x_min) / self.step + STEP_ROUNDING)) + 1
+        ny = int(math.floor((y_max - y_min) / self.step + STEP_ROUNDING)) + 1
         return x_min, y_min, nx, ny
 
     def _localize(self, problem: Problem) -> Estimate:
@@ -197,7 +214,10 @@ class Mex(Localizer):
             diagnostics={"cost": float(cost), "grid_shape": (ny, nx)},
         )
 
-    def _coarse_to_fine(self, args, x0, y0, nx, ny, no_store):
+    def _coarse_to_fine(
+        self, args: tuple[FloatArray, ...], x0: float, y0: float, nx: int, ny: int,
+        no_store: FloatArray,
+    ) -> tuple[int, int, float]:
         """Coarse grid, then a descent on the fine grid from each seed.
 
         The seeds are the best coarse local minima and the beacons' positions. Around each seed
@@ -214,16 +234,14 @@ class Mex(Localizer):
         # Seeds on the fine grid: the best coarse local minima, and every beacon inside the grid.
         # Near a beacon E_ref is singular (its direction turns arbitrarily fast), so a camera at
         # or next to a beacon has its minimum in a basin narrower than the coarse step.
-        # A beacon's seed gets one window: it is there for a basin at the beacon, and a descent
-        # that leaves the window is heading for a minimum that a coarse seed covers.
-        seeds = [(ci * ratio, cj * ratio, 64)
+        seeds = [(ci * ratio, cj * ratio, SEED_MOVES)
                  for cj, ci in _local_minima(coarse, self.n_candidates)]
         bx, by = args[0], args[1]
         step = float(self.step)
         for b in range(bx.size):
             bi, bj = round((bx[b] - x0) / step), round((by[b] - y0) / step)
             if 0 <= bi < nx and 0 <= bj < ny:
-                seeds.append((int(bi), int(bj), 1))
+                seeds.append((int(bi), int(bj), BEACON_SEED_MOVES))
         best = (-1, -1, math.inf)
         for ci, cj, moves in seeds:
             for _ in range(moves):

@@ -11,9 +11,56 @@ import numpy as np
 from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Measurements
 from azgym.jit import jit
 from azgym.localize import _kernels as K
-from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range, gather
+from azgym.localize.base import (
+    MIN_MEASUREMENTS,
+    ROW_BEACON_INDEX,
+    ROW_BX,
+    ROW_BY,
+    ROW_COS_AZ,
+    ROW_SIN_AZ,
+    ROW_SOURCE,
+    ROW_WIDTH,
+    Localizer,
+    Problem,
+    check_range,
+    gather,
+)
 from azgym.localize.refinement import package, refine_with_covariance
 from azgym.site.error_model import ErrorModel
+
+SERIES_Z_MAX = 0.0025
+"""u² = tan² ε up to which :func:`_score_all` trusts its atan series (to u¹¹) for an inlier.
+
+At u² = 0.0025 (ε = 2.86°) the first term left out is below 2e-17 of ε, so the series is exact
+to the last bit that matters; an inlier farther off makes the candidate "special", rescored with
+the exact angle.
+"""
+
+# The slots of ``settings``, the hyperparameters handed to the kernels as one float array (one
+# argument instead of five: each argument costs time at the Python/compiled boundary).
+SETTING_DELTA_D = 0
+"""Slot of ``settings``: Δα_d [rad]."""
+SETTING_COVERAGE = 1
+"""Slot of ``settings``: 1.0 if the tolerance includes the coverage term Δα_c,i, else 0.0."""
+SETTING_DEGENERACY_TOL = 2
+"""Slot of ``settings``: the degeneracy tolerance of the triplet solution."""
+SETTING_WEIGHTED = 3
+"""Slot of ``settings``: 1.0 if the refinement is weighted by the model's variances, else 0.0."""
+SETTING_MAX_ITER = 4
+"""Slot of ``settings``: the refinement's iteration limit."""
+N_SETTINGS = 5
+"""Length of ``settings``."""
+
+# The slots of the kernels' ``out``: the refinement's output (``K.POSE_*``, ``K.REFINED_*``), then
+# these three.
+OUT_SUPPORT = K.REFINED_SIZE
+"""Slot of ``out``: NS, the number of supporters of the winning triplet (step 5)."""
+OUT_TRIPLET_MEAN_SQ = K.REFINED_SIZE + 1
+"""Slot of ``out``: E, the winning triplet's mean squared error over its supporters (eq. 27)."""
+OUT_VALID_TRIPLETS = K.REFINED_SIZE + 2
+"""Slot of ``out``: how many triplets were not degenerate."""
+OUT_SIZE = K.REFINED_SIZE + 3
+"""Length of ``out``."""
 
 
 def n_trials(n_measurements: int, n_good: int, pr_hit: float, p_star: float) -> int:
@@ -97,18 +144,14 @@ def _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage)
     return abs(eps) <= 2.0 * (delta_d + K.fast_atan2(0.5 * w, math.sqrt(d2))), eps
 
 
-# Reassociation lets LLVM vectorise the loop over measurements (4 at a time); the sums then depend
-# on the compiled code, which is fixed for a machine, so results stay bit-for-bit repeatable.
-_VECTOR_MATH = {"reassoc", "nsz", "arcp", "contract"}
-
-
-@jit(fastmath=_VECTOR_MATH)
+@jit(fastmath=K.VECTOR_MATH)
 def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, special):
     """Supporters NS_t and Σε² of every candidate pose t at once (the fast path of _is_inlier).
 
-    The inner loop runs over candidates, so it vectorises without horizontal sums. A measurement
-    whose tolerance is π/2 or more, or an inlier more than 2.86° off, is "special" for that
-    candidate: the caller then rescores the candidate exactly with _score_exact.
+    The inner loop runs over candidates, so it vectorises (``K.VECTOR_MATH``) without horizontal
+    sums. A measurement whose tolerance is π/2 or more, or an inlier beyond SERIES_Z_MAX (2.86°),
+    is "special" for that candidate: the caller then rescores the candidate exactly with
+    _score_exact.
     """
     count = px.size
     for t in range(count):
@@ -132,12 +175,12 @@ def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, s
             inlier, wide = _inside_tolerance(cross, dot, dx * dx + dy * dy, w, tan_d, wide_d2)
             u = cross / dot
             z = u * u
-            # atan(u) to u¹¹: for z <= 0.0025 (ε <= 2.86°) the next term is below 2e-17 of ε.
+            # atan(u) to u¹¹, exact for z <= SERIES_Z_MAX.
             eps = u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
                 1.0 / 9.0 - z / 11.0)))))
             ns[t] += inlier
             sq[t] += eps * eps if inlier else 0.0
-            special[t] += wide | (inlier & (z > 0.0025))
+            special[t] += wide | (inlier & (z > SERIES_Z_MAX))
 
 
 @jit
@@ -153,21 +196,17 @@ def _score_exact(bx, by, ca, sa, width, x, y, ch, sh, tan_d, delta_d, coverage):
     return ns, sq
 
 
-@jit
-def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, degeneracy_tol,
-            best_pose, best_mask):
-    """Steps 1-5: solve, score and rank every triplet.
+@jit(inline="always")
+def _solve_triplets(bx, by, ca, sa, beacon_index, triplets, degeneracy_tol):
+    """The candidate pose of every triplet (eq. 7-20, ``K.solve_triplet``).
 
-    Each triplet is solved (eq. 7-20) and scored by its supporters (eq. 21-26) and their mean ε²
-    (eq. 27); the best has the most supporters, then the smallest mean ε².
-
-    Returns (NS of the winner, E of the winner, number of non-degenerate triplets).
+    Returns (x, y, h_x, h_y, valid, number valid), one entry per triplet; (h_x, h_y) is a positive
+    multiple of (cos φ, sin φ). A degenerate triplet, or one with two detections of one beacon,
+    is not valid and keeps a NaN position: it supports nothing.
     """
-    n = bx.size
     count = triplets.shape[0]
-    tan_d = math.tan(delta_d)
     rows, ox, oy, scale = K.pair_table(bx, by, ca, sa)
-    px = np.full(count, np.nan)  # a degenerate triplet keeps NaN: it supports nothing
+    px = np.full(count, np.nan)
     py = np.full(count, np.nan)
     hx = np.zeros(count)
     hy = np.zeros(count)
@@ -177,9 +216,8 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
         i = triplets[t, 0]
         j = triplets[t, 1]
         k = triplets[t, 2]
-        if beacon_index[i] == beacon_index[j] or beacon_index[j] == beacon_index[k] or \
-                beacon_index[i] == beacon_index[k]:
-            continue  # two detections of one beacon (a ghost) say nothing about position
+        if not K.distinct_beacons(beacon_index[i], beacon_index[j], beacon_index[k]):
+            continue
         ok, x, y, h0, h1, _ = K.solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k,
                                               degeneracy_tol)
         if ok:
@@ -189,6 +227,21 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
             hy[t] = h1
             valid[t] = True
             n_valid += 1
+    return px, py, hx, hy, valid, n_valid
+
+
+@jit(inline="always")
+def _pick_best(bx, by, ca, sa, width, px, py, hx, hy, valid, tan_d, delta_d, coverage,
+               best_pose):
+    """Score every valid candidate and write the best one (step 5) into ``best_pose``.
+
+    The score is the number of supporters NS (eq. 21-26) and their mean ε², E (eq. 27); the best
+    candidate has the most supporters, then the smallest E (a full tie goes to the earlier one).
+    ``best_pose`` gets (x, y, h_x, h_y) in the ``K.POSE_*`` slots, the heading not yet normalised.
+
+    Returns (NS, E) of the winner; NS = −1 when no candidate has a supporter.
+    """
+    count = px.size
     ns = np.empty(count, dtype=np.int64)
     sq = np.empty(count)
     special = np.empty(count, dtype=np.int64)
@@ -209,17 +262,46 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
         if support > best_ns or e < best_e:
             best_ns = support
             best_e = e
-            best_pose[0] = px[t]
-            best_pose[1] = py[t]
-            best_pose[2] = hx[t]
-            best_pose[3] = hy[t]
+            best_pose[K.POSE_X] = px[t]
+            best_pose[K.POSE_Y] = py[t]
+            best_pose[K.POSE_COS] = hx[t]
+            best_pose[K.POSE_SIN] = hy[t]
+    return best_ns, best_e
+
+
+@jit(inline="always")
+def _mark_supporters(bx, by, ca, sa, width, tan_d, delta_d, coverage, best_pose, best_mask):
+    """The winner's supporters into ``best_mask``; then its heading normalised to (cos φ, sin φ)."""
+    x = best_pose[K.POSE_X]
+    y = best_pose[K.POSE_Y]
+    ch = best_pose[K.POSE_COS]
+    sh = best_pose[K.POSE_SIN]
+    for m in range(bx.size):
+        best_mask[m], _ = _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d,
+                                     coverage)
+    norm = math.hypot(ch, sh)
+    best_pose[K.POSE_COS] = ch / norm
+    best_pose[K.POSE_SIN] = sh / norm
+
+
+@jit
+def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, degeneracy_tol,
+            best_pose, best_mask):
+    """Steps 1-5: solve, score and rank every triplet.
+
+    Each triplet is solved (eq. 7-20) and scored by its supporters (eq. 21-26) and their mean ε²
+    (eq. 27); the best has the most supporters, then the smallest mean ε². Its pose array goes
+    into ``best_pose`` (``K.POSE_*`` slots), its supporters into ``best_mask``.
+
+    Returns (NS of the winner, E of the winner, number of non-degenerate triplets).
+    """
+    tan_d = math.tan(delta_d)
+    px, py, hx, hy, valid, n_valid = _solve_triplets(bx, by, ca, sa, beacon_index, triplets,
+                                                     degeneracy_tol)
+    best_ns, best_e = _pick_best(bx, by, ca, sa, width, px, py, hx, hy, valid, tan_d, delta_d,
+                                 coverage, best_pose)
     if best_ns > 0:
-        for m in range(n):
-            best_mask[m], _ = _is_inlier(bx, by, ca, sa, width, m, best_pose[0], best_pose[1],
-                                         best_pose[2], best_pose[3], tan_d, delta_d, coverage)
-        norm = math.hypot(best_pose[2], best_pose[3])
-        best_pose[2] /= norm
-        best_pose[3] /= norm
+        _mark_supporters(bx, by, ca, sa, width, tan_d, delta_d, coverage, best_pose, best_mask)
     return best_ns, best_e, n_valid
 
 
@@ -227,33 +309,33 @@ def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, de
 def _ransac(floats, ints, triplets, settings, out, mask, cov):
     """Steps 1-6 in one compiled call on a Problem's packed arrays.
 
-    ``settings`` is (Δα_d, coverage, degeneracy_tol, weighted, max_iter) as floats (one argument
-    instead of five: each argument costs time at the Python/compiled boundary). ``out`` gets the
-    refinement's 7 values (see K.refine), then NS, E and the number of valid triplets; ``mask``
-    (length M, all False on entry) the supporters, by original position; ``cov`` the covariance.
+    ``settings`` holds the hyperparameters in the ``SETTING_*`` slots. ``out`` (length OUT_SIZE)
+    gets the refinement's output (see K.refine), then NS, E and the number of valid triplets
+    (``OUT_*`` slots); ``mask`` (length M, all False on entry) the supporters, by original
+    position; ``cov`` the covariance.
     """
-    delta_d = settings[0]
-    coverage = settings[1] != 0.0
-    degeneracy_tol = settings[2]
-    weighted = settings[3] != 0.0
-    max_iter = int(settings[4])
-    bx = floats[3]
-    by = floats[4]
-    ca = floats[1]
-    sa = floats[2]
-    width = floats[5]
-    pose = np.empty(4)
+    delta_d = settings[SETTING_DELTA_D]
+    coverage = settings[SETTING_COVERAGE] != 0.0
+    degeneracy_tol = settings[SETTING_DEGENERACY_TOL]
+    weighted = settings[SETTING_WEIGHTED] != 0.0
+    max_iter = int(settings[SETTING_MAX_ITER])
+    bx = floats[ROW_BX]
+    by = floats[ROW_BY]
+    ca = floats[ROW_COS_AZ]
+    sa = floats[ROW_SIN_AZ]
+    width = floats[ROW_WIDTH]
+    pose = np.empty(K.POSE_SIZE)
     support = np.zeros(bx.size, dtype=np.bool_)
-    n_support, mean_sq, n_valid = _search(bx, by, ca, sa, width, ints[1], triplets, delta_d,
-                                          coverage, degeneracy_tol, pose, support)
-    out[7] = n_support
-    out[8] = mean_sq
-    out[9] = n_valid
-    if n_support >= 3:
+    n_support, mean_sq, n_valid = _search(bx, by, ca, sa, width, ints[ROW_BEACON_INDEX], triplets,
+                                          delta_d, coverage, degeneracy_tol, pose, support)
+    out[OUT_SUPPORT] = n_support
+    out[OUT_TRIPLET_MEAN_SQ] = mean_sq
+    out[OUT_VALID_TRIPLETS] = n_valid
+    if n_support >= MIN_MEASUREMENTS:
         refine_with_covariance(bx, by, ca, sa, width, support, weighted, delta_d, coverage, pose,
                                max_iter, out, cov)
         for m in range(bx.size):
-            mask[ints[0, m]] = support[m]
+            mask[ints[ROW_SOURCE, m]] = support[m]
 
 
 @jit
@@ -263,11 +345,11 @@ def _ransac_frame(ids, azimuth, sorted_ids, sorted_order, xyz, width, triplets, 
 
     ``triplets`` are all triplets of the M measurements in lexicographic order; those within the
     first K (the usable measurements) are exactly all triplets of K. Returns (K, distinct
-    beacons); when fewer than three beacons are distinct nothing else is done.
+    beacons); when fewer than MIN_MEASUREMENTS beacons are distinct nothing else is done.
     """
     floats, ints, distinct = gather(ids, azimuth, sorted_ids, sorted_order, xyz, width)
     usable = floats.shape[1]
-    if distinct >= 3:
+    if distinct >= MIN_MEASUREMENTS:
         if usable < ids.size:
             triplets = triplets[triplets[:, 2] < usable]
         _ransac(floats, ints, triplets, settings, out, mask, cov)
@@ -338,8 +420,13 @@ class Ransac(Localizer):
         check_range(name, "max_exhaustive", self.max_exhaustive, low=1, integer=True)
         check_range(name, "degeneracy_tol", self.degeneracy_tol, low=0.0, high=1.0)
         check_range(name, "max_iter", self.max_iter, low=1, integer=True)
-        self._settings = np.array([self.delta_alpha_d, bool(self.coverage), self.degeneracy_tol,
-                                   bool(self.weighted), self.max_iter], dtype=np.float64)
+        settings = np.empty(N_SETTINGS)
+        settings[SETTING_DELTA_D] = self.delta_alpha_d
+        settings[SETTING_COVERAGE] = bool(self.coverage)
+        settings[SETTING_DEGENERACY_TOL] = self.degeneracy_tol
+        settings[SETTING_WEIGHTED] = bool(self.weighted)
+        settings[SETTING_MAX_ITER] = self.max_iter
+        self._settings = settings
 
     def error_model(self) -> ErrorModel:
         """The error model whose bounds set the tolerance (eq. 25)."""
@@ -364,7 +451,7 @@ class Ransac(Localizer):
         count = len(measurements)
         if math.comb(count, 3) > self.max_exhaustive:
             return super()._localize_frame(measurements, beacons)
-        out = np.empty(10)
+        out = np.empty(OUT_SIZE)
         mask = np.zeros(count, dtype=np.bool_)
         cov = np.empty((3, 3))
         usable, distinct = _ransac_frame(
@@ -377,7 +464,7 @@ class Ransac(Localizer):
 
     def _localize(self, problem: Problem) -> Estimate:
         triplets = self.triplets(problem.size)
-        out = np.empty(10)
+        out = np.empty(OUT_SIZE)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
         cov = np.empty((3, 3))
         _ransac(problem.floats, problem.ints, triplets, self._settings, out, mask, cov)
@@ -385,10 +472,10 @@ class Ransac(Localizer):
 
     @staticmethod
     def _estimate(out: FloatArray, mask: BoolArray, cov: FloatArray, n_triplets: int) -> Estimate:
-        diagnostics = {"n_triplets": n_triplets, "n_valid_triplets": int(out[9])}
-        if out[7] < 3:
+        diagnostics = {"n_triplets": n_triplets, "n_valid_triplets": int(out[OUT_VALID_TRIPLETS])}
+        if out[OUT_SUPPORT] < MIN_MEASUREMENTS:
             return Estimate.failure(
                 "no non-degenerate triplet with at least 3 supporters", mask.size, diagnostics
             )
-        diagnostics["triplet_mean_sq_error"] = float(out[8])
+        diagnostics["triplet_mean_sq_error"] = float(out[OUT_TRIPLET_MEAN_SQ])
         return package(mask, out, cov, diagnostics)

@@ -18,9 +18,18 @@ from azgym.localize import _kernels as K
 from azgym.localize.base import Problem
 from azgym.site.error_model import ErrorModel
 
+MIN_VARIANCE = 1e-300
+"""Floor on a measurement's model variance [rad²] before it is inverted into a weight.
+
+With Δα_d = 0 and no coverage error (no coverage term, or a beacon of width 0) the model
+variance is 0; the floor keeps its weight finite (1/0 would be infinite). Every real variance is
+many orders of magnitude above it.
+"""
+
 
 @jit
 def _model_variance(width, dist, delta_d, coverage):
+    """The error model's variance of one azimuth (eq. 3): (Δα_d² + Δα_c²)/3, Δα_c of eq. 2."""
     c = K.fast_atan2(0.5 * width, dist) if coverage else 0.0
     return (delta_d * delta_d + c * c) / 3.0
 
@@ -28,20 +37,23 @@ def _model_variance(width, dist, delta_d, coverage):
 @jit
 def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, coverage, start,
                            max_iter, out, cov):
-    """Refine ``start`` = (x, y, cos φ, sin φ) on ``use``; fill ``out`` (as K.refine), ``cov``."""
+    """Refine the pose array ``start`` on ``use``; fill ``out`` (as K.refine) and ``cov``.
+
+    The variances are the model's at the start pose; ``weighted`` uses their inverses as weights.
+    """
     n = bx.size
     var = np.empty(n)
     weight = np.ones(n)
     for m in range(n):
-        dist = math.hypot(bx[m] - start[0], by[m] - start[1])
+        dist = math.hypot(bx[m] - start[K.POSE_X], by[m] - start[K.POSE_Y])
         var[m] = _model_variance(width[m], dist, delta_d, coverage)
         if weighted:
-            weight[m] = 1.0 / max(var[m], 1e-300)
+            weight[m] = 1.0 / max(var[m], MIN_VARIANCE)
     info = np.zeros((3, 3))
-    K.refine(bx, by, ca, sa, weight, use, start[0], start[1], start[2], start[3], max_iter, out,
-             info)
+    K.refine(bx, by, ca, sa, weight, use, start[K.POSE_X], start[K.POSE_Y], start[K.POSE_COS],
+             start[K.POSE_SIN], max_iter, out, info)
     meat = np.empty((3, 3))
-    K.information(bx, by, use, weight * weight * var, out[0], out[1], False, meat)
+    K.information(bx, by, use, weight * weight * var, out[K.POSE_X], out[K.POSE_Y], False, meat)
     inverse = np.empty((3, 3))
     unit = np.zeros(3)
     column = np.empty(3)
@@ -69,13 +81,13 @@ def finish(
     Args:
         problem: The frame's usable measurements.
         use: Which of them the refinement uses (they become the estimate's inliers).
-        start: Start pose (x, y, cos φ, sin φ).
+        start: Start pose, a pose array (``K.POSE_*`` slots: x, y, cos φ, sin φ).
         weighted: Weight by inverse error-model variance instead of equally (eq. 31).
         max_iter: Iteration limit of Levenberg-Marquardt.
         error_model: Model of the azimuth errors, for weights and covariance.
         diagnostics: Extra entries for ``Estimate.diagnostics``.
     """
-    out = np.empty(7)
+    out = np.empty(K.REFINED_SIZE)
     cov = np.empty((3, 3))
     refine_with_covariance(
         problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width, use, weighted,
@@ -91,22 +103,23 @@ def package(
 
     Args:
         inliers: The measurements used, over all M measurements of the frame.
-        out: The refinement's output.
+        out: The refinement's output (``K.POSE_*`` and ``K.REFINED_*`` slots; it may go on).
         cov: The covariance.
         diagnostics: Entries for ``Estimate.diagnostics`` (iterations and cost are added).
     """
-    diagnostics["n_iterations"] = int(out[5])
-    diagnostics["converged"] = int(out[6]) == K.CONVERGED
-    diagnostics["cost"] = float(out[4])
-    if int(out[6]) == K.SINGULAR:
+    status = int(out[K.REFINED_STATUS])
+    diagnostics["n_iterations"] = int(out[K.REFINED_ITERATIONS])
+    diagnostics["converged"] = status == K.CONVERGED
+    diagnostics["cost"] = float(out[K.REFINED_COST])
+    if status == K.SINGULAR:
         return Estimate.failure(
             "the measurements used do not determine the pose (singular geometry)",
             inliers.size, diagnostics,
         )
     return Estimate(
-        x=float(out[0]),
-        y=float(out[1]),
-        heading=math.atan2(out[3], out[2]),
+        x=float(out[K.POSE_X]),
+        y=float(out[K.POSE_Y]),
+        heading=math.atan2(out[K.POSE_SIN], out[K.POSE_COS]),
         inliers=inliers,
         covariance=cov,
         diagnostics=diagnostics,

@@ -14,25 +14,28 @@ from azgym.localize.base import Localizer, Problem, check_range
 
 @jit
 def _best_triplet(bx, by, ca, sa, beacon_index, degeneracy_tol, pose, chosen):
-    """Solve every triplet of distinct beacons; keep the best-conditioned one."""
+    """Solve every triplet of distinct beacons; keep the best-conditioned one.
+
+    Writes its pose array (``K.POSE_*`` slots) into ``pose`` and its measurements into ``chosen``;
+    returns its quality (``K.solve_triplet``), −1 when every triplet is degenerate.
+    """
     n = bx.size
     rows, ox, oy, scale = K.pair_table(bx, by, ca, sa)
     best = -1.0
     for i in range(n):
         for j in range(i + 1, n):
             for k in range(j + 1, n):
-                if beacon_index[i] == beacon_index[j] or beacon_index[j] == beacon_index[k] \
-                        or beacon_index[i] == beacon_index[k]:
+                if not K.distinct_beacons(beacon_index[i], beacon_index[j], beacon_index[k]):
                     continue
                 ok, x, y, hx, hy, quality = K.solve_triplet(rows, ox, oy, scale, bx, by, ca,
                                                             sa, i, j, k, degeneracy_tol)
                 if ok and quality > best:
                     best = quality
                     norm = math.hypot(hx, hy)
-                    pose[0] = x
-                    pose[1] = y
-                    pose[2] = hx / norm
-                    pose[3] = hy / norm
+                    pose[K.POSE_X] = x
+                    pose[K.POSE_Y] = y
+                    pose[K.POSE_COS] = hx / norm
+                    pose[K.POSE_SIN] = hy / norm
                     chosen[0] = i
                     chosen[1] = j
                     chosen[2] = k
@@ -61,7 +64,7 @@ class Triplet(Localizer):
                     high=1.0)
 
     def _localize(self, problem: Problem) -> Estimate:
-        pose = np.empty(4)
+        pose = np.empty(K.POSE_SIZE)
         chosen = np.empty(3, dtype=np.int64)
         quality = _best_triplet(problem.bx, problem.by, problem.cos_az, problem.sin_az,
                                 problem.beacon_index, float(self.degeneracy_tol), pose, chosen)
@@ -73,6 +76,7 @@ class Triplet(Localizer):
         used = np.zeros(problem.size, dtype=bool)
         used[chosen] = True
         return Estimate(
-            x=float(pose[0]), y=float(pose[1]), heading=math.atan2(pose[3], pose[2]),
+            x=float(pose[K.POSE_X]), y=float(pose[K.POSE_Y]),
+            heading=math.atan2(pose[K.POSE_SIN], pose[K.POSE_COS]),
             inliers=problem.expand(used), diagnostics={"conditioning": float(quality)},
         )
