@@ -31,15 +31,23 @@ TWO_PI = 2.0 * math.pi
 def wrap_scalar(angle: float) -> float:
     """Wrap one angle to (−π, π] [rad]: the formula every wrap in azgym uses.
 
-    Compiled kernels call its twin :data:`azgym.jit.wrap_compiled` (the same function compiled),
-    arrays go through :func:`wrap_angle`.
+    An angle already in range comes back bit for bit; any other becomes a − 2π ⌈(a − π) / 2π⌉,
+    which is exact for |a| < 3π (beyond, a rounded result is moved back into range). Keeping
+    in-range angles untouched matters: the localizers turn a last-bit change of an azimuth into
+    a different inlier set now and then. Compiled kernels call its twin
+    :data:`azgym.jit.wrap_compiled` (this function, compiled); arrays go through
+    :func:`wrap_angle`, which computes the same element by element.
     """
-    wrapped = math.pi - (math.pi - angle) % TWO_PI
-    return wrapped if wrapped > -math.pi else math.pi
+    if -math.pi < angle <= math.pi:
+        return angle
+    wrapped = angle - TWO_PI * math.ceil((angle - math.pi) / TWO_PI)
+    if wrapped <= -math.pi:
+        return wrapped + TWO_PI
+    return wrapped - TWO_PI if wrapped > math.pi else wrapped
 
 
 def wrap_angle(angle: ArrayLike) -> Any:
-    """Wrap angles to the interval (−π, π].
+    """Wrap angles to the interval (−π, π] (the formula of :func:`wrap_scalar`).
 
     Args:
         angle: Angle or array of angles in radians.
@@ -47,11 +55,13 @@ def wrap_angle(angle: ArrayLike) -> Any:
     Returns:
         The wrapped angle(s), a float for a scalar input.
     """
-    if isinstance(angle, (float, int)):  # the same formula without numpy's overhead
+    if isinstance(angle, (float, int)):  # without numpy's overhead
         return wrap_scalar(angle)
-    wrapped = np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), TWO_PI)
-    # np.mod can round a tiny negative remainder up to 2π, which would give −π: map it to π.
-    wrapped = np.where(wrapped <= -np.pi, np.pi, wrapped)
+    angle = np.asarray(angle, dtype=np.float64)
+    wrapped = angle - TWO_PI * np.ceil((angle - np.pi) / TWO_PI)
+    wrapped = np.where(wrapped <= -np.pi, wrapped + TWO_PI,
+                       np.where(wrapped > np.pi, wrapped - TWO_PI, wrapped))
+    wrapped = np.where((angle > -np.pi) & (angle <= np.pi), angle, wrapped)
     return float(wrapped) if wrapped.ndim == 0 else wrapped
 
 

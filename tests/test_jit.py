@@ -49,3 +49,24 @@ def test_the_shared_cache_subfolder_is_numbas_own():
 
     source = "/some/where/azgym/localize/ransac.py"
     assert numba_subfolder(Path(source).parent) == _CacheLocator.get_suitable_cache_subpath(source)
+
+
+def test_the_compiled_wrap_is_the_python_wrap_bit_for_bit():
+    import math
+
+    import numpy as np
+
+    from azgym.core import wrap_angle, wrap_scalar
+    from azgym.jit import wrap_compiled
+
+    rng = np.random.default_rng(0)
+    edges = [math.pi, -math.pi, np.nextafter(math.pi, 4.0), np.nextafter(-math.pi, 0.0),
+             np.nextafter(-math.pi, -4.0), 3 * math.pi, -3 * math.pi, 0.0, -0.0, 1e6]
+    angles = np.concatenate([edges, rng.uniform(-20, 20, 2000), rng.uniform(-4, 4, 2000)])
+    array = wrap_angle(angles)
+    for k, angle in enumerate(angles):
+        expected = wrap_scalar(float(angle))
+        assert wrap_compiled(float(angle)) == expected == array[k]
+        assert -math.pi < expected <= math.pi
+        if -math.pi < angle <= math.pi:
+            assert expected == angle  # in range: untouched, to the last bit

@@ -44,15 +44,14 @@ class GeometrySensor:
         self._xyz = np.ascontiguousarray(scenario.beacon_positions)
         self._width = scenario.beacons.width
         self._moved = np.any(self._xyz != scenario.beacons.xyz, axis=1)
+        camera = scenario.camera
+        self._lens = (float(camera.min_elevation), float(camera.max_range))
         n = len(scenario.beacons)
         self._capacity = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
-        most = self._capacity
-        self._ghosts = np.empty((most, 6))
-        self._scratch = (np.empty(n), np.empty(n, dtype=np.int64), np.empty(n))
-        self._collected = (np.empty(most), np.empty(most), np.empty(most, dtype=np.int64),
-                           np.empty(most, dtype=np.int64), np.empty(most), np.empty(most),
-                           np.empty(most))
-        self._buffers = FrameBuffers(most)
+        # The detections of a frame before noise, filled by G.collect (rows G.FOUND_*).
+        self._found = np.empty((G.FOUND_FLOAT_ROWS, self._capacity))
+        self._found_ints = np.empty((G.FOUND_INT_ROWS, self._capacity), dtype=np.int64)
+        self._buffers = FrameBuffers(self._capacity)
 
     @property
     def capacity(self) -> int:
@@ -80,17 +79,12 @@ class GeometrySensor:
         if misdecode_rate is None:
             misdecode_rate = self.scenario.faults.misdecode_rate
         x, y, heading = pose
-        camera = self.scenario.camera
-        cz = camera.height if camera_height is None else camera_height
-        world, elevation, beacon, label, visible, brightness, halfwidth = self._collected
-        count = G.collect(float(x), float(y), float(cz), self._xyz, self._width, self._moved,
-                          self._segments, camera.min_elevation, camera.max_range, world,
-                          elevation, beacon, label, visible, brightness, halfwidth,
-                          *self._scratch, self._ghosts)
-        G.finish(world[:count], elevation[:count], beacon[:count], label[:count],
-                 visible[:count], brightness[:count], halfwidth[:count], float(heading),
-                 float(tilt[0]), float(tilt[1]), rng.random((3, count)),
-                 self.scenario.error_model.delta_alpha_d, misdecode_rate,
+        cz = self.scenario.camera.height if camera_height is None else camera_height
+        found, found_ints = self._found, self._found_ints
+        count = G.collect((float(x), float(y), float(cz)), self._lens, self._xyz, self._width,
+                          self._moved, self._segments, found, found_ints)
+        G.finish(found, found_ints, count, float(heading), (float(tilt[0]), float(tilt[1])),
+                 rng.random((3, count)), self.scenario.error_model.delta_alpha_d, misdecode_rate,
                  self.scenario.beacons.ids, out.floats, out.ints)
         return min(count, out.size)
 
@@ -118,7 +112,8 @@ class FrameBuffers:
     """Fixed-size arrays one frame is written into (see :meth:`GeometrySensor.observe_into`).
 
     Two packed arrays, ``floats`` (6, size) and ``ints`` (4, size), which the compiled kernel
-    fills in one call; the named rows are views of them.
+    fills in one call; the named rows are views of them (rows ``FRAME_*`` of
+    :mod:`~azgym.sensing.geometry.kernels`).
 
     Attributes:
         ids, azimuth, quality: What the camera reports (quality: log10 of the blob's brightness
@@ -129,24 +124,32 @@ class FrameBuffers:
 
     def __init__(self, size: int) -> None:
         self.size = size
-        self.floats = np.zeros((6, size))
-        self.ints = np.full((4, size), -1, dtype=np.int64)
+        self.floats = np.zeros((G.FRAME_FLOAT_ROWS, size))
+        self.ints = np.full((G.FRAME_INT_ROWS, size), -1, dtype=np.int64)
 
     # Views made on access (stored views would turn into copies when the object is pickled).
-    azimuth = property(lambda self: self.floats[0], doc="Measured azimuths [rad].")
-    quality = property(lambda self: self.floats[1],
+    azimuth = property(lambda self: self.floats[G.FRAME_AZIMUTH], doc="Measured azimuths [rad].")
+    quality = property(lambda self: self.floats[G.FRAME_QUALITY],
                        doc="log10 of the blob's brightness over the detection threshold (>= 0).")
-    true_azimuth = property(lambda self: self.floats[2], doc="Noise-free azimuths [rad].")
-    visible = property(lambda self: self.floats[3], doc="Visible share of each beacon.")
-    elevation = property(lambda self: self.floats[4], doc="Elevation above the horizon [rad].")
-    half_width = property(lambda self: self.floats[5],
+    true_azimuth = property(lambda self: self.floats[G.FRAME_TRUE_AZIMUTH],
+                            doc="Noise-free azimuths [rad].")
+    visible = property(lambda self: self.floats[G.FRAME_VISIBLE],
+                       doc="Visible share of each beacon.")
+    elevation = property(lambda self: self.floats[G.FRAME_ELEVATION],
+                         doc="Elevation above the horizon [rad].")
+    half_width = property(lambda self: self.floats[G.FRAME_HALF_WIDTH],
                           doc="Angular half-width of the whole beacon [rad].")
-    ids = property(lambda self: self.ints[0], doc="Decoded ids, -1 for padding.")
-    beacon = property(lambda self: self.ints[1], doc="Map row of the true beacon.")
-    label = property(lambda self: self.ints[2], doc="Cause of each detection.")
-    mirrored = property(lambda self: self.ints[3], doc="1 for a mirror image, else 0.")
+    ids = property(lambda self: self.ints[G.FRAME_ID], doc="Decoded ids, -1 for padding.")
+    beacon = property(lambda self: self.ints[G.FRAME_BEACON], doc="Map row of the true beacon.")
+    label = property(lambda self: self.ints[G.FRAME_LABEL], doc="Cause of each detection.")
+    mirrored = property(lambda self: self.ints[G.FRAME_MIRRORED],
+                        doc="1 for a mirror image, else 0.")
 
     def observation(self, count: int) -> Observation:
-        """The first ``count`` entries as an :class:`Observation` (one copy of each array)."""
-        return Observation(self.floats[:2, :count].copy(), self.floats[2:4, :count].copy(),
+        """The first ``count`` entries as an :class:`Observation` (one copy of each array).
+
+        The buffers' rows are laid out as the observation's (see the kernels' ``FRAME_*``).
+        """
+        return Observation(self.floats[G.FRAME_AZIMUTH:G.FRAME_QUALITY + 1, :count].copy(),
+                           self.floats[G.FRAME_TRUE_AZIMUTH:G.FRAME_VISIBLE + 1, :count].copy(),
                            self.ints[:, :count].copy())

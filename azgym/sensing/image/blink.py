@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
 
-from azgym.core import FloatArray, IntArray
+from azgym.core import FloatArray, IntArray, wrap_angle, wrap_scalar
 from azgym.errors import InvalidInputError
 
 MARKER = (1, 1, 1, 0)
@@ -39,9 +39,36 @@ BLINK_CAMERA_RATE_HZ = 30.0
 """The camera's frame rate for blinking ids [Hz]: the code changes every frame, and the tracker
 needs blobs to move little between frames (see ``azgym study ids``)."""
 
+MAX_BITS = 30
+"""The longest ids a code sends, in bits: a codeword is then 66 frames long, over 2 s at 30 Hz."""
+MAX_DARK_RUN = 2
+"""The most frames in a row a blinking beacon is dark (pairs ``1 0 | 0 1``, or the marker's dark
+frame and a ``0 1``): a tracker must keep a track through that many dark frames."""
+
 MERGE_SHARE = 0.8
 """A blob is taken for several close beacons' merged light when its area is at least this share
 of their blobs' areas alone (areas fluctuate by about ±20 % with noise at the threshold)."""
+SETTLED_SIGHTINGS = 3
+"""Frames a track must have had a blob in to count as settled: only a settled track lends its
+drift to a new neighbour or joins a merged blob (noise makes short-lived specks of a few
+pixels, whose tracks would otherwise spread their drift and turn every blob beside them into a
+merger)."""
+NEW_TRACK_GATES = 3.0
+"""A track whose drift is not yet measured takes blobs this many gates from its prediction: its
+own motion is still unknown."""
+NEIGHBOUR_GATES = 6.0
+"""A new track borrows the drift of the nearest settled track within this many gates on the
+image (close blobs are at similar bearings and distances and drift alike)."""
+DRIFT_GAIN = 0.5
+"""Share of a track's surprise (its blob's distance from the prediction) that goes into its drift
+once the drift is measured: the beta of its alpha-beta filter."""
+AREA_GAIN = 0.5
+"""Share of a new blob area that goes into the track's remembered area (exponential smoothing)."""
+TURN_WINDOW = 0.02
+"""Width of the window in which track-to-blob azimuth shifts count as one common turn [rad]:
+about 4 px at the horizon."""
+TURN_SUPPORT = 2
+"""Shifts a common turn needs inside its window; with fewer, the last frame's turn stays."""
 
 
 @dataclass(frozen=True)
@@ -55,8 +82,8 @@ class BlinkCode:
     bits: int
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.bits, int) and 1 <= self.bits <= 30):
-            raise InvalidInputError(f"BlinkCode.bits must be an integer in [1, 30], got "
+        if not (isinstance(self.bits, int) and 1 <= self.bits <= MAX_BITS):
+            raise InvalidInputError(f"BlinkCode.bits must be an integer in [1, {MAX_BITS}], got "
                                     f"{self.bits!r}")
 
     @classmethod
@@ -98,6 +125,7 @@ class BlinkCode:
         """
         lit = np.asarray(history, dtype=bool)
         d = len(lit) - 1 - 2 * (self.bits + 1)  # where the marker's dark frame must be
+        # The marker: three lit frames (``MARKER``), then the dark frame d.
         if d < 3 or lit[d] or not (lit[d - 1] and lit[d - 2] and lit[d - 3]):
             return None
         first, second = lit[d + 1::2], lit[d + 2::2]
@@ -125,22 +153,28 @@ class _Track:
     area: float = 0.0  # the blob's area when it was alone [px]; 0: not known
     prior: bool = False  # whether the drift started from a neighbour's
 
+    @property
+    def has_drift(self) -> bool:
+        """Whether the drift is known: measured from a second sighting, or a neighbour's."""
+        return self.seen >= 2 or self.prior
+
 
 def _follow(track: _Track, azimuth: float, radius: float, area: float | None) -> None:
     """Move a track onto the blob it took, with an alpha-beta update of its drift.
 
-    Part of the surprise goes into the drift: all of it at the second sighting of a track
-    without a prior drift, when the drift is first measured. The gap counts the dark frames
-    since the last sighting, over which the surprise built up.
+    ``DRIFT_GAIN`` of the surprise goes into the drift, and all of it when the drift is first
+    measured (the second sighting of a track without a neighbour's drift). The gap counts the
+    dark frames since the last sighting, over which the surprise built up.
     """
+    azimuth, radius = float(azimuth), float(radius)
     gap = track.missed + 1
-    beta = 1.0 if track.seen == 1 and not track.prior else 0.5
-    track.parallax_rate += beta * math.remainder(azimuth - track.azimuth, 2 * math.pi) / gap
+    beta = DRIFT_GAIN if track.has_drift else 1.0
+    track.parallax_rate += beta * wrap_scalar(azimuth - track.azimuth) / gap
     track.radius_rate += beta * (radius - track.radius) / gap
-    track.azimuth, track.radius = float(azimuth), float(radius)
+    track.azimuth, track.radius = azimuth, radius
     track.seen += 1
     if area is not None:
-        track.area += 0.5 * (area - track.area) if track.area else area
+        track.area += AREA_GAIN * (area - track.area) if track.area else area
 
 
 def _assign(margin: FloatArray, inside: np.ndarray) -> tuple[IntArray, IntArray]:
@@ -191,10 +225,10 @@ class BlobTracker:
     def __init__(self, code: BlinkCode, principal_point: tuple[float, float],
                  gate_px: float = 8.0, max_missed: int = 3,
                  max_turn_change: float = 0.1) -> None:
-        if not gate_px > 0 or max_missed < 2 or not 0 < max_turn_change < math.pi:
+        if not gate_px > 0 or max_missed < MAX_DARK_RUN or not 0 < max_turn_change < math.pi:
             raise InvalidInputError(
-                f"gate_px must be > 0, max_missed >= 2 and max_turn_change in (0, pi), got "
-                f"{gate_px}, {max_missed}, {max_turn_change}")
+                f"gate_px must be > 0, max_missed >= {MAX_DARK_RUN} and max_turn_change in "
+                f"(0, pi), got {gate_px}, {max_missed}, {max_turn_change}")
         self.code = code
         self.centre = principal_point
         self.gate_px = gate_px
@@ -218,29 +252,28 @@ class BlobTracker:
         """The frame's common azimuth shift: the densest cluster of track-to-blob shifts.
 
         Shifts are searched within ``max_turn_change`` of the last frame's turn (a forklift's
-        turn rate changes smoothly); a cluster needs two supporters, else the last turn stays.
+        turn rate changes smoothly); a cluster needs ``TURN_SUPPORT`` shifts within
+        ``TURN_WINDOW``, else the last turn stays.
         """
         tracks = self._tracks
         if not tracks or not len(azimuth):
             return self._turn
         own = np.array([(t.azimuth + t.parallax_rate, t.radius + t.radius_rate)
                         for t in tracks])
-        shift = np.remainder(azimuth[None, :] - own[:, 0:1] - self._turn + math.pi,
-                             2 * math.pi) - math.pi
-        near = (np.abs(radius[None, :] - own[:, 1:2]) <= self.gate_px) & \
-            (np.abs(shift) <= self.max_turn_change)
-        candidates = np.sort(shift[near])
-        if candidates.size < 2:
+        # Pairs at similar radii whose shift is within max_turn_change of the last turn.
+        close = np.abs(radius[None, :] - own[:, 1:2]) <= self.gate_px
+        shift = wrap_angle((azimuth[None, :] - own[:, 0:1] - self._turn)[close])
+        candidates = np.sort(shift[np.abs(shift) <= self.max_turn_change])
+        if candidates.size < TURN_SUPPORT:
             return self._turn
-        window = 0.02  # [rad]: about 4 px at the horizon
-        support = np.searchsorted(candidates, candidates + window, side="right") - \
+        support = np.searchsorted(candidates, candidates + TURN_WINDOW, side="right") - \
             np.arange(candidates.size)
         most = support.max()
-        if most < 2:
+        if most < TURN_SUPPORT:
             return self._turn
         # Among the densest windows, the one nearest the last turn.
         starts = np.flatnonzero(support == most)
-        best = starts[np.argmin(np.abs(candidates[starts] + 0.5 * window))]
+        best = starts[np.argmin(np.abs(candidates[starts] + 0.5 * TURN_WINDOW))]
         return self._turn + float(np.median(candidates[best:best + most]))
 
     def update(self, pixels: FloatArray, areas: FloatArray | None = None) -> IntArray:
@@ -256,64 +289,87 @@ class BlobTracker:
                 tracks; without them, a track left without a blob reads that frame as dark and
                 its code breaks.
         """
-        cx, cy = self.centre
         points = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
         if areas is not None:
             areas = np.asarray(areas, dtype=np.float64).reshape(-1)
             if areas.shape != (len(points),):
                 raise InvalidInputError(f"areas: one per blob ({len(points)}), got shape "
                                         f"{areas.shape}")
+        cx, cy = self.centre
         azimuth = np.arctan2(points[:, 1] - cy, points[:, 0] - cx)
         radius = np.hypot(points[:, 0] - cx, points[:, 1] - cy)
         self._turn = self._common_turn(azimuth, radius)
-        tracks = self._tracks
-        for track in tracks:  # move every track to where it should be now
+        for track in self._tracks:  # move every track to where it should be now
             track.azimuth += self._turn + track.parallax_rate
             track.radius += track.radius_rate
+        assignment, taken, merged = self._pair(points, areas)
+        # A merged blob's centroid mixes lights: its tracks coast on their predictions.
+        for b in np.flatnonzero((assignment >= 0) & ~merged):
+            _follow(self._tracks[assignment[b]], azimuth[b], radius[b],
+                    None if areas is None else areas[b])
+        for track, lit in zip(self._tracks, taken.tolist(), strict=True):
+            track.missed = 0 if lit else track.missed + 1
+            track.history.append(1 if lit else 0)
+        assignment = self._drop_lost(assignment)
+        self._start_tracks(assignment, azimuth, radius, areas)
+        self._decode()
+        ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
+        ids[merged] = -1  # several beacons' light, at none's azimuth
+        return ids
+
+    def _pair(self, points: FloatArray,
+              areas: FloatArray | None) -> tuple[IntArray, np.ndarray, np.ndarray]:
+        """The blobs' tracks: (each blob's track or -1, each track's "lit", each blob's "merged").
+
+        Each track is paired with at most one blob inside its gate (:func:`_assign`); with
+        ``areas``, tracks left without a blob may then join a merged blob
+        (:meth:`_join_merged`).
+        """
+        tracks = self._tracks
         assignment = np.full(len(points), -1, dtype=np.int64)
         taken = np.zeros(len(tracks), dtype=bool)
         merged = np.zeros(len(points), dtype=bool)
-        if tracks and len(points):
-            predicted = np.array([(t.azimuth, t.radius) for t in tracks])
-            px = cx + predicted[:, 1] * np.cos(predicted[:, 0])
-            py = cy + predicted[:, 1] * np.sin(predicted[:, 0])
-            cost = np.hypot(px[:, None] - points[None, :, 0], py[:, None] - points[None, :, 1])
-            margin = cost - np.array([self._gate(t) for t in tracks])[:, None]
-            inside = margin <= 0.0  # each track pairs only with blobs inside its gate
-            rows, cols = _assign(margin, inside)
-            assignment[cols] = rows
-            taken[rows] = True
-            if areas is not None:
-                self._join_merged(areas, assignment, inside & ~taken[:, None], cost, taken,
-                                  merged)
-        # A merged blob's centroid mixes lights: its tracks coast on their predictions.
-        for b in np.flatnonzero((assignment >= 0) & ~merged):
-            _follow(tracks[assignment[b]], azimuth[b], radius[b],
-                    None if areas is None else areas[b])
-        for t, track in enumerate(tracks):
-            if taken[t]:
-                track.missed = 0
-                track.history.append(1)
-            else:
-                track.missed += 1
-                track.history.append(0)
+        if not tracks or not len(points):
+            return assignment, taken, merged
+        cx, cy = self.centre
+        predicted = np.array([(t.azimuth, t.radius) for t in tracks])
+        px = cx + predicted[:, 1] * np.cos(predicted[:, 0])
+        py = cy + predicted[:, 1] * np.sin(predicted[:, 0])
+        cost = np.hypot(px[:, None] - points[None, :, 0], py[:, None] - points[None, :, 1])
+        margin = cost - np.array([self._gate(t) for t in tracks])[:, None]
+        inside = margin <= 0.0  # each track pairs only with blobs inside its gate
+        rows, cols = _assign(margin, inside)
+        assignment[cols] = rows
+        taken[rows] = True
+        if areas is not None:
+            self._join_merged(areas, assignment, inside & ~taken[:, None], cost, taken, merged)
+        return assignment, taken, merged
+
+    def _drop_lost(self, assignment: IntArray) -> IntArray:
+        """Drop the tracks dark for more than ``max_missed`` frames; renumber ``assignment``."""
+        tracks = self._tracks
         survivors = [t for t in range(len(tracks)) if tracks[t].missed <= self.max_missed]
         renumber = np.full(len(tracks) + 1, -1, dtype=np.int64)
         renumber[survivors] = np.arange(len(survivors))
         self._tracks = [tracks[t] for t in survivors]
-        assignment = renumber[assignment]  # -1 stays -1 (index -1 of renumber is -1)
-        new = np.flatnonzero(assignment < 0)  # blobs no track took start tracks
-        settled = [t for t in self._tracks if t.seen >= 3 and t.missed == 0] if len(new) else []
+        return renumber[assignment]  # -1 stays -1 (index -1 of renumber is -1)
+
+    def _start_tracks(self, assignment: IntArray, azimuth: FloatArray, radius: FloatArray,
+                      areas: FloatArray | None) -> None:
+        """Start a track on every blob no track took (``assignment`` -1, set in place).
+
+        A new track starts with the drift of a settled neighbour (:meth:`_local_flow`), if any.
+        """
+        new = np.flatnonzero(assignment < 0)
+        if not len(new):
+            return
+        settled = [t for t in self._tracks if t.seen >= SETTLED_SIGHTINGS and t.missed == 0]
         for b in new:
             assignment[b] = len(self._tracks)
             flow = self._local_flow(settled, azimuth[b], radius[b])
             self._tracks.append(_Track(float(azimuth[b]), float(radius[b]), *(flow or (0.0, 0.0)),
                                        [1], area=0.0 if areas is None else float(areas[b]),
                                        prior=flow is not None))
-        self._decode()
-        ids = np.array([self._tracks[t].beacon_id for t in assignment], dtype=np.int64)
-        ids[merged] = -1  # several beacons' light, at none's azimuth
-        return ids
 
     def _decode(self) -> None:
         """Read the codeword that ends now on every track; keep the phase of those with an id."""
@@ -336,8 +392,8 @@ class BlobTracker:
         """
         if track.phase >= 0 and not self._codeword(track.beacon_id)[track.phase]:
             return -1.0
-        if track.seen < 2 and not track.prior:  # no drift yet: a wider gate
-            return 3.0 * self.gate_px
+        if not track.has_drift:  # its motion is not yet predicted: a wider gate
+            return NEW_TRACK_GATES * self.gate_px
         return self.gate_px
 
     def _codeword(self, beacon_id: int) -> np.ndarray:
@@ -348,13 +404,13 @@ class BlobTracker:
 
     def _local_flow(self, settled: list[_Track], azimuth: float,
                     radius: float) -> tuple[float, float] | None:
-        """A new track's first drift: that of the nearest settled track within 6 gates, if any.
+        """A new track's first drift: the nearest settled track's within ``NEIGHBOUR_GATES``.
 
         An upward fisheye maps a light's azimuth and elevation to the image, and beacons hang at
         similar heights, so blobs that are close on the image are at similar bearings and
         distances and drift alike as the forklift travels.
         """
-        best, nearest = None, (6.0 * self.gate_px) ** 2
+        best, nearest = None, (NEIGHBOUR_GATES * self.gate_px) ** 2
         for track in settled:
             du = track.radius * math.cos(track.azimuth) - radius * math.cos(azimuth)
             dv = track.radius * math.sin(track.azimuth) - radius * math.sin(azimuth)
@@ -370,9 +426,8 @@ class BlobTracker:
         flux-weighted centre and about as large as their two blobs together. A track left
         without a blob whose gate holds such a blob is lit too: the blob's area must be at
         least ``MERGE_SHARE`` of the areas its tracks had alone, and the track must have been
-        seen alone three times (noise makes short-lived specks of a few pixels, and a speck's
-        track would otherwise turn every blob beside it into a merger). Checked nearest first,
-        so a blob can hold three or more beacons.
+        seen alone ``SETTLED_SIGHTINGS`` times. Checked nearest first, so a blob can hold three or
+        more beacons.
 
         Args:
             areas: Each blob's area [px].
@@ -389,7 +444,7 @@ class BlobTracker:
             candidates = np.flatnonzero(free[:, b])
             for t in candidates[np.argsort(cost[candidates, b])]:
                 track = self._tracks[t]
-                if (taken[t] or track.seen < 3
+                if (taken[t] or track.seen < SETTLED_SIGHTINGS
                         or areas[b] < MERGE_SHARE * (claimed + track.area)):
                     continue
                 claimed += track.area

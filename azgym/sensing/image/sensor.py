@@ -42,6 +42,7 @@ from azgym.sensing.misread import misread_row
 from azgym.sensing.protocol import (
     CAMERA_RATE_HZ,
     LEVEL,
+    DetectionTruth,
     Observation,
     Seed,
     Tilt,
@@ -142,55 +143,65 @@ class ImageSensor:
         """
         if not self._noise:
             raise InvalidInputError("ImageSensor: call reset(seed) before the first observe")
-        blink = self.ids == "blink"
-        out = self._buffers
-        # Misreads are drawn per blob below (oracle mode) or come from decoding (blink mode), so
-        # the geometry's labels keep what each light is (a misread ghost is still a ghost).
-        count = self._geometry.observe_into(pose, rng, out, tilt=tilt, misdecode_rate=0.0)
-        lit = np.ones(count, dtype=bool)
-        if blink:
-            rows = out.beacon[:count]
-            lit = self._codes[rows, self.code_position(rows)]
-        beacons = _Lights.from_buffers(out, count, lit)
-        lights = self._lights.observe(pose, rng, tilt)
-        every = beacons.join(lights)
+        lights, in_view = self._lights_in_view(pose, rng, tilt)
         noise = self._noise[int(rng.integers(len(self._noise)))]
-        image = render(self.camera, every.azimuth - every.half_width,
-                       every.azimuth + every.half_width, every.elevation, every.flux, noise,
-                       every.half_tall)
+        image = render(self.camera, lights.azimuth - lights.half_width,
+                       lights.azimuth + lights.half_width, lights.elevation, lights.flux, noise,
+                       lights.half_tall)
         blobs = detect(image, self.camera, self.threshold)
         pixels = np.array([(b.u, b.v) for b in blobs], dtype=np.float64).reshape(-1, 2)
-        source = self._match(pixels, every)
-        matched = np.flatnonzero(source >= 0)
-        from_beacon = (source >= 0) & (source < len(beacons.azimuth))
-        labels = np.full(len(blobs), DISTRACTOR, dtype=np.int64)
-        labels[from_beacon] = beacons.label[source[from_beacon]]
-        beacon = np.full(len(blobs), -1, dtype=np.int64)
-        beacon[from_beacon] = beacons.beacon[source[from_beacon]]
-        mirrored = np.zeros(len(blobs), dtype=bool)
-        mirrored[matched] = every.mirrored[source[matched]]
-        visible = np.zeros(len(blobs))
-        visible[matched] = every.visible[source[matched]]
-        true_azimuth = np.full(len(blobs), np.nan)
-        true_azimuth[matched] = every.azimuth[source[matched]]
         quality = np.array([(b.area, b.peak, b.elongation) for b in blobs],
                            dtype=np.float64).reshape(-1, 3)
-        if blink:
-            ids = self.tracker.update(pixels, quality[:, 0])
-            true_ids = np.where(beacon >= 0, self.scenario.beacons.ids[np.maximum(beacon, 0)],
-                                -1)
-            labels[(ids >= 0) & (ids != true_ids)] = MISIDENTIFIED
-        else:
-            ids = np.full(len(blobs), -1, dtype=np.int64)
-            ids[from_beacon] = beacons.ids[source[from_beacon]]
-            self._misread(ids, labels, beacon, rng)
+        source = self._match(pixels, lights)
+        truth = _truth(source, lights)
+        ids = self._identify(pixels, quality[:, 0], source, lights, truth, rng)
         self._frame += 1
         quality[~np.isfinite(quality)] = self.elongation_cap  # a one-pixel-wide blob
         return Observation.from_columns(
-            ids=ids, azimuth=np.array([b.azimuth for b in blobs]), quality=quality, label=labels,
-            beacon=beacon, true_azimuth=true_azimuth, visible=visible, mirrored=mirrored,
-            in_view=out.beacon[:count][out.mirrored[:count] == 0].copy(), image=image,
+            ids=ids, azimuth=np.array([b.azimuth for b in blobs]), quality=quality,
+            label=truth.label, beacon=truth.beacon, true_azimuth=truth.azimuth,
+            visible=truth.visible, mirrored=truth.mirrored, in_view=in_view, image=image,
             blobs=tuple(blobs))
+
+    def _lights_in_view(self, pose: Pose, rng: np.random.Generator,
+                        tilt: Tilt) -> tuple[_Lights, IntArray]:
+        """The lights the frame shows, and the map rows of the beacons in direct view.
+
+        The lights are the lit beacons (all of them in oracle mode), then the lamps and windows;
+        the beacons in direct view count whether lit or not. Misreads are drawn per blob (oracle
+        mode) or come from decoding (blink mode), so the geometry draws none: its labels keep
+        what each light is (a misread ghost is still a ghost).
+        """
+        out = self._buffers
+        count = self._geometry.observe_into(pose, rng, out, tilt=tilt, misdecode_rate=0.0)
+        rows = out.beacon[:count]
+        lit = (self._codes[rows, self.code_position(rows)] if self.ids == "blink"
+               else np.ones(count, dtype=bool))
+        beacons = _Lights.from_buffers(out, count, lit)
+        in_view = rows[out.mirrored[:count] == 0].copy()
+        return beacons.join(self._lights.observe(pose, rng, tilt)), in_view
+
+    def _identify(self, pixels: FloatArray, areas: FloatArray, source: IntArray,
+                  lights: _Lights, truth: DetectionTruth, rng: np.random.Generator) -> IntArray:
+        """Each blob's id (see the module's docstring); -1 for none.
+
+        Blink mode decodes them (the tracker takes the blobs' centroids and areas), oracle mode
+        gives each blob its light's id (``source``: its row in ``lights``), misread at the
+        scenario's rate. Blobs whose id is not their beacon's are relabelled MISIDENTIFIED in
+        ``truth.label``.
+        """
+        if self.ids == "blink":
+            ids = self.tracker.update(pixels, areas)
+            beacon = truth.beacon
+            true_ids = np.where(beacon >= 0, self.scenario.beacons.ids[np.maximum(beacon, 0)],
+                                -1)
+            truth.label[(ids >= 0) & (ids != true_ids)] = MISIDENTIFIED
+            return ids
+        ids = np.full(len(pixels), -1, dtype=np.int64)
+        matched = source >= 0
+        ids[matched] = lights.ids[source[matched]]  # -1 for a lamp or a window
+        self._misread(ids, truth.label, truth.beacon, rng)
+        return ids
 
     def _misread(self, ids: IntArray, labels: IntArray, beacon: IntArray,
                  rng: np.random.Generator) -> None:
@@ -229,6 +240,30 @@ class ImageSensor:
         close = distance[np.arange(len(pixels)), nearest] <= reach[nearest]
         source[close] = nearest[close]
         return source
+
+
+def _truth(source: IntArray, lights: _Lights) -> DetectionTruth:
+    """The ground truth of each blob, from the light that made it.
+
+    ``source`` holds each blob's row in ``lights``, -1 for none (noise). A blob takes its light's
+    label, beacon, azimuth, visible share and mirroring; a blob of noise is a DISTRACTOR of no
+    beacon, with azimuth NaN.
+    """
+    count = len(source)
+    matched = np.flatnonzero(source >= 0)
+    rows = source[matched]
+    label = np.full(count, DISTRACTOR, dtype=np.int64)
+    label[matched] = lights.label[rows]
+    beacon = np.full(count, -1, dtype=np.int64)
+    beacon[matched] = lights.beacon[rows]
+    azimuth = np.full(count, np.nan)
+    azimuth[matched] = lights.azimuth[rows]
+    visible = np.zeros(count)
+    visible[matched] = lights.visible[rows]
+    mirrored = np.zeros(count, dtype=bool)
+    mirrored[matched] = lights.mirrored[rows]
+    return DetectionTruth(label=label, beacon=beacon, azimuth=azimuth, visible=visible,
+                          mirrored=mirrored)
 
 
 @dataclass(frozen=True)

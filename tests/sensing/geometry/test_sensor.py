@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from azgym import ScenarioError
-from azgym.sensing.geometry.sensor import GeometrySensor
+from azgym.sensing.geometry import kernels as G
+from azgym.sensing.geometry.sensor import FrameBuffers, GeometrySensor
 from azgym.sensing.labels import LABEL_NAMES
 from azgym.site import parse_scenario
 
@@ -213,3 +214,63 @@ def test_a_rolled_camera_sees_a_beacon_ahead_shifted_by_atan_sin_roll_tan_elevat
     [(azimuth, _, _)] = detections_of(pitched, truth, 1)
     assert azimuth == pytest.approx(math.pi / 2 + math.atan(math.sin(math.radians(5.0))),
                                     abs=1e-12)
+
+
+def test_a_beacon_behind_more_than_16_occluders_counts_every_one():
+    # A 0.2 m wide beacon 10 m east spans ±h, h = atan(0.01); at x = 5 the extent is y in
+    # [-0.05, 0.05]. Twenty short walls at x = 5 tile y from -0.06 to 0.03, listed top first, so
+    # that the bottom ones come last: only [0.03, 0.05] stays visible, between atan(0.006) and h.
+    edges = [-0.06] + [-0.05 + 0.004 * k for k in range(1, 21)]
+    tiles = [{"start": [5.0, lo], "end": [5.0, hi], "height": 10.0}
+             for lo, hi in zip(edges, edges[1:], strict=False)]
+    scenario = site([{"id": 1, "xyz": [10.0, 0.0, 4.0], "width": 0.2}, *far_beacons()],
+                    walls=tiles[::-1])
+    measurements, truth = seen(scenario)
+    [(azimuth, label, share)] = detections_of(measurements, truth, 1)
+    half, edge = math.atan(0.01), math.atan(0.006)
+    assert label == "partial"
+    assert share == pytest.approx((half - edge) / (2 * half), abs=1e-9)
+    assert azimuth == pytest.approx((half + edge) / 2, abs=1e-12)
+    # Without the last wall listed, [-0.05, -0.046] at x = 5 shows too: every wall counts.
+    measurements, truth = seen(site([{"id": 1, "xyz": [10.0, 0.0, 4.0], "width": 0.2},
+                                     *far_beacons()], walls=tiles[:0:-1]))
+    [(_, _, more)] = detections_of(measurements, truth, 1)
+    assert more == pytest.approx(share + (half - math.atan(0.0092)) / (2 * half), abs=1e-9)
+
+
+def test_the_frame_buffers_rows_are_the_rows_the_kernels_write():
+    float_rows = {"azimuth": G.FRAME_AZIMUTH, "quality": G.FRAME_QUALITY,
+                  "true_azimuth": G.FRAME_TRUE_AZIMUTH, "visible": G.FRAME_VISIBLE,
+                  "elevation": G.FRAME_ELEVATION, "half_width": G.FRAME_HALF_WIDTH}
+    int_rows = {"ids": G.FRAME_ID, "beacon": G.FRAME_BEACON, "label": G.FRAME_LABEL,
+                "mirrored": G.FRAME_MIRRORED}
+    assert sorted(float_rows.values()) == list(range(G.FRAME_FLOAT_ROWS))
+    assert sorted(int_rows.values()) == list(range(G.FRAME_INT_ROWS))
+    found_rows = [G.FOUND_AZIMUTH, G.FOUND_ELEVATION, G.FOUND_VISIBLE, G.FOUND_BRIGHTNESS,
+                  G.FOUND_HALF_WIDTH]
+    assert sorted(found_rows) == list(range(G.FOUND_FLOAT_ROWS))
+    assert sorted([G.FOUND_BEACON, G.FOUND_LABEL]) == list(range(G.FOUND_INT_ROWS))
+    buffers = FrameBuffers(3)
+    buffers.floats[:] = np.arange(G.FRAME_FLOAT_ROWS)[:, None]
+    buffers.ints[:] = np.arange(G.FRAME_INT_ROWS)[:, None]
+    for name, row in (float_rows | int_rows).items():
+        assert getattr(buffers, name).tolist() == [row] * 3, name
+
+
+def test_each_row_of_a_frame_holds_its_own_hand_worked_value():
+    # One beacon 10 m east, 2 m above the camera, 0.2 m wide, seen with the heading 0.25.
+    beacon = {"id": 7, "xyz": [10.0, 0.0, CAMERA_Z + 2.0], "width": 0.2}
+    sensor = GeometrySensor(site([beacon, *far_beacons()]))
+    out = sensor.new_buffers(sensor.capacity + 2)
+    count = sensor.observe_into((0.0, 0.0, 0.25), np.random.default_rng(0), out)
+    assert count == 4 == sensor.capacity
+    [k] = np.flatnonzero(out.ids == 7)
+    assert out.azimuth[k] == out.true_azimuth[k] == pytest.approx(-0.25, abs=1e-15)
+    assert out.quality[k] == pytest.approx(math.log10(100.0**2 / 104.0), abs=1e-12)
+    assert out.visible[k] == 1.0
+    assert out.elevation[k] == pytest.approx(math.atan2(2.0, 10.0), abs=1e-15)
+    assert out.half_width[k] == pytest.approx(math.atan2(0.1, 10.0), abs=1e-15)
+    assert (out.beacon[k], LABEL_NAMES[out.label[k]], out.mirrored[k]) == (0, "direct", 0)
+    assert out.ids[count:].tolist() == out.beacon[count:].tolist() == [-1, -1]
+    assert out.label[count:].tolist() == [-1, -1] and out.mirrored[count:].tolist() == [0, 0]
+    assert not out.floats[:, count:].any()

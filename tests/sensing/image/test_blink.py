@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from azgym.errors import InvalidInputError
-from azgym.sensing.image.blink import MARKER, BlinkCode, BlobTracker
+from azgym.sensing.image.blink import MARKER, NEW_TRACK_GATES, BlinkCode, BlobTracker
 
 CODE = BlinkCode(6)
 
@@ -145,6 +145,22 @@ def test_a_dark_track_leaves_its_neighbours_blob_when_a_new_blob_appears():
     assert tracker.track_count == 11  # C has its own track, A waits for its next lit frame
     tracker.update(np.vstack([ring, a, b, c]))
     assert tracker.track_count == 11  # and A's blob returns to A
+
+
+@pytest.mark.parametrize("step", [2.5, 3.5])
+def test_a_new_track_takes_a_blob_within_three_gates_then_within_one(step):
+    # One blob 200 px right of the centre moves outwards by `step` gates of 8 px: a track whose
+    # drift is not yet measured keeps it within NEW_TRACK_GATES gates. Its drift then measured,
+    # a blob 1.25 gates off the prediction starts a new track.
+    gate = 8.0
+    tracker = BlobTracker(CODE, (240.0, 240.0), gate_px=gate)
+    tracker.update(np.array([[440.0, 240.0]]))
+    tracker.update(np.array([[440.0 + step * gate, 240.0]]))
+    assert tracker.track_count == (1 if step < NEW_TRACK_GATES else 2)
+    if step < NEW_TRACK_GATES:
+        predicted = 440.0 + 2 * step * gate
+        tracker.update(np.array([[predicted + 1.25 * gate, 240.0]]))
+        assert tracker.track_count == 2
 
 
 def test_blob_areas_must_match_the_blobs():
