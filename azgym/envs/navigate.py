@@ -107,6 +107,9 @@ class NavigateEnv(gym.Env):
     * v0: initial version. Revised with azgym's suites warehouse-routes v2 and image-routes v2:
       the camera's sway on bumps is a damped oscillation (consecutive frames see nearly the same
       tilt) instead of independent draws per frame, which changes warehouse-paper's episodes.
+      Revised again with image-routes v3: ``reset(seed=...)`` also draws the image sensor's noise
+      frames and blinking phases (they were fixed), and with a camera faster than the navigator
+      every frame is observed, whatever the sensor (the default, one frame a step, is unchanged).
 
     ## Example
 

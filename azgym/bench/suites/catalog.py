@@ -11,9 +11,9 @@ SUITES: dict[str, Suite] = {suite.name: suite for suite in (
           "K = 0, 1, 3, 5 (the runs of azgym reproduce paper)", 2021, paper.build),
     Suite("warehouse-static", 1, "random poses in warehouse-small and warehouse-paper; faults "
           "clean, as shipped and heavy", 7, warehouse.static),
-    Suite("warehouse-routes", 2, "every route of warehouse-small and warehouse-paper, frame by "
+    Suite("warehouse-routes", 3, "every route of warehouse-small and warehouse-paper, frame by "
           "frame at 10 Hz", 11, warehouse.routes),
-    Suite("image-routes", 2, "every route of warehouse-small and warehouse-paper through the "
+    Suite("image-routes", 3, "every route of warehouse-small and warehouse-paper through the "
           "fisheye image path: blobs detected from pixels, ids decoded from blinking (30 Hz "
           "camera, every third frame scored)", 17, image.routes),
     Suite("stress", 1, "warehouse-large (64 beacons) with heavy faults: 5 % misreads, bright "
