@@ -11,7 +11,7 @@ from azgym.bench.suites import CAUSES, Case
 from azgym.site import load_scenario
 
 if TYPE_CHECKING:
-    from azgym.bench.results import Outcome
+    from azgym.bench.outcome import Outcome
 
 
 def write_figures(summary: dict[str, Any], frames: list[Case],

@@ -15,61 +15,18 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from azgym.bench.metrics import confidence_intervals, summarize_errors
+from azgym.bench.contenders import Contender
+from azgym.bench.metrics import confidence_intervals
+from azgym.bench.outcome import Outcome
 from azgym.bench.suites import CAUSES, Case, Suite
-
-if TYPE_CHECKING:
-    from azgym.bench.runner import Contender
 
 FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
                  "heading_error_rad", "micros", "error"]
 """The columns of a per-frame results file (``frames.csv``, and a leaderboard entry's)."""
-
-
-@dataclass
-class Outcome:
-    """One contender's outcome on each case.
-
-    Attributes:
-        ok: Whether it gave an estimate, shape (C,).
-        position: Position error [m], NaN without an estimate, shape (C,).
-        heading: Absolute heading error [rad], NaN without an estimate, shape (C,).
-        micros: Time of the call [µs], NaN when it raised, shape (C,).
-        errors: The exception it raised, "" for none, one per case.
-    """
-
-    ok: np.ndarray
-    position: np.ndarray
-    heading: np.ndarray
-    micros: np.ndarray
-    errors: list[str]
-
-    @classmethod
-    def empty(cls, count: int) -> Outcome:
-        """No estimate yet on any of ``count`` cases."""
-        return cls(np.zeros(count, dtype=bool), np.full(count, np.nan), np.full(count, np.nan),
-                   np.full(count, np.nan), [""] * count)
-
-    @classmethod
-    def concatenate(cls, parts: Sequence[Outcome]) -> Outcome:
-        """The outcomes of consecutive chunks of cases, joined."""
-        return cls(*(np.concatenate([getattr(p, key) for p in parts])
-                     for key in ("ok", "position", "heading", "micros")),
-                   [error for p in parts for error in p.errors])
-
-    def select(self, which: np.ndarray) -> Outcome:
-        """The outcome on some cases: a boolean mask over them, or their indices."""
-        index = np.flatnonzero(which) if which.dtype == bool else which
-        return Outcome(self.ok[index], self.position[index], self.heading[index],
-                       self.micros[index], [self.errors[k] for k in index])
-
-    def stats(self) -> dict[str, Any]:
-        """The error statistics (:func:`~azgym.bench.metrics.summarize_errors`)."""
-        return summarize_errors(self.position, self.heading, self.ok)
 
 
 def summarize(suite: Suite, split: str, seed: int, quick: bool,

@@ -14,51 +14,21 @@ import secrets
 import time
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
-from typing import Any
 
-from azgym.bench.results import BenchResult, Outcome, summarize
+from azgym.bench.contenders import REFERENCE, Contender, default_contenders
+from azgym.bench.outcome import Outcome
+from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import Case, Suite
 from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import make_localizer
 from azgym.site import load_scenario
 
-REFERENCE = "ransac"
-"""The localizer every runtime is compared with (added to a run that lacks it)."""
 CHUNKS_PER_WORKER = 4
 """Cases are split into this many chunks per worker, so a slow chunk does not idle the others."""
 
 Progress = Callable[[str], None]
 """Called with text as a run advances; text starting with a carriage return redraws the line."""
-
-
-@dataclass(frozen=True)
-class Contender:
-    """A localizer as the runner runs it.
-
-    Attributes:
-        label: Its name in reports.
-        spec: A registered name, ``package.module:Class`` or ``path/file.py:Class``.
-        params: Hyperparameters for ``make_localizer``.
-    """
-
-    label: str
-    spec: str
-    params: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def is_reference(self) -> bool:
-        """Whether this is the runtime reference: ``ransac`` with its default hyperparameters."""
-        return self.spec == REFERENCE and not self.params
-
-
-def default_contenders() -> list[Contender]:
-    """The built-in localizers; mex runs coarse-to-fine (10 cm, then the 1 cm lattice)."""
-    return [Contender("ransac", "ransac"),
-            Contender("ransac-weighted", "ransac", {"weighted": True}),
-            Contender("loo", "loo"), Contender("lsq", "lsq"), Contender("triplet", "triplet"),
-            Contender("mex", "mex", {"coarse_step": 0.1})]
 
 
 def default_workers() -> int:

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.results import Outcome
+from azgym.bench.outcome import Outcome
 from azgym.bench.runner import Contender, Progress, default_contenders, run_contenders
 from azgym.bench.suites.paper import ProtocolConfig, Runs, cases_of, draw_runs
 from azgym.experiments.paper.bound import wls_position_error
