@@ -134,7 +134,7 @@ def _study_error_model(args: argparse.Namespace) -> int:
 
 def _study_ids(args: argparse.Namespace) -> int:
     from azgym.experiments.identification import measure_identification
-    from azgym.sensing.image.blink import BLINK_CAMERA_RATE_HZ
+    from azgym.sensing.image.blink_code import BLINK_CAMERA_RATE_HZ
 
     stats = measure_identification(args.scenario, camera_rate_hz=args.rate or BLINK_CAMERA_RATE_HZ,
                                    noise_sigma=args.noise, seed=args.seed)

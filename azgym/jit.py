@@ -30,8 +30,9 @@ PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
     "core.py", "jit.py", "localize/_kernels.py", "localize/base.py", "localize/loo.py",
     "localize/lsq.py", "localize/mex.py", "localize/ransac.py", "localize/refinement.py",
-    "localize/triplet.py", "sensing/geometry/kernels.py", "sensing/image/render.py",
-    "sensing/misread.py",
+    "localize/triplet.py", "sensing/geometry/detections.py", "sensing/geometry/direct.py",
+    "sensing/geometry/frame.py", "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py",
+    "sensing/image/render.py", "sensing/misread.py",
 )
 """The modules (relative to the package) whose functions are compiled with :func:`jit`."""
 STAMP_NAME = "azgym-kernels.sha256"

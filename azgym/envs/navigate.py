@@ -14,7 +14,7 @@ from azgym.envs.common import check_camera_rate, check_render_mode, reward_weigh
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
 from azgym.sensing.catalog import make_sensor
-from azgym.sensing.geometry import kernels as G
+from azgym.sensing.geometry import occluders as G
 from azgym.sensing.protocol import Observation
 from azgym.site import Scenario, load_scenario
 from azgym.site.elements import occluder_table

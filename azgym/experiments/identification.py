@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from azgym.sensing.image.blink import BLINK_CAMERA_RATE_HZ
+from azgym.sensing.image.blink_code import BLINK_CAMERA_RATE_HZ
 from azgym.sensing.image.sensor import ImageSensor
 from azgym.site import Scenario, load_scenario
 from azgym.world.drive import simulate

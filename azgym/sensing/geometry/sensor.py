@@ -5,7 +5,8 @@ beacon (its azimuth moves to the visible part's centroid), reflective faces show
 with the real beacon's id, and beacons moved after the map was made appear where they really
 are. Decoding faults (a misread id) come from a rate. On top of all of this, every detection gets
 the centre-detection error of eq. 1, uniform on ±Δα_d; the coverage error of eq. 2 is not drawn,
-since partial occlusion now produces it. The kernels are in :mod:`azgym.sensing.geometry.kernels`.
+since partial occlusion now produces it. The kernels are in :mod:`azgym.sensing.geometry.frame`
+(which calls :mod:`~azgym.sensing.geometry.direct` and :mod:`~azgym.sensing.geometry.mirrors`).
 """
 
 from __future__ import annotations
@@ -13,7 +14,23 @@ from __future__ import annotations
 import numpy as np
 
 from azgym.core import Pose
-from azgym.sensing.geometry import kernels as G
+from azgym.sensing.geometry.detections import FOUND_FLOAT_ROWS, FOUND_INT_ROWS
+from azgym.sensing.geometry.frame import (
+    FRAME_AZIMUTH,
+    FRAME_BEACON,
+    FRAME_ELEVATION,
+    FRAME_FLOAT_ROWS,
+    FRAME_HALF_WIDTH,
+    FRAME_ID,
+    FRAME_INT_ROWS,
+    FRAME_LABEL,
+    FRAME_MIRRORED,
+    FRAME_QUALITY,
+    FRAME_TRUE_AZIMUTH,
+    FRAME_VISIBLE,
+    collect,
+    finish,
+)
 from azgym.sensing.protocol import (
     CAMERA_RATE_HZ,
     LEVEL,
@@ -48,9 +65,9 @@ class GeometrySensor:
         self._lens = (float(camera.min_elevation), float(camera.max_range))
         n = len(scenario.beacons)
         self._capacity = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
-        # The detections of a frame before noise, filled by G.collect (rows G.FOUND_*).
-        self._found = np.empty((G.FOUND_FLOAT_ROWS, self._capacity))
-        self._found_ints = np.empty((G.FOUND_INT_ROWS, self._capacity), dtype=np.int64)
+        # The detections of a frame before noise, filled by collect (rows FOUND_*).
+        self._found = np.empty((FOUND_FLOAT_ROWS, self._capacity))
+        self._found_ints = np.empty((FOUND_INT_ROWS, self._capacity), dtype=np.int64)
         self._buffers = FrameBuffers(self._capacity)
 
     @property
@@ -81,9 +98,9 @@ class GeometrySensor:
         x, y, heading = pose
         cz = self.scenario.camera.height if camera_height is None else camera_height
         found, found_ints = self._found, self._found_ints
-        count = G.collect((float(x), float(y), float(cz)), self._lens, self._xyz, self._width,
+        count = collect((float(x), float(y), float(cz)), self._lens, self._xyz, self._width,
                           self._moved, self._segments, found, found_ints)
-        G.finish(found, found_ints, count, float(heading), (float(tilt[0]), float(tilt[1])),
+        finish(found, found_ints, count, float(heading), (float(tilt[0]), float(tilt[1])),
                  rng.random((3, count)), self.scenario.error_model.delta_alpha_d, misdecode_rate,
                  self.scenario.beacons.ids, out.floats, out.ints)
         return min(count, out.size)
@@ -113,7 +130,7 @@ class FrameBuffers:
 
     Two packed arrays, ``floats`` (6, size) and ``ints`` (4, size), which the compiled kernel
     fills in one call; the named rows are views of them (rows ``FRAME_*`` of
-    :mod:`~azgym.sensing.geometry.kernels`).
+    :mod:`~azgym.sensing.geometry.frame`).
 
     Attributes:
         ids, azimuth, quality: What the camera reports (quality: log10 of the blob's brightness
@@ -124,25 +141,25 @@ class FrameBuffers:
 
     def __init__(self, size: int) -> None:
         self.size = size
-        self.floats = np.zeros((G.FRAME_FLOAT_ROWS, size))
-        self.ints = np.full((G.FRAME_INT_ROWS, size), -1, dtype=np.int64)
+        self.floats = np.zeros((FRAME_FLOAT_ROWS, size))
+        self.ints = np.full((FRAME_INT_ROWS, size), -1, dtype=np.int64)
 
     # Views made on access (stored views would turn into copies when the object is pickled).
-    azimuth = property(lambda self: self.floats[G.FRAME_AZIMUTH], doc="Measured azimuths [rad].")
-    quality = property(lambda self: self.floats[G.FRAME_QUALITY],
+    azimuth = property(lambda self: self.floats[FRAME_AZIMUTH], doc="Measured azimuths [rad].")
+    quality = property(lambda self: self.floats[FRAME_QUALITY],
                        doc="log10 of the blob's brightness over the detection threshold (>= 0).")
-    true_azimuth = property(lambda self: self.floats[G.FRAME_TRUE_AZIMUTH],
+    true_azimuth = property(lambda self: self.floats[FRAME_TRUE_AZIMUTH],
                             doc="Noise-free azimuths [rad].")
-    visible = property(lambda self: self.floats[G.FRAME_VISIBLE],
+    visible = property(lambda self: self.floats[FRAME_VISIBLE],
                        doc="Visible share of each beacon.")
-    elevation = property(lambda self: self.floats[G.FRAME_ELEVATION],
+    elevation = property(lambda self: self.floats[FRAME_ELEVATION],
                          doc="Elevation above the horizon [rad].")
-    half_width = property(lambda self: self.floats[G.FRAME_HALF_WIDTH],
+    half_width = property(lambda self: self.floats[FRAME_HALF_WIDTH],
                           doc="Angular half-width of the whole beacon [rad].")
-    ids = property(lambda self: self.ints[G.FRAME_ID], doc="Decoded ids, -1 for padding.")
-    beacon = property(lambda self: self.ints[G.FRAME_BEACON], doc="Map row of the true beacon.")
-    label = property(lambda self: self.ints[G.FRAME_LABEL], doc="Cause of each detection.")
-    mirrored = property(lambda self: self.ints[G.FRAME_MIRRORED],
+    ids = property(lambda self: self.ints[FRAME_ID], doc="Decoded ids, -1 for padding.")
+    beacon = property(lambda self: self.ints[FRAME_BEACON], doc="Map row of the true beacon.")
+    label = property(lambda self: self.ints[FRAME_LABEL], doc="Cause of each detection.")
+    mirrored = property(lambda self: self.ints[FRAME_MIRRORED],
                         doc="1 for a mirror image, else 0.")
 
     def observation(self, count: int) -> Observation:
@@ -150,6 +167,6 @@ class FrameBuffers:
 
         The buffers' rows are laid out as the observation's (see the kernels' ``FRAME_*``).
         """
-        return Observation(self.floats[G.FRAME_AZIMUTH:G.FRAME_QUALITY + 1, :count].copy(),
-                           self.floats[G.FRAME_TRUE_AZIMUTH:G.FRAME_VISIBLE + 1, :count].copy(),
+        return Observation(self.floats[FRAME_AZIMUTH:FRAME_QUALITY + 1, :count].copy(),
+                           self.floats[FRAME_TRUE_AZIMUTH:FRAME_VISIBLE + 1, :count].copy(),
                            self.ints[:, :count].copy())

@@ -13,10 +13,11 @@ Per frame, :class:`ImageSensor`
    * ``ids="oracle"``: the id of the light whose projected centre is nearest (within
      ``match_px``), misread at the scenario's ``faults.misdecode_rate`` as another map id — fast,
      for single frames;
-   * ``ids="blink"``: every beacon blinks its id's on-off code (``blink.BlinkCode``) from its own
-     phase, and a ``blink.BlobTracker`` decodes ids from the blobs' lit/dark histories over
-     frames. Frames must then be successive (call :meth:`ImageSensor.reset` between episodes);
-     dark beacons give no blob, and misidentifications come from tracking and decoding.
+   * ``ids="blink"``: every beacon blinks its id's on-off code (``blink_code.BlinkCode``) from
+     its own phase, and a ``blob_tracker.BlobTracker`` decodes ids from the blobs' lit/dark
+     histories over frames. Frames must then be successive (call :meth:`ImageSensor.reset`
+     between episodes); dark beacons give no blob, and misidentifications come from tracking
+     and decoding.
 
 The ground truth of every blob — which light made it and its noise-free azimuth — travels beside
 the measurements, found by the same nearest-centre matching.
@@ -34,7 +35,8 @@ from azgym.core import BeaconMap, FloatArray, IntArray, Pose
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.catalog import ID_MODES
 from azgym.sensing.geometry.sensor import FrameBuffers, GeometrySensor
-from azgym.sensing.image.blink import BLINK_CAMERA_RATE_HZ, BlinkCode, BlobTracker
+from azgym.sensing.image.blink_code import BLINK_CAMERA_RATE_HZ, BlinkCode
+from azgym.sensing.image.blob_tracker import BlobTracker
 from azgym.sensing.image.detect import detect
 from azgym.sensing.image.render import render
 from azgym.sensing.labels import DISTRACTOR, MISIDENTIFIED

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from azgym import ScenarioError
-from azgym.sensing.geometry import kernels as G
+from azgym.sensing.geometry import detections, frame
 from azgym.sensing.geometry.sensor import FrameBuffers, GeometrySensor
 from azgym.sensing.labels import LABEL_NAMES
 from azgym.site import parse_scenario
@@ -239,20 +239,22 @@ def test_a_beacon_behind_more_than_16_occluders_counts_every_one():
 
 
 def test_the_frame_buffers_rows_are_the_rows_the_kernels_write():
-    float_rows = {"azimuth": G.FRAME_AZIMUTH, "quality": G.FRAME_QUALITY,
-                  "true_azimuth": G.FRAME_TRUE_AZIMUTH, "visible": G.FRAME_VISIBLE,
-                  "elevation": G.FRAME_ELEVATION, "half_width": G.FRAME_HALF_WIDTH}
-    int_rows = {"ids": G.FRAME_ID, "beacon": G.FRAME_BEACON, "label": G.FRAME_LABEL,
-                "mirrored": G.FRAME_MIRRORED}
-    assert sorted(float_rows.values()) == list(range(G.FRAME_FLOAT_ROWS))
-    assert sorted(int_rows.values()) == list(range(G.FRAME_INT_ROWS))
-    found_rows = [G.FOUND_AZIMUTH, G.FOUND_ELEVATION, G.FOUND_VISIBLE, G.FOUND_BRIGHTNESS,
-                  G.FOUND_HALF_WIDTH]
-    assert sorted(found_rows) == list(range(G.FOUND_FLOAT_ROWS))
-    assert sorted([G.FOUND_BEACON, G.FOUND_LABEL]) == list(range(G.FOUND_INT_ROWS))
+    float_rows = {"azimuth": frame.FRAME_AZIMUTH, "quality": frame.FRAME_QUALITY,
+                  "true_azimuth": frame.FRAME_TRUE_AZIMUTH, "visible": frame.FRAME_VISIBLE,
+                  "elevation": frame.FRAME_ELEVATION, "half_width": frame.FRAME_HALF_WIDTH}
+    int_rows = {"ids": frame.FRAME_ID, "beacon": frame.FRAME_BEACON, "label": frame.FRAME_LABEL,
+                "mirrored": frame.FRAME_MIRRORED}
+    assert sorted(float_rows.values()) == list(range(frame.FRAME_FLOAT_ROWS))
+    assert sorted(int_rows.values()) == list(range(frame.FRAME_INT_ROWS))
+    found_rows = [detections.FOUND_AZIMUTH, detections.FOUND_ELEVATION,
+                  detections.FOUND_VISIBLE, detections.FOUND_BRIGHTNESS,
+                  detections.FOUND_HALF_WIDTH]
+    assert sorted(found_rows) == list(range(detections.FOUND_FLOAT_ROWS))
+    int_rows_found = [detections.FOUND_BEACON, detections.FOUND_LABEL]
+    assert sorted(int_rows_found) == list(range(detections.FOUND_INT_ROWS))
     buffers = FrameBuffers(3)
-    buffers.floats[:] = np.arange(G.FRAME_FLOAT_ROWS)[:, None]
-    buffers.ints[:] = np.arange(G.FRAME_INT_ROWS)[:, None]
+    buffers.floats[:] = np.arange(frame.FRAME_FLOAT_ROWS)[:, None]
+    buffers.ints[:] = np.arange(frame.FRAME_INT_ROWS)[:, None]
     for name, row in (float_rows | int_rows).items():
         assert getattr(buffers, name).tolist() == [row] * 3, name
 

@@ -10,7 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from azgym.errors import InvalidInputError
-from azgym.sensing.image.blink import MARKER, NEW_TRACK_GATES, BlinkCode, BlobTracker
+from azgym.sensing.image.blink_code import MARKER, BlinkCode
+from azgym.sensing.image.blob_tracker import NEW_TRACK_GATES, BlobTracker
 
 CODE = BlinkCode(6)
 
