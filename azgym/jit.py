@@ -32,7 +32,7 @@ KERNEL_MODULES = (
     "localize/lsq.py", "localize/mex.py", "localize/ransac.py", "localize/refinement.py",
     "localize/triplet.py", "sensing/geometry/detections.py", "sensing/geometry/direct.py",
     "sensing/geometry/frame.py", "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py",
-    "sensing/image/render.py", "sensing/misread.py",
+    "sensing/image/render.py", "sensing/identities.py",
 )
 """The modules (relative to the package) whose functions are compiled with :func:`jit`."""
 STAMP_NAME = "azgym-kernels.sha256"

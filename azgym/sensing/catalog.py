@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 from azgym.errors import InvalidInputError, unknown_name
+from azgym.sensing.identities import ID_MODES
 from azgym.sensing.protocol import Sensor
 from azgym.site import Scenario
 
 SENSORS = ("geometry", "image")
 """The camera models: the compiled geometry, or rendered and detected fisheye frames."""
-ID_MODES = ("oracle", "blink")
-"""How the image sensor identifies blobs: by the light that made them, or by decoding blinking."""
 
 
 def make_sensor(scenario: Scenario, sensor: str = "geometry", ids: str = "oracle") -> Sensor:

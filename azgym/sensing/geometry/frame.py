@@ -27,8 +27,8 @@ from azgym.sensing.geometry.detections import (
 )
 from azgym.sensing.geometry.direct import direct_view
 from azgym.sensing.geometry.mirrors import mirror_view
+from azgym.sensing.identities import misread_row
 from azgym.sensing.labels import GHOST, MISIDENTIFIED
-from azgym.sensing.misread import misread_row
 from azgym.sensing.protocol import AZIMUTH, BEACON, ID, LABEL, MIRRORED, TRUE_AZIMUTH, VISIBLE
 
 # Rows of a finished frame, sorted by measured azimuth (``FrameBuffers.floats`` and ``.ints``).

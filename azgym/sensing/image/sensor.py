@@ -33,14 +33,13 @@ import numpy as np
 
 from azgym.core import BeaconMap, FloatArray, IntArray, Pose
 from azgym.errors import InvalidInputError, unknown_name
-from azgym.sensing.catalog import ID_MODES
 from azgym.sensing.geometry.sensor import FrameBuffers, GeometrySensor
+from azgym.sensing.identities import ID_MODES, misread_row
 from azgym.sensing.image.blink_code import BLINK_CAMERA_RATE_HZ, BlinkCode
 from azgym.sensing.image.blob_tracker import BlobTracker
 from azgym.sensing.image.detect import detect
 from azgym.sensing.image.render import render
 from azgym.sensing.labels import DISTRACTOR, MISIDENTIFIED
-from azgym.sensing.misread import misread_row
 from azgym.sensing.protocol import (
     CAMERA_RATE_HZ,
     LEVEL,

@@ -1,4 +1,8 @@
-"""The misread rule: a decoded id mistaken for another map beacon's, the same in every sensor.
+"""How a detection gets its id, and the misread rule every sensor applies.
+
+Two modes (``ids=``): ``"oracle"``, the id of the light that made the detection, misread at the
+scenario's ``faults.misdecode_rate``; and ``"blink"``, decoded from the beacons' on-off codes over
+frames (the image sensor only; see :mod:`azgym.sensing.image.blob_tracker`).
 
 A misread detection of the beacon in map row ``b`` is read as one of the other N − 1 map
 beacons, uniformly: row ``(b + shift) % N`` with ``shift`` = 1 + ⌊u (N − 1)⌋ for a uniform u in
@@ -9,6 +13,9 @@ loop; Python code calls it the same way.
 from __future__ import annotations
 
 from azgym.jit import jit
+
+ID_MODES = ("oracle", "blink")
+"""How detections are identified: by the light that made them, or by decoding its blinking."""
 
 
 @jit(inline="always")
