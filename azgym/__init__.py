@@ -15,9 +15,9 @@ imported (before or after azgym; see :mod:`azgym.envs.registration`).
 from __future__ import annotations
 
 import importlib
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
+from azgym._version import __version__
 from azgym.core import BeaconMap, Estimate, Measurements, pose_error, wrap_angle
 from azgym.envs.registration import register_when_gymnasium_loads
 from azgym.errors import (
@@ -27,11 +27,6 @@ from azgym.errors import (
     ScenarioError,
     UnknownNameError,
 )
-
-try:
-    __version__ = version("azgym")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree never installed
-    __version__ = "0.0.0+unknown"
 
 _LAZY = {
     "ENV_IDS": "azgym.envs.registration",

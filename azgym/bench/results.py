@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from azgym._version import __version__
 from azgym.bench.contenders import Contender
 from azgym.bench.metrics import confidence_intervals
 from azgym.bench.outcome import Outcome
@@ -66,7 +67,7 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
             "first_error": next((e for e in outcome.errors if e), ""),
         }
     return {"suite": suite.name, "suite_version": suite.version, "split": split, "seed": seed,
-            "quick": quick, "n_frames": len(cases), "azgym_version": _version(),
+            "quick": quick, "n_frames": len(cases), "azgym_version": __version__,
             "python": sys.version.split()[0], "localizers": results}
 
 
@@ -101,9 +102,3 @@ class BenchResult:
 
             written += write_figures(self.summary, self.cases, self.outcomes, out)
         return written
-
-
-def _version() -> str:
-    from azgym import __version__
-
-    return __version__
