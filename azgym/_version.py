@@ -1,4 +1,4 @@
-"""azgym's version, read from the installed package's metadata (pyproject.toml is its one source)."""
+"""azgym's version, read from the installed package's metadata (pyproject.toml holds it)."""
 
 from importlib.metadata import PackageNotFoundError, version
 

@@ -28,11 +28,12 @@ from azgym.core import wrap_scalar
 
 PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
-    "core.py", "jit.py", "localize/_kernels.py", "localize/base.py", "localize/loo.py",
-    "localize/lsq.py", "localize/mex.py", "localize/ransac.py", "localize/refinement.py",
-    "localize/triplet.py", "sensing/geometry/detections.py", "sensing/geometry/direct.py",
-    "sensing/geometry/frame.py", "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py",
-    "sensing/image/render.py", "sensing/identities.py",
+    "core.py", "jit.py", "localize/_angles.py", "localize/_circles.py", "localize/_kernels.py",
+    "localize/_levenberg_marquardt.py", "localize/_ransac_search.py", "localize/base.py",
+    "localize/loo.py", "localize/lsq.py", "localize/mex.py", "localize/ransac.py",
+    "localize/refinement.py", "localize/triplet.py", "sensing/geometry/detections.py",
+    "sensing/geometry/direct.py", "sensing/geometry/frame.py", "sensing/geometry/mirrors.py",
+    "sensing/geometry/occluders.py", "sensing/identities.py", "sensing/image/render.py",
 )
 """The modules (relative to the package) whose functions are compiled with :func:`jit`."""
 STAMP_NAME = "azgym-kernels.sha256"

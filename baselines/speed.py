@@ -27,6 +27,7 @@ import numpy as np  # noqa: E402
 
 import azgym  # noqa: E402
 from azgym.localize import ransac as ransac_module  # noqa: E402
+from azgym.localize._ransac_search import search as ransac_search  # noqa: E402
 from azgym.localize.base import Problem  # noqa: E402
 from azgym.sensing.synthetic import noisy_measurements  # noqa: E402
 
@@ -116,9 +117,9 @@ def main() -> None:
                                     ransac._settings, out, np.zeros(len(frame), dtype=bool), cov)
 
     def search() -> None:
-        ransac_module._search(problem.bx, problem.by, problem.cos_az, problem.sin_az,
-                              problem.width, problem.beacon_index, triplets,
-                              ransac.delta_alpha_d, True, ransac.degeneracy_tol, pose, support)
+        ransac_search(problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width,
+                      problem.beacon_index, triplets, ransac.delta_alpha_d, True,
+                      ransac.degeneracy_tol, pose, support)
 
     whole = min(median_us(lambda: ransac.localize(frame, beacons), args.calls)
                 for _ in range(args.rounds))

@@ -9,6 +9,8 @@ import numpy as np
 from azgym.core import Estimate
 from azgym.jit import jit
 from azgym.localize import _kernels as K
+from azgym.localize._circles import circle_row
+from azgym.localize._levenberg_marquardt import determined, refine, solve3
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range
 from azgym.localize.refinement import finish
 from azgym.site.error_model import ErrorModel
@@ -16,7 +18,7 @@ from azgym.site.error_model import ErrorModel
 
 @jit(inline="always")
 def _pool_circles(bx, by, ca, sa, beacon_index, use, ox, oy, scale, ata, atb):
-    """Add every pair's circle equation (``K.circle_row``) to the normal equations AᵀA s = Aᵀb.
+    """Add every pair's circle equation (``circle_row``) to the normal equations AᵀA s = Aᵀb.
 
     The unknowns are s = (x, y, q) in coordinates relative to (ox, oy) and divided by ``scale``. A
     pair of two detections of one beacon (a ghost) says nothing about the position and is skipped.
@@ -32,7 +34,7 @@ def _pool_circles(bx, by, ca, sa, beacon_index, use, ox, oy, scale, ata, atb):
                 continue
             xj = (bx[j] - ox) / scale
             yj = (by[j] - oy) / scale
-            r0, r1, r2, r3 = K.circle_row(xi, yi, xj, yj, ca[i], sa[i], ca[j], sa[j])
+            r0, r1, r2, r3 = circle_row(xi, yi, xj, yj, ca[i], sa[i], ca[j], sa[j])
             row = (r0, r1, r2)
             for a in range(3):
                 atb[a] -= row[a] * r3
@@ -65,14 +67,14 @@ def _heading_sum(bx, by, ca, sa, use, x, y):
 def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
     """Closed-form pose from all measurements in ``use``: the triplet method's circles, pooled.
 
-    Every pair of measured beacons gives the linear circle equation of ``K.circle_row`` in
+    Every pair of measured beacons gives the linear circle equation of ``circle_row`` in
     (x, y, q = x² + y²); all pairs are solved together by linear least squares (q treated as a
     third unknown). With three beacons this is the triplet solution of Sec. 2.5. The heading is the
     circular mean of β_i − α_i. Writes the pose array (``K.POSE_*`` slots) into ``out`` and
     returns False when the measurements do not determine the pose.
 
-    As in ``K.pair_table``, coordinates are taken relative to the beacons' centroid and divided by
-    their extent L, so the unknowns (x/L, y/L, q/L²) are all of order one.
+    As in ``_circles.pair_table``, coordinates are taken relative to the beacons' centroid and
+    divided by their extent L, so the unknowns (x/L, y/L, q/L²) are all of order one.
     """
     ox = 0.0
     oy = 0.0
@@ -97,7 +99,7 @@ def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
     _pool_circles(bx, by, ca, sa, beacon_index, use, ox, oy, scale, ata, atb)
     sol = np.empty(3)
     diag = ata[0, 0] * ata[1, 1] * ata[2, 2]
-    if not K.determined(K.solve3(ata, atb, sol), diag):
+    if not determined(solve3(ata, atb, sol), diag):
         return False
     x = sol[0] * scale + ox
     y = sol[1] * scale + oy
@@ -124,8 +126,8 @@ def fit_subset(bx, by, ca, sa, beacon_index, use, max_iter, out):
     result = np.empty(K.REFINED_SIZE)
     info = np.empty((3, 3))
     weight = np.ones(bx.size)
-    K.refine(bx, by, ca, sa, weight, use, out[K.POSE_X], out[K.POSE_Y], out[K.POSE_COS],
-             out[K.POSE_SIN], max_iter, result, info)
+    refine(bx, by, ca, sa, weight, use, out[K.POSE_X], out[K.POSE_Y], out[K.POSE_COS],
+           out[K.POSE_SIN], max_iter, result, info)
     if result[K.REFINED_STATUS] == K.SINGULAR:
         return np.inf
     out[:K.POSE_SIZE] = result[:K.POSE_SIZE]

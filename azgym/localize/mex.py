@@ -10,6 +10,8 @@ from azgym.core import Estimate, FloatArray
 from azgym.errors import InvalidInputError
 from azgym.jit import jit
 from azgym.localize import _kernels as K
+from azgym.localize._angles import fast_atan2
+from azgym.localize._levenberg_marquardt import singular_at
 from azgym.localize.base import Localizer, Problem, check_range
 
 CANCELLED = 1e-18
@@ -63,7 +65,7 @@ def _row_costs(bx, by, ca, sa, y, x0, step, nx, ux, uy, mean, cost):
             dx = bx[b] - (x0 + i * step)
             vx = dx * ca[b] + dy * sa[b]
             vy = dy * ca[b] - dx * sa[b]
-            d = K.fast_atan2(ux[i] * vy - uy[i] * vx, ux[i] * vx + uy[i] * vy)
+            d = fast_atan2(ux[i] * vy - uy[i] * vx, ux[i] * vx + uy[i] * vy)
             mean[i] += d
             cost[i] += d * d
     inv_n = 1.0 / n
@@ -195,7 +197,7 @@ class Mex(Localizer):
             return Estimate.failure("no grid point has a finite cost", problem.n_measurements)
         x = x0 + i * step
         y = y0 + j * step
-        if K.singular_at(problem.bx, problem.by, np.ones(problem.size, dtype=np.bool_), x, y):
+        if singular_at(problem.bx, problem.by, np.ones(problem.size, dtype=np.bool_), x, y):
             return Estimate.failure(
                 "the measured beacons do not determine the pose at the best grid point "
                 "(e.g. all on one line through it)", problem.n_measurements,

@@ -1,4 +1,11 @@
-"""The paper's RANSAC localizer (Rátosi & Simon 2021, Sec. 2.3-2.7)."""
+"""The paper's RANSAC localizer (Rátosi & Simon 2021, Sec. 2.3-2.7).
+
+Here: the :class:`Ransac` class, which triplets it tries (all of them, or N_Q random ones from
+eq. 4-6), and its two compiled entry points, which run steps 1-6 on a frame and exchange the
+hyperparameters and results with the class through the named ``SETTING_*`` and ``OUT_*`` slots.
+Steps 1-5, the triplet search itself, are compiled in :mod:`azgym.localize._ransac_search`;
+step 6 is the shared refinement of :mod:`azgym.localize.refinement`.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +18,7 @@ import numpy as np
 from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Measurements
 from azgym.jit import jit
 from azgym.localize import _kernels as K
+from azgym.localize._ransac_search import search
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
     ROW_BEACON_INDEX,
@@ -27,14 +35,6 @@ from azgym.localize.base import (
 )
 from azgym.localize.refinement import package, refine_with_covariance
 from azgym.site.error_model import ErrorModel
-
-SERIES_Z_MAX = 0.0025
-"""u² = tan² ε up to which :func:`_score_all` trusts its atan series (to u¹¹) for an inlier.
-
-At u² = 0.0025 (ε = 2.86°) the first term left out is below 2e-17 of ε, so the series is exact
-to the last bit that matters; an inlier farther off makes the candidate "special", rescored with
-the exact angle.
-"""
 
 # The slots of ``settings``, the hyperparameters handed to the kernels as one float array (one
 # argument instead of five: each argument costs time at the Python/compiled boundary).
@@ -91,228 +91,14 @@ def _random_triplets(n: int, count: int, rng: np.random.Generator) -> IntArray:
     return np.sort(np.argpartition(keys, 3, axis=1)[:, :3], axis=1).astype(np.int64)
 
 
-@jit(inline="always")
-def _inside_tolerance(cross, dot, d2, w, tan_d, wide_d2):
-    """|ε| <= Δα = 2(Δα_d + Δα_c) (eq. 25-26) from the direction vectors, without sqrt or atan.
-
-    With t = tan Δα_d, tan Δα_c = W / 2D and the addition formulas, tan(Δα_d + Δα_c) = n / d with
-    n = 2Dt + W and d = 2D − Wt, and tan Δα = 2nd / (d² − n²). Where Δα < π/2 (d > n, i.e.
-    D² > ``wide_d2``), |ε| <= Δα ⟺ dot > 0 and |cross| (d² − n²) <= 2nd · dot. Expanded in D this
-    reads L <= D·S with L = D²(4(1−t²)|cross| − 8t·dot) − W²(1−t²)|cross| + 2W²t·dot and
-    S = 8Wt|cross| + 4W(1−t²)dot >= 0, decided by L <= 0 or L² <= D²S²: only D² is needed.
-
-    Returns (inside, wide); a "wide" measurement (tolerance >= π/2, the beacon closer than about
-    its own width) is not decided here.
-    """
-    wide = d2 <= wide_d2
-    c = abs(cross)
-    q = 1.0 - tan_d * tan_d
-    lhs = d2 * (4.0 * q * c - 8.0 * tan_d * dot) - w * w * (q * c - 2.0 * tan_d * dot)
-    slope = w * (8.0 * tan_d * c + 4.0 * q * dot)
-    inside = (dot > 0.0) & ((lhs <= 0.0) | (lhs * lhs <= d2 * slope * slope)) & ~wide
-    return inside, wide
-
-
-@jit(inline="always")
-def _wide_d2(w, tan_d):
-    """D² below which Δα_d + Δα_c >= π/4 (tolerance >= π/2): D <= W(1 + t) / 2(1 − t)."""
-    if tan_d >= 1.0:
-        return np.inf
-    limit = 0.5 * w * (1.0 + tan_d) / (1.0 - tan_d)
-    return limit * limit
-
-
-@jit(inline="always")
-def _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage):
-    """Inlier test |ε_m| <= Δα_m = 2(Δα_d + Δα_c,m) (eq. 23-26); returns (inlier, ε_m).
-
-    (ch, sh) may be any positive multiple of (cos φ, sin φ). ε is computed for inliers only.
-    """
-    dx = bx[m] - x
-    dy = by[m] - y
-    mx = ca[m] * ch - sa[m] * sh  # measured world direction, along α_m + φ
-    my = sa[m] * ch + ca[m] * sh
-    cross = dx * my - dy * mx
-    dot = dx * mx + dy * my
-    w = width[m] if coverage else 0.0
-    d2 = dx * dx + dy * dy
-    inside, wide = _inside_tolerance(cross, dot, d2, w, tan_d, _wide_d2(w, tan_d))
-    if not wide:
-        return inside, K.small_angle(cross, dot) if inside else 0.0
-    # Wide tolerance: compare the angles themselves.
-    eps = K.fast_atan2(cross, dot)
-    return abs(eps) <= 2.0 * (delta_d + K.fast_atan2(0.5 * w, math.sqrt(d2))), eps
-
-
-@jit(fastmath=K.VECTOR_MATH)
-def _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, special):
-    """Supporters NS_t and Σε² of every candidate pose t at once (the fast path of _is_inlier).
-
-    The inner loop runs over candidates, so it vectorises (``K.VECTOR_MATH``) without horizontal
-    sums. A measurement whose tolerance is π/2 or more, or an inlier beyond SERIES_Z_MAX (2.86°),
-    is "special" for that candidate: the caller then rescores the candidate exactly with
-    _score_exact.
-    """
-    count = px.size
-    for t in range(count):
-        ns[t] = 0
-        sq[t] = 0.0
-        special[t] = 0
-    for m in range(bx.size):
-        xm = bx[m]
-        ym = by[m]
-        cm = ca[m]
-        sm = sa[m]
-        w = width[m] if coverage else 0.0
-        wide_d2 = _wide_d2(w, tan_d)
-        for t in range(count):
-            dx = xm - px[t]
-            dy = ym - py[t]
-            mx = cm * hx[t] - sm * hy[t]  # measured world direction, scaled by |h|
-            my = sm * hx[t] + cm * hy[t]
-            cross = dx * my - dy * mx
-            dot = dx * mx + dy * my
-            inlier, wide = _inside_tolerance(cross, dot, dx * dx + dy * dy, w, tan_d, wide_d2)
-            u = cross / dot
-            z = u * u
-            # atan(u) to u¹¹, exact for z <= SERIES_Z_MAX.
-            eps = u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
-                1.0 / 9.0 - z / 11.0)))))
-            ns[t] += inlier
-            sq[t] += eps * eps if inlier else 0.0
-            special[t] += wide | (inlier & (z > SERIES_Z_MAX))
-
-
-@jit
-def _score_exact(bx, by, ca, sa, width, x, y, ch, sh, tan_d, delta_d, coverage):
-    """Supporters and Σε² of one candidate pose, measurement by measurement (eq. 26-27)."""
-    ns = 0
-    sq = 0.0
-    for m in range(bx.size):
-        inlier, eps = _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage)
-        if inlier:
-            ns += 1
-            sq += eps * eps
-    return ns, sq
-
-
-@jit(inline="always")
-def _solve_triplets(bx, by, ca, sa, beacon_index, triplets, degeneracy_tol):
-    """The candidate pose of every triplet (eq. 7-20, ``K.solve_triplet``).
-
-    Returns (x, y, h_x, h_y, valid, number valid), one entry per triplet; (h_x, h_y) is a positive
-    multiple of (cos φ, sin φ). A degenerate triplet, or one with two detections of one beacon,
-    is not valid and keeps a NaN position: it supports nothing.
-    """
-    count = triplets.shape[0]
-    rows, ox, oy, scale = K.pair_table(bx, by, ca, sa)
-    px = np.full(count, np.nan)
-    py = np.full(count, np.nan)
-    hx = np.zeros(count)
-    hy = np.zeros(count)
-    valid = np.zeros(count, dtype=np.bool_)
-    n_valid = 0
-    for t in range(count):
-        i = triplets[t, 0]
-        j = triplets[t, 1]
-        k = triplets[t, 2]
-        if not K.distinct_beacons(beacon_index[i], beacon_index[j], beacon_index[k]):
-            continue
-        ok, x, y, h0, h1, _ = K.solve_triplet(rows, ox, oy, scale, bx, by, ca, sa, i, j, k,
-                                              degeneracy_tol)
-        if ok:
-            px[t] = x
-            py[t] = y
-            hx[t] = h0
-            hy[t] = h1
-            valid[t] = True
-            n_valid += 1
-    return px, py, hx, hy, valid, n_valid
-
-
-@jit(inline="always")
-def _pick_best(bx, by, ca, sa, width, px, py, hx, hy, valid, tan_d, delta_d, coverage,
-               best_pose):
-    """Score every valid candidate and write the best one (step 5) into ``best_pose``.
-
-    The score is the number of supporters NS (eq. 21-26) and their mean ε², E (eq. 27); the best
-    candidate has the most supporters, then the smallest E (a full tie goes to the earlier one).
-    ``best_pose`` gets (x, y, h_x, h_y) in the ``K.POSE_*`` slots, the heading not yet normalised.
-
-    Returns (NS, E) of the winner; NS = −1 when no candidate has a supporter.
-    """
-    count = px.size
-    ns = np.empty(count, dtype=np.int64)
-    sq = np.empty(count)
-    special = np.empty(count, dtype=np.int64)
-    _score_all(bx, by, ca, sa, width, px, py, hx, hy, tan_d, coverage, ns, sq, special)
-    best_ns = -1
-    best_e = np.inf
-    for t in range(count):
-        if not valid[t]:
-            continue
-        support = ns[t]
-        total = sq[t]
-        if special[t] > 0:
-            support, total = _score_exact(bx, by, ca, sa, width, px[t], py[t], hx[t], hy[t],
-                                          tan_d, delta_d, coverage)
-        if support < best_ns or support == 0:
-            continue
-        e = total / support
-        if support > best_ns or e < best_e:
-            best_ns = support
-            best_e = e
-            best_pose[K.POSE_X] = px[t]
-            best_pose[K.POSE_Y] = py[t]
-            best_pose[K.POSE_COS] = hx[t]
-            best_pose[K.POSE_SIN] = hy[t]
-    return best_ns, best_e
-
-
-@jit(inline="always")
-def _mark_supporters(bx, by, ca, sa, width, tan_d, delta_d, coverage, best_pose, best_mask):
-    """The winner's supporters into ``best_mask``; then its heading normalised to (cos φ, sin φ)."""
-    x = best_pose[K.POSE_X]
-    y = best_pose[K.POSE_Y]
-    ch = best_pose[K.POSE_COS]
-    sh = best_pose[K.POSE_SIN]
-    for m in range(bx.size):
-        best_mask[m], _ = _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d,
-                                     coverage)
-    norm = math.hypot(ch, sh)
-    best_pose[K.POSE_COS] = ch / norm
-    best_pose[K.POSE_SIN] = sh / norm
-
-
-@jit
-def _search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, degeneracy_tol,
-            best_pose, best_mask):
-    """Steps 1-5: solve, score and rank every triplet.
-
-    Each triplet is solved (eq. 7-20) and scored by its supporters (eq. 21-26) and their mean ε²
-    (eq. 27); the best has the most supporters, then the smallest mean ε². Its pose array goes
-    into ``best_pose`` (``K.POSE_*`` slots), its supporters into ``best_mask``.
-
-    Returns (NS of the winner, E of the winner, number of non-degenerate triplets).
-    """
-    tan_d = math.tan(delta_d)
-    px, py, hx, hy, valid, n_valid = _solve_triplets(bx, by, ca, sa, beacon_index, triplets,
-                                                     degeneracy_tol)
-    best_ns, best_e = _pick_best(bx, by, ca, sa, width, px, py, hx, hy, valid, tan_d, delta_d,
-                                 coverage, best_pose)
-    if best_ns > 0:
-        _mark_supporters(bx, by, ca, sa, width, tan_d, delta_d, coverage, best_pose, best_mask)
-    return best_ns, best_e, n_valid
-
-
 @jit
 def _ransac(floats, ints, triplets, settings, out, mask, cov):
-    """Steps 1-6 in one compiled call on a Problem's packed arrays.
+    """Steps 1-6 in one compiled call on a Problem's packed arrays (steps 1-5: ``search``).
 
     ``settings`` holds the hyperparameters in the ``SETTING_*`` slots. ``out`` (length OUT_SIZE)
-    gets the refinement's output (see K.refine), then NS, E and the number of valid triplets
-    (``OUT_*`` slots); ``mask`` (length M, all False on entry) the supporters, by original
-    position; ``cov`` the covariance.
+    gets the refinement's output (see ``_levenberg_marquardt.refine``), then NS, E and the number
+    of valid triplets (``OUT_*`` slots); ``mask`` (length M, all False on entry) the supporters,
+    by original position; ``cov`` the covariance.
     """
     delta_d = settings[SETTING_DELTA_D]
     coverage = settings[SETTING_COVERAGE] != 0.0
@@ -326,8 +112,8 @@ def _ransac(floats, ints, triplets, settings, out, mask, cov):
     width = floats[ROW_WIDTH]
     pose = np.empty(K.POSE_SIZE)
     support = np.zeros(bx.size, dtype=np.bool_)
-    n_support, mean_sq, n_valid = _search(bx, by, ca, sa, width, ints[ROW_BEACON_INDEX], triplets,
-                                          delta_d, coverage, degeneracy_tol, pose, support)
+    n_support, mean_sq, n_valid = search(bx, by, ca, sa, width, ints[ROW_BEACON_INDEX], triplets,
+                                         delta_d, coverage, degeneracy_tol, pose, support)
     out[OUT_SUPPORT] = n_support
     out[OUT_TRIPLET_MEAN_SQ] = mean_sq
     out[OUT_VALID_TRIPLETS] = n_valid

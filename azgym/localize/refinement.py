@@ -15,6 +15,8 @@ import numpy as np
 from azgym.core import BoolArray, Estimate, FloatArray
 from azgym.jit import jit
 from azgym.localize import _kernels as K
+from azgym.localize._angles import fast_atan2
+from azgym.localize._levenberg_marquardt import information, refine, solve3
 from azgym.localize.base import Problem
 from azgym.site.error_model import ErrorModel
 
@@ -30,14 +32,14 @@ many orders of magnitude above it.
 @jit
 def _model_variance(width, dist, delta_d, coverage):
     """The error model's variance of one azimuth (eq. 3): (Δα_d² + Δα_c²)/3, Δα_c of eq. 2."""
-    c = K.fast_atan2(0.5 * width, dist) if coverage else 0.0
+    c = fast_atan2(0.5 * width, dist) if coverage else 0.0
     return (delta_d * delta_d + c * c) / 3.0
 
 
 @jit
 def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, coverage, start,
                            max_iter, out, cov):
-    """Refine the pose array ``start`` on ``use``; fill ``out`` (as K.refine) and ``cov``.
+    """Refine the pose array ``start`` on ``use``; fill ``out`` (as ``refine``) and ``cov``.
 
     The variances are the model's at the start pose; ``weighted`` uses their inverses as weights.
     """
@@ -50,17 +52,17 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
         if weighted:
             weight[m] = 1.0 / max(var[m], MIN_VARIANCE)
     info = np.zeros((3, 3))
-    K.refine(bx, by, ca, sa, weight, use, start[K.POSE_X], start[K.POSE_Y], start[K.POSE_COS],
-             start[K.POSE_SIN], max_iter, out, info)
+    refine(bx, by, ca, sa, weight, use, start[K.POSE_X], start[K.POSE_Y], start[K.POSE_COS],
+           start[K.POSE_SIN], max_iter, out, info)
     meat = np.empty((3, 3))
-    K.information(bx, by, use, weight * weight * var, out[K.POSE_X], out[K.POSE_Y], False, meat)
+    information(bx, by, use, weight * weight * var, out[K.POSE_X], out[K.POSE_Y], False, meat)
     inverse = np.empty((3, 3))
     unit = np.zeros(3)
     column = np.empty(3)
     for c in range(3):
         unit[:] = 0.0
         unit[c] = 1.0
-        if K.solve3(info, unit, column) == 0.0:
+        if solve3(info, unit, column) == 0.0:
             cov[:, :] = np.nan
             return
         inverse[:, c] = column
@@ -99,7 +101,7 @@ def finish(
 def package(
     inliers: BoolArray, out: FloatArray, cov: FloatArray, diagnostics: dict[str, Any]
 ) -> Estimate:
-    """The :class:`Estimate` from the refinement's output ``out`` (see ``K.refine``).
+    """The :class:`Estimate` from the refinement's output ``out`` (as ``refine`` writes it).
 
     Args:
         inliers: The measurements used, over all M measurements of the frame.

@@ -9,6 +9,7 @@ import numpy as np
 from azgym.core import Estimate
 from azgym.jit import jit
 from azgym.localize import _kernels as K
+from azgym.localize._circles import distinct_beacons, pair_table, solve_triplet
 from azgym.localize.base import Localizer, Problem, check_range
 
 
@@ -17,18 +18,18 @@ def _best_triplet(bx, by, ca, sa, beacon_index, degeneracy_tol, pose, chosen):
     """Solve every triplet of distinct beacons; keep the best-conditioned one.
 
     Writes its pose array (``K.POSE_*`` slots) into ``pose`` and its measurements into ``chosen``;
-    returns its quality (``K.solve_triplet``), −1 when every triplet is degenerate.
+    returns its quality (``solve_triplet``), −1 when every triplet is degenerate.
     """
     n = bx.size
-    rows, ox, oy, scale = K.pair_table(bx, by, ca, sa)
+    rows, ox, oy, scale = pair_table(bx, by, ca, sa)
     best = -1.0
     for i in range(n):
         for j in range(i + 1, n):
             for k in range(j + 1, n):
-                if not K.distinct_beacons(beacon_index[i], beacon_index[j], beacon_index[k]):
+                if not distinct_beacons(beacon_index[i], beacon_index[j], beacon_index[k]):
                     continue
-                ok, x, y, hx, hy, quality = K.solve_triplet(rows, ox, oy, scale, bx, by, ca,
-                                                            sa, i, j, k, degeneracy_tol)
+                ok, x, y, hx, hy, quality = solve_triplet(rows, ox, oy, scale, bx, by, ca, sa,
+                                                          i, j, k, degeneracy_tol)
                 if ok and quality > best:
                     best = quality
                     norm = math.hypot(hx, hy)

@@ -1,4 +1,4 @@
-"""The packed arrays' named slots, and the size limit on the localizers' functions."""
+"""The packed arrays' named slots, and the size limits on the localizers' functions and modules."""
 
 from __future__ import annotations
 
@@ -11,13 +11,16 @@ import pytest
 from helpers import ideal_frame
 
 from azgym.core import Measurements
+from azgym.jit import KERNEL_MODULES, PACKAGE_DIR
 from azgym.localize import _kernels as K
 from azgym.localize import base, ransac
+from azgym.localize._levenberg_marquardt import refine
 from azgym.localize.base import Problem
 from azgym.localize.lsq import algebraic_start
 
 LOCALIZE_DIR = Path(base.__file__).parent
 MAX_FUNCTION_LINES = 60
+MAX_MODULE_LINES = 400
 
 
 def slots(module, prefix: str) -> dict[str, int]:
@@ -63,8 +66,8 @@ def test_refine_writes_every_slot_of_its_output(paper_beacons):
     problem = Problem.from_frame(ideal_frame(1.0, -2.0, 0.3, paper_beacons), paper_beacons)
     use = np.ones(problem.size, dtype=np.bool_)
     out = np.full(K.REFINED_SIZE, np.nan)
-    K.refine(problem.bx, problem.by, problem.cos_az, problem.sin_az, np.ones(problem.size), use,
-             1.2, -1.7, math.cos(0.25), math.sin(0.25), 50, out, np.empty((3, 3)))
+    refine(problem.bx, problem.by, problem.cos_az, problem.sin_az, np.ones(problem.size), use,
+           1.2, -1.7, math.cos(0.25), math.sin(0.25), 50, out, np.empty((3, 3)))
     assert np.isfinite(out).all()
     assert out[K.POSE_X] == pytest.approx(1.0, abs=1e-9)
     assert out[K.POSE_Y] == pytest.approx(-2.0, abs=1e-9)
@@ -126,3 +129,30 @@ def long_functions() -> list[str]:
 
 def test_no_localizer_function_is_longer_than_sixty_lines():
     assert long_functions() == []
+
+
+def test_no_localizer_module_is_longer_than_four_hundred_lines():
+    lengths = {path.name: len(path.read_text(encoding="utf-8").splitlines())
+               for path in sorted(LOCALIZE_DIR.glob("*.py"))}
+    assert {name: n for name, n in lengths.items() if n > MAX_MODULE_LINES} == {}
+
+
+def compiles_kernels(path: Path) -> bool:
+    """Whether a module defines a function decorated with ``@jit`` or ``@jit(...)``."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.FunctionDef):
+            for decorator in node.decorator_list:
+                target = decorator.func if isinstance(decorator, ast.Call) else decorator
+                if isinstance(target, ast.Name) and target.id == "jit":
+                    return True
+    return False
+
+
+def test_every_localizer_module_with_kernels_is_hashed_for_the_cache():
+    # azgym.jit drops the kernel cache when one of KERNEL_MODULES changes; a kernel module left
+    # out would let its callers in other modules keep running its old code.
+    listed = set(KERNEL_MODULES)
+    for path in sorted(LOCALIZE_DIR.glob("*.py")):
+        if compiles_kernels(path):
+            assert path.relative_to(PACKAGE_DIR).as_posix() in listed, path.name
+    assert all((PACKAGE_DIR / module).is_file() for module in KERNEL_MODULES)
