@@ -10,7 +10,7 @@ from azgym.core import Estimate
 from azgym.localize import _kernels as K
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range
 from azgym.localize.lsq import fit_subset
-from azgym.localize.refinement import finish
+from azgym.localize.refinement import refine_estimate
 from azgym.site.error_model import ErrorModel
 
 
@@ -91,4 +91,4 @@ class LeaveOneOut(Localizer):
                 diagnostics,
             )
         model = ErrorModel(delta_alpha_d=self.delta_alpha_d)
-        return finish(problem, use, pose, False, self.max_iter, model, diagnostics)
+        return refine_estimate(problem, use, pose, False, self.max_iter, model, diagnostics)

@@ -12,7 +12,7 @@ from azgym.localize import _kernels as K
 from azgym.localize._circles import circle_row
 from azgym.localize._levenberg_marquardt import determined, refine, solve3
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range
-from azgym.localize.refinement import finish
+from azgym.localize.refinement import refine_estimate
 from azgym.site.error_model import ErrorModel
 
 
@@ -179,4 +179,4 @@ class LeastSquares(Localizer):
                 problem.n_measurements,
             )
         model = ErrorModel(delta_alpha_d=self.delta_alpha_d, coverage=bool(self.coverage))
-        return finish(problem, use, start, bool(self.weighted), self.max_iter, model)
+        return refine_estimate(problem, use, start, bool(self.weighted), self.max_iter, model)

@@ -69,7 +69,7 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
     cov[:, :] = inverse @ meat @ inverse
 
 
-def finish(
+def refine_estimate(
     problem: Problem,
     use: BoolArray,
     start: FloatArray,

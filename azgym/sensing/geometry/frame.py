@@ -4,7 +4,7 @@ A frame passes through two kernels, each writing packed arrays (one float and on
 so that the sensor hands them over whole). :func:`collect` lists the frame's detections — the
 direct views with partial occlusion (:mod:`azgym.sensing.geometry.direct`), then the mirror
 images (:mod:`azgym.sensing.geometry.mirrors`) — in the rows ``FOUND_*`` of
-:mod:`azgym.sensing.geometry.detections`. :func:`finish` turns them into the camera's
+:mod:`azgym.sensing.geometry.detections`. :func:`finish_frame` turns them into the camera's
 measurements: camera-frame azimuths, noise and misread ids, sorted by azimuth and padded, in the
 rows ``FRAME_*`` defined here, which :class:`~azgym.sensing.geometry.sensor.FrameBuffers` reads.
 """
@@ -137,8 +137,8 @@ def _pad_frame(out_floats, out_ints, start):
 
 
 @jit
-def finish(found, found_ints, count, heading, tilt, uniforms, delta_d, misdecode_rate, map_ids,
-           out_floats, out_ints):
+def finish_frame(found, found_ints, count, heading, tilt, uniforms, delta_d, misdecode_rate,
+                 map_ids, out_floats, out_ints):
     """Camera-frame azimuths, eq. 1 noise and misread ids, listed by measured azimuth.
 
     Takes the first ``count`` detections :func:`collect` listed in ``found`` and ``found_ints``

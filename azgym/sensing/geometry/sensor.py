@@ -29,7 +29,7 @@ from azgym.sensing.geometry.frame import (
     FRAME_TRUE_AZIMUTH,
     FRAME_VISIBLE,
     collect,
-    finish,
+    finish_frame,
 )
 from azgym.sensing.protocol import (
     CAMERA_RATE_HZ,
@@ -100,7 +100,7 @@ class GeometrySensor:
         found, found_ints = self._found, self._found_ints
         count = collect((float(x), float(y), float(cz)), self._lens, self._xyz, self._width,
                           self._moved, self._segments, found, found_ints)
-        finish(found, found_ints, count, float(heading), (float(tilt[0]), float(tilt[1])),
+        finish_frame(found, found_ints, count, float(heading), (float(tilt[0]), float(tilt[1])),
                  rng.random((3, count)), self.scenario.error_model.delta_alpha_d, misdecode_rate,
                  self.scenario.beacons.ids, out.floats, out.ints)
         return min(count, out.size)
