@@ -215,3 +215,15 @@ def test_the_render_shows_the_camera_frame_beside_the_top_down_view():
     drawn, top_down = image_env.render(), plain.render()
     assert drawn.shape[0] == top_down.shape[0]
     assert drawn.shape[1] > top_down.shape[1] + 300  # the fisheye panel
+
+
+@pytest.mark.parametrize("env_id", [NAVIGATE, "azgym/Localize-WarehouseSmall-v0"])
+def test_reset_seeds_the_image_sensors_noise_and_blinking_phases(env_id):
+    env = gym.make(env_id, sensor="image", ids="blink")
+    camera = env.unwrapped.camera
+    env.reset(seed=1)
+    phases = camera.phases.copy()
+    env.reset(seed=1)
+    assert np.array_equal(camera.phases, phases)
+    env.reset(seed=2)
+    assert not np.array_equal(camera.phases, phases)
