@@ -194,8 +194,14 @@ def leg_hits_rack(start: FloatArray, end: FloatArray, rack: Rack, clearance: flo
     return True
 
 
+SEG_X1, SEG_Y1, SEG_X2, SEG_Y2, SEG_HEIGHT, SEG_REFLECTIVITY = range(6)
+"""Columns of an occluder table: one end (x, y) [m], the other end, top height [m], reflectivity."""
+SEG_COLUMNS = 6
+"""Columns of an occluder table."""
+
+
 def occluder_table(racks: tuple[Rack, ...], walls: tuple[Wall, ...]) -> FloatArray:
-    """Every rack face and wall as a row (x1, y1, x2, y2, height, reflectivity), shape (S, 6)."""
+    """Every rack face and wall as a row of ``SEG_*`` columns, shape (S, SEG_COLUMNS)."""
     rows = []
     for rack in racks:
         corners = rack.corners()
@@ -204,4 +210,4 @@ def occluder_table(racks: tuple[Rack, ...], walls: tuple[Wall, ...]) -> FloatArr
             rows.append((a[0], a[1], b[0], b[1], rack.height, rack.reflectivity))
     for wall in walls:
         rows.append((*wall.start, *wall.end, wall.height, wall.reflectivity))
-    return np.array(rows, dtype=np.float64).reshape(-1, 6)
+    return np.array(rows, dtype=np.float64).reshape(-1, SEG_COLUMNS)

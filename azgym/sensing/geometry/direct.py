@@ -19,6 +19,7 @@ from azgym.jit import jit, wrap_compiled
 from azgym.sensing.geometry.detections import list_detection
 from azgym.sensing.geometry.occluders import CROSSING_EPS, crossing
 from azgym.sensing.labels import DIRECT, MOVED, PARTIAL
+from azgym.site.elements import SEG_HEIGHT, SEG_X1, SEG_X2, SEG_Y1, SEG_Y2
 
 # Rows of the scratch array of one beacon's covers: the angular interval each occluder hides.
 _COVER_LO = 0
@@ -127,8 +128,9 @@ def direct_view(eye, lens, beacon_xyz, beacon_width, moved, seg, found, found_in
         half = math.atan2(0.5 * beacon_width[b], dist)
         n_covers = 0
         for s in range(seg.shape[0]):
-            covered, lo, hi = _cover(cx, cy, cz, dx, dy, dz, dist, alpha, half, seg[s, 0],
-                                     seg[s, 1], seg[s, 2], seg[s, 3], seg[s, 4])
+            covered, lo, hi = _cover(cx, cy, cz, dx, dy, dz, dist, alpha, half, seg[s, SEG_X1],
+                                     seg[s, SEG_Y1], seg[s, SEG_X2], seg[s, SEG_Y2],
+                                     seg[s, SEG_HEIGHT])
             if covered:
                 covers[_COVER_LO, n_covers] = lo
                 covers[_COVER_HI, n_covers] = hi

@@ -71,7 +71,7 @@ def collect(eye, lens, beacon_xyz, beacon_width, moved, seg, found, found_ints):
         beacon_xyz: Where each beacon really is, shape (N, 3) [m].
         beacon_width: Each beacon's width W, shape (N,) [m].
         moved: Whether each beacon was moved after the map was made (label MOVED), shape (N,).
-        seg: The occluders, rows (x1, y1, x2, y2, height, reflectivity), shape (S, 6).
+        seg: The occluders, rows of ``SEG_*`` columns (see ``occluder_table``).
         found: Filled with the detections' rows ``FOUND_*``: the azimuth in the world frame,
             elevation, visible share, brightness (received flux over the detection threshold,
             >= 1: the visible share over the squared 3-D distance, times the reflectivity for a

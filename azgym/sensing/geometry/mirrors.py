@@ -17,6 +17,7 @@ from azgym.jit import jit
 from azgym.sensing.geometry.detections import list_detection
 from azgym.sensing.geometry.occluders import CROSSING_EPS, blocked, crossing
 from azgym.sensing.labels import GHOST
+from azgym.site.elements import SEG_HEIGHT, SEG_REFLECTIVITY, SEG_X1, SEG_X2, SEG_Y1, SEG_Y2
 
 
 @jit(inline="always")
@@ -74,10 +75,11 @@ def mirror_view(eye, lens, beacon_xyz, beacon_width, seg, found, found_ints, cou
     min_elevation, max_range = lens
     limit2 = max_range * max_range
     for s in range(seg.shape[0]):
-        reflectivity = seg[s, 5]
+        reflectivity = seg[s, SEG_REFLECTIVITY]
         if reflectivity <= 0.0:
             continue  # not a mirror
-        ax, ay, bx, by, top = seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3], seg[s, 4]
+        ax, ay, bx, by = seg[s, SEG_X1], seg[s, SEG_Y1], seg[s, SEG_X2], seg[s, SEG_Y2]
+        top = seg[s, SEG_HEIGHT]
         for b in range(beacon_xyz.shape[0]):
             px, py, pz = beacon_xyz[b, 0], beacon_xyz[b, 1], beacon_xyz[b, 2]
             seen, mx, my, t = _mirror_image(cx, cy, cz, px, py, pz, ax, ay, bx, by, top,

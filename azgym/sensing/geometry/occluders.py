@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 from azgym.jit import jit
+from azgym.site.elements import SEG_HEIGHT, SEG_X1, SEG_X2, SEG_Y1, SEG_Y2
 
 CROSSING_EPS = 1e-9
 """Tolerance of the crossing tests: a touch at a ray's or segment's very end counts as none."""
@@ -45,16 +46,17 @@ def crossing(px, py, qx, qy, ax, ay, bx, by):
 def blocked(px, py, pz, qx, qy, qz, seg, skip):
     """Whether the straight ray from P to Q (with heights) is blocked by an occluder.
 
-    ``seg`` rows are (x1, y1, x2, y2, height, reflectivity); row ``skip`` is ignored (the mirror of
+    ``seg`` rows are an occluder table's (``SEG_*`` columns); row ``skip`` is ignored (the mirror of
     a reflection). Crossings at the ray's very ends do not count, so a beacon mounted on a wall is
     not hidden by that wall.
     """
     for s in range(seg.shape[0]):
         if s == skip:
             continue
-        t, u = crossing(px, py, qx, qy, seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
+        t, u = crossing(px, py, qx, qy, seg[s, SEG_X1], seg[s, SEG_Y1], seg[s, SEG_X2],
+                        seg[s, SEG_Y2])
         if CROSSING_EPS < t < 1.0 - CROSSING_EPS and -CROSSING_EPS <= u <= 1.0 + CROSSING_EPS:
-            if pz + t * (qz - pz) < seg[s, 4]:
+            if pz + t * (qz - pz) < seg[s, SEG_HEIGHT]:
                 return True
     return False
 
@@ -71,7 +73,8 @@ def ray_ranges(x, y, heading, seg, count, max_range, out):
         qy = y + max_range * math.sin(angle)
         nearest = 1.0
         for s in range(seg.shape[0]):
-            t, u = crossing(x, y, qx, qy, seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
+            t, u = crossing(x, y, qx, qy, seg[s, SEG_X1], seg[s, SEG_Y1], seg[s, SEG_X2],
+                            seg[s, SEG_Y2])
             if 0.0 <= t < nearest and 0.0 <= u <= 1.0:
                 nearest = t
         out[r] = nearest * max_range

@@ -39,7 +39,7 @@ from azgym.sensing.protocol import (
     Tilt,
 )
 from azgym.site import Scenario
-from azgym.site.elements import occluder_table
+from azgym.site.elements import SEG_REFLECTIVITY, occluder_table
 
 
 class GeometrySensor:
@@ -64,7 +64,7 @@ class GeometrySensor:
         camera = scenario.camera
         self._lens = (float(camera.min_elevation), float(camera.max_range))
         n = len(scenario.beacons)
-        self._capacity = n * (1 + int(np.count_nonzero(self._segments[:, 5] > 0)))
+        self._capacity = n * (1 + int(np.count_nonzero(self._segments[:, SEG_REFLECTIVITY] > 0)))
         # The detections of a frame before noise, filled by collect (rows FOUND_*).
         self._found = np.empty((FOUND_FLOAT_ROWS, self._capacity))
         self._found_ints = np.empty((FOUND_INT_ROWS, self._capacity), dtype=np.int64)
