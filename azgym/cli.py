@@ -1,5 +1,8 @@
-"""The ``azgym`` command.
+"""azgym: benchmark azimuth-based indoor localizers, and reproduce the papers they come from.
 
+azgym bench [--suite S] [--localizer SPEC ...] [--split dev|test] [--workers N] [--quick]
+            [--out DIR]
+azgym leaderboard submit|build|verify ...
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
 azgym study error-model [--scenario S] [--frames N] [--noise SIGMA] [--calibration-px PX]
 azgym study ids [--scenario S] [--rate HZ] [--noise SIGMA]

@@ -28,18 +28,26 @@ Pose = tuple[float, float, float]
 TWO_PI = 2.0 * math.pi
 
 
+LARGE_ANGLE = 1e12
+"""Beyond this magnitude [rad] an angle is first reduced modulo 2π (exact), so that the count
+of whole turns stays a small integer in compiled code too."""
+
+
 def wrap_scalar(angle: float) -> float:
     """Wrap one angle to (−π, π] [rad]: the formula every wrap in azgym uses.
 
     An angle already in range comes back bit for bit; any other becomes a − 2π ⌈(a − π) / 2π⌉,
     which is exact for |a| < 3π (beyond, a rounded result is moved back into range). Keeping
     in-range angles untouched matters: the localizers turn a last-bit change of an azimuth into
-    a different inlier set now and then. Compiled kernels call its twin
+    a different inlier set now and then. NaN and ±inf come back as they are: they have no
+    direction, and the caller decides what that means. Compiled kernels call its twin
     :data:`azgym.jit.wrap_compiled` (this function, compiled); arrays go through
     :func:`wrap_angle`, which computes the same element by element.
     """
-    if -math.pi < angle <= math.pi:
+    if -math.pi < angle <= math.pi or not math.isfinite(angle):
         return angle
+    if abs(angle) > LARGE_ANGLE:
+        angle = angle % TWO_PI
     wrapped = angle - TWO_PI * math.ceil((angle - math.pi) / TWO_PI)
     if wrapped <= -math.pi:
         return wrapped + TWO_PI
@@ -53,15 +61,18 @@ def wrap_angle(angle: ArrayLike) -> Any:
         angle: Angle or array of angles in radians.
 
     Returns:
-        The wrapped angle(s), a float for a scalar input.
+        The wrapped angle(s), a float for a scalar input; NaN and ±inf as they are.
     """
     if isinstance(angle, (float, int)):  # without numpy's overhead
         return wrap_scalar(angle)
     angle = np.asarray(angle, dtype=np.float64)
-    wrapped = angle - TWO_PI * np.ceil((angle - np.pi) / TWO_PI)
+    with np.errstate(invalid="ignore"):
+        reduced = np.where(np.abs(angle) > LARGE_ANGLE, np.mod(angle, TWO_PI), angle)
+        wrapped = reduced - TWO_PI * np.ceil((reduced - np.pi) / TWO_PI)
     wrapped = np.where(wrapped <= -np.pi, wrapped + TWO_PI,
                        np.where(wrapped > np.pi, wrapped - TWO_PI, wrapped))
-    wrapped = np.where((angle > -np.pi) & (angle <= np.pi), angle, wrapped)
+    keep = ((angle > -np.pi) & (angle <= np.pi)) | ~np.isfinite(angle)
+    wrapped = np.where(keep, angle, wrapped)
     return float(wrapped) if wrapped.ndim == 0 else wrapped
 
 

@@ -28,14 +28,18 @@ from azgym.core import wrap_scalar
 
 PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
-    "core.py", "jit.py", "localize/_angles.py", "localize/_circles.py", "localize/_kernels.py",
-    "localize/_levenberg_marquardt.py", "localize/_ransac_search.py", "localize/base.py",
-    "localize/loo.py", "localize/lsq.py", "localize/mex.py", "localize/ransac.py",
-    "localize/refinement.py", "localize/triplet.py", "sensing/geometry/detections.py",
-    "sensing/geometry/direct.py", "sensing/geometry/frame.py", "sensing/geometry/mirrors.py",
-    "sensing/geometry/occluders.py", "sensing/identities.py", "sensing/image/render.py",
+    "core.py", "errors.py", "jit.py", "localize/_angles.py", "localize/_circles.py",
+    "localize/_kernels.py", "localize/_levenberg_marquardt.py", "localize/_ransac_search.py",
+    "localize/base.py", "localize/loo.py", "localize/lsq.py", "localize/mex.py",
+    "localize/ransac.py", "localize/refinement.py", "localize/triplet.py",
+    "sensing/geometry/detections.py", "sensing/geometry/direct.py", "sensing/geometry/frame.py",
+    "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py", "sensing/identities.py",
+    "sensing/image/render.py", "sensing/labels.py", "sensing/protocol.py", "site/elements.py",
+    "site/error_model.py", "site/fisheye.py",
 )
-"""The modules (relative to the package) whose functions are compiled with :func:`jit`."""
+"""The modules (relative to the package) with compiled kernels, and every azgym module they import
+from: numba compiles a kernel's global constants (label codes, row numbers) into it, so a change
+to any of them must drop the cache as much as a change to a kernel."""
 STAMP_NAME = "azgym-kernels.sha256"
 
 
@@ -79,39 +83,58 @@ def _cache_dirs(package_dir: Path) -> list[Path]:
     return sorted(dirs)
 
 
-def drop_stale_cache(package_dir: Path = PACKAGE_DIR) -> bool:
-    """Delete azgym's cached kernels if any kernel source changed; True if it did.
-
-    Args:
-        package_dir: The installed package's folder (the tests give a copy).
-    """
+def sources_digest(package_dir: Path) -> str:
+    """SHA-256 of every watched module's source: what azgym's cached kernels were compiled from."""
     digest = hashlib.sha256()
     for module in KERNEL_MODULES:
         digest.update((package_dir / module).read_bytes())
-    stamp = digest.hexdigest()
+    return digest.hexdigest()
+
+
+def drop_stale_cache(package_dir: Path = PACKAGE_DIR) -> bool:
+    """Delete azgym's cached kernels wherever they were compiled from other sources.
+
+    Each cache folder keeps its own record of the sources its kernels came from, so a folder
+    found current is left alone, and a folder whose record cannot be written is never touched
+    (numba cannot write there either).
+
+    Args:
+        package_dir: The installed package's folder (the tests give a copy).
+
+    Returns:
+        Whether any cached kernel was deleted.
+    """
+    stamp = sources_digest(package_dir)
     names = {Path(module).stem for module in KERNEL_MODULES}
-    record = package_dir / "__pycache__" / STAMP_NAME
+    dropped = False
+    for folder in _cache_dirs(package_dir):
+        if folder.is_dir() and _claim(folder, stamp):
+            dropped |= _delete_kernels(folder, names)
+    return dropped
+
+
+def _claim(folder: Path, stamp: str) -> bool:
+    """Record ``stamp`` in the folder; True if it held another (or none): its kernels are stale."""
+    record = folder / STAMP_NAME
     try:
         if record.is_file() and record.read_text() == stamp:
             return False
-    except OSError:
-        return False
-    dropped = False
-    for folder in _cache_dirs(package_dir):
-        if not folder.is_dir():
-            continue
-        for path in folder.glob("*.nb[ic]"):  # numba names them <module>.<function>-<line>...
-            if path.name.split(".")[0] in names:
-                try:
-                    path.unlink()
-                    dropped = True
-                except OSError:
-                    continue  # a read-only install: numba then caches elsewhere or not at all
-    try:
-        record.parent.mkdir(parents=True, exist_ok=True)
         record.write_text(stamp)
     except OSError:
-        pass
+        return False
+    return True
+
+
+def _delete_kernels(folder: Path, names: set[str]) -> bool:
+    """Delete the folder's cache files of azgym's modules; True if any was deleted."""
+    dropped = False
+    for path in folder.glob("*.nb[ic]"):  # numba names them <module>.<function>-<line>...
+        if path.name.split(".")[0] in names:
+            try:
+                path.unlink()
+                dropped = True
+            except OSError:
+                continue
     return dropped
 
 

@@ -3,7 +3,7 @@
     python baselines/speed.py [--calls 3000] [--rounds 5] [--out results/speed.json]
 
 Every figure is a median over many calls, end to end through ``localize()`` on one core, with
-numba's compile time kept out. The machines here are shared, and their speed drifts by up to 2x
+numba's compile time kept out. Shared machines drift in speed by up to 2x
 within seconds. So each localizer runs ``--rounds`` rounds over the same frames, a reference
 workload is timed right before each round, and the round with the lowest median is reported (the
 least disturbed one, as ``timeit`` recommends). Beside it is its ratio to that round's reference:

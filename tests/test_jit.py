@@ -70,3 +70,44 @@ def test_the_compiled_wrap_is_the_python_wrap_bit_for_bit():
         assert -math.pi < expected <= math.pi
         if -math.pi < angle <= math.pi:
             assert expected == angle  # in range: untouched, to the last bit
+
+
+def test_non_finite_angles_stay_as_they_are_and_huge_ones_wrap_alike():
+    import math
+
+    import numpy as np
+
+    from azgym.core import wrap_angle, wrap_scalar
+    from azgym.jit import wrap_compiled
+
+    for angle in (math.nan, math.inf, -math.inf):
+        forms = (wrap_scalar(angle), wrap_compiled(angle), wrap_angle(np.array([angle]))[0])
+        assert all(math.isnan(f) for f in forms) if math.isnan(angle) else set(forms) == {angle}
+    for angle in (1e300, -1e20, 1e13, -7.0 * 1e12):
+        expected = wrap_scalar(angle)
+        assert -math.pi < expected <= math.pi
+        assert wrap_compiled(angle) == expected == wrap_angle(np.array([angle]))[0]
+
+
+def test_a_cache_folder_whose_record_cannot_be_written_is_never_touched(tmp_path, monkeypatch):
+    # A read-only install: deleting there on every import would only cost recompiles.
+    from azgym.jit import STAMP_NAME
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    for module in KERNEL_MODULES:
+        (tmp_path / module).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / module).write_text(f"# {module}\n")
+    cache = tmp_path / "localize" / "__pycache__"
+    cache.mkdir()
+    (cache / "ransac._search-10.py311.nbi").write_text("index")
+    write_text = Path.write_text
+
+    def read_only(self, *args, **kwargs):
+        if self.name == STAMP_NAME:
+            raise PermissionError(f"read-only: {self}")
+        return write_text(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "write_text", read_only)
+    for _ in range(3):
+        assert drop_stale_cache(tmp_path) is False
+    assert (cache / "ransac._search-10.py311.nbi").exists()

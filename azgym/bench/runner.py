@@ -55,13 +55,13 @@ def _localize_chunk(contender: Contender, cases: list[Case],
             start = time.perf_counter_ns()
             estimate = localizer.localize(case.measurements, maps[case.scenario])
             outcome.micros[k] = (time.perf_counter_ns() - start) / 1000.0
-            ok = bool(estimate.ok) and math.isfinite(estimate.x) and math.isfinite(estimate.y)
+            pose = (float(estimate.x), float(estimate.y), float(estimate.heading))
+            ok = bool(estimate.ok) and all(math.isfinite(value) for value in pose)
+            if ok:  # a pose with a NaN or infinite part is no estimate
+                outcome.position[k], outcome.heading[k] = pose_error(pose, case.pose)
+            outcome.ok[k] = ok
         except Exception as exc:  # noqa: BLE001 - a failing plug-in is scored, not fatal
             outcome.errors[k] = f"{type(exc).__name__}: {exc}"
-            continue
-        outcome.ok[k] = ok
-        if ok:
-            outcome.position[k], outcome.heading[k] = pose_error(estimate.pose, case.pose)
     return outcome
 
 

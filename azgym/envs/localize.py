@@ -95,7 +95,7 @@ class LocalizeEnv(gym.Env):
     ``scenario`` accepts a shipped name or the path of a user's TOML file.
 
     ``info`` holds the true ``pose`` of the answered frame and, for the returned observation,
-    ``labels`` (see ``azgym.sensing.geometry.LABEL_NAMES``, −1 for padding) and ``true_beacons``
+    ``labels`` (see ``azgym.sensing.labels.LABEL_NAMES``, −1 for padding) and ``true_beacons``
     (map rows) — ground truth kept beside the observation, never in it.
 
     ## Version History

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import functools
 import importlib.abc
-import importlib.util
+import importlib.machinery
 import sys
 from collections.abc import Sequence
 from types import ModuleType
@@ -52,20 +52,27 @@ def register_environments() -> tuple[str, ...]:
 
 
 class _AfterGymnasiumImport(importlib.abc.MetaPathFinder):
-    """Registers the ids right after Gymnasium's module has run (a one-shot post-import hook)."""
+    """Registers the ids right after Gymnasium's module has run (a post-import hook).
+
+    It hands out Gymnasium's spec with a loader that registers after running the module, every
+    time the spec is looked up (a look-up alone, ``importlib.util.find_spec("gymnasium")`` as
+    libraries probe optional dependencies, imports nothing), and leaves ``sys.meta_path`` once
+    Gymnasium has really been imported.
+    """
 
     def find_spec(self, fullname: str, path: Sequence[str] | None,
                   target: ModuleType | None = None) -> Any:
         if fullname != "gymnasium":
             return None
-        sys.meta_path.remove(self)
-        spec = importlib.util.find_spec(fullname)
+        spec = importlib.machinery.PathFinder.find_spec(fullname, path)
         if spec is None or spec.loader is None:
             return spec
         run = spec.loader.exec_module
 
         def exec_then_register(module: ModuleType) -> None:
             run(module)
+            if self in sys.meta_path:
+                sys.meta_path.remove(self)
             register_environments()
 
         spec.loader.exec_module = exec_then_register  # type: ignore[method-assign]

@@ -22,8 +22,7 @@ def make_sensor(scenario: Scenario, sensor: str = "geometry", ids: str = "oracle
 
     Raises:
         UnknownNameError: An unknown sensor or id mode.
-        InvalidInputError: Blinking ids without the image sensor, or on a scenario without
-            routes (blinking is decoded over successive frames of a drive).
+        InvalidInputError: Blinking ids without the image sensor.
     """
     if not isinstance(sensor, str) or sensor not in SENSORS:
         raise unknown_name("sensor", str(sensor), SENSORS)

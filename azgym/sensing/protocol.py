@@ -15,13 +15,16 @@ generator, so an environment's ``reset(seed=...)`` decides both.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from azgym.core import BoolArray, FloatArray, IntArray, Measurements, Pose
+from azgym.errors import InvalidInputError
 from azgym.sensing.labels import LABEL_NAMES
 
 if TYPE_CHECKING:
@@ -101,18 +104,38 @@ class Observation:
         self._truth: DetectionTruth | None = None
 
     @classmethod
-    def from_columns(cls, *, ids: IntArray, azimuth: FloatArray, quality: FloatArray,
-                     label: IntArray, beacon: IntArray, true_azimuth: FloatArray,
-                     visible: FloatArray, mirrored: BoolArray, in_view: IntArray | None = None,
-                     image: np.ndarray | None = None, blobs: tuple[Blob, ...] = ()
+    def from_columns(cls, *, ids: ArrayLike, azimuth: ArrayLike, quality: ArrayLike | None,
+                     label: ArrayLike, beacon: ArrayLike, true_azimuth: ArrayLike,
+                     visible: ArrayLike, mirrored: ArrayLike, in_view: ArrayLike | None = None,
+                     image: np.ndarray | None = None, blobs: Sequence[Blob] = ()
                      ) -> Observation:
-        """A frame from one array per field (M each; quality (M,) or (M, Q)), sorted by azimuth."""
-        order = np.argsort(azimuth, kind="stable")
-        columns = quality[:, None] if quality.ndim == 1 else quality
-        measured = np.vstack([azimuth[None, :], columns.T])
-        return cls(measured[:, order], np.vstack([true_azimuth, visible])[:, order],
-                   np.vstack([ids, beacon, label, mirrored.astype(np.int64)])[:, order],
-                   in_view=in_view, image=image, blobs=tuple(blobs[k] for k in order))
+        """A frame from one column per field, M entries each, listed here by azimuth.
+
+        Every column is checked, and a bad one is named: ids, label and beacon are integers;
+        azimuth, quality ((M,) or (M, Q)) and visible are finite; true_azimuth is finite or NaN
+        (a blob no light explains); blobs are none or one per detection.
+
+        Raises:
+            InvalidInputError: A column of the wrong type, length or value.
+        """
+        measurements = Measurements(ids, azimuth, quality)
+        count = len(measurements)
+        ints = [measurements.ids, _column("beacon", beacon, count, integer=True),
+                _column("label", label, count, integer=True),
+                _column("mirrored", mirrored, count, integer=True)]
+        true = [_column("true_azimuth", true_azimuth, count, allow_nan=True),
+                _column("visible", visible, count)]
+        if blobs and len(blobs) != count:
+            raise InvalidInputError(f"Observation.blobs must be empty or hold {count} blobs, "
+                                    f"got {len(blobs)}")
+        quality = measurements.quality
+        quality_columns = (np.empty((count, 0)) if quality is None
+                           else quality[:, None] if quality.ndim == 1 else quality)
+        order = np.argsort(measurements.azimuth, kind="stable")
+        measured = np.vstack([measurements.azimuth[None, :], quality_columns.T])
+        return cls(measured[:, order], np.vstack(true)[:, order], np.vstack(ints)[:, order],
+                   in_view=None if in_view is None else np.asarray(in_view, dtype=np.int64),
+                   image=image, blobs=tuple(blobs[k] for k in order) if blobs else ())
 
     def __len__(self) -> int:
         return int(self.ints.shape[1])
@@ -173,3 +196,37 @@ class Sensor(Protocol):
     def observe(self, pose: Pose, rng: np.random.Generator, tilt: Tilt = LEVEL) -> Observation:
         """The frame seen from the camera pose (x, y, heading), every draw taken from ``rng``."""
         ...
+
+
+def check_pose(pose: Pose) -> Pose:
+    """The camera pose (x, y, heading) as floats; refuses one of another length or not finite."""
+    try:
+        x, y, heading = (float(value) for value in pose)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"pose must be (x, y, heading) numbers, got {pose!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
+        raise InvalidInputError(f"pose must be finite, got {(x, y, heading)}")
+    return x, y, heading
+
+
+def _column(name: str, values: ArrayLike, count: int, *, integer: bool = False,
+            allow_nan: bool = False) -> np.ndarray:
+    """One column of an observation: ``count`` integers, or finite floats (NaN if allowed)."""
+    array = np.asarray(values)
+    if array.shape != (count,):
+        raise InvalidInputError(f"Observation.{name} must have shape ({count},), got "
+                                f"{array.shape}")
+    if integer:
+        if array.size and not (np.issubdtype(array.dtype, np.integer) or array.dtype == bool):
+            raise InvalidInputError(f"Observation.{name} must hold integers, got dtype "
+                                    f"{array.dtype}")
+        return array.astype(np.int64)
+    try:
+        array = array.astype(np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"Observation.{name} must be numeric, got {array.dtype}") from None
+    bad = np.isinf(array) if allow_nan else ~np.isfinite(array)
+    if bad.any():
+        raise InvalidInputError(f"Observation.{name} must be finite, got {array[bad][0]} at "
+                                f"index {int(np.flatnonzero(bad)[0])}")
+    return array

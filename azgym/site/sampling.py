@@ -7,12 +7,15 @@ import math
 import numpy as np
 
 from azgym.core import Pose
+from azgym.errors import ScenarioError
 from azgym.site.scenario import Scenario
 
 WALL_CLEARANCE = 0.5
 """A random pose keeps this far inside the room's bounds [m]."""
 RACK_CLEARANCE = 0.8
 """A random pose keeps this far from every rack's footprint [m]: where a forklift can stand."""
+MAX_TRIES = 10_000
+"""Draws before giving up: a site whose free floor is under about 0.1 % of its room has none."""
 
 
 def random_free_pose(scenario: Scenario, rng: np.random.Generator) -> Pose:
@@ -21,11 +24,17 @@ def random_free_pose(scenario: Scenario, rng: np.random.Generator) -> Pose:
     The position is drawn uniformly in the room shrunk by ``WALL_CLEARANCE`` until it is
     ``RACK_CLEARANCE`` clear of every rack (rejection sampling: uniform over the free floor);
     then the heading is drawn uniformly from [−π, π).
+
+    Raises:
+        ScenarioError: No free floor found in ``MAX_TRIES`` draws.
     """
     x_min, y_min, x_max, y_max = scenario.bounds
     low = (x_min + WALL_CLEARANCE, y_min + WALL_CLEARANCE)
     high = (x_max - WALL_CLEARANCE, y_max - WALL_CLEARANCE)
-    while True:
+    for _ in range(MAX_TRIES):
         x, y = rng.uniform(low, high)
         if not any(rack.contains(x, y, margin=-RACK_CLEARANCE) for rack in scenario.racks):
             return float(x), float(y), float(rng.uniform(-math.pi, math.pi))
+    raise ScenarioError(
+        f"{scenario.name}: no free floor for a camera pose: {MAX_TRIES} random points in the "
+        f"room were all within {WALL_CLEARANCE} m of a wall or {RACK_CLEARANCE} m of a rack")

@@ -170,7 +170,7 @@ def simulate(
     seed: int | Sequence[int] = 0,
     *,
     sensor: Sensor | None = None,
-    camera_rate_hz: float = 10.0,
+    camera_rate_hz: float | None = None,
     dt: float = 0.02,
     spec: ForkliftSpec | None = None,
     odometry: OdometryModel | None = None,
@@ -185,7 +185,8 @@ def simulate(
         seed: Seed of every random draw.
         sensor: The camera model (default: a :class:`GeometrySensor` of the scenario); it is
             reset here, from its own stream of the seed.
-        camera_rate_hz: Camera frames per second.
+        camera_rate_hz: Camera frames per second (default: the sensor's ``frame_rate_hz``,
+            10 Hz, or 30 Hz for blinking ids).
         dt: Physics step [s].
         spec: The forklift (default: :class:`ForkliftSpec`).
         odometry: Wheel odometry errors (default: :class:`OdometryModel`).
@@ -194,12 +195,17 @@ def simulate(
     """
     scenario = load_scenario(scenario)
     chosen = _route(scenario, route)
+    sensor = GeometrySensor(scenario) if sensor is None else sensor
+    if not isinstance(sensor, Sensor):
+        raise InvalidInputError(f"sensor must be an azgym Sensor (reset and observe), got "
+                                f"{type(sensor).__name__}; make one with "
+                                f"azgym.sensing.catalog.make_sensor")
+    camera_rate_hz = sensor.frame_rate_hz if camera_rate_hz is None else camera_rate_hz
     if not camera_rate_hz > 0 or not dt > 0:
         raise InvalidInputError(f"camera_rate_hz and dt must be > 0, got {camera_rate_hz}, {dt}")
     streams = np.random.SeedSequence(seed).spawn(5)
     camera_rng, odometry_rng, imu_rng, sway_rng = (
         np.random.default_rng(stream) for stream in streams[:4])
-    sensor = sensor or GeometrySensor(scenario)
     sensor.reset(streams[4])
     motion = _Motion(odometry or OdometryModel(), imu or ImuModel(), odometry_rng, imu_rng, dt)
     sway = CameraSway(scenario, 1.0 / camera_rate_hz, spec)

@@ -93,6 +93,31 @@ def test_a_crashing_plugin_is_scored_unavailable_and_never_stops_the_run(tmp_pat
     assert broken.summary["localizers"]["missing"]["all"]["availability"] == 0.0
 
 
+def test_a_pose_with_a_nan_or_infinite_part_is_scored_as_no_estimate(tmp_path):
+    plugin = tmp_path / "nan_heading.py"
+    plugin.write_text(textwrap.dedent("""
+        import dataclasses, math
+        import azgym
+
+        class NanHeading:
+            def __init__(self):
+                self.ransac = azgym.make_localizer("ransac")
+                self.calls = 0
+
+            def localize(self, measurements, beacons):
+                self.calls += 1
+                estimate = self.ransac.localize(measurements, beacons)
+                bad = (math.nan, math.inf, -math.inf)[self.calls % 3]
+                return dataclasses.replace(estimate, heading=bad) if self.calls % 2 else estimate
+    """))
+    result = run_benchmark(get_suite("stress"), [Contender("nan", f"{plugin}:NanHeading")],
+                           quick=True)
+    row, outcome = result.summary["localizers"]["nan"], result.outcomes["nan"]
+    assert row["crashes"] == 0
+    assert 0.3 < row["all"]["availability"] < 0.7
+    assert np.isfinite(outcome.heading[outcome.ok]).all()
+
+
 def test_cli_default_run_prints_a_ranked_table_and_writes_results(tmp_path, capsys):
     assert main(["bench", "--out", str(tmp_path), "--workers", "1"]) == 0
     printed = capsys.readouterr().out

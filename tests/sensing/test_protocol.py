@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -94,3 +96,48 @@ def test_mirror_images_are_flagged_and_are_not_beacons_in_view(scenario):
 def test_sensor_names_are_checked(scenario, kind, ids, error, message):
     with pytest.raises(error, match=message):
         make_sensor(scenario, kind, ids)
+
+
+def columns(**changes):
+    base = dict(ids=[3, 1], azimuth=[0.5, -0.2], quality=[[1.0, 2.0], [3.0, 4.0]],
+                label=[0, 2], beacon=[2, 0], true_azimuth=[0.5, np.nan], visible=[1.0, 0.0],
+                mirrored=[False, True])
+    return {**base, **changes}
+
+
+def test_an_observation_from_columns_is_listed_by_azimuth_without_blobs():
+    observation = Observation.from_columns(**columns())
+    assert list(observation.measurements.ids) == [1, 3]
+    assert observation.measurements.quality.tolist() == [[3.0, 4.0], [1.0, 2.0]]
+    assert list(observation.truth.mirrored) == [True, False]
+    assert observation.blobs == () and list(observation.in_view) == [2]
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"ids": [1.5, 2]}, "Measurements.ids must hold integers, got 1.5"),
+    ({"azimuth": [np.nan, 0.1]}, "Measurements.azimuth must be finite"),
+    ({"label": [0]}, "Observation.label must have shape (2,), got (1,)"),
+    ({"beacon": [0.5, 1.0]}, "Observation.beacon must hold integers"),
+    ({"visible": [np.inf, 0.0]}, "Observation.visible must be finite, got inf at index 0"),
+    ({"true_azimuth": [np.inf, 0.0]}, "Observation.true_azimuth must be finite"),
+    ({"blobs": (None,)}, "Observation.blobs must be empty or hold 2 blobs, got 1"),
+])
+def test_a_bad_column_is_named(change, message):
+    with pytest.raises(InvalidInputError, match=re.escape(message)):
+        Observation.from_columns(**columns(**change))
+
+
+@pytest.mark.parametrize("pose", [(np.nan, 5.0, 0.0), (1.0, 2.0), ("a", 1.0, 0.0), None])
+def test_a_sensor_refuses_a_pose_that_is_not_three_finite_numbers(scenario, pose):
+    for kind, ids in KINDS[:2]:
+        sensor = make_sensor(scenario, kind, ids)
+        sensor.reset(0)
+        with pytest.raises(InvalidInputError, match="pose must be"):
+            sensor.observe(pose, np.random.default_rng(0))
+
+
+def test_an_empty_frame_keeps_its_quality_columns():
+    empty = Observation.from_columns(**columns(
+        ids=[], azimuth=[], quality=np.empty((0, 3)), label=[], beacon=[], true_azimuth=[],
+        visible=[], mirrored=[]))
+    assert len(empty) == 0 and empty.measured.shape == (4, 0)

@@ -32,3 +32,17 @@ def test_the_same_generator_state_gives_the_same_poses():
     first = [random_free_pose(scenario, np.random.default_rng(5)) for _ in range(3)]
     again = [random_free_pose(scenario, np.random.default_rng(5)) for _ in range(3)]
     assert first == again
+
+
+def test_a_site_without_free_floor_is_refused_instead_of_searched_forever():
+    import dataclasses
+
+    import pytest
+
+    from azgym.site.elements import Rack
+
+    room = azgym.load_scenario("paper-room")
+    full = dataclasses.replace(room, racks=(Rack(center=(0.0, 0.0), size=(21.0, 21.0), angle=0.0,
+                                                  height=3.0),))
+    with pytest.raises(azgym.ScenarioError, match="paper-room: no free floor for a camera pose"):
+        random_free_pose(full, np.random.default_rng(0))

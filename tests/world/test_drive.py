@@ -76,3 +76,18 @@ def test_ransac_beats_lsq_on_the_faulty_frames(frames):
 def test_unknown_route_names_are_refused():
     with pytest.raises(azgym.UnknownNameError, match="Did you mean 'aisle-loop'"):
         next(simulate("warehouse-small", "aisle-lop"))
+
+
+def test_the_drive_takes_frames_at_the_sensors_own_rate_and_refuses_a_non_sensor():
+    import pytest
+
+    import azgym
+    from azgym.sensing.image.sensor import ImageSensor
+    from azgym.world.drive import simulate
+
+    room = azgym.load_scenario("warehouse-small")
+    frames = simulate(room, seed=0, sensor=ImageSensor(room, ids="blink"))
+    times = [next(frames).time for _ in range(4)]
+    assert times[1] - times[0] == pytest.approx(1 / 30, abs=0.02)  # 30 Hz on 0.02 s steps
+    with pytest.raises(azgym.InvalidInputError, match="sensor must be an azgym Sensor"):
+        next(simulate(room, seed=0, sensor="image"))

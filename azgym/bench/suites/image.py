@@ -21,8 +21,7 @@ def routes(seed: int, quick: bool) -> list[Case]:
         chosen = scenario.routes[:1] if quick else scenario.routes
         for k, route in enumerate(chosen):
             sensor = ImageSensor(scenario, ids="blink")
-            for frame in simulate(scenario, route, [seed, k], sensor=sensor,
-                                  camera_rate_hz=sensor.frame_rate_hz):
+            for frame in simulate(scenario, route, [seed, k], sensor=sensor):
                 if frame.index % every == 0:
                     cases.append(Case(name, frame.measurements, frame.pose,
                                       frame_cause(frame.truth.label), f"{name}/{route.name}"))

@@ -37,6 +37,7 @@ from azgym.sensing.protocol import (
     Observation,
     Seed,
     Tilt,
+    check_pose,
 )
 from azgym.site import Scenario
 from azgym.site.elements import SEG_REFLECTIVITY, occluder_table
@@ -119,9 +120,12 @@ class GeometrySensor:
         Returns:
             The measurements (sorted by azimuth, as a detector scanning the image would list
             them) and the ground truth of each.
+
+        Raises:
+            InvalidInputError: A pose that is not three finite numbers.
         """
         out = self._buffers
-        count = self.observe_into(pose, rng, out, tilt, camera_height)
+        count = self.observe_into(check_pose(pose), rng, out, tilt, camera_height)
         return out.observation(count)
 
 

@@ -2,12 +2,13 @@
 
 Per frame, :class:`ImageSensor`
 
-1. asks the sensor geometry (``sensor.Sensor``) what the camera sees: beacons, partly covered
-   beacons, mirror ghosts, moved beacons; and the same for the scenario's other ``lights``
-   (lamps, windows), which racks hide and mirrors reflect like any light;
-2. renders them (``image.render``): beacons as LED blobs cut to their visible part, lights as
-   patches, with noise from a bank of precomputed frames;
-3. detects blobs (``image.detect``) and turns each centroid into an azimuth;
+1. asks the geometry (:class:`~azgym.sensing.geometry.sensor.GeometrySensor`) what it sees:
+   beacons, partly covered beacons, mirror ghosts, moved beacons; and the same for the
+   scenario's other ``lights`` (lamps, windows), which racks hide and mirrors reflect like any
+   light;
+2. renders them (:mod:`~azgym.sensing.image.render`): beacons as LED blobs cut to their visible
+   part, lights as patches, with noise from a bank of precomputed frames;
+3. detects blobs (:mod:`~azgym.sensing.image.detect`) and turns each centroid into an azimuth;
 4. identifies each blob, in one of two modes:
 
    * ``ids="oracle"``: the id of the light whose projected centre is nearest (within
@@ -47,6 +48,7 @@ from azgym.sensing.protocol import (
     Observation,
     Seed,
     Tilt,
+    check_pose,
 )
 from azgym.site import Scenario
 from azgym.site.elements import Faults
@@ -134,7 +136,8 @@ class ImageSensor:
             tilt: (pitch, roll) of the camera's axis [rad].
 
         Raises:
-            InvalidInputError: :meth:`reset` was never called.
+            InvalidInputError: :meth:`reset` was never called, or a pose that is not three
+                finite numbers.
 
         Returns:
             The blobs' ids (-1: not identified), azimuths and quality (columns: area [px], peak
@@ -144,6 +147,7 @@ class ImageSensor:
         """
         if not self._noise:
             raise InvalidInputError("ImageSensor: call reset(seed) before the first observe")
+        pose = check_pose(pose)
         lights, in_view = self._lights_in_view(pose, rng, tilt)
         noise = self._noise[int(rng.integers(len(self._noise)))]
         image = render(self.camera, lights.azimuth - lights.half_width,
