@@ -110,9 +110,9 @@ class Odometer:
 
     def take(self) -> OdometrySamples:
         """The samples since the last call."""
-        rows = np.array(self._rows, dtype=np.float64).reshape(-1, 3)
+        time, speed, steer = np.array(self._rows, dtype=np.float64).reshape(-1, 3).T
         self._rows = []
-        return OdometrySamples(time=rows[:, 0], speed=rows[:, 1], steer=rows[:, 2])
+        return OdometrySamples(time=time.copy(), speed=speed.copy(), steer=steer.copy())
 
 
 class Imu:
@@ -144,7 +144,7 @@ class Imu:
 
     def take(self) -> ImuSamples:
         """The samples since the last call."""
-        rows = np.array(self._rows, dtype=np.float64).reshape(-1, 5)
+        time, yaw_rate, ax, ay, heading = np.array(self._rows, dtype=np.float64).reshape(-1, 5).T
         self._rows = []
-        return ImuSamples(time=rows[:, 0], yaw_rate=rows[:, 1], accel=rows[:, 2:4],
-                          heading=rows[:, 4])
+        return ImuSamples(time=time.copy(), yaw_rate=yaw_rate.copy(),
+                          accel=np.column_stack([ax, ay]), heading=heading.copy())

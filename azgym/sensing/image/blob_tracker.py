@@ -166,11 +166,11 @@ class BlobTracker:
         tracks = self._tracks
         if not tracks or not len(azimuth):
             return self._turn
-        own = np.array([(t.azimuth + t.parallax_rate, t.radius + t.radius_rate)
-                        for t in tracks])
+        own_azimuth = np.array([t.azimuth + t.parallax_rate for t in tracks])
+        own_radius = np.array([t.radius + t.radius_rate for t in tracks])
         # Pairs at similar radii whose shift is within max_turn_change of the last turn.
-        close = np.abs(radius[None, :] - own[:, 1:2]) <= self.gate_px
-        shift = wrap_angle((azimuth[None, :] - own[:, 0:1] - self._turn)[close])
+        close = np.abs(radius[None, :] - own_radius[:, None]) <= self.gate_px
+        shift = wrap_angle((azimuth[None, :] - own_azimuth[:, None] - self._turn)[close])
         candidates = np.sort(shift[np.abs(shift) <= self.max_turn_change])
         if candidates.size < TURN_SUPPORT:
             return self._turn
@@ -204,8 +204,9 @@ class BlobTracker:
                 raise InvalidInputError(f"areas: one per blob ({len(points)}), got shape "
                                         f"{areas.shape}")
         cx, cy = self.centre
-        azimuth = np.arctan2(points[:, 1] - cy, points[:, 0] - cx)
-        radius = np.hypot(points[:, 0] - cx, points[:, 1] - cy)
+        u, v = points.T  # pixel columns and rows
+        azimuth = np.arctan2(v - cy, u - cx)
+        radius = np.hypot(u - cx, v - cy)
         self._turn = self._common_turn(azimuth, radius)
         for track in self._tracks:  # move every track to where it should be now
             track.azimuth += self._turn + track.parallax_rate
@@ -240,10 +241,12 @@ class BlobTracker:
         if not tracks or not len(points):
             return assignment, taken, merged
         cx, cy = self.centre
-        predicted = np.array([(t.azimuth, t.radius) for t in tracks])
-        px = cx + predicted[:, 1] * np.cos(predicted[:, 0])
-        py = cy + predicted[:, 1] * np.sin(predicted[:, 0])
-        cost = np.hypot(px[:, None] - points[None, :, 0], py[:, None] - points[None, :, 1])
+        predicted_azimuth = np.array([t.azimuth for t in tracks])
+        predicted_radius = np.array([t.radius for t in tracks])
+        px = cx + predicted_radius * np.cos(predicted_azimuth)
+        py = cy + predicted_radius * np.sin(predicted_azimuth)
+        u, v = points.T  # pixel columns and rows
+        cost = np.hypot(px[:, None] - u[None, :], py[:, None] - v[None, :])
         margin = cost - np.array([self._gate(t) for t in tracks])[:, None]
         inside = margin <= 0.0  # each track pairs only with blobs inside its gate
         rows, cols = _assign(margin, inside)
