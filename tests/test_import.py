@@ -18,7 +18,7 @@ def test_import_azgym_loads_no_heavy_library():
 
 
 def test_environment_ids_register_whether_gymnasium_comes_first_or_second():
-    make = ("env = gym.make('azgym/Localize-WarehouseSmall-v0'); "
+    make = ("env = gym.make('azgym/Localize-WarehouseSmall-v1'); "
             "print(type(env.unwrapped).__name__)")
     assert run("import gymnasium as gym, azgym; " + make) == "LocalizeEnv"
     assert run("import azgym; import gymnasium as gym; " + make) == "LocalizeEnv"

@@ -89,7 +89,7 @@ class LocalizeEnv(gym.Env):
 
     ## Arguments
 
-    ``gym.make("azgym/Localize-WarehouseSmall-v0", scenario=..., route=None, max_detections=32,
+    ``gym.make("azgym/Localize-WarehouseSmall-v1", scenario=..., route=None, max_detections=32,
     position_error=1.0, heading_error=0.1, episode_length=200, sensor="geometry", ids="oracle",
     observation="measurements", camera_rate_hz=None, render_mode=None)``.
     ``scenario`` accepts a shipped name or the path of a user's TOML file.
@@ -103,15 +103,18 @@ class LocalizeEnv(gym.Env):
     * v0: initial version. Revised with azgym's suites warehouse-routes v2 and image-routes v2:
       the camera's sway on bumps is a damped oscillation (consecutive frames see nearly the same
       tilt) instead of independent draws per frame, which changes warehouse-paper's episodes.
-      Revised again with image-routes v3: with ``sensor="image"`` the blob quality is under the
-      key ``quality`` (was ``blob``), and ``reset(seed=...)`` also draws the image sensor's noise
-      frames and blinking phases (they were fixed); the random poses of a scenario without routes
-      keep 0.5 m from the walls and 0.8 m from racks, like the benchmark's.
+    * v1: with ``sensor="image"`` the blob quality is under the key ``quality`` (was ``blob``),
+      and ``reset(seed=...)`` also draws the image sensor's noise frames and blinking phases (they
+      were fixed); every heading is wrapped by one rule, which leaves in-range angles untouched
+      (the routes' camera poses move in their last bits); the random poses of a scenario without
+      routes keep 0.5 m from the walls and 0.8 m from racks, like the benchmark's;
+      ``env.unwrapped.camera`` and ``last_observation`` replace ``image_sensor`` and
+      ``image_frame``.
 
     ## Example
 
     >>> import gymnasium as gym, azgym
-    >>> env = gym.make("azgym/Localize-WarehouseSmall-v0")
+    >>> env = gym.make("azgym/Localize-WarehouseSmall-v1")
     >>> observation, info = env.reset(seed=0)
     >>> observation, reward, terminated, truncated, info = env.step(env.action_space.sample())
     """

@@ -96,7 +96,7 @@ class NavigateEnv(gym.Env):
 
     ## Arguments
 
-    ``gym.make("azgym/Navigate-WarehouseSmall-v0", scenario=..., localizer="ransac",
+    ``gym.make("azgym/Navigate-WarehouseSmall-v1", scenario=..., localizer="ransac",
     discrete=False, max_steps=600, progress=1.0, collision=1.0, time=0.01, success=10.0,
     goal_radius=1.0, n_rays=8, ray_range=10.0, sensor="geometry", ids="oracle",
     camera_rate_hz=None, render_mode=None)``. With ``render_mode`` and ``sensor="image"`` the
@@ -107,14 +107,16 @@ class NavigateEnv(gym.Env):
     * v0: initial version. Revised with azgym's suites warehouse-routes v2 and image-routes v2:
       the camera's sway on bumps is a damped oscillation (consecutive frames see nearly the same
       tilt) instead of independent draws per frame, which changes warehouse-paper's episodes.
-      Revised again with image-routes v3: ``reset(seed=...)`` also draws the image sensor's noise
-      frames and blinking phases (they were fixed), and with a camera faster than the navigator
-      every frame is observed, whatever the sensor (the default, one frame a step, is unchanged).
+    * v1: ``reset(seed=...)`` also draws the image sensor's noise frames and blinking phases
+      (they were fixed); with a camera faster than the navigator every frame is observed,
+      whatever the sensor; every heading is wrapped by one rule, which leaves in-range angles
+      untouched (poses move in their last bits); ``env.unwrapped.camera`` and
+      ``last_observation`` replace ``image_sensor`` and ``image_frame``.
 
     ## Example
 
     >>> import gymnasium as gym, azgym
-    >>> env = gym.make("azgym/Navigate-WarehouseSmall-v0", localizer="ransac")
+    >>> env = gym.make("azgym/Navigate-WarehouseSmall-v1", localizer="ransac")
     >>> observation, info = env.reset(seed=0)
     >>> observation, reward, terminated, truncated, info = env.step(env.action_space.sample())
     """

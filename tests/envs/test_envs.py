@@ -25,10 +25,10 @@ NAVIGATE_IDS = [i for i in ALL_IDS if "/Navigate" in i]
 def test_every_scenario_is_registered():
     names = [azgym.envs.registration.camel_case(n) for n in azgym.list_scenarios()]
     for name in names:
-        assert f"azgym/Localize-{name}-v0" in ALL_IDS
-    assert "azgym/Navigate-WarehouseSmall-v0" in ALL_IDS
-    assert "azgym/NavigateDiscrete-WarehouseSmall-v0" in ALL_IDS
-    assert "azgym/Navigate-PaperRoom-v0" not in ALL_IDS  # no routes, no spots to drive to
+        assert f"azgym/Localize-{name}-v1" in ALL_IDS
+    assert "azgym/Navigate-WarehouseSmall-v1" in ALL_IDS
+    assert "azgym/NavigateDiscrete-WarehouseSmall-v1" in ALL_IDS
+    assert "azgym/Navigate-PaperRoom-v1" not in ALL_IDS  # no routes, no spots to drive to
 
 
 @pytest.mark.parametrize("env_id", ALL_IDS)
@@ -63,10 +63,10 @@ def same(a, b):
     return np.array_equal(a, b)
 
 
-@pytest.mark.parametrize("env_id", ["azgym/Localize-WarehouseSmall-v0",
-                                    "azgym/Localize-PaperRoom-v0",
-                                    "azgym/Navigate-WarehouseSmall-v0",
-                                    "azgym/NavigateDiscrete-WarehousePaper-v0"])
+@pytest.mark.parametrize("env_id", ["azgym/Localize-WarehouseSmall-v1",
+                                    "azgym/Localize-PaperRoom-v1",
+                                    "azgym/Navigate-WarehouseSmall-v1",
+                                    "azgym/NavigateDiscrete-WarehousePaper-v1"])
 def test_same_seed_same_rollout_and_different_seeds_differ(env_id):
     first = rollout(env_id, seed=3)
     again = rollout(env_id, seed=3)
@@ -75,8 +75,8 @@ def test_same_seed_same_rollout_and_different_seeds_differ(env_id):
     assert not all(same(a, b) for a, b in zip(first, other, strict=False))
 
 
-@pytest.mark.parametrize("env_id", ["azgym/Localize-WarehouseSmall-v0",
-                                    "azgym/Navigate-WarehouseSmall-v0"])
+@pytest.mark.parametrize("env_id", ["azgym/Localize-WarehouseSmall-v1",
+                                    "azgym/Navigate-WarehouseSmall-v1"])
 def test_environments_pickle(env_id):
     env = gym.make(env_id)
     env.reset(seed=1)
@@ -88,7 +88,7 @@ def test_environments_pickle(env_id):
 
 
 def test_async_vector_environments_run():
-    envs = gym.make_vec("azgym/Navigate-WarehouseSmall-v0", num_envs=4,
+    envs = gym.make_vec("azgym/Navigate-WarehouseSmall-v1", num_envs=4,
                         vectorization_mode="async")
     observations, _ = envs.reset(seed=0)
     assert observations.shape == (4, 13)
@@ -99,7 +99,7 @@ def test_async_vector_environments_run():
 
 
 def test_localize_rewards_are_named_terms_and_truth_is_beside_the_observation():
-    env = gym.make("azgym/Localize-WarehouseSmall-v0", position_error=2.0, heading_error=0.5)
+    env = gym.make("azgym/Localize-WarehouseSmall-v1", position_error=2.0, heading_error=0.5)
     observation, info = env.reset(seed=0)
     assert set(observation) == {"ids", "azimuth", "valid", "quality", "beacon_ids",
                                 "beacon_xyz"}
@@ -116,7 +116,7 @@ def test_localize_rewards_are_named_terms_and_truth_is_beside_the_observation():
 
 
 def test_an_episode_is_one_drive_of_the_route():
-    env = gym.make("azgym/Localize-WarehouseSmall-v0", route="cross-aisle")
+    env = gym.make("azgym/Localize-WarehouseSmall-v1", route="cross-aisle")
     env.reset(seed=0)
     steps, terminated = 0, False
     while not terminated:
@@ -131,11 +131,11 @@ def test_navigation_reports_a_failed_localizer_instead_of_a_pose():
         def localize(self, measurements, beacons):
             return azgym.Estimate.failure("blind", len(measurements))
 
-    env = gym.make("azgym/Navigate-WarehouseSmall-v0", localizer=NeverLocalizes())
+    env = gym.make("azgym/Navigate-WarehouseSmall-v1", localizer=NeverLocalizes())
     observation, info = env.reset(seed=0)
     assert observation[0] == 0.0 and observation[1] == 0.0 and observation[2] == 0.0
     assert info["estimate"] is None and not info["localized"]
-    truth = gym.make("azgym/Navigate-WarehouseSmall-v0", localizer="truth")
+    truth = gym.make("azgym/Navigate-WarehouseSmall-v1", localizer="truth")
     observation, info = truth.reset(seed=0)
     assert observation[0] == 1.0 and info["localized"]
     x, y, heading = info["true_pose"]
@@ -147,7 +147,7 @@ def test_navigation_reports_a_failed_localizer_instead_of_a_pose():
 
 
 def test_reaching_the_goal_terminates_with_success():
-    env = gym.make("azgym/Navigate-WarehouseSmall-v0", localizer="truth", goal_radius=100.0)
+    env = gym.make("azgym/Navigate-WarehouseSmall-v1", localizer="truth", goal_radius=100.0)
     env.reset(seed=0)
     _, reward, terminated, truncated, info = env.step(np.zeros(2, dtype=np.float32))
     assert terminated and not truncated
@@ -157,13 +157,13 @@ def test_reaching_the_goal_terminates_with_success():
 @pytest.mark.parametrize(
     ("env_id", "action", "message"),
     [
-        ("azgym/Localize-WarehouseSmall-v0", np.array([0.0, np.nan, 0.0]), "must be finite"),
-        ("azgym/Localize-WarehouseSmall-v0", np.zeros(2), "of shape (3,), got shape (2,)"),
-        ("azgym/Localize-WarehouseSmall-v0", np.array([0.0, 2.0, 0.0]),
+        ("azgym/Localize-WarehouseSmall-v1", np.array([0.0, np.nan, 0.0]), "must be finite"),
+        ("azgym/Localize-WarehouseSmall-v1", np.zeros(2), "of shape (3,), got shape (2,)"),
+        ("azgym/Localize-WarehouseSmall-v1", np.array([0.0, 2.0, 0.0]),
          "is outside the action space"),
-        ("azgym/Navigate-WarehouseSmall-v0", np.array([0.5, 1.5]), "within [-1, 1]"),
-        ("azgym/Navigate-WarehouseSmall-v0", np.zeros(3), "of shape (2,), got shape (3,)"),
-        ("azgym/NavigateDiscrete-WarehouseSmall-v0", 7, "an integer in [0, 5)"),
+        ("azgym/Navigate-WarehouseSmall-v1", np.array([0.5, 1.5]), "within [-1, 1]"),
+        ("azgym/Navigate-WarehouseSmall-v1", np.zeros(3), "of shape (2,), got shape (3,)"),
+        ("azgym/NavigateDiscrete-WarehouseSmall-v1", 7, "an integer in [0, 5)"),
     ],
 )
 def test_bad_actions_are_refused_clearly(env_id, action, message):
@@ -176,28 +176,28 @@ def test_bad_actions_are_refused_clearly(env_id, action, message):
 @pytest.mark.filterwarnings("ignore:.*render_mode='ascii'")
 def test_bad_arguments_are_refused_clearly(tmp_path):
     with pytest.raises(UnknownNameError, match=re.escape("Did you mean 'warehouse-small'?")):
-        gym.make("azgym/Localize-WarehouseSmall-v0", scenario="warehouse-smal")
+        gym.make("azgym/Localize-WarehouseSmall-v1", scenario="warehouse-smal")
     with pytest.raises(UnknownNameError, match=re.escape("Did you mean 'ransac'?")):
-        gym.make("azgym/Navigate-WarehouseSmall-v0", localizer="ransak")
+        gym.make("azgym/Navigate-WarehouseSmall-v1", localizer="ransak")
     with pytest.raises(UnknownNameError, match=re.escape("Did you mean 'aisle-loop'?")):
-        gym.make("azgym/Localize-WarehouseSmall-v0", route="aisle-lop")
+        gym.make("azgym/Localize-WarehouseSmall-v1", route="aisle-lop")
     with pytest.raises(InvalidInputError, match="render_mode must be one of"):
-        gym.make("azgym/Localize-WarehouseSmall-v0", render_mode="ascii")
+        gym.make("azgym/Localize-WarehouseSmall-v1", render_mode="ascii")
     with pytest.raises(InvalidInputError, match=re.escape("collision weight must be a number")):
-        gym.make("azgym/Navigate-WarehouseSmall-v0", collision=-1.0)
+        gym.make("azgym/Navigate-WarehouseSmall-v1", collision=-1.0)
 
 
 def test_a_users_scenario_file_runs_under_any_id(tmp_path):
     text = (importlib.resources.files("azgym.site.scenarios") / "warehouse-small.toml").read_text()
     path = tmp_path / "mine.toml"
     path.write_text(text.replace('name = "warehouse-small"', 'name = "mine"'))
-    env = gym.make("azgym/Localize-WarehouseSmall-v0", scenario=str(path))
+    env = gym.make("azgym/Localize-WarehouseSmall-v1", scenario=str(path))
     assert env.unwrapped.scenario.name == "mine"
     env.reset(seed=0)
 
 
 def test_rgb_array_rendering_and_a_clear_error_for_human_without_a_display(monkeypatch):
-    env = gym.make("azgym/Navigate-WarehouseSmall-v0", render_mode="rgb_array")
+    env = gym.make("azgym/Navigate-WarehouseSmall-v1", render_mode="rgb_array")
     env.reset(seed=0)
     image = env.render()
     assert image.dtype == np.uint8 and image.ndim == 3 and image.shape[2] == 3
@@ -205,11 +205,11 @@ def test_rgb_array_rendering_and_a_clear_error_for_human_without_a_display(monke
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     with pytest.raises(azgym.AzgymError, match="needs a display"):
-        gym.make("azgym/Navigate-WarehouseSmall-v0", render_mode="human")
+        gym.make("azgym/Navigate-WarehouseSmall-v1", render_mode="human")
 
 
 def test_evaluate_runs_a_localizer_as_the_agent():
-    env = gym.make("azgym/Localize-WarehouseSmall-v0", route="cross-aisle")
+    env = gym.make("azgym/Localize-WarehouseSmall-v1", route="cross-aisle")
     ransac = azgym.evaluate(env, "ransac", seed=0)
     lsq = azgym.evaluate(env, "lsq", seed=0)
     assert ransac["n"] == lsq["n"] == len(env.unwrapped._trajectory("cross-aisle"))
@@ -217,12 +217,12 @@ def test_evaluate_runs_a_localizer_as_the_agent():
     assert ransac["median_cm"] < 5.0
     assert lsq["mean_cm"] > 3 * ransac["mean_cm"]
     with pytest.raises(InvalidInputError, match="needs a Localize environment"):
-        azgym.evaluate(gym.make("azgym/Navigate-WarehouseSmall-v0"), "ransac")
+        azgym.evaluate(gym.make("azgym/Navigate-WarehouseSmall-v1"), "ransac")
 
 
 def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy", reason='needs pip install "azgym[video]"')
-    env = gym.make("azgym/Navigate-WarehouseSmall-v0", render_mode="rgb_array", max_steps=20)
+    env = gym.make("azgym/Navigate-WarehouseSmall-v1", render_mode="rgb_array", max_steps=20)
     folder = tmp_path / "videos"
     env = gym.wrappers.RecordVideo(env, str(folder), episode_trigger=lambda _: True,
                                    disable_logger=True)
@@ -241,12 +241,12 @@ IMAGE_OPTIONS = [{"sensor": "image"}, {"sensor": "image", "ids": "blink"},
 
 @pytest.mark.parametrize("options", IMAGE_OPTIONS)
 def test_the_image_path_environments_conform_and_repeat(options):
-    env = gym.make("azgym/Localize-WarehouseSmall-v0", **options)
+    env = gym.make("azgym/Localize-WarehouseSmall-v1", **options)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_env(env.unwrapped, skip_render_check=True)
-    first = rollout("azgym/Localize-WarehouseSmall-v0", seed=3, steps=30, **options)
-    again = rollout("azgym/Localize-WarehouseSmall-v0", seed=3, steps=30, **options)
+    first = rollout("azgym/Localize-WarehouseSmall-v1", seed=3, steps=30, **options)
+    again = rollout("azgym/Localize-WarehouseSmall-v1", seed=3, steps=30, **options)
     assert all(same(a, b) for a, b in zip(first, again, strict=True))
     if options.get("observation") == "image":
         assert first[0].shape == (480, 480, 1) and first[0].dtype == np.uint8
@@ -254,7 +254,7 @@ def test_the_image_path_environments_conform_and_repeat(options):
 
 
 def test_ransac_localizes_on_detected_and_decoded_measurements():
-    env = gym.make("azgym/Localize-WarehouseSmall-v0", route="cross-aisle", sensor="image",
+    env = gym.make("azgym/Localize-WarehouseSmall-v1", route="cross-aisle", sensor="image",
                    ids="blink")
     assert env.unwrapped.camera_rate_hz == 30.0
     stats = azgym.evaluate(env, "ransac", seed=0)
@@ -262,14 +262,14 @@ def test_ransac_localizes_on_detected_and_decoded_measurements():
     # has an estimate in 59 % of frames here (100 % with ids="oracle"); those are sub-centimetre.
     assert stats["availability"] > 0.5 and stats["median_cm"] < 1.0
     with pytest.raises(InvalidInputError, match="observes pixels"):
-        azgym.evaluate(gym.make("azgym/Localize-WarehouseSmall-v0", observation="image"))
+        azgym.evaluate(gym.make("azgym/Localize-WarehouseSmall-v1", observation="image"))
 
 
 def test_the_render_shows_the_camera_frame_with_blobs_ringed_by_status():
     from azgym.envs import render as R
 
-    env = gym.make("azgym/Localize-WarehouseSmall-v0", sensor="image", render_mode="rgb_array")
-    plain = gym.make("azgym/Localize-WarehouseSmall-v0", render_mode="rgb_array")
+    env = gym.make("azgym/Localize-WarehouseSmall-v1", sensor="image", render_mode="rgb_array")
+    plain = gym.make("azgym/Localize-WarehouseSmall-v1", render_mode="rgb_array")
     env.reset(seed=0)
     plain.reset(seed=0)
     assert env.render().shape[1] > plain.render().shape[1] + 300  # the fisheye panel
@@ -291,10 +291,10 @@ def test_the_render_shows_the_camera_frame_with_blobs_ringed_by_status():
 
 def test_image_options_are_checked():
     with pytest.raises(UnknownNameError, match=re.escape("Did you mean 'image'?")):
-        gym.make("azgym/Localize-WarehouseSmall-v0", sensor="imag")
+        gym.make("azgym/Localize-WarehouseSmall-v1", sensor="imag")
     with pytest.raises(InvalidInputError, match="needs the image path"):
-        gym.make("azgym/Localize-WarehouseSmall-v0", ids="blink")
+        gym.make("azgym/Localize-WarehouseSmall-v1", ids="blink")
     with pytest.raises(InvalidInputError, match="has no routes"):
-        gym.make("azgym/Localize-PaperRoom-v0", sensor="image", ids="blink")
+        gym.make("azgym/Localize-PaperRoom-v1", sensor="image", ids="blink")
     with pytest.raises(InvalidInputError, match="camera_rate_hz must be a finite number > 0"):
-        gym.make("azgym/Localize-WarehouseSmall-v0", camera_rate_hz=0.0)
+        gym.make("azgym/Localize-WarehouseSmall-v1", camera_rate_hz=0.0)

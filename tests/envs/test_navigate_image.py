@@ -17,7 +17,7 @@ import azgym  # noqa: F401 - registers the environment ids
 from azgym import InvalidInputError, UnknownNameError
 from azgym.envs.navigate import _interpolate
 
-NAVIGATE = "azgym/Navigate-WarehouseSmall-v0"
+NAVIGATE = "azgym/Navigate-WarehouseSmall-v1"
 
 
 def towards_goal(observation: np.ndarray) -> np.ndarray:
@@ -194,7 +194,7 @@ def test_same_seed_same_episode_on_the_image_path(ids):
 
 
 def test_image_path_environments_conform_pickle_and_make_by_id():
-    env = gym.make("azgym/NavigateDiscrete-WarehouseSmall-v0", sensor="image", ids="blink")
+    env = gym.make("azgym/NavigateDiscrete-WarehouseSmall-v1", sensor="image", ids="blink")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_env(env.unwrapped, skip_render_check=True)
@@ -217,7 +217,7 @@ def test_the_render_shows_the_camera_frame_beside_the_top_down_view():
     assert drawn.shape[1] > top_down.shape[1] + 300  # the fisheye panel
 
 
-@pytest.mark.parametrize("env_id", [NAVIGATE, "azgym/Localize-WarehouseSmall-v0"])
+@pytest.mark.parametrize("env_id", [NAVIGATE, "azgym/Localize-WarehouseSmall-v1"])
 def test_reset_seeds_the_image_sensors_noise_and_blinking_phases(env_id):
     env = gym.make(env_id, sensor="image", ids="blink")
     camera = env.unwrapped.camera
