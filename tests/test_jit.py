@@ -4,18 +4,32 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from azgym.jit import KERNEL_MODULES, drop_stale_cache, numba_subfolder
 
 
-def test_editing_a_kernel_module_drops_the_whole_kernel_cache(tmp_path, monkeypatch):
+def fake_package(root: Path) -> Path:
+    """A copy of the package's kernel modules' layout under ``root``, each a one-line file."""
+    for module in KERNEL_MODULES:
+        (root / module).parent.mkdir(parents=True, exist_ok=True)
+        (root / module).write_text(f"# {module}\n")
+    return root
+
+
+@pytest.fixture
+def package_with_cache(tmp_path, monkeypatch) -> tuple[Path, Path]:
+    """A fake package and its localize/__pycache__, with no shared numba cache set."""
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    cache = fake_package(tmp_path) / "localize" / "__pycache__"
+    cache.mkdir()
+    return tmp_path, cache
+
+
+def test_editing_a_kernel_module_drops_the_whole_kernel_cache(package_with_cache):
     # numba keys a cached function on its own file only; a caller in another module would keep
     # running an edited callee's old code. drop_stale_cache hashes every kernel module instead.
-    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
-    for module in KERNEL_MODULES:
-        (tmp_path / module).parent.mkdir(parents=True, exist_ok=True)
-        (tmp_path / module).write_text(f"# {module}\n")
-    cache = tmp_path / "localize" / "__pycache__"
-    cache.mkdir()
+    tmp_path, cache = package_with_cache
     assert drop_stale_cache(tmp_path) is False  # nothing cached yet; the hash is recorded
     (cache / "ransac._search-10.py311.nbi").write_text("index")
     (cache / "other.f-1.py311.nbi").write_text("not ours")
@@ -28,10 +42,7 @@ def test_editing_a_kernel_module_drops_the_whole_kernel_cache(tmp_path, monkeypa
 
 
 def test_with_a_shared_cache_folder_only_azgyms_own_subfolders_are_touched(tmp_path, monkeypatch):
-    package = tmp_path / "site-packages" / "azgym"
-    for module in KERNEL_MODULES:
-        (package / module).parent.mkdir(parents=True, exist_ok=True)
-        (package / module).write_text(f"# {module}\n")
+    package = fake_package(tmp_path / "site-packages" / "azgym")
     shared = tmp_path / "numba-cache"
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(shared))
     ours = shared / numba_subfolder(package / "localize")
@@ -89,16 +100,12 @@ def test_non_finite_angles_stay_as_they_are_and_huge_ones_wrap_alike():
         assert wrap_compiled(angle) == expected == wrap_angle(np.array([angle]))[0]
 
 
-def test_a_cache_folder_whose_record_cannot_be_written_is_never_touched(tmp_path, monkeypatch):
+def test_a_cache_folder_whose_record_cannot_be_written_is_never_touched(package_with_cache,
+                                                                         monkeypatch):
     # A read-only install: deleting there on every import would only cost recompiles.
     from azgym.jit import STAMP_NAME
 
-    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
-    for module in KERNEL_MODULES:
-        (tmp_path / module).parent.mkdir(parents=True, exist_ok=True)
-        (tmp_path / module).write_text(f"# {module}\n")
-    cache = tmp_path / "localize" / "__pycache__"
-    cache.mkdir()
+    tmp_path, cache = package_with_cache
     (cache / "ransac._search-10.py311.nbi").write_text("index")
     write_text = Path.write_text
 
