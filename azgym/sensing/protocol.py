@@ -199,14 +199,17 @@ class Sensor(Protocol):
 
 
 def check_pose(pose: Pose) -> Pose:
-    """The camera pose (x, y, heading) as floats; refuses one of another length or not finite."""
+    """The camera pose (x, y, heading) as given; refuses one of another length or not finite.
+
+    Cheap on purpose (every frame goes through it): three ``math.isfinite`` calls.
+    """
     try:
-        x, y, heading = (float(value) for value in pose)
+        x, y, heading = pose
+        if math.isfinite(x) and math.isfinite(y) and math.isfinite(heading):
+            return pose
     except (TypeError, ValueError):
         raise InvalidInputError(f"pose must be (x, y, heading) numbers, got {pose!r}") from None
-    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
-        raise InvalidInputError(f"pose must be finite, got {(x, y, heading)}")
-    return x, y, heading
+    raise InvalidInputError(f"pose must be finite, got {tuple(pose)}")
 
 
 def _column(name: str, values: ArrayLike, count: int, *, integer: bool = False,
