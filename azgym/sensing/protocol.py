@@ -120,22 +120,45 @@ class Observation:
         """
         measurements = Measurements(ids, azimuth, quality)
         count = len(measurements)
-        ints = [measurements.ids, _column("beacon", beacon, count, integer=True),
-                _column("label", label, count, integer=True),
-                _column("mirrored", mirrored, count, integer=True)]
-        true = [_column("true_azimuth", true_azimuth, count, allow_nan=True),
-                _column("visible", visible, count)]
+        beacon, label, mirrored = (_column(name, values, count, integer=True) for name, values in
+                                   (("beacon", beacon), ("label", label), ("mirrored", mirrored)))
         if blobs and len(blobs) != count:
             raise InvalidInputError(f"Observation.blobs must be empty or hold {count} blobs, "
                                     f"got {len(blobs)}")
         quality = measurements.quality
-        quality_columns = (np.empty((count, 0)) if quality is None
-                           else quality[:, None] if quality.ndim == 1 else quality)
-        order = np.argsort(measurements.azimuth, kind="stable")
-        measured = np.vstack([measurements.azimuth[None, :], quality_columns.T])
-        return cls(measured[:, order], np.vstack(true)[:, order], np.vstack(ints)[:, order],
-                   in_view=None if in_view is None else np.asarray(in_view, dtype=np.int64),
-                   image=image, blobs=tuple(blobs[k] for k in order) if blobs else ())
+        return cls._from_valid_columns(
+            ids=measurements.ids, azimuth=measurements.azimuth,
+            quality=(np.empty((count, 0)) if quality is None
+                     else quality[:, None] if quality.ndim == 1 else quality),
+            label=label, beacon=beacon,
+            true_azimuth=_column("true_azimuth", true_azimuth, count, allow_nan=True),
+            visible=_column("visible", visible, count), mirrored=mirrored,
+            in_view=None if in_view is None else np.asarray(in_view, dtype=np.int64),
+            image=image, blobs=blobs)
+
+    @classmethod
+    def _from_valid_columns(cls, *, ids: IntArray, azimuth: FloatArray, quality: FloatArray,
+                            label: IntArray, beacon: IntArray, true_azimuth: FloatArray,
+                            visible: FloatArray, mirrored: np.ndarray,
+                            in_view: IntArray | None, image: np.ndarray | None,
+                            blobs: Sequence[Blob]) -> Observation:
+        """:meth:`from_columns` without the checks, for columns azgym's own sensors computed.
+
+        Only for equal-length arrays: integer ids, label, beacon and mirrored; finite azimuths
+        and quality (M, Q); true azimuths finite or NaN.
+        """
+        count, columns = quality.shape
+        order = np.argsort(azimuth, kind="stable")
+        measured = np.empty((1 + columns, count))
+        measured[AZIMUTH] = azimuth[order]
+        measured[AZIMUTH + 1:] = quality[order].T
+        true = np.empty((2, count))
+        true[TRUE_AZIMUTH], true[VISIBLE] = true_azimuth[order], visible[order]
+        ints = np.empty((4, count), dtype=np.int64)
+        ints[ID], ints[BEACON], ints[LABEL], ints[MIRRORED] = (
+            ids[order], beacon[order], label[order], mirrored[order])
+        return cls(measured, true, ints, in_view=in_view, image=image,
+                   blobs=tuple(blobs[k] for k in order) if blobs else ())
 
     def __len__(self) -> int:
         return int(self.ints.shape[1])
@@ -220,14 +243,12 @@ def _column(name: str, values: ArrayLike, count: int, *, integer: bool = False,
         raise InvalidInputError(f"Observation.{name} must have shape ({count},), got "
                                 f"{array.shape}")
     if integer:
-        if array.size and not (np.issubdtype(array.dtype, np.integer) or array.dtype == bool):
+        if count and array.dtype.kind not in "iub":  # signed, unsigned, bool
             raise InvalidInputError(f"Observation.{name} must hold integers, got dtype "
                                     f"{array.dtype}")
-        return array.astype(np.int64)
-    try:
-        array = array.astype(np.float64)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"Observation.{name} must be numeric, got {array.dtype}") from None
+        return array
+    if array.dtype.kind not in "iuf":
+        raise InvalidInputError(f"Observation.{name} must be numeric, got {array.dtype}")
     bad = np.isinf(array) if allow_nan else ~np.isfinite(array)
     if bad.any():
         raise InvalidInputError(f"Observation.{name} must be finite, got {array[bad][0]} at "

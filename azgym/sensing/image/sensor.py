@@ -162,8 +162,8 @@ class ImageSensor:
         ids = self._identify(pixels, quality[:, 0], source, lights, truth, rng)
         self._frame += 1
         quality[~np.isfinite(quality)] = self.elongation_cap  # a one-pixel-wide blob
-        return Observation.from_columns(
-            ids=ids, azimuth=np.array([b.azimuth for b in blobs]), quality=quality,
+        return Observation._from_valid_columns(
+            ids=ids, azimuth=np.array([b.azimuth for b in blobs]).reshape(-1), quality=quality,
             label=truth.label, beacon=truth.beacon, true_azimuth=truth.azimuth,
             visible=truth.visible, mirrored=truth.mirrored, in_view=in_view, image=image,
             blobs=tuple(blobs))
