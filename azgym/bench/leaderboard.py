@@ -266,9 +266,9 @@ def build(entries_dir: Path, out_dir: Path) -> list[Path]:
 
 
 _SORT_SCRIPT = """
-document.querySelectorAll("table.board th").forEach(function (th, column) {
+document.querySelectorAll("table.board th").forEach(function (th) {
   th.addEventListener("click", function () {
-    var table = th.closest("table"), body = table.tBodies[0];
+    var table = th.closest("table"), body = table.tBodies[0], column = th.cellIndex;
     var ascending = th.getAttribute("data-order") !== "ascending";
     table.querySelectorAll("th").forEach(function (h) { h.removeAttribute("data-order"); });
     th.setAttribute("data-order", ascending ? "ascending" : "descending");

@@ -139,6 +139,50 @@ def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, 
 
 
 @pytest.mark.slow
+def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium(tmp_path):
+    # Each table sorts by its own column: a header's index counts within its table, not the page.
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run installs it)")
+    page = L.Path(__file__).parents[2] / "leaderboard" / "index.html"
+    column = [c for c, _ in L.COLUMNS].index("p75 cm")
+    probe = f"""<script>
+      var result = [];
+      document.querySelectorAll("table.board").forEach(function (table) {{
+        var header = table.tHead.rows[0].cells[{column}];
+        function p75() {{
+          return Array.prototype.map.call(table.tBodies[0].rows,
+            function (row) {{ return row.cells[{column}].textContent; }}).join(";");
+        }}
+        header.click(); var up = p75(); header.click(); var down = p75();
+        result.push([table.id, up, down]);
+      }});
+      document.body.setAttribute("data-result", JSON.stringify(result));
+      document.body.setAttribute("data-errors", JSON.stringify(window.pageErrors));
+    </script>"""
+    catcher = ('<script>window.pageErrors = []; window.addEventListener("error", function (e) '
+               '{ window.pageErrors.push(e.message); });</script>')
+    harness = tmp_path / "harness.html"
+    harness.write_text(page.read_text().replace("<title>", catcher + "<title>").replace(
+        "</body>", probe + "</body>"))
+    completed = subprocess.run(
+        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--disable-background-networking", "--disable-component-update", "--no-first-run",
+         "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom",
+         harness.as_uri()],
+        capture_output=True, text=True, timeout=120, check=True)
+    body = re.search(r"<body([^>]*)>", completed.stdout).group(1)
+    attributes = dict(re.findall(r'data-(\w+)="([^"]*)"', body))
+    assert json.loads(html.unescape(attributes["errors"])) == []
+    tables = json.loads(html.unescape(attributes["result"]))
+    assert [table for table, _, _ in tables] == [f"board-{suite}" for suite in L.SUITES]
+    for table, up, down in tables:
+        values = [float(cell) for cell in up.split(";")]
+        assert values == sorted(values), table
+        assert down.split(";") == up.split(";")[::-1], table
+
+
+@pytest.mark.slow
 def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(tmp_path):
     root = L.Path(__file__).parents[2] / "leaderboard"
     entries = L.load_entries(root / "entries")
