@@ -73,7 +73,7 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _leaderboard(args: argparse.Namespace) -> int:
-    from azgym.bench import leaderboard
+    from azgym.bench import board, leaderboard
 
     if args.action == "submit":
         path = leaderboard.submit(Path(args.results), args.localizer, Path(args.entries),
@@ -81,7 +81,7 @@ def _leaderboard(args: argparse.Namespace) -> int:
                                   link=args.link, overwrite=args.overwrite)
         print(f"wrote {path}")
     elif args.action == "build":
-        for path in leaderboard.build(Path(args.entries), Path(args.out)):
+        for path in board.build(Path(args.entries), Path(args.out)):
             print(f"wrote {path}")
     else:
         differences = leaderboard.verify(Path(args.entry), workers=args.workers or 1)

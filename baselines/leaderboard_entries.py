@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from azgym.bench import leaderboard
+from azgym.bench import board, leaderboard
 from azgym.bench.runner import default_contenders, run_benchmark
 from azgym.bench.suites import SUITES
 from azgym.bench.table import ranked_table
@@ -35,10 +35,10 @@ def main() -> None:
         for label in result.summary["localizers"]:
             path = leaderboard.submit(out, label, entries, name=f"{label}-{name}",
                                       version="0.1.0", authors=["azgym developers"],
-                                      link="built into azgym",
+                                      link="",
                                       overwrite=True)
             print(f"wrote {path}")
-    for path in leaderboard.build(entries, ROOT / "leaderboard"):
+    for path in board.build(entries, ROOT / "leaderboard"):
         print(f"wrote {path}")
 
 

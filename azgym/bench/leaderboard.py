@@ -1,22 +1,19 @@
-"""The leaderboard: entries a researcher submits, checks they cannot fake, and the published board.
+"""The leaderboard's entries: what a researcher submits, and the checks they cannot fake.
 
 An entry (``leaderboard/entries/NAME.json``, format in ``entry.schema.json``) holds a localizer's
 metrics on one suite, and beside it the per-frame results they were computed from
 (``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Validation checks the schema,
 that the suite and its version exist, that the per-frame file matches the entry's SHA-256, and
 that the metrics recomputed from it are the entry's: a tampered number, a swapped file or an old
-suite is rejected with the reason. ``build`` writes the ranked tables (``leaderboard/README.md``)
-and a self-contained, sortable HTML page; ``verify`` reruns the entry's localizer and compares.
+suite is rejected with the reason. ``verify`` reruns the entry's localizer and compares;
+:mod:`azgym.bench.board` publishes the entries.
 """
 
 from __future__ import annotations
 
-import base64
 import csv
 import gzip
 import hashlib
-import html
-import importlib.util
 import io
 import json
 import math
@@ -35,7 +32,6 @@ from azgym.bench.metrics import summarize_errors
 from azgym.bench.results import FRAME_COLUMNS
 from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import SUITES, get_suite
-from azgym.bench.table import rank_key
 from azgym.errors import AzgymError
 
 ENTRY_FORMAT = 1
@@ -87,6 +83,9 @@ def metrics_from_frames(text: str) -> dict[str, Any]:
 def make_entry(results_dir: Path, label: str, *, name: str, version: str, authors: list[str],
                link: str) -> tuple[dict[str, Any], str]:
     """An entry for localizer ``label`` from an ``azgym bench`` output folder, and its frames."""
+    if link and not link.startswith(("http://", "https://")):
+        raise LeaderboardError(f"link: must be an http:// or https:// address (or empty), got "
+                               f"{link!r}")
     summary = json.loads((results_dir / "results.json").read_text(encoding="utf-8"))
     if label not in summary["localizers"]:
         raise LeaderboardError(f"{results_dir}: no localizer {label!r} in the results; there "
@@ -194,149 +193,12 @@ def _load(path: Path) -> tuple[dict[str, Any], str]:
 
 def load_entries(entries_dir: Path) -> list[dict[str, Any]]:
     """Every entry in the folder, validated (the first bad one raises, naming its file)."""
-    return [entry for entry, _ in _load_all(entries_dir)]
+    return [entry for entry, _ in load_all(entries_dir)]
 
 
-def _load_all(entries_dir: Path) -> list[tuple[dict[str, Any], str]]:
+def load_all(entries_dir: Path) -> list[tuple[dict[str, Any], str]]:
+    """Every entry of the folder with its per-frame results, validated."""
     return [_load(path) for path in sorted(entries_dir.glob("*.json"))]
-
-
-def _ranked(entries: list[dict[str, Any]], suite: str) -> list[dict[str, Any]]:
-    rows = [e for e in entries if e["suite"] == suite]
-    return sorted(rows, key=lambda e: rank_key(e["metrics"]["all"], e["name"]))
-
-
-def _interval(bounds: list[float] | None) -> str:
-    return "–" if not bounds or None in bounds else f"{bounds[0]:.2f}–{bounds[1]:.2f}"
-
-
-def _fmt(value: Any, digits: int = 2) -> str:
-    return "–" if value is None else f"{value:.{digits}f}"
-
-
-COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
-           ("availability %", "availability"), ("mean cm", "mean_cm"),
-           ("median cm", "median_cm"), ("p75 cm", "p75_cm"), ("p75 95% CI", None),
-           ("p95 cm", "p95_cm"),
-           ("failures %", "failure_rate"), ("µs", None), ("× ransac", None), ("split", None),
-           ("azgym", None)]
-
-
-def _cells(rank: int, entry: dict[str, Any]) -> list[str]:
-    stats, runtime = entry["metrics"]["all"], entry["metrics"]["runtime_us"]
-
-    def percent(value: float | None) -> str:
-        return _fmt(None if value is None else 100 * value, 1)
-
-    return [str(rank), entry["name"], entry["version"], ", ".join(entry["authors"]),
-            percent(stats["availability"]), _fmt(stats["mean_cm"]), _fmt(stats["median_cm"]),
-            _fmt(stats["p75_cm"]), _interval(entry["metrics"].get("ci95", {}).get("p75_cm")),
-            _fmt(stats["p95_cm"], 1), percent(stats["failure_rate"]),
-            _fmt(runtime["median"], 1), _fmt(runtime["ratio_to_ransac"]),
-            f"{entry['split']} ({'quick' if entry['quick'] else 'full'})",
-            entry["azgym_version"]]
-
-
-def build(entries_dir: Path, out_dir: Path) -> list[Path]:
-    """Write the board: README.md (tables) and index.html (sortable, self-contained)."""
-    loaded = _load_all(entries_dir)
-    entries = [entry for entry, _ in loaded]
-    frames = {entry["name"]: text for entry, text in loaded}
-    suites = [name for name in SUITES if any(e["suite"] == name for e in entries)]
-    lines = ["# azgym leaderboard", "",
-             f"Ranked by the 75th percentile of the position error (EvAAL's headline). Generated "
-             f"by `azgym leaderboard build` from {len(entries)} entries in `entries/`; every "
-             "entry's figures are recomputed from its per-frame results when it is read.", ""]
-    sections = []
-    for suite in suites:
-        description = get_suite(suite).description
-        header = [c for c, _ in COLUMNS]
-        rows = [_cells(rank, entry) for rank, entry in enumerate(_ranked(entries, suite), 1)]
-        lines += [f"## {suite} — {description}", "",
-                  "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-        lines += ["| " + " | ".join(row) + " |" for row in rows]
-        lines.append("")
-        sections.append((suite, description, header, rows,
-                         _cdf_png(_ranked(entries, suite), frames)))
-    out_dir.mkdir(parents=True, exist_ok=True)
-    readme, page = out_dir / "README.md", out_dir / "index.html"
-    readme.write_text("\n".join(lines), encoding="utf-8")
-    page.write_text(_html(sections, len(entries)), encoding="utf-8")
-    return [readme, page]
-
-
-_SORT_SCRIPT = """
-document.querySelectorAll("table.board th").forEach(function (th) {
-  th.addEventListener("click", function () {
-    var table = th.closest("table"), body = table.tBodies[0], column = th.cellIndex;
-    var ascending = th.getAttribute("data-order") !== "ascending";
-    table.querySelectorAll("th").forEach(function (h) { h.removeAttribute("data-order"); });
-    th.setAttribute("data-order", ascending ? "ascending" : "descending");
-    var rows = Array.prototype.slice.call(body.rows);
-    rows.sort(function (a, b) {
-      var x = a.cells[column].textContent, y = b.cells[column].textContent;
-      var nx = parseFloat(x), ny = parseFloat(y);
-      var order = (isNaN(nx) || isNaN(ny)) ? x.localeCompare(y) : nx - ny;
-      return ascending ? order : -order;
-    });
-    rows.forEach(function (row) { body.appendChild(row); });
-  });
-});
-"""
-
-
-def _cdf_png(entries: list[dict[str, Any]], frames: dict[str, str]) -> str | None:
-    """The suite's error CDFs as a base64 PNG (None without matplotlib)."""
-    if importlib.util.find_spec("matplotlib") is None:
-        return None
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
-    for entry in entries:
-        rows = list(csv.DictReader(io.StringIO(frames[entry["name"]])))
-        # A missing estimate is a failure: it sits at +inf, never at zero error.
-        errors = np.sort([float(r["position_error_m"]) * 100 if r["ok"] == "1" else np.inf
-                          for r in rows])
-        axes.step(errors, np.arange(1, errors.size + 1) / errors.size, where="post",
-                  label=entry["name"])
-    axes.set_xscale("log")
-    axes.set_xlim(left=0.1)
-    axes.set_xlabel("position error [cm]")
-    axes.set_ylabel("share of frames")
-    axes.grid(True, which="both", alpha=0.3)
-    axes.legend(fontsize=7, loc="lower right")
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=90)
-    plt.close(figure)
-    return base64.b64encode(buffer.getvalue()).decode("ascii")
-
-
-def _html(sections: list[tuple[str, str, list[str], list[list[str]], str | None]],
-          count: int) -> str:
-    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-             "<title>azgym leaderboard</title><style>",
-             "body{font-family:sans-serif;margin:2em}table{border-collapse:collapse;margin:1em 0}",
-             "th,td{border:1px solid #bbb;padding:4px 8px;text-align:right}",
-             "th{cursor:pointer;background:#eee}th[data-order=ascending]::after{content:' ▲'}",
-             "th[data-order=descending]::after{content:' ▼'}</style></head><body>",
-             "<h1>azgym leaderboard</h1>",
-             f"<p>{count} entries, ranked by p75 position error. Click a column to sort.</p>"]
-    for suite, description, header, rows, cdf in sections:
-        parts.append(f'<h2>{html.escape(suite)}</h2><p>{html.escape(description)}</p>')
-        if cdf is not None:
-            parts.append(f'<img alt="error CDFs, {html.escape(suite)}" '
-                         f'src="data:image/png;base64,{cdf}">')
-        parts.append(f'<table class="board" id="board-{html.escape(suite)}"><thead><tr>')
-        parts += [f"<th>{html.escape(cell)}</th>" for cell in header]
-        parts.append("</tr></thead><tbody>")
-        for row in rows:
-            parts.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>")
-        parts.append("</tbody></table>")
-    parts += [f"<script>{_SORT_SCRIPT}</script>", "</body></html>"]
-    return "\n".join(parts)
 
 
 def verify(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]]:

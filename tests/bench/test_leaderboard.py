@@ -11,6 +11,7 @@ import subprocess
 
 import pytest
 
+from azgym.bench import board as B
 from azgym.bench import leaderboard as L
 from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import get_suite
@@ -30,12 +31,46 @@ def entry_path(results, tmp_path):
                     authors=["A. Author"], link="https://example.org")
 
 
+def test_submitted_text_cannot_forge_a_row_or_inject_html(results, tmp_path):
+    entries = tmp_path / "entries"
+    forged = "x | 0.00 |\n| 1 | evil | 9 | me | 100.0 | 0.00 |"
+    L.submit(results, "lsq", entries, name="lsq-ref", version="1<script>alert(1)</script>",
+             authors=[forged, "B|C"], link="https://example.org/a(b)")
+    readme, page = B.build(entries, tmp_path / "board")
+    table = [line for line in readme.read_text().splitlines() if line.startswith("| ")]
+    assert len(table) == 2  # the header and the one entry, no forged row
+    row = table[1]
+    cells = re.split(r"(?<!\\)\|", row)[1:-1]  # split on unescaped pipes only
+    assert len(cells) == len(B.COLUMNS)
+    assert "<script>" not in readme.read_text() and "&lt;script&gt;" in row
+    assert "(https://example.org/a%28b%29)" in row
+    text = page.read_text()
+    assert "<script>alert" not in text and '<a href="https://example.org/a%28b%29">' in text
+
+
+@pytest.mark.parametrize("link", ["javascript:alert(1)", "file:///etc/passwd", "built into azgym"])
+def test_a_link_must_be_a_web_address_and_others_are_never_shown(results, tmp_path, link):
+    with pytest.raises(L.LeaderboardError, match="link: must be an http:// or https:// address"):
+        L.submit(results, "lsq", tmp_path / "entries", name="bad-link", version="1",
+                 authors=["a"], link=link)
+    assert B.web_link(link) is None
+
+
+def test_building_from_a_missing_or_empty_folder_keeps_the_board(tmp_path):
+    board = tmp_path / "board"
+    for folder in (tmp_path / "typo", tmp_path / "empty"):
+        (tmp_path / "empty").mkdir(exist_ok=True)
+        with pytest.raises(L.LeaderboardError, match="no leaderboard entries there"):
+            B.build(folder, board)
+    assert not board.exists()
+
+
 def test_a_submitted_entry_validates_builds_and_reproduces(entry_path, tmp_path):
     entry = L.load_entry(entry_path)
     assert entry["name"] == "lsq-ref" and entry["localizer"] == {"spec": "lsq", "params": {}}
     assert (entry_path.parent / "lsq-ref.frames.csv.gz").is_file()
-    readme, page = L.build(entry_path.parent, tmp_path / "board")
-    assert "| 1 | lsq-ref | 1.0 | A. Author |" in readme.read_text()
+    readme, page = B.build(entry_path.parent, tmp_path / "board")
+    assert "| 1 | [lsq-ref](https://example.org) | 1.0 | A. Author |" in readme.read_text()
     text = page.read_text()
     assert "data:image/png;base64," in text  # the suite's error CDFs, embedded
     assert "<table class=\"board\"" in text and "<script>" in text and "http" not in text.split(
@@ -104,8 +139,8 @@ def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, 
     entries = tmp_path / "entries"
     for label in ("ransac", "lsq"):
         L.submit(results, label, entries, name=f"{label}-ref", version="1", authors=["a"])
-    _, page = L.build(entries, tmp_path / "board")
-    column = [c for c, _ in L.COLUMNS].index("p75 cm")
+    _, page = B.build(entries, tmp_path / "board")
+    column = [c for c, _ in B.COLUMNS].index("p75 cm")
     probe = f"""<script>
       var header = document.querySelectorAll("table.board th")[{column}];
       function names() {{
@@ -145,7 +180,7 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
     if chromium is None:
         pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run installs it)")
     page = L.Path(__file__).parents[2] / "leaderboard" / "index.html"
-    column = [c for c, _ in L.COLUMNS].index("p75 cm")
+    column = [c for c, _ in B.COLUMNS].index("p75 cm")
     probe = f"""<script>
       var result = [];
       document.querySelectorAll("table.board").forEach(function (table) {{
@@ -190,6 +225,6 @@ def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(t
     for suite in L.SUITES:
         assert {e["name"].removesuffix(f"-{suite}") for e in entries
                 if e["suite"] == suite} == builtins, suite
-    readme, _ = L.build(root / "entries", tmp_path)
+    readme, _ = B.build(root / "entries", tmp_path)
     assert readme.read_text() == (root / "README.md").read_text(), \
         "leaderboard/README.md is stale: run python baselines/leaderboard_entries.py"

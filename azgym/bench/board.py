@@ -1,0 +1,207 @@
+"""The published board: ranked Markdown tables (``leaderboard/README.md``) and a sortable page.
+
+Everything an entry's submitter wrote (name, version, authors, link) is escaped where it is
+shown: in Markdown, ``|``, backslashes, line breaks and HTML cannot forge a row or a tag; on the
+page, HTML is escaped; a link is shown only when it is an ``http://`` or ``https://`` address.
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import html
+import importlib.util
+import io
+from pathlib import Path
+from typing import Any
+from urllib.parse import quote
+
+import numpy as np
+
+from azgym.bench.leaderboard import LeaderboardError, load_all
+from azgym.bench.suites import SUITES, get_suite
+from azgym.bench.table import rank_key
+
+WEB_SCHEMES = ("http://", "https://")
+"""A link is shown only with one of these schemes (no ``javascript:``, no local files)."""
+
+
+def web_link(link: str) -> str | None:
+    """The link made safe for an attribute or a Markdown target, or None if it is no web address."""
+    if not isinstance(link, str) or not link.startswith(WEB_SCHEMES):
+        return None
+    return quote(link, safe=":/?#[]@!$&'*+,;=%~")
+
+
+def markdown_cell(text: str) -> str:
+    """Text as one Markdown table cell: no line break, no unescaped ``|``, no raw HTML."""
+    escaped = html.escape(text, quote=False).replace("\\", "\\\\").replace("|", "\\|")
+    return " ".join(escaped.splitlines())
+
+
+def _ranked(entries: list[dict[str, Any]], suite: str) -> list[dict[str, Any]]:
+    rows = [e for e in entries if e["suite"] == suite]
+    return sorted(rows, key=lambda e: rank_key(e["metrics"]["all"], e["name"]))
+
+
+def _interval(bounds: list[float] | None) -> str:
+    return "–" if not bounds or None in bounds else f"{bounds[0]:.2f}–{bounds[1]:.2f}"
+
+
+def _fmt(value: Any, digits: int = 2) -> str:
+    return "–" if value is None else f"{value:.{digits}f}"
+
+
+COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
+           ("availability %", "availability"), ("mean cm", "mean_cm"),
+           ("median cm", "median_cm"), ("p75 cm", "p75_cm"), ("p75 95% CI", None),
+           ("p95 cm", "p95_cm"),
+           ("failures %", "failure_rate"), ("µs", None), ("× ransac", None), ("split", None),
+           ("azgym", None)]
+NAME_COLUMN = 1
+"""The column of the entry's name, which links to its web link."""
+
+
+def _cells(rank: int, entry: dict[str, Any]) -> list[str]:
+    stats, runtime = entry["metrics"]["all"], entry["metrics"]["runtime_us"]
+
+    def percent(value: float | None) -> str:
+        return _fmt(None if value is None else 100 * value, 1)
+
+    return [str(rank), entry["name"], entry["version"], ", ".join(entry["authors"]),
+            percent(stats["availability"]), _fmt(stats["mean_cm"]), _fmt(stats["median_cm"]),
+            _fmt(stats["p75_cm"]), _interval(entry["metrics"].get("ci95", {}).get("p75_cm")),
+            _fmt(stats["p95_cm"], 1), percent(stats["failure_rate"]),
+            _fmt(runtime["median"], 1), _fmt(runtime["ratio_to_ransac"]),
+            f"{entry['split']} ({'quick' if entry['quick'] else 'full'})",
+            entry["azgym_version"]]
+
+
+def build(entries_dir: Path, out_dir: Path) -> list[Path]:
+    """Write the board: README.md (tables) and index.html (sortable, self-contained).
+
+    Raises:
+        LeaderboardError: The entries folder is missing or holds no entry (a typo must not
+            replace the board with an empty one).
+    """
+    if not entries_dir.is_dir() or not any(entries_dir.glob("*.json")):
+        raise LeaderboardError(f"{entries_dir}: no leaderboard entries there (*.json); the "
+                               "board is left as it is")
+    loaded = load_all(entries_dir)
+    entries = [entry for entry, _ in loaded]
+    frames = {entry["name"]: text for entry, text in loaded}
+    suites = [name for name in SUITES if any(e["suite"] == name for e in entries)]
+    lines = ["# azgym leaderboard", "",
+             f"Ranked by the 75th percentile of the position error (EvAAL's headline). Generated "
+             f"by `azgym leaderboard build` from {len(entries)} entries in `entries/`; every "
+             "entry's figures are recomputed from its per-frame results when it is read.", ""]
+    sections = []
+    for suite in suites:
+        description = get_suite(suite).description
+        header = [c for c, _ in COLUMNS]
+        rows = [_cells(rank, entry) for rank, entry in enumerate(_ranked(entries, suite), 1)]
+        lines += [f"## {suite} — {description}", "",
+                  "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+        lines += ["| " + " | ".join(_markdown_row(row, entry)) + " |"
+                  for row, entry in zip(rows, _ranked(entries, suite), strict=True)]
+        lines.append("")
+        links = [web_link(entry["link"]) for entry in _ranked(entries, suite)]
+        sections.append((suite, description, header, rows, links,
+                         _cdf_png(_ranked(entries, suite), frames)))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    readme, page = out_dir / "README.md", out_dir / "index.html"
+    readme.write_text("\n".join(lines), encoding="utf-8")
+    page.write_text(_html(sections, len(entries)), encoding="utf-8")
+    return [readme, page]
+
+
+_SORT_SCRIPT = """
+document.querySelectorAll("table.board th").forEach(function (th) {
+  th.addEventListener("click", function () {
+    var table = th.closest("table"), body = table.tBodies[0], column = th.cellIndex;
+    var ascending = th.getAttribute("data-order") !== "ascending";
+    table.querySelectorAll("th").forEach(function (h) { h.removeAttribute("data-order"); });
+    th.setAttribute("data-order", ascending ? "ascending" : "descending");
+    var rows = Array.prototype.slice.call(body.rows);
+    rows.sort(function (a, b) {
+      var x = a.cells[column].textContent, y = b.cells[column].textContent;
+      var nx = parseFloat(x), ny = parseFloat(y);
+      var order = (isNaN(nx) || isNaN(ny)) ? x.localeCompare(y) : nx - ny;
+      return ascending ? order : -order;
+    });
+    rows.forEach(function (row) { body.appendChild(row); });
+  });
+});
+"""
+
+
+def _cdf_png(entries: list[dict[str, Any]], frames: dict[str, str]) -> str | None:
+    """The suite's error CDFs as a base64 PNG (None without matplotlib)."""
+    if importlib.util.find_spec("matplotlib") is None:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
+    for entry in entries:
+        rows = list(csv.DictReader(io.StringIO(frames[entry["name"]])))
+        # A missing estimate is a failure: it sits at +inf, never at zero error.
+        errors = np.sort([float(r["position_error_m"]) * 100 if r["ok"] == "1" else np.inf
+                          for r in rows])
+        axes.step(errors, np.arange(1, errors.size + 1) / errors.size, where="post",
+                  label=entry["name"])
+    axes.set_xscale("log")
+    axes.set_xlim(left=0.1)
+    axes.set_xlabel("position error [cm]")
+    axes.set_ylabel("share of frames")
+    axes.grid(True, which="both", alpha=0.3)
+    axes.legend(fontsize=7, loc="lower right")
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=90)
+    plt.close(figure)
+    return base64.b64encode(buffer.getvalue()).decode("ascii")
+
+
+def _markdown_row(row: list[str], entry: dict[str, Any]) -> list[str]:
+    """A table row's cells escaped for Markdown; the name links to the entry's web link."""
+    cells = [markdown_cell(cell) for cell in row]
+    link = web_link(entry["link"])
+    if link is not None:
+        target = link.replace("(", "%28").replace(")", "%29")
+        cells[NAME_COLUMN] = f"[{cells[NAME_COLUMN]}]({target})"
+    return cells
+
+
+def _html_cells(row: list[str], link: str | None) -> str:
+    """A table row's cells as HTML; the name links to the entry's web link."""
+    cells = [html.escape(cell) for cell in row]
+    if link is not None:
+        cells[NAME_COLUMN] = f'<a href="{html.escape(link)}">{cells[NAME_COLUMN]}</a>'
+    return "".join(f"<td>{cell}</td>" for cell in cells)
+
+
+def _html(sections: list[tuple[str, str, list[str], list[list[str]], list[str | None],
+                               str | None]], count: int) -> str:
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+             "<title>azgym leaderboard</title><style>",
+             "body{font-family:sans-serif;margin:2em}table{border-collapse:collapse;margin:1em 0}",
+             "th,td{border:1px solid #bbb;padding:4px 8px;text-align:right}",
+             "th{cursor:pointer;background:#eee}th[data-order=ascending]::after{content:' ▲'}",
+             "th[data-order=descending]::after{content:' ▼'}</style></head><body>",
+             "<h1>azgym leaderboard</h1>",
+             f"<p>{count} entries, ranked by p75 position error. Click a column to sort.</p>"]
+    for suite, description, header, rows, links, cdf in sections:
+        parts.append(f'<h2>{html.escape(suite)}</h2><p>{html.escape(description)}</p>')
+        if cdf is not None:
+            parts.append(f'<img alt="error CDFs, {html.escape(suite)}" '
+                         f'src="data:image/png;base64,{cdf}">')
+        parts.append(f'<table class="board" id="board-{html.escape(suite)}"><thead><tr>')
+        parts += [f"<th>{html.escape(cell)}</th>" for cell in header]
+        parts.append("</tr></thead><tbody>")
+        for row, link in zip(rows, links, strict=True):
+            parts.append("<tr>" + _html_cells(row, link) + "</tr>")
+        parts.append("</tbody></table>")
+    parts += [f"<script>{_SORT_SCRIPT}</script>", "</body></html>"]
+    return "\n".join(parts)
