@@ -90,6 +90,24 @@ def pose_error(estimate: Pose, truth: Pose) -> tuple[float, float]:
             abs(wrap_angle(float(estimate[2]) - truth[2])))
 
 
+def estimated_pose(estimate: Any) -> Pose | None:
+    """The pose an estimate gives, or None when it gives none: the one rule for "has a pose".
+
+    A pose needs ``ok`` to be True and x, y and heading to be finite: an ``ok=True`` with a NaN
+    part is no pose (a plug-in's bug must not read as an answer).
+
+    Raises:
+        InvalidInputError: ``ok`` is not a bool (e.g. the string "False", which is truthy).
+    """
+    ok = estimate.ok
+    if not isinstance(ok, (bool, np.bool_)):
+        raise InvalidInputError(f"Estimate.ok must be True or False, got {ok!r}")
+    if not ok:
+        return None
+    pose = (float(estimate.x), float(estimate.y), float(estimate.heading))
+    return pose if all(math.isfinite(value) for value in pose) else None
+
+
 def _frozen(array: np.ndarray) -> np.ndarray:
     array.setflags(write=False)
     return array

@@ -302,3 +302,15 @@ def test_wrap_angle_just_above_pi():
     wrapped = wrap_angle(np.nextafter(math.pi, 4.0))
     assert wrapped != -math.pi
     assert wrap_angle(wrapped) == wrapped
+
+
+def test_an_estimate_gives_a_pose_only_when_ok_is_true_and_the_pose_finite():
+    from azgym.core import estimated_pose
+
+    mask = np.zeros(3, dtype=bool)
+    assert estimated_pose(Estimate(1.0, 2.0, 0.5, mask)) == (1.0, 2.0, 0.5)
+    assert estimated_pose(Estimate(1.0, math.nan, 0.5, mask)) is None  # ok=True, NaN part
+    assert estimated_pose(Estimate.failure("none", 3)) is None
+    with pytest.raises(InvalidInputError, match=re.escape("Estimate.ok must be True or False, "
+                                                          "got 'False'")):
+        estimated_pose(Estimate(1.0, 2.0, 0.5, mask, ok="False"))

@@ -19,7 +19,7 @@ from azgym.bench.contenders import REFERENCE, Contender, default_contenders
 from azgym.bench.outcome import Outcome
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import Case, Suite
-from azgym.core import BeaconMap, pose_error
+from azgym.core import BeaconMap, estimated_pose, pose_error
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import make_localizer
 from azgym.site import load_scenario
@@ -55,11 +55,10 @@ def _localize_chunk(contender: Contender, cases: list[Case],
             start = time.perf_counter_ns()
             estimate = localizer.localize(case.measurements, maps[case.scenario])
             outcome.micros[k] = (time.perf_counter_ns() - start) / 1000.0
-            pose = (float(estimate.x), float(estimate.y), float(estimate.heading))
-            ok = bool(estimate.ok) and all(math.isfinite(value) for value in pose)
-            if ok:  # a pose with a NaN or infinite part is no estimate
+            pose = estimated_pose(estimate)
+            if pose is not None:
                 outcome.position[k], outcome.heading[k] = pose_error(pose, case.pose)
-            outcome.ok[k] = ok
+            outcome.ok[k] = pose is not None
         except Exception as exc:  # noqa: BLE001 - a failing plug-in is scored, not fatal
             outcome.errors[k] = f"{type(exc).__name__}: {exc}"
     return outcome

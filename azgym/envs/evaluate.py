@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 
 from azgym.bench.metrics import summarize_errors
-from azgym.core import Measurements, pose_error
+from azgym.core import Measurements, estimated_pose, pose_error
 from azgym.envs.localize import LocalizeEnv
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
@@ -62,12 +62,13 @@ def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episode
         done = False
         while not done:
             estimate = agent.localize(measurements_from_observation(observation), beacons)
-            ok.append(bool(estimate.ok))
-            if estimate.ok:
-                position_error, heading_error = pose_error(estimate.pose, info["true_pose"])
+            pose = estimated_pose(estimate)
+            ok.append(pose is not None)
+            if pose is not None:
+                position_error, heading_error = pose_error(pose, info["true_pose"])
                 position.append(position_error)
                 heading.append(heading_error)
-                action = inner.pose_to_action(estimate.x, estimate.y, estimate.heading)
+                action = inner.pose_to_action(*pose)
             else:
                 position.append(math.nan)
                 heading.append(math.nan)

@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from azgym.core import wrap_angle
+from azgym.core import estimated_pose, wrap_angle
 from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
@@ -297,7 +297,7 @@ class NavigateEnv(gym.Env):
         else:
             estimate = self.localizer.localize(self.last_observation.measurements,
                                                self.scenario.beacons)
-            self._estimate = estimate.pose if estimate.ok else None
+            self._estimate = estimated_pose(estimate)
 
     def _observe(self) -> np.ndarray:
         forklift = self._world.forklift

@@ -12,7 +12,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, Measurements, Pose, pose_error, wrap_scalar
+from azgym.core import (
+    BeaconMap,
+    Estimate,
+    Measurements,
+    Pose,
+    estimated_pose,
+    pose_error,
+    wrap_scalar,
+)
 from azgym.errors import AzgymError
 from azgym.localize.base import Localizer
 from azgym.localize.registry import SupportsLocalize
@@ -86,7 +94,11 @@ def _check_recovery(
     _expect(inliers.shape == (len(beacons),) and inliers.dtype == bool, "inlier mask",
             f"expected bool array of shape ({len(beacons)},), got {inliers.dtype} "
             f"{inliers.shape}")
+    _expect(isinstance(estimate.ok, (bool, np.bool_)), "ok is a bool",
+            f"got {estimate.ok!r}")
     _expect(estimate.ok, "noise-free recovery", f"failed at pose {pose}: {estimate.reason}")
+    _expect(estimated_pose(estimate) is not None, "ok=True comes with a finite pose",
+            f"got ({estimate.x}, {estimate.y}, {estimate.heading})")
     position_error, heading_error = pose_error(estimate.pose, pose)
     _expect(position_error <= position_tol and heading_error <= heading_tol,
             "noise-free recovery",

@@ -227,3 +227,15 @@ def test_reset_seeds_the_image_sensors_noise_and_blinking_phases(env_id):
     assert np.array_equal(camera.phases, phases)
     env.reset(seed=2)
     assert not np.array_equal(camera.phases, phases)
+
+
+def test_an_ok_estimate_with_a_nan_pose_is_not_a_localization():
+    from azgym.core import Estimate
+
+    class NanPose:
+        def localize(self, measurements, beacons):
+            return Estimate(math.nan, 1.0, 0.0, np.zeros(len(measurements), dtype=bool))
+
+    env = gym.make(NAVIGATE, localizer=NanPose())
+    observation, info = env.reset(seed=0)
+    assert not info["localized"] and observation[0] == 0.0  # no goal from a pose that is none

@@ -255,3 +255,16 @@ def test_entry_point_plugins_are_listed_and_built(monkeypatch):
     assert type(localizer).__name__ == "LeastSquares" and localizer.max_iter == 7
     with pytest.raises(azgym.UnknownNameError, match=re.escape("Did you mean 'vendor-lsq'?")):
         azgym.make_localizer("vendor-lsk")
+
+
+@pytest.mark.parametrize(("ok", "x", "message"), [("True", 0.4, "ok is a bool"),
+                                                 (True, float("nan"), "finite pose")])
+def test_check_localizer_refuses_a_string_ok_or_an_ok_without_a_finite_pose(ok, x, message):
+    from azgym.core import Estimate
+
+    class Liar:
+        def localize(self, measurements, beacons):
+            return Estimate(x, -0.7, 0.3, np.ones(len(measurements), dtype=bool), ok=ok)
+
+    with pytest.raises(azgym.LocalizerCheckError, match=message):
+        azgym.check_localizer(Liar())
