@@ -84,6 +84,9 @@ def _leaderboard(args: argparse.Namespace) -> int:
         for path in board.build(Path(args.entries), Path(args.out)):
             print(f"wrote {path}")
     else:
+        spec = leaderboard.load_entry(Path(args.entry))["localizer"]["spec"]
+        print(f"{args.entry}: rerunning its localizer {spec!r}, which is the submitter's code",
+              flush=True)
         differences = leaderboard.verify(Path(args.entry), workers=args.workers or 1)
         if differences:
             for key, (claimed, fresh) in differences.items():

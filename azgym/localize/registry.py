@@ -93,11 +93,26 @@ def _load_attribute(spec: str) -> Factory:
                 f"localizer spec {spec!r}: cannot import {target!r}: {exc}"
             ) from None
     try:
-        return getattr(module, attribute)
+        factory = getattr(module, attribute)
     except AttributeError:
         raise InvalidInputError(
             f"localizer spec {spec!r}: {target!r} has no attribute {attribute!r}"
         ) from None
+    return _localizer_class(spec, factory)
+
+
+def _localizer_class(spec: str, factory: Any) -> Factory:
+    """The factory a spec names, if it is a localizer class: a class with a ``localize`` method.
+
+    A spec comes from a command line or a leaderboard entry, which anyone can write: refusing
+    anything else before calling it means that ``"os:system"`` or ``"subprocess:Popen"`` with
+    hyperparameters can never run a command.
+    """
+    if not (isinstance(factory, type) and callable(getattr(factory, "localize", None))):
+        raise InvalidInputError(
+            f"localizer spec {spec!r} names a {type(factory).__name__}, not a localizer class "
+            "(a class with a localize(measurements, beacons) method)")
+    return factory
 
 
 def resolve(name: str) -> Factory:
@@ -112,7 +127,7 @@ def resolve(name: str) -> Factory:
         return _load_attribute(name)
     plugins = _entry_points()
     if name in plugins:
-        return plugins[name].load()
+        return _localizer_class(name, plugins[name].load())
     raise unknown_name("localizer", name, list_localizers())
 
 

@@ -151,8 +151,9 @@ def test_bad_specs_raise_invalid_input(spec, message):
 
 def test_a_factory_without_localize_is_rejected(tmp_path):
     path = plugin_file(tmp_path)
-    with pytest.raises(InvalidInputError,
-                       match=re.escape("has no localize(measurements, beacons)")):
+    with pytest.raises(InvalidInputError, match=re.escape(
+            "names a function, not a localizer class (a class with a localize(measurements, "
+            "beacons) method)")):
         azgym.make_localizer(f"{path}:not_a_localizer")
 
 
@@ -268,3 +269,13 @@ def test_check_localizer_refuses_a_string_ok_or_an_ok_without_a_finite_pose(ok, 
 
     with pytest.raises(azgym.LocalizerCheckError, match=message):
         azgym.check_localizer(Liar())
+
+
+@pytest.mark.parametrize("spec", ["os:system", "subprocess:Popen", "builtins:eval",
+                                  "azgym.localize.ransac:n_trials"])
+def test_a_spec_that_is_not_a_localizer_class_is_refused_before_it_is_called(spec, tmp_path,
+                                                                              monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(InvalidInputError, match="not a localizer class"):
+        azgym.make_localizer(spec, command="touch pwned", args="touch pwned", shell=True)
+    assert not (tmp_path / "pwned").exists()
