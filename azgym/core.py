@@ -28,6 +28,9 @@ Pose = tuple[float, float, float]
 TWO_PI = 2.0 * math.pi
 
 
+AZIMUTH_SLACK = 1e-6
+"""How far past ±π a measured azimuth may lie [rad]: a float32 round trip of ±π (an agent's
+observation) lands about 1e-7 outside."""
 LARGE_ANGLE = 1e12
 """Beyond this magnitude [rad] an angle is first reduced modulo 2π (exact), so that the count
 of whole turns stays a small integer in compiled code too."""
@@ -243,6 +246,12 @@ class Measurements:
     ) -> None:
         id_array = _as_ids("Measurements", "ids", ids)
         azimuth_array = _as_finite("Measurements", "azimuth", azimuth, id_array.shape)
+        outside = np.abs(azimuth_array) > math.pi + AZIMUTH_SLACK
+        if outside.any():
+            k = int(np.flatnonzero(outside)[0])
+            raise InvalidInputError(
+                f"Measurements.azimuth must be radians in [-π, π], got {azimuth_array[k]} at "
+                f"index {k} (degrees? convert with np.radians; unwrapped? use azgym.wrap_angle)")
         quality_array = None
         if quality is not None:
             shape = np.shape(quality)

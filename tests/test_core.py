@@ -314,3 +314,12 @@ def test_an_estimate_gives_a_pose_only_when_ok_is_true_and_the_pose_finite():
     with pytest.raises(InvalidInputError, match=re.escape("Estimate.ok must be True or False, "
                                                           "got 'False'")):
         estimated_pose(Estimate(1.0, 2.0, 0.5, mask, ok="False"))
+
+
+def test_azimuths_in_degrees_are_refused_with_a_hint():
+    with pytest.raises(InvalidInputError, match=re.escape(
+            "Measurements.azimuth must be radians in [-π, π], got 45.0 at index 1 (degrees? "
+            "convert with np.radians")):
+        Measurements([1, 2, 3], [0.0, 45.0, -90.0])
+    edge = np.float32(np.pi).astype(np.float64)  # an agent's float32 observation of π
+    assert Measurements([1], [edge]).azimuth[0] == edge

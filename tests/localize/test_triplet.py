@@ -11,7 +11,7 @@ from helpers import beacon_map, ideal_frame, pose_error_of
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from azgym import InvalidInputError, Measurements
+from azgym import InvalidInputError, Measurements, wrap_angle
 from azgym.localize.triplet import Triplet
 
 PI = math.pi
@@ -55,8 +55,8 @@ def test_hand_worked_heading_behind_the_camera():
 def test_eq18_limit_camera_between_two_beacons(heading):
     # Camera at the origin on the segment between (1, 0) and (−1, 0): θ = 180°, sin θ = 0, the
     # limit case of eq. 18. β = 0°, 90°, 180°; α = β − φ.
-    azimuth = [-heading, PI / 2 - heading, PI - heading]
-    estimate = solve([(1, 0), (0, 1), (-1, 0)], np.array(azimuth))
+    azimuth = wrap_angle(np.array([-heading, PI / 2 - heading, PI - heading]))
+    estimate = solve([(1, 0), (0, 1), (-1, 0)], azimuth)
     assert estimate.ok, estimate.reason
     x, y = estimate.x, estimate.y
     assert math.hypot(x, y) < 1e-10
