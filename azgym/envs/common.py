@@ -30,13 +30,34 @@ def reward_weights(**weights: float) -> dict[str, float]:
     return {name: float(value) for name, value in weights.items()}
 
 
+CAMERA_RATES_HZ = (0.1, 1000.0)
+"""The frame rates an environment accepts [Hz]: slower would leave a route without frames (and
+take forever to find the next one), faster is no camera."""
+
+
 def check_camera_rate(camera_rate_hz: float | None) -> None:
-    """Refuse a frame rate that is not a finite number > 0 (None: the sensor's own rate)."""
+    """Refuse a frame rate that is not a number in ``CAMERA_RATES_HZ`` (None: the sensor's)."""
+    low, high = CAMERA_RATES_HZ
     if camera_rate_hz is not None and (
             isinstance(camera_rate_hz, bool) or not isinstance(camera_rate_hz, numbers.Real)
-            or not (math.isfinite(camera_rate_hz) and camera_rate_hz > 0)):
-        raise InvalidInputError(f"camera_rate_hz must be a finite number > 0 [Hz], got "
-                                f"{camera_rate_hz!r}")
+            or not low <= camera_rate_hz <= high):
+        raise InvalidInputError(f"camera_rate_hz must be a finite number > 0 [Hz] from {low} "
+                                f"to {high}, got {camera_rate_hz!r}")
+
+
+def whole_number(name: str, value: object, minimum: int = 1) -> int:
+    """``value`` as an int, refusing anything that is not a whole number >= ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise InvalidInputError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def positive_number(name: str, value: object, unit: str) -> float:
+    """``value`` as a float, refusing anything that is not a finite number > 0."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
+            math.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{name} must be a finite number > 0 [{unit}], got {value!r}")
+    return float(value)
 
 
 class Padder:

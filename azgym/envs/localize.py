@@ -10,7 +10,13 @@ import numpy as np
 from gymnasium import spaces
 
 from azgym.core import pose_error, wrap_angle
-from azgym.envs.common import Padder, check_camera_rate, check_render_mode, reward_weights
+from azgym.envs.common import (
+    Padder,
+    check_camera_rate,
+    check_render_mode,
+    reward_weights,
+    whole_number,
+)
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.catalog import make_sensor
 from azgym.sensing.protocol import Observation
@@ -139,10 +145,10 @@ class LocalizeEnv(gym.Env):
         self._check_options(route, max_detections, ids, observation, camera_rate_hz,
                             render_mode)
         self.route = route
-        self.max_detections = max_detections
+        self.max_detections = whole_number("max_detections", max_detections, minimum=3)
         self.weights = reward_weights(position_error=position_error,
                                       heading_error=heading_error)
-        self.episode_length = episode_length
+        self.episode_length = whole_number("episode_length", episode_length)
         self.render_mode = render_mode
         self.observation = observation
         self.camera = make_sensor(self.scenario, "image" if observation == "image" else sensor,
@@ -180,9 +186,6 @@ class LocalizeEnv(gym.Env):
         if route is not None and route not in names:
             raise unknown_name("route", route, names)
         check_render_mode(render_mode, self.metadata["render_modes"])
-        if not (isinstance(max_detections, int) and max_detections >= 3):
-            raise InvalidInputError(f"max_detections must be an integer >= 3, got "
-                                    f"{max_detections!r}")
 
     def _observation_space(self) -> spaces.Space:
         """The frame's pixels, or the padded detections with the map (see the class)."""

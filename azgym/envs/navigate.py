@@ -10,7 +10,13 @@ import numpy as np
 from gymnasium import spaces
 
 from azgym.core import estimated_pose, wrap_angle
-from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
+from azgym.envs.common import (
+    check_camera_rate,
+    check_render_mode,
+    positive_number,
+    reward_weights,
+    whole_number,
+)
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
 from azgym.sensing.catalog import make_sensor
@@ -30,6 +36,8 @@ DISCRETE_CONTROLS = np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.6, 1.0], [
                              dtype=np.float32)
 """(throttle, steer) of the discrete actions: coast, forward, back, forward-left, forward-right."""
 
+MIN_GOAL_DISTANCE = 5.0
+"""A goal spot is at least this far from the start [m]."""
 GOAL_SCALE = 20.0
 """Goal offsets in the observation are divided by this [m]."""
 
@@ -154,11 +162,14 @@ class NavigateEnv(gym.Env):
         self.localizer_name = localizer if isinstance(localizer, str) else type(localizer).__name__
         self.localizer = None if localizer == "truth" else (
             make_localizer(localizer) if isinstance(localizer, str) else localizer)
+        if self.localizer is not None and not isinstance(self.localizer, SupportsLocalize):
+            raise InvalidInputError(f"localizer must be a name, \"truth\" or an object with "
+                                    f"localize(measurements, beacons), got {localizer!r}")
         self.discrete = bool(discrete)
-        self.max_steps = int(max_steps)
-        self.goal_radius = float(goal_radius)
-        self.n_rays = int(n_rays)
-        self.ray_range = float(ray_range)
+        self.max_steps = whole_number("max_steps", max_steps)
+        self.goal_radius = positive_number("goal_radius", goal_radius, "m")
+        self.n_rays = whole_number("n_rays", n_rays)
+        self.ray_range = positive_number("ray_range", ray_range, "m")
         self.render_mode = render_mode
         self.camera = make_sensor(self.scenario, sensor, ids)
         self.camera_rate_hz = float(camera_rate_hz or self.camera.frame_rate_hz)
@@ -171,6 +182,11 @@ class NavigateEnv(gym.Env):
         self._rays = np.empty(self.n_rays)
         self.spots = np.unique(np.concatenate([r.waypoints for r in self.scenario.routes]),
                                axis=0)
+        spread = np.hypot(*(self.spots[:, None, :] - self.spots[None, :, :]).transpose(2, 0, 1))
+        if spread.max() < MIN_GOAL_DISTANCE:
+            raise InvalidInputError(
+                f"scenario {self.scenario.name!r}: no two spots (route waypoints) are "
+                f"{MIN_GOAL_DISTANCE} m apart, so no start and goal can be drawn")
         self.action_space = (spaces.Discrete(len(DISCRETE_CONTROLS)) if self.discrete else
                              spaces.Box(-1.0, 1.0, (2,), np.float32))
         self.observation_space = spaces.Box(-1.0, 1.0, (5 + self.n_rays,), np.float32)
@@ -184,7 +200,7 @@ class NavigateEnv(gym.Env):
         super().reset(seed=seed)
         while True:
             start, goal = self.np_random.choice(len(self.spots), size=2, replace=False)
-            if np.hypot(*(self.spots[goal] - self.spots[start])) >= 5.0:
+            if np.hypot(*(self.spots[goal] - self.spots[start])) >= MIN_GOAL_DISTANCE:
                 break
         heading = float(self.np_random.uniform(-math.pi, math.pi))
         self._world = World(self.scenario, (*self.spots[start], heading), dt=PHYSICS_DT)
@@ -235,8 +251,9 @@ class NavigateEnv(gym.Env):
 
     def _controls(self, action: Any) -> tuple[float, float]:
         if self.discrete:
-            if not (np.ndim(action) == 0 and int(action) == action
-                    and 0 <= int(action) < len(DISCRETE_CONTROLS)):
+            value = np.asarray(action)
+            if not (value.shape == () and value.dtype.kind in "iuf" and np.isfinite(value)
+                    and value == np.floor(value) and 0 <= value < len(DISCRETE_CONTROLS)):
                 raise InvalidInputError(
                     f"action must be an integer in [0, {len(DISCRETE_CONTROLS)}), got {action!r}"
                 )

@@ -298,3 +298,42 @@ def test_image_options_are_checked():
         gym.make("azgym/Localize-PaperRoom-v1", sensor="image", ids="blink")
     with pytest.raises(InvalidInputError, match="camera_rate_hz must be a finite number > 0"):
         gym.make("azgym/Localize-WarehouseSmall-v1", camera_rate_hz=0.0)
+
+
+LOCALIZE, NAVIGATE = "azgym/Localize-WarehouseSmall-v1", "azgym/Navigate-WarehouseSmall-v1"
+
+
+@pytest.mark.parametrize(("env_id", "options", "message"), [
+    (LOCALIZE, {"episode_length": 0}, "episode_length must be an integer >= 1, got 0"),
+    ("azgym/Localize-PaperRoom-v1", {"episode_length": 1.5},
+     "episode_length must be an integer >= 1, got 1.5"),
+    (LOCALIZE, {"camera_rate_hz": 1e-7}, "from 0.1 to 1000.0, got 1e-07"),
+    (NAVIGATE, {"n_rays": -1}, "n_rays must be an integer >= 1, got -1"),
+    (NAVIGATE, {"ray_range": 0}, "ray_range must be a finite number > 0 [m], got 0"),
+    (NAVIGATE, {"goal_radius": -1}, "goal_radius must be a finite number > 0 [m]"),
+    (NAVIGATE, {"max_steps": "x"}, "max_steps must be an integer >= 1, got 'x'"),
+    (NAVIGATE, {"localizer": 42}, "localizer must be a name, \"truth\" or an object"),
+])
+def test_bad_environment_arguments_are_refused_when_made(env_id, options, message):
+    with pytest.raises(InvalidInputError, match=re.escape(message)):
+        gym.make(env_id, **options)
+
+
+@pytest.mark.parametrize("action", [math.nan, None, math.inf, 2.5, "1", -1, 5])
+def test_a_discrete_action_must_be_a_whole_number_in_range(action):
+    env = gym.make("azgym/NavigateDiscrete-WarehouseSmall-v1")
+    env.reset(seed=0)
+    with pytest.raises(InvalidInputError, match=re.escape("action must be an integer in [0, 5)")):
+        env.step(action)
+
+
+def test_a_site_whose_spots_are_all_close_is_refused_for_navigation(tmp_path):
+    text = importlib.resources.files("azgym.site.scenarios").joinpath(
+        "warehouse-small.toml").read_text()
+    start = text.index("[[routes]]")
+    routes = ('[[routes]]\nname = "short"\nwaypoints = [[2.0, 2.0], [4.0, 2.0]]\n')
+    end = text.find("\n[[", text.rfind("[[routes]]") + 1)
+    close = tmp_path / "close.toml"
+    close.write_text(text[:start] + routes + (text[end:] if end > 0 else ""))
+    with pytest.raises(InvalidInputError, match="no two spots .* are 5.0 m apart"):
+        gym.make("azgym/Navigate-WarehouseSmall-v1", scenario=str(close))
