@@ -180,13 +180,7 @@ class NavigateEnv(gym.Env):
         self._frames = 0
         self._segments = occluder_table(self.scenario.racks, self.scenario.walls)
         self._rays = np.empty(self.n_rays)
-        self.spots = np.unique(np.concatenate([r.waypoints for r in self.scenario.routes]),
-                               axis=0)
-        spread = np.hypot(*(self.spots[:, None, :] - self.spots[None, :, :]).transpose(2, 0, 1))
-        if spread.max() < MIN_GOAL_DISTANCE:
-            raise InvalidInputError(
-                f"scenario {self.scenario.name!r}: no two spots (route waypoints) are "
-                f"{MIN_GOAL_DISTANCE} m apart, so no start and goal can be drawn")
+        self.spots = _spots(self.scenario)
         self.action_space = (spaces.Discrete(len(DISCRETE_CONTROLS)) if self.discrete else
                              spaces.Box(-1.0, 1.0, (2,), np.float32))
         self.observation_space = spaces.Box(-1.0, 1.0, (5 + self.n_rays,), np.float32)
@@ -369,3 +363,18 @@ def _interpolate(a: tuple[float, float, float], b: tuple[float, float, float],
     turn = wrap_angle(b[2] - a[2])
     return (a[0] + fraction * (b[0] - a[0]), a[1] + fraction * (b[1] - a[1]),
             wrap_angle(a[2] + fraction * turn))
+
+
+def _spots(scenario: Scenario) -> np.ndarray:
+    """The pick and drop spots: every route's waypoints, once each, shape (S, 2) [m].
+
+    Raises:
+        InvalidInputError: No two spots are ``MIN_GOAL_DISTANCE`` apart: no episode can start.
+    """
+    spots = np.unique(np.concatenate([route.waypoints for route in scenario.routes]), axis=0)
+    spread = np.hypot(*(spots[:, None, :] - spots[None, :, :]).transpose(2, 0, 1))
+    if spread.max() < MIN_GOAL_DISTANCE:
+        raise InvalidInputError(
+            f"scenario {scenario.name!r}: no two spots (route waypoints) are "
+            f"{MIN_GOAL_DISTANCE} m apart, so no start and goal can be drawn")
+    return spots
