@@ -55,6 +55,7 @@ def _bench(args: argparse.Namespace) -> int:
     from azgym.bench.runner import Contender, default_contenders, default_workers, run_benchmark
     from azgym.bench.suites import get_suite
     from azgym.bench.table import ranked_table
+    from azgym.files import prepare_folder
 
     # With no suite named, the default suite runs in its quick size: the README's main job.
     quick = args.quick or args.suite is None
@@ -62,6 +63,7 @@ def _bench(args: argparse.Namespace) -> int:
     contenders = ([Contender(spec, spec) for spec in args.localizer] if args.localizer
                   else default_contenders())
     workers = args.workers or default_workers()
+    prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
     started = time.perf_counter()
     result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
                            progress=_progress_printer())

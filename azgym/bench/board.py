@@ -21,6 +21,7 @@ import numpy as np
 from azgym.bench.leaderboard import LeaderboardError, load_all
 from azgym.bench.suites import SUITES, get_suite
 from azgym.bench.table import rank_key
+from azgym.files import prepare_folder, write_file
 
 WEB_SCHEMES = ("http://", "https://")
 """A link is shown only with one of these schemes (no ``javascript:``, no local files)."""
@@ -108,10 +109,9 @@ def build(entries_dir: Path, out_dir: Path) -> list[Path]:
         links = [web_link(entry["link"]) for entry in _ranked(entries, suite)]
         sections.append((suite, description, header, rows, links,
                          _cdf_png(_ranked(entries, suite), frames)))
-    out_dir.mkdir(parents=True, exist_ok=True)
-    readme, page = out_dir / "README.md", out_dir / "index.html"
-    readme.write_text("\n".join(lines), encoding="utf-8")
-    page.write_text(_html(sections, len(entries)), encoding="utf-8")
+    prepare_folder(out_dir)
+    readme = write_file(out_dir / "README.md", "\n".join(lines))
+    page = write_file(out_dir / "index.html", _html(sections, len(entries)))
     return [readme, page]
 
 

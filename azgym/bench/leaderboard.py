@@ -33,6 +33,7 @@ from azgym.bench.results import FRAME_COLUMNS
 from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.errors import AzgymError
+from azgym.files import prepare_folder, write_file
 
 ENTRY_FORMAT = 1
 
@@ -156,14 +157,14 @@ def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, versi
     entry, text = make_entry(results_dir, label, name=name, version=version, authors=authors,
                              link=link)
     validate_entry(entry, text, f"entry {name!r}")
-    entries_dir.mkdir(parents=True, exist_ok=True)
+    prepare_folder(entries_dir)
     path = entries_dir / f"{name}.json"
     if path.exists() and not overwrite:
         raise LeaderboardError(f"{path}: an entry of that name exists; pick another name or "
                                "pass --overwrite")
     # mtime=0: the same results give the same bytes.
-    (entries_dir / entry["results_file"]).write_bytes(gzip.compress(text.encode(), mtime=0))
-    path.write_text(json.dumps(entry, indent=1) + "\n", encoding="utf-8")
+    write_file(entries_dir / entry["results_file"], gzip.compress(text.encode(), mtime=0))
+    write_file(path, json.dumps(entry, indent=1) + "\n")
     return path
 
 

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from azgym.bench.suites import CAUSES, Case
+from azgym.files import write_file
 from azgym.site import load_scenario
 
 if TYPE_CHECKING:
@@ -102,6 +104,7 @@ def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
 
 def _save(figure: Any, path: Path, plt: Any) -> Path:
     """Write the figure to ``path`` and close it (pyplot keeps open figures alive)."""
-    figure.savefig(path, dpi=100)
+    image = io.BytesIO()
+    figure.savefig(image, format="png", dpi=100)
     plt.close(figure)
-    return path
+    return write_file(path, image.getvalue())

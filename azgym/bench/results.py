@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import importlib.util
+import io
 import json
 import math
 import sys
@@ -24,6 +25,7 @@ from azgym.bench.contenders import Contender
 from azgym.bench.metrics import confidence_intervals
 from azgym.bench.outcome import Outcome
 from azgym.bench.suites import CAUSES, Case, Suite
+from azgym.files import prepare_folder, write_file
 
 FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
                  "heading_error_rad", "micros", "error"]
@@ -88,15 +90,14 @@ class BenchResult:
 
     def write(self, out: Path, figures: bool = True) -> list[Path]:
         """Write results.json, frames.csv and, with matplotlib installed, the figures."""
-        out.mkdir(parents=True, exist_ok=True)
-        summary_path, frames_path = out / "results.json", out / "frames.csv"
-        summary_path.write_text(json.dumps(self.summary, indent=1) + "\n", encoding="utf-8")
-        with frames_path.open("w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(FRAME_COLUMNS)
-            for label, outcome in self.outcomes.items():
-                writer.writerows(frame_rows(label, self.cases, outcome))
-        written = [summary_path, frames_path]
+        prepare_folder(out)
+        summary_path = write_file(out / "results.json", json.dumps(self.summary, indent=1) + "\n")
+        table = io.StringIO(newline="")
+        writer = csv.writer(table)
+        writer.writerow(FRAME_COLUMNS)
+        for label, outcome in self.outcomes.items():
+            writer.writerows(frame_rows(label, self.cases, outcome))
+        written = [summary_path, write_file(out / "frames.csv", table.getvalue())]
         if figures and importlib.util.find_spec("matplotlib") is not None:
             from azgym.bench.plots import write_figures
 
