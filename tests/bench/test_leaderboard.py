@@ -131,6 +131,18 @@ def test_submit_refuses_unknown_localizers_and_overwrites(results, entry_path):
 
 
 
+def body_attributes(chromium: str, harness, tmp_path) -> dict[str, str]:
+    """Open the page in headless Chromium; the ``data-*`` attributes its scripts set on <body>."""
+    completed = subprocess.run(
+        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--disable-background-networking", "--disable-component-update", "--no-first-run",
+         "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom",
+         harness.as_uri()],
+        capture_output=True, text=True, timeout=120, check=True)
+    body = re.search(r"<body([^>]*)>", completed.stdout).group(1)
+    return dict(re.findall(r'data-(\w+)="([^"]*)"', body))
+
+
 @pytest.mark.slow
 def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, tmp_path):
     chromium = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -157,14 +169,7 @@ def test_the_board_opens_without_errors_and_sorts_in_headless_chromium(results, 
         "</body>", probe + "</body>")
     harness = tmp_path / "harness.html"
     harness.write_text(text)
-    completed = subprocess.run(
-        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-         "--disable-background-networking", "--disable-component-update", "--no-first-run",
-         "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom",
-         harness.as_uri()],
-        capture_output=True, text=True, timeout=120, check=True)
-    body = re.search(r"<body([^>]*)>", completed.stdout).group(1)
-    attributes = dict(re.findall(r'data-(\w+)="([^"]*)"', body))
+    attributes = body_attributes(chromium, harness, tmp_path)
     assert html.unescape(attributes["errors"]) == "[]"
     p75 = {label: json.loads((entries / f"{label}-ref.json").read_text())["metrics"]["all"][
         "p75_cm"] for label in ("ransac", "lsq")}
@@ -200,14 +205,7 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
     harness = tmp_path / "harness.html"
     harness.write_text(page.read_text().replace("<title>", catcher + "<title>").replace(
         "</body>", probe + "</body>"))
-    completed = subprocess.run(
-        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-         "--disable-background-networking", "--disable-component-update", "--no-first-run",
-         "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom",
-         harness.as_uri()],
-        capture_output=True, text=True, timeout=120, check=True)
-    body = re.search(r"<body([^>]*)>", completed.stdout).group(1)
-    attributes = dict(re.findall(r'data-(\w+)="([^"]*)"', body))
+    attributes = body_attributes(chromium, harness, tmp_path)
     assert json.loads(html.unescape(attributes["errors"])) == []
     tables = json.loads(html.unescape(attributes["result"]))
     assert [table for table, _, _ in tables] == [f"board-{suite}" for suite in L.SUITES]
