@@ -17,6 +17,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from azgym.errors import AzgymError
 
@@ -175,9 +176,31 @@ def _localizers(_args: argparse.Namespace) -> int:
     return 0
 
 
+class _DefaultsFormatter(argparse.HelpFormatter):
+    """Help that ends each option with its default, unless the text says it or there is none."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if (not action.option_strings or "default" in text
+                or action.default in (None, False, [], argparse.SUPPRESS)):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose ``--help`` shows every option's default."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _DefaultsFormatter)
+        super().__init__(*args, **kwargs)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``azgym`` command."""
-    parser = argparse.ArgumentParser(prog="azgym", description=__doc__.splitlines()[0])
+    from azgym._version import __version__
+
+    parser = _Parser(prog="azgym", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"azgym {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
     _add_bench(commands)
     _add_leaderboard(commands)

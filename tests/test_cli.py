@@ -55,3 +55,14 @@ def test_incomplete_or_invalid_commands_are_refused(argv, capsys):
         cli.build_parser().parse_args(argv)
     assert info.value.code == 2
     assert "usage: azgym" in capsys.readouterr().err
+
+
+def test_version_and_defaults_are_shown(capsys):
+    import azgym
+
+    with pytest.raises(SystemExit) as done:
+        cli.main(["--version"])
+    assert done.value.code == 0 and capsys.readouterr().out.strip() == f"azgym {azgym.__version__}"
+    with pytest.raises(SystemExit):
+        cli.main(["bench", "--help"])
+    assert "(default: results/bench)" in capsys.readouterr().out
