@@ -90,7 +90,7 @@ def pose_error(estimate: Pose, truth: Pose) -> tuple[float, float]:
         The 2-D position error [m] and the absolute heading error, wrapped to [0, π] [rad].
     """
     return (math.hypot(estimate[0] - truth[0], estimate[1] - truth[1]),
-            abs(wrap_angle(float(estimate[2]) - truth[2])))
+            abs(wrap_scalar(float(estimate[2]) - float(truth[2]))))
 
 
 def estimated_pose(estimate: Any) -> Pose | None:

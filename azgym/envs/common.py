@@ -9,6 +9,7 @@ import numpy as np
 
 from azgym.errors import InvalidInputError
 from azgym.sensing.protocol import AZIMUTH, BEACON, ID, LABEL, Observation
+from azgym.world.drive import checked_camera_rate
 
 
 def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
@@ -30,19 +31,10 @@ def reward_weights(**weights: float) -> dict[str, float]:
     return {name: float(value) for name, value in weights.items()}
 
 
-CAMERA_RATES_HZ = (0.1, 1000.0)
-"""The frame rates an environment accepts [Hz]: slower would leave a route without frames (and
-take forever to find the next one), faster is no camera."""
-
-
 def check_camera_rate(camera_rate_hz: float | None) -> None:
-    """Refuse a frame rate that is not a number in ``CAMERA_RATES_HZ`` (None: the sensor's)."""
-    low, high = CAMERA_RATES_HZ
-    if camera_rate_hz is not None and (
-            isinstance(camera_rate_hz, bool) or not isinstance(camera_rate_hz, numbers.Real)
-            or not low <= camera_rate_hz <= high):
-        raise InvalidInputError(f"camera_rate_hz must be a finite number > 0 [Hz] from {low} "
-                                f"to {high}, got {camera_rate_hz!r}")
+    """Refuse a frame rate outside the drive's range (None: the sensor's own rate)."""
+    if camera_rate_hz is not None:
+        checked_camera_rate(camera_rate_hz)
 
 
 def whole_number(name: str, value: object, minimum: int = 1) -> int:

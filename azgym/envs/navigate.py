@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from azgym.core import estimated_pose, wrap_angle
+from azgym.core import estimated_pose, wrap_scalar
 from azgym.envs.common import (
     check_camera_rate,
     check_render_mode,
@@ -360,9 +360,9 @@ def _interpolate(a: tuple[float, float, float], b: tuple[float, float, float],
     """
     if fraction >= 1.0:
         return b
-    turn = wrap_angle(b[2] - a[2])
+    turn = wrap_scalar(b[2] - a[2])
     return (a[0] + fraction * (b[0] - a[0]), a[1] + fraction * (b[1] - a[1]),
-            wrap_angle(a[2] + fraction * turn))
+            wrap_scalar(a[2] + fraction * turn))
 
 
 def _spots(scenario: Scenario) -> np.ndarray:

@@ -15,6 +15,7 @@ a damped mast that the bumps shake, so consecutive frames see nearly the same ti
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
@@ -86,6 +87,9 @@ def _route(scenario: Scenario, route: str | Route | None) -> Route:
     return names[route]
 
 
+CAMERA_RATES_HZ = (0.1, 1000.0)
+"""The camera frame rates azgym accepts [Hz]: slower would leave a route without frames (and
+take forever to reach the next one), faster is no camera."""
 STOPPED_SPEED = 0.05
 """Below this speed [m/s] a forklift at the end of its route has stopped: the drive is over."""
 FRAME_TIME_TOLERANCE = 1e-9
@@ -121,6 +125,16 @@ class _Motion:
         return self._odometer.take(), self._imu.take()
 
 
+def checked_camera_rate(camera_rate_hz: float) -> float:
+    """``camera_rate_hz`` as a float, refusing a value outside ``CAMERA_RATES_HZ``."""
+    low, high = CAMERA_RATES_HZ
+    if (isinstance(camera_rate_hz, bool) or not isinstance(camera_rate_hz, numbers.Real)
+            or not low <= camera_rate_hz <= high):
+        raise InvalidInputError(f"camera_rate_hz must be a finite number > 0 [Hz] from {low} "
+                                f"to {high}, got {camera_rate_hz!r}")
+    return float(camera_rate_hz)
+
+
 def _frames(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
             spec: ForkliftSpec | None, max_time: float,
             on_step: Callable[[World], None] | None = None) -> Iterator[World]:
@@ -129,10 +143,12 @@ def _frames(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
     ``on_step`` sees the world after every physics step (and at the start). The drive ends at
     the frame after the forklift has stopped at the route's end, or after ``max_time``.
     """
+    if not dt > 0:
+        raise InvalidInputError(f"dt must be > 0 [s], got {dt}")
     world = World(scenario, route.start_pose(), spec, dt)
     forklift = world.forklift
     driver = PurePursuit(route, forklift.spec)
-    period = 1.0 / camera_rate_hz
+    period = 1.0 / checked_camera_rate(camera_rate_hz)
     next_frame = 0.0
     while True:
         if on_step is not None:
@@ -200,9 +216,8 @@ def simulate(
         raise InvalidInputError(f"sensor must be an azgym Sensor (reset and observe), got "
                                 f"{type(sensor).__name__}; make one with "
                                 f"azgym.sensing.catalog.make_sensor")
-    camera_rate_hz = sensor.frame_rate_hz if camera_rate_hz is None else camera_rate_hz
-    if not camera_rate_hz > 0 or not dt > 0:
-        raise InvalidInputError(f"camera_rate_hz and dt must be > 0, got {camera_rate_hz}, {dt}")
+    camera_rate_hz = checked_camera_rate(
+        sensor.frame_rate_hz if camera_rate_hz is None else camera_rate_hz)
     streams = np.random.SeedSequence(seed).spawn(5)
     camera_rng, odometry_rng, imu_rng, sway_rng = (
         np.random.default_rng(stream) for stream in streams[:4])

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from azgym.core import FloatArray, wrap_angle
+from azgym.core import FloatArray, wrap_scalar
 from azgym.site.elements import Route
 from azgym.world.forklift import ForkliftSpec
 
@@ -69,8 +69,8 @@ class PurePursuit:
             return brake, 0.0
         target = _point_at(points, lengths, min(total, self._progress + self.lookahead))
         travel = heading + (math.pi if backwards else 0.0)
-        alpha = float(wrap_angle(math.atan2(target[1] - reference[1], target[0] - reference[0])
-                                 - travel))
+        alpha = wrap_scalar(math.atan2(target[1] - reference[1], target[0] - reference[0])
+                            - travel)
         curvature = 2.0 * math.sin(alpha) / max(self.lookahead, 1e-6)
         steer = math.atan(direction * curvature * self.spec.wheelbase) / self.spec.max_steer
         # Slow down for the end of the stretch: v² = 2 a d with a margin.

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import pymunk
 
-from azgym.core import wrap_angle
+from azgym.core import wrap_scalar
 from azgym.errors import InvalidInputError
 
 FORKLIFT_COLLISION_TYPE = 1
@@ -141,7 +141,7 @@ class Forklift:
     def pose(self) -> tuple[float, float, float]:
         """(x, y, heading) of the body centre [m, m, rad], the heading wrapped to (−π, π]."""
         position = self.body.position
-        return position.x, position.y, float(wrap_angle(self.body.angle))
+        return position.x, position.y, wrap_scalar(float(self.body.angle))
 
     def camera_position(self) -> tuple[float, float]:
         """Where the camera is in the world (x, y) [m]."""

@@ -100,10 +100,10 @@ class GeometrySensor:
         cz = self.scenario.camera.height if camera_height is None else camera_height
         found, found_ints = self._found, self._found_ints
         count = collect((float(x), float(y), float(cz)), self._lens, self._xyz, self._width,
-                          self._moved, self._segments, found, found_ints)
+                        self._moved, self._segments, found, found_ints)
         finish_frame(found, found_ints, count, float(heading), (float(tilt[0]), float(tilt[1])),
-                 rng.random((3, count)), self.scenario.error_model.delta_alpha_d, misdecode_rate,
-                 self.scenario.beacons.ids, out.floats, out.ints)
+                     rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
+                     misdecode_rate, self.scenario.beacons.ids, out.floats, out.ints)
         return min(count, out.size)
 
     def observe(self, pose: Pose, rng: np.random.Generator, tilt: Tilt = LEVEL,
