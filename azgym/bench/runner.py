@@ -1,8 +1,10 @@
 """The runner: every contender on every case, the one loop behind ``azgym bench`` and the paper.
 
-A localizer that raises on a case is scored as unavailable on that case (the error is kept),
-never taking the run down. Cases are drawn once, in this process, and split into chunks for the
-worker processes, so the figures do not depend on ``workers``. Runtimes are measured per call,
+Cases are drawn once, in this process; each contender runs in worker processes of its own
+(:mod:`azgym.bench.isolation`) that see the measurements and the maps only, never the truth.
+A localizer that raises, hangs or crashes on a case is scored as unavailable on that case (the
+reason is kept), never taking the run down. Each frame is localized on its own, so the figures
+do not depend on ``workers``. Runtimes are measured per call,
 and reported beside ``ransac``'s median from the same run, so runs on different machines compare.
 """
 
@@ -13,19 +15,23 @@ import os
 import secrets
 import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
 
+import numpy as np
+
+from azgym.arguments import positive_number, whole_number
 from azgym.bench.contenders import REFERENCE, Contender, default_contenders
+from azgym.bench.isolation import DEFAULT_TIME_LIMIT, Answers, IsolatedRun, start_fork_server
 from azgym.bench.outcome import Outcome
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import Case, Suite
-from azgym.core import BeaconMap, estimated_pose, pose_error
+from azgym.bench.worker import frame_data
+from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError
-from azgym.localize.registry import make_localizer
 from azgym.site import load_scenario
 
-CHUNKS_PER_WORKER = 4
-"""Cases are split into this many chunks per worker, so a slow chunk does not idle the others."""
+BATCHES_PER_WORKER = 4
+"""Frames go to the workers in this many batches per worker: few round trips, and a slow batch
+does not leave the other workers idle for long."""
 
 Progress = Callable[[str], None]
 """Called with text as a run advances; text starting with a carriage return redraws the line."""
@@ -36,77 +42,72 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-def _localize_chunk(contender: Contender, cases: list[Case],
-                    maps: Mapping[str, BeaconMap]) -> Outcome:
-    """Run one contender on some cases (in a worker); never raises for the localizer's sake."""
-    outcome = Outcome.empty(len(cases))
-    try:
-        localizer = make_localizer(contender.spec, **contender.params)
-    except Exception as exc:  # noqa: BLE001 - a plug-in that cannot even be built
-        outcome.errors[:] = [f"cannot build {contender.spec!r}: {exc}"] * len(cases)
-        return outcome
-    for case in cases[:1]:  # warm-up: numba's first call loads compiled code; keep it untimed
-        try:
-            localizer.localize(case.measurements, maps[case.scenario])
-        except Exception:  # noqa: BLE001, S110 - the timed loop below records the failure
-            pass
-    for k, case in enumerate(cases):
-        try:
-            start = time.perf_counter_ns()
-            estimate = localizer.localize(case.measurements, maps[case.scenario])
-            outcome.micros[k] = (time.perf_counter_ns() - start) / 1000.0
-            pose = estimated_pose(estimate)
-            if pose is not None:
-                outcome.position[k], outcome.heading[k] = pose_error(pose, case.pose)
-            outcome.ok[k] = pose is not None
-        except Exception as exc:  # noqa: BLE001 - a failing plug-in is scored, not fatal
-            outcome.errors[k] = f"{type(exc).__name__}: {exc}"
-    return outcome
-
-
 def run_contenders(
     cases: Sequence[Case],
     contenders: Sequence[Contender],
     *,
     workers: int = 1,
     maps: Mapping[str, BeaconMap] | None = None,
+    time_limit: float = DEFAULT_TIME_LIMIT,
     progress: Progress | None = None,
 ) -> dict[str, Outcome]:
     """Score every contender on every case; the outcomes are in the order of ``cases``.
 
+    Each contender runs in worker processes of its own (:mod:`azgym.bench.isolation`), which
+    get the measurements and the beacon maps only; the errors are computed here.
+
     Args:
         cases: The cases.
         contenders: The localizers.
-        workers: Worker processes (1: this process).
+        workers: Worker processes per contender at a time.
         maps: Beacon map of each scenario named by the cases (default: the shipped scenarios').
+        time_limit: Seconds a localizer may take on one frame (or to be built).
         progress: Called with text as the run advances.
     """
+    workers = whole_number("workers", workers, minimum=1)
+    time_limit = positive_number("time_limit", time_limit, "s")
+    start_fork_server()
     cases = list(cases)
     say = progress or (lambda _line: None)
     if maps is None:
         maps = {name: load_scenario(name).beacons for name in {case.scenario for case in cases}}
-    chunk = max(1, math.ceil(len(cases) / max(1, CHUNKS_PER_WORKER * workers)))
-    pieces = [cases[s:s + chunk] for s in range(0, len(cases), chunk)]
+    frames = [frame_data(case.scenario, case.measurements) for case in cases]
+    sent_maps = {name: (m.ids, m.xyz, m.width) for name, m in maps.items()}
+    batch_size = max(1, math.ceil(len(cases) / (BATCHES_PER_WORKER * workers)))
     outcomes: dict[str, Outcome] = {}
-    executor = ProcessPoolExecutor(max_workers=workers) if workers > 1 else None
-    try:
-        for contender in contenders:
-            begun = time.perf_counter()
-            jobs = ([contender] * len(pieces), pieces, [maps] * len(pieces))
-            results = map(_localize_chunk, *jobs) if executor is None else executor.map(
-                _localize_chunk, *jobs)
-            parts = []
-            for part in results:  # in order, as each chunk completes
-                parts.append(part)
-                done = len(parts) * 20 // len(pieces)
-                say(f"\r  {contender.label:<20} [{'#' * done}{'.' * (20 - done)}] "
-                    f"{len(parts)}/{len(pieces)}")
-            outcomes[contender.label] = Outcome.concatenate(parts)
-            say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
-    finally:
-        if executor is not None:
-            executor.shutdown()
+    for contender in contenders:
+        begun = time.perf_counter()
+        run = IsolatedRun(contender.spec, contender.params, frames, sent_maps, workers=workers,
+                          time_limit=time_limit, batch_size=batch_size, say=say)
+        answers = run.run(_progress_bar(contender.label, len(cases), say))
+        outcomes[contender.label] = _score(answers, cases)
+        say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
     return outcomes
+
+
+def _progress_bar(label: str, total: int, say: Progress) -> Callable[[int], None]:
+    """A progress report that redraws a bar when the count of finished frames changes."""
+    shown = [-1]
+
+    def report(finished: int) -> None:
+        if finished != shown[0]:
+            shown[0] = finished
+            done = finished * 20 // max(total, 1)
+            say(f"\r  {label:<20} [{'#' * done}{'.' * (20 - done)}] {finished}/{total}")
+
+    return report
+
+
+def _score(answers: Answers, cases: Sequence[Case]) -> Outcome:
+    """A contender's answers scored against the true poses (which only this process has)."""
+    outcome = Outcome.empty(len(cases))
+    outcome.ok[:] = answers.posed
+    outcome.micros[:] = answers.micros
+    outcome.errors[:] = answers.errors
+    for k in np.flatnonzero(answers.posed):
+        estimate = tuple(float(v) for v in answers.pose[k])
+        outcome.position[k], outcome.heading[k] = pose_error(estimate, cases[k].pose)
+    return outcome
 
 
 def run_benchmark(
@@ -117,6 +118,7 @@ def run_benchmark(
     quick: bool = False,
     workers: int = 1,
     seed: int | None = None,
+    time_limit: float = DEFAULT_TIME_LIMIT,
     progress: Progress | None = None,
 ) -> BenchResult:
     """Score every contender on the suite's cases.
@@ -127,8 +129,9 @@ def run_benchmark(
             the runtime reference if missing.
         split: "dev" (the suite's fixed seed) or "test" (a seed drawn now, and reported).
         quick: Draw the suite's small version.
-        workers: Worker processes (1: this process).
+        workers: Worker processes per contender at a time.
         seed: Draw the cases from this seed instead (to rerun a reported test split).
+        time_limit: Seconds a localizer may take on one frame (or to be built).
         progress: Called with text as the run advances.
     """
     if split not in ("dev", "test"):
@@ -139,11 +142,13 @@ def run_benchmark(
     say = progress or (lambda _line: None)
     if seed is None:
         seed = suite.dev_seed if split == "dev" else secrets.randbits(31)
+    start_fork_server()  # its warm-up overlaps the drawing of the cases
     started = time.perf_counter()
     cases = suite.build(seed, quick)
     say(f"{suite.name} v{suite.version} ({split}, seed {seed}): {len(cases)} frames drawn in "
         f"{time.perf_counter() - started:.1f} s")
-    outcomes = run_contenders(cases, contenders, workers=workers, progress=progress)
+    outcomes = run_contenders(cases, contenders, workers=workers, time_limit=time_limit,
+                              progress=progress)
     reference = next(c.label for c in contenders if c.is_reference)
     summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference)
     return BenchResult(summary, cases, outcomes)

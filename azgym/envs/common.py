@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import numbers
 
 import numpy as np
 
@@ -35,21 +34,6 @@ def check_camera_rate(camera_rate_hz: float | None) -> None:
     """Refuse a frame rate outside the drive's range (None: the sensor's own rate)."""
     if camera_rate_hz is not None:
         checked_camera_rate(camera_rate_hz)
-
-
-def whole_number(name: str, value: object, minimum: int = 1) -> int:
-    """``value`` as an int, refusing anything that is not a whole number >= ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise InvalidInputError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
-
-
-def positive_number(name: str, value: object, unit: str) -> float:
-    """``value`` as a float, refusing anything that is not a finite number > 0."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
-            math.isfinite(value) and value > 0):
-        raise InvalidInputError(f"{name} must be a finite number > 0 [{unit}], got {value!r}")
-    return float(value)
 
 
 class Padder:

@@ -9,14 +9,9 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from azgym.arguments import whole_number
 from azgym.core import pose_error, wrap_angle
-from azgym.envs.common import (
-    Padder,
-    check_camera_rate,
-    check_render_mode,
-    reward_weights,
-    whole_number,
-)
+from azgym.envs.common import Padder, check_camera_rate, check_render_mode, reward_weights
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.catalog import make_sensor
 from azgym.sensing.protocol import Observation

@@ -9,14 +9,9 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from azgym.arguments import positive_number, whole_number
 from azgym.core import estimated_pose, wrap_scalar
-from azgym.envs.common import (
-    check_camera_rate,
-    check_render_mode,
-    positive_number,
-    reward_weights,
-    whole_number,
-)
+from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
 from azgym.sensing.catalog import make_sensor

@@ -1,0 +1,28 @@
+"""The one rule for numeric arguments: whole numbers and positive numbers, refused by name.
+
+Environments, the runner and the command line check their numeric arguments with these, so a
+``workers=1.5`` or a ``ray_range=0`` is refused where it is given, with the argument's name,
+instead of failing later deep inside a loop.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+from azgym.errors import InvalidInputError
+
+
+def whole_number(name: str, value: object, minimum: int = 1) -> int:
+    """``value`` as an int, refusing anything that is not a whole number >= ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise InvalidInputError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def positive_number(name: str, value: object, unit: str) -> float:
+    """``value`` as a float, refusing anything that is not a finite number > 0."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
+            math.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{name} must be a finite number > 0 [{unit}], got {value!r}")
+    return float(value)

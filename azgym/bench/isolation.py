@@ -1,0 +1,346 @@
+"""The runner's side of an isolated run: worker processes that can hang, crash or cheat safely.
+
+Each contender runs in processes of its own (:mod:`azgym.bench.worker`), started from a fork
+server that imported azgym and loaded the built-in localizers' compiled code once, so a worker
+starts in milliseconds and holds nothing of the run that started it: no true pose, no other
+contender. A worker gets frames in batches (one round trip each) and answers into shared
+memory.
+
+Every call into the localizer gets a time limit. A call that overruns it, or a worker that dies
+(a segfault, ``os._exit``, the kernel's out-of-memory killer), costs that frame only: it is
+scored unavailable with the reason, a fresh worker takes over the rest of the batch, and the run
+goes on. After ``GIVE_UP_AFTER`` such losses in a row the contender's remaining frames are not
+run at all, so a localizer that hangs on every frame costs seconds, not hours.
+
+What isolation does not do: it is not a security sandbox. A plug-in still runs as the user, with
+the user's files and network; run code you do not trust in a container.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import multiprocessing.connection
+import signal
+import sys
+import time
+import types
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from azgym.bench import worker
+from azgym.bench.worker import ANSWER_SIZE, FrameData, MapData
+
+DEFAULT_TIME_LIMIT = 10.0
+"""Seconds a localizer may take on one frame (or to be built) before it is stopped: 60 times the
+slowest built-in (the exhaustive 1 cm MEX, ~0.15 s a frame)."""
+STARTUP_LIMIT = 300.0
+"""Seconds a new worker may take to come up, not counting the build. The first run on a machine
+compiles azgym's kernels in the fork server (tens of seconds); later runs take milliseconds."""
+GIVE_UP_AFTER = 3
+"""Frames lost in a row (time-outs or dead workers) after which a contender's other frames are
+skipped."""
+SLOW_START_NOTICE = 1.0
+"""Seconds of waiting for the first worker after which the run says why it waits."""
+PRELOAD = "azgym.bench.preload"
+
+Report = Callable[[int], None]
+"""Called with the number of frames finished so far."""
+
+
+@dataclass
+class Answers:
+    """A contender's answers to every frame of a run, in the frames' order.
+
+    Attributes:
+        pose: (x, y, heading) of each usable estimate, NaN elsewhere, shape (F, 3).
+        posed: Whether the frame got a usable pose, shape (F,).
+        micros: Time of the call [µs], NaN when it raised, timed out or was not run, shape (F,).
+        errors: Why a frame got no answer ("" when it got one), one per frame.
+    """
+
+    pose: np.ndarray
+    posed: np.ndarray
+    micros: np.ndarray
+    errors: list[str]
+
+    @classmethod
+    def unanswered(cls, count: int) -> Answers:
+        """No answer yet to any of ``count`` frames."""
+        return cls(np.full((count, 3), np.nan), np.zeros(count, dtype=bool),
+                   np.full(count, np.nan), [""] * count)
+
+
+def context() -> Any:
+    """The fork-server context the workers start from (the server starts on first use)."""
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload([PRELOAD])
+    return ctx
+
+
+def start_fork_server() -> None:
+    """Start the fork server now, so its warm-up overlaps whatever the caller does next."""
+    context()
+    from multiprocessing import forkserver
+
+    forkserver.ensure_running()
+
+
+@dataclass
+class _Batch:
+    """Frames [start, stop) of the run, given to one worker."""
+
+    start: int
+    stop: int
+    sent: float = 0.0
+
+
+@dataclass
+class _Worker:
+    """One worker process and its shared memory."""
+
+    process: Any
+    conn: Any
+    progress: Any
+    answers: Any
+    ready: bool = False
+    batch: _Batch | None = None
+    started: float = field(default_factory=time.monotonic)
+
+
+class IsolatedRun:
+    """One contender on a run's frames, in up to ``workers`` worker processes at a time."""
+
+    def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[FrameData],
+                 maps: Mapping[str, MapData], *, workers: int, time_limit: float,
+                 batch_size: int, say: Callable[[str], None]) -> None:
+        self.spec, self.params, self.frames, self.maps = spec, params, frames, maps
+        self.workers, self.time_limit, self.batch_size = workers, time_limit, batch_size
+        self.say = say
+        self.answers = Answers.unanswered(len(frames))
+        self.queue = [_Batch(s, min(s + batch_size, len(frames)))
+                      for s in range(0, len(frames), batch_size)]
+        self.running: list[_Worker] = []
+        self.lost_in_a_row = 0
+        self.finished = 0
+        self.unbuildable = ""
+        self.noticed_slow_start = False
+
+    def run(self, report: Report) -> Answers:
+        """Run every frame; ``report`` hears how many are finished after each batch."""
+        try:
+            while self.queue or any(w.batch is not None for w in self.running):
+                self._fill()
+                self._wait()
+                report(self.finished)
+        finally:
+            for w in self.running:
+                _stop(w)
+        return self.answers
+
+    def _fill(self) -> None:
+        """Give each idle worker a batch, starting workers up to the limit."""
+        idle = [w for w in self.running if w.batch is None]
+        while self.queue and not self.unbuildable:
+            if not idle and len(self.running) >= self.workers:
+                return
+            w = idle.pop() if idle else self._start()
+            w.batch = self.queue.pop(0)
+            if w.ready:
+                self._send(w)
+        if self.unbuildable:
+            for batch in self.queue:
+                self._skip(batch, self.unbuildable)
+            self.queue.clear()
+
+    def _start(self) -> _Worker:
+        """A fresh worker process (its batch is sent once it reports ready)."""
+        ctx = context()
+        mine, theirs = ctx.Pipe()
+        progress = ctx.RawArray("q", [worker.IDLE, 0])
+        answers = ctx.RawArray("d", self.batch_size * ANSWER_SIZE)
+        process = ctx.Process(target=worker.serve, daemon=True, name=f"azgym {self.spec}",
+                              args=(theirs, progress, answers, self.spec, self.params,
+                                    self.maps))
+        with _caller_main_hidden():
+            process.start()
+        theirs.close()
+        w = _Worker(process, mine, progress, answers)
+        self.running.append(w)
+        return w
+
+    def _send(self, w: _Worker) -> None:
+        assert w.batch is not None
+        w.batch.sent = time.monotonic()
+        w.conn.send(list(self.frames[w.batch.start:w.batch.stop]))
+
+    def _wait(self) -> None:
+        """Wait for messages, deaths or a deadline, and deal with whatever happened."""
+        busy = [w for w in self.running if w.batch is not None]
+        waitables = [w.conn for w in busy] + [w.process.sentinel for w in busy]
+        multiprocessing.connection.wait(waitables, timeout=self._next_deadline(busy))
+        for w in busy:
+            self._drain(w)
+            if w.batch is not None and not w.process.is_alive():
+                self._lose(w, _death(w.process))
+            elif w.batch is not None and self._overran(w):
+                self._lose(w, self._overrun_reason(w))
+
+    def _next_deadline(self, busy: list[_Worker]) -> float:
+        """Seconds until the earliest deadline among busy workers (at least 1 ms)."""
+        now = time.monotonic()
+        soonest = min((self._deadline(w) for w in busy), default=now + 0.1)
+        return min(max(soonest - now, 0.001), 0.5)
+
+    def _deadline(self, w: _Worker) -> float:
+        """When the worker's current step must be over (monotonic seconds)."""
+        if not w.ready:
+            phase, since = w.progress[0], w.progress[1] / 1e9
+            if phase == worker.BUILDING and since >= w.started:
+                return since + self.time_limit
+            return w.started + STARTUP_LIMIT
+        if w.progress[0] >= 0:
+            return w.progress[1] / 1e9 + self.time_limit
+        return w.batch.sent + STARTUP_LIMIT if w.batch else time.monotonic() + 1.0
+
+    def _overran(self, w: _Worker) -> bool:
+        late = time.monotonic() > self._deadline(w)
+        if not w.ready and not late and not self.noticed_slow_start:
+            if time.monotonic() - w.started > SLOW_START_NOTICE:
+                self.noticed_slow_start = True
+                self.say("  (starting the workers: the first run compiles azgym's kernels; "
+                         "they are cached for the next runs)")
+        return late
+
+    def _overrun_reason(self, w: _Worker) -> str:
+        if not w.ready:
+            if w.progress[0] == worker.BUILDING:
+                return f"building the localizer took longer than the {self.time_limit:g} s limit"
+            return f"the worker did not start within {STARTUP_LIMIT:g} s"
+        return f"timed out: took longer than the {self.time_limit:g} s limit"
+
+    def _drain(self, w: _Worker) -> None:
+        """Read every message the worker has sent."""
+        while w.batch is not None and _poll(w.conn):
+            try:
+                message = w.conn.recv()
+            except (EOFError, OSError):
+                return
+            if message[0] == "ready":
+                w.ready = True
+                self._send(w)
+            elif message[0] == "unbuildable":
+                self.unbuildable = message[1]
+                self._skip(w.batch, message[1])
+                w.batch = None
+                _stop(w)
+                self.running.remove(w)
+            elif message[0] == "error":
+                self.answers.errors[w.batch.start + message[1]] = message[2]
+            elif message[0] == "done":
+                self._collect(w, w.batch.stop - w.batch.start)
+                self.lost_in_a_row = 0
+                w.batch = None
+
+    def _collect(self, w: _Worker, count: int) -> None:
+        """Copy the answers to the batch's first ``count`` frames out of shared memory."""
+        assert w.batch is not None
+        table = np.frombuffer(w.answers, np.float64)[:count * ANSWER_SIZE].reshape(
+            count, ANSWER_SIZE).copy()
+        rows = slice(w.batch.start, w.batch.start + count)
+        posed = table[:, worker.ANSWER_STATE] == worker.POSED
+        answered = np.isin(table[:, worker.ANSWER_STATE], (worker.POSED, worker.NO_POSE))
+        self.answers.posed[rows] = posed
+        pose = table[:, [worker.ANSWER_X, worker.ANSWER_Y, worker.ANSWER_HEADING]]
+        self.answers.pose[rows] = np.where(posed[:, None], pose, np.nan)
+        self.answers.micros[rows] = np.where(answered, table[:, worker.ANSWER_MICROS], np.nan)
+        self.finished += count
+
+    def _lose(self, w: _Worker, reason: str) -> None:
+        """The worker overran or died: score its current frame, requeue the rest, replace it."""
+        batch = w.batch
+        assert batch is not None
+        _stop(w)
+        self.running.remove(w)
+        if not w.ready:
+            if w.progress[0] == worker.BUILDING:
+                self.unbuildable = reason
+            self._skip(batch, reason)
+            return
+        phase = int(w.progress[0])
+        done = phase if phase >= 0 else 0
+        self._collect(w, done)
+        self.answers.errors[batch.start + done] = reason
+        self.finished += 1
+        self.lost_in_a_row += 1
+        rest = _Batch(batch.start + done + 1, batch.stop)
+        if self.lost_in_a_row >= GIVE_UP_AFTER:
+            note = f"not run: {GIVE_UP_AFTER} frames in a row were lost (last: {reason})"
+            for pending in [rest, *self.queue]:
+                self._skip(pending, note)
+            self.queue.clear()
+        elif rest.stop > rest.start:
+            self.queue.insert(0, rest)
+
+    def _skip(self, batch: _Batch, reason: str) -> None:
+        """Score frames that will not run as unavailable, with the reason."""
+        for k in range(batch.start, batch.stop):
+            self.answers.errors[k] = self.answers.errors[k] or reason
+        self.finished += batch.stop - batch.start
+
+
+@contextlib.contextmanager
+def _caller_main_hidden() -> Iterator[None]:
+    """Start workers without the caller's main script.
+
+    multiprocessing re-runs the parent's ``__main__`` in a new process so that functions defined
+    there can be found. A worker needs none of it (it runs azgym's worker and a localizer given
+    by an importable spec), and re-running a user's script there would repeat its work, fail for
+    a script read from standard input, and put whatever that script computes (true poses
+    included) into the localizer's process. While a worker starts, ``__main__`` is a bare
+    stand-in module.
+    """
+    main = sys.modules["__main__"]
+    sys.modules["__main__"] = types.ModuleType("__main__")
+    try:
+        yield
+    finally:
+        sys.modules["__main__"] = main
+
+
+def _poll(conn: Any) -> bool:
+    try:
+        return bool(conn.poll())
+    except (EOFError, OSError):
+        return False
+
+
+def _death(process: Any) -> str:
+    """Why a worker process ended, in words."""
+    process.join(timeout=1.0)
+    code = process.exitcode
+    if code is not None and code < 0:
+        try:
+            name = signal.Signals(-code).name
+        except ValueError:
+            name = f"signal {-code}"
+        return f"the localizer's process was killed by {name}"
+    return f"the localizer's process exited (exit code {code})"
+
+
+def _stop(w: _Worker) -> None:
+    """End a worker: ask politely when idle, kill it otherwise."""
+    if w.process.is_alive():
+        if w.batch is None and w.ready:
+            try:
+                w.conn.send(None)
+            except (BrokenPipeError, OSError):
+                pass
+            w.process.join(timeout=1.0)
+        if w.process.is_alive():
+            w.process.kill()
+    w.process.join(timeout=5.0)
+    w.conn.close()
