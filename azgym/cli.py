@@ -91,12 +91,14 @@ def _contenders(specs: Sequence[str], with_builtins: bool) -> list[Any]:
         with_defaults,
     )
 
-    named = list({c.label: c for c in map(contender, reversed(specs))}.values())[::-1]
-    for candidate in named:
+    named: dict[str, Any] = {}  # by label: a localizer named twice runs once
+    for candidate in map(contender, specs):
+        named.setdefault(candidate.label, candidate)
+    for candidate in named.values():
         check_buildable(candidate)
     if not named:
         return default_contenders()
-    return with_defaults(named) if with_builtins else named
+    return with_defaults(named.values()) if with_builtins else list(named.values())
 
 
 def _leaderboard(args: argparse.Namespace) -> int:
