@@ -18,7 +18,6 @@ import numpy as np
 
 from azgym.core import BeaconMap, Measurements
 from azgym.errors import AzgymError, InvalidInputError
-from azgym.localize.base import Localizer
 from azgym.localize.registry import make_localizer, parse_spec, spec_label
 
 REFERENCE = "ransac"
@@ -72,14 +71,17 @@ def with_defaults(contenders: Iterable[Contender]) -> list[Contender]:
 
 
 def check_buildable(candidate: Contender) -> None:
-    """Build the contender once and, for an :class:`~azgym.localize.base.Localizer`, check its
-    hyperparameters (they are validated on its first frame: here an empty one).
+    """Build the contender once: a bad name, spec or hyperparameter raises here, not per frame.
 
-    This runs the localizer's code in the calling process: a plug-in's module and constructor.
+    For a :class:`~azgym.localize.base.Localizer`, the hyperparameters are checked too (they are
+    validated on its first frame: here an empty one). This runs the localizer's code in the
+    calling process: a plug-in's module and its constructor.
 
     Raises:
         InvalidInputError: Naming the contender and what went wrong.
     """
+    from azgym.localize.base import Localizer  # here: it loads the compiled kernels
+
     beacons = BeaconMap(np.arange(3), np.array([[1.0, 0.0, 2.5], [0.0, 1.0, 2.5],
                                                 [-1.0, 0.0, 2.5]]))
     try:

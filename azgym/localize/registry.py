@@ -1,4 +1,4 @@
-"""Names → localizer factories: the built-ins, presets, the ``azgym.localizers`` entry points, specs.
+"""Names → localizer factories: built-ins, presets, ``azgym.localizers`` entry points, specs.
 
 A spec is a target, optionally followed by hyperparameters::
 
@@ -7,7 +7,7 @@ A spec is a target, optionally followed by hyperparameters::
 The target is a registered name (``ransac``), a preset (``ransac-weighted``: a built-in with
 hyperparameters, listed in ``PRESETS``), an importable ``package.module:Class`` or a file
 ``path/to/file.py:Class``. The hyperparameters start at the first colon that is followed by
-``NAME=``, which a target's own colon (``file.py:Class``, ``C:\\dir``) never is:
+``NAME=``, which a target's own colon (``file.py:Class``, ``C:/dir``) never is:
 ``ransac:weighted=true``, ``path/mine.py:Mine:max_iter=50,tag=fast``. A value is read as a JSON
 scalar (``true``, ``false``, ``null``, a number, a ``"quoted string"``; Python's ``True``,
 ``False`` and ``None`` too); any other word is a string (``tag=fast``). :func:`spec_label` writes
@@ -212,8 +212,10 @@ def _scalar(spec: str, name: str, text: str) -> Any:
 
 
 def spec_label(target: str, params: dict[str, Any]) -> str:
-    """The canonical spec of a target and hyperparameters, which :func:`parse_spec` reads back:
-    a preset's name where one matches, else the target and the hyperparameters sorted by name."""
+    """The canonical spec of a target and hyperparameters, which :func:`parse_spec` reads back.
+
+    A preset's name where one matches, else the target and the hyperparameters sorted by name.
+    """
     text = _canonical(target, params)
     for preset, (preset_target, preset_params) in PRESETS.items():
         if preset_target == target and _canonical(target, preset_params) == text:
