@@ -19,9 +19,12 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from azgym.errors import AzgymError
+
+if TYPE_CHECKING:
+    from azgym.bench.contenders import Contender
 
 
 def _reproduce_paper(args: argparse.Namespace) -> int:
@@ -76,7 +79,7 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
-def _contenders(specs: Sequence[str], with_builtins: bool) -> list[Any]:
+def _contenders(specs: Sequence[str], with_builtins: bool) -> list[Contender]:
     """The contenders ``--localizer`` names (every built-in if none), each built once first.
 
     A bad name, spec or hyperparameter stops the command here, before any frame is drawn,
@@ -91,7 +94,7 @@ def _contenders(specs: Sequence[str], with_builtins: bool) -> list[Any]:
         with_defaults,
     )
 
-    named: dict[str, Any] = {}  # by label: a localizer named twice runs once
+    named: dict[str, Contender] = {}  # by label: a localizer named twice runs once
     for candidate in map(contender, specs):
         named.setdefault(candidate.label, candidate)
     for candidate in named.values():
@@ -332,7 +335,7 @@ def _add_study(commands: argparse._SubParsersAction) -> None:
 
 
 def _add_listings(commands: argparse._SubParsersAction) -> None:
-    """``azgym scenarios`` and ``azgym localizers``: what ships with azgym."""
+    """``azgym scenarios``, ``azgym localizers``: what ships with azgym; ``azgym check``."""
     commands.add_parser("scenarios", help="list the shipped scenarios").set_defaults(
         handler=_scenarios)
     commands.add_parser("localizers", help="list the registered localizers and presets"
