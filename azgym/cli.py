@@ -1,25 +1,30 @@
 """azgym: benchmark azimuth-based indoor localizers, and reproduce the papers they come from.
 
-azgym bench [--suite S] [--localizer SPEC ...] [--split dev|test] [--workers N] [--quick]
-            [--out DIR]
+azgym bench [--suite S] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
+            [--workers N] [--quick] [--out DIR]
 azgym leaderboard submit|build|verify ...
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
 azgym study error-model [--scenario S] [--frames N] [--noise SIGMA] [--calibration-px PX]
 azgym study ids [--scenario S] [--rate HZ] [--noise SIGMA]
 azgym scenarios
 azgym localizers
+azgym check SPEC
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from azgym.errors import AzgymError
+
+if TYPE_CHECKING:
+    from azgym.bench.contenders import Contender
 
 
 def _reproduce_paper(args: argparse.Namespace) -> int:
@@ -53,7 +58,7 @@ DEFAULT_SUITE = "warehouse-static"
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from azgym.bench.runner import Contender, default_contenders, default_workers, run_benchmark
+    from azgym.bench.runner import default_workers, run_benchmark
     from azgym.bench.suites import get_suite
     from azgym.bench.table import ranked_table
     from azgym.files import prepare_folder
@@ -61,8 +66,7 @@ def _bench(args: argparse.Namespace) -> int:
     # With no suite named, the default suite runs in its quick size: the README's main job.
     quick = args.quick or args.suite is None
     suite = get_suite(args.suite or DEFAULT_SUITE)
-    contenders = ([Contender(spec, spec) for spec in args.localizer] if args.localizer
-                  else default_contenders())
+    contenders = _contenders(args.localizer, args.with_builtins)
     workers = args.workers or default_workers()
     prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
     started = time.perf_counter()
@@ -73,6 +77,31 @@ def _bench(args: argparse.Namespace) -> int:
     print(ranked_table(result.summary))
     print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
     return 0
+
+
+def _contenders(specs: Sequence[str], with_builtins: bool) -> list[Contender]:
+    """The contenders ``--localizer`` names (every built-in if none), each built once first.
+
+    A bad name, spec or hyperparameter stops the command here, before any frame is drawn,
+    rather than scoring a localizer that cannot run as failing every frame. Building a plug-in
+    runs its module and constructor in this process: acceptable for the command's own
+    ``--localizer``, which the user asked to run (the runner builds it again in its worker).
+    """
+    from azgym.bench.contenders import (
+        check_buildable,
+        contender,
+        default_contenders,
+        with_defaults,
+    )
+
+    named: dict[str, Contender] = {}  # by label: a localizer named twice runs once
+    for candidate in map(contender, specs):
+        named.setdefault(candidate.label, candidate)
+    for candidate in named.values():
+        check_buildable(candidate)
+    if not named:
+        return default_contenders()
+    return with_defaults(named.values()) if with_builtins else list(named.values())
 
 
 def _leaderboard(args: argparse.Namespace) -> int:
@@ -167,12 +196,24 @@ def _scenarios(_args: argparse.Namespace) -> int:
 
 
 def _localizers(_args: argparse.Namespace) -> int:
-    from azgym.localize.registry import list_localizers, make_localizer
+    from azgym.localize.registry import PRESETS, list_localizers, make_localizer
 
     for name in list_localizers():
-        localizer = make_localizer(name)
-        doc = (type(localizer).__doc__ or "").strip().splitlines()
-        print(f"{name:<12} {doc[0] if doc else ''}")
+        if name in PRESETS:
+            target, params = PRESETS[name]
+            pairs = ",".join(f"{key}={json.dumps(value)}" for key, value in params.items())
+            print(f"{name:<16} {target} with {pairs}")
+            continue
+        doc = (type(make_localizer(name)).__doc__ or "").strip().splitlines()
+        print(f"{name:<16} {doc[0] if doc else ''}")
+    return 0
+
+
+def _check(args: argparse.Namespace) -> int:
+    from azgym.localize.checks import check_localizer
+    from azgym.localize.registry import make_localizer
+
+    check_localizer(make_localizer(args.localizer))  # raises (exit code 2) on a failed check
     return 0
 
 
@@ -212,11 +253,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _add_bench(commands: argparse._SubParsersAction) -> None:
     """``azgym bench``: score localizers on a suite."""
+    from azgym.bench.contenders import DEFAULT_SPECS
+
     bench = commands.add_parser("bench", help="score localizers on a benchmark suite")
     bench.add_argument("--suite", help=f"suite name (default: {DEFAULT_SUITE}, quick)")
-    bench.add_argument("--localizer", action="append", default=[],
-                       help="NAME, package.module:Class or path/file.py:Class; repeatable "
-                            "(default: every built-in)")
+    bench.add_argument("--localizer", action="append", default=[], metavar="SPEC",
+                       help="a localizer: NAME, package.module:Class or path/file.py:Class, "
+                            "then optionally :NAME=VALUE,... hyperparameters (JSON scalars), "
+                            "e.g. ransac:weighted=true; repeatable; every result is labelled "
+                            "by the spec that rebuilds it (default: the built-ins: "
+                            f"{', '.join(DEFAULT_SPECS)})")
+    bench.add_argument("--with-builtins", action="store_true",
+                       help="run the default built-ins too (naming a --localizer otherwise runs "
+                            "only the ones named, and ransac as the runtime reference)")
     bench.add_argument("--split", choices=("dev", "test"), default="dev",
                        help="dev: the suite's fixed seed; test: a fresh seed, reported")
     bench.add_argument("--workers", type=int, default=0, help="processes (0: one per core)")
@@ -286,11 +335,15 @@ def _add_study(commands: argparse._SubParsersAction) -> None:
 
 
 def _add_listings(commands: argparse._SubParsersAction) -> None:
-    """``azgym scenarios`` and ``azgym localizers``: what ships with azgym."""
+    """``azgym scenarios``, ``azgym localizers``: what ships with azgym; ``azgym check``."""
     commands.add_parser("scenarios", help="list the shipped scenarios").set_defaults(
         handler=_scenarios)
-    commands.add_parser("localizers", help="list the registered localizers").set_defaults(
-        handler=_localizers)
+    commands.add_parser("localizers", help="list the registered localizers and presets"
+                        ).set_defaults(handler=_localizers)
+    check = commands.add_parser("check", help="run the conformance checks on a localizer")
+    check.add_argument("localizer", metavar="SPEC",
+                       help="as for bench --localizer, e.g. path/mine.py:Mine:max_iter=20")
+    check.set_defaults(handler=_check)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,15 +1,21 @@
-"""The ``azgym`` command line: every sub-command parses to its handler with its defaults."""
+"""The ``azgym`` command line: every sub-command parses to its handler with its defaults; the
+localizers ``bench`` runs are named, labelled and checked before the run."""
 
 from __future__ import annotations
+
+import re
+import textwrap
 
 import pytest
 
 from azgym import cli
+from azgym.bench import runner
+from azgym.bench.contenders import Contender, default_contenders
 
 PARSED = [
     pytest.param(["bench"], cli._bench,
-                 {"suite": None, "localizer": [], "split": "dev", "workers": 0, "quick": False,
-                  "out": "results/bench"}, id="bench"),
+                 {"suite": None, "localizer": [], "with_builtins": False, "split": "dev",
+                  "workers": 0, "quick": False, "out": "results/bench"}, id="bench"),
     pytest.param(["bench", "--localizer", "ransac", "--localizer", "lsq", "--split", "test"],
                  cli._bench, {"localizer": ["ransac", "lsq"], "split": "test"},
                  id="bench-repeated-localizer"),
@@ -36,6 +42,8 @@ PARSED = [
                  id="study-ids"),
     pytest.param(["scenarios"], cli._scenarios, {}, id="scenarios"),
     pytest.param(["localizers"], cli._localizers, {}, id="localizers"),
+    pytest.param(["check", "ransac:weighted=true"], cli._check,
+                 {"localizer": "ransac:weighted=true"}, id="check"),
 ]
 
 
@@ -65,4 +73,88 @@ def test_version_and_defaults_are_shown(capsys):
     assert done.value.code == 0 and capsys.readouterr().out.strip() == f"azgym {azgym.__version__}"
     with pytest.raises(SystemExit):
         cli.main(["bench", "--help"])
-    assert "(default: results/bench)" in capsys.readouterr().out
+    shown = " ".join(capsys.readouterr().out.split())
+    assert "(default: results/bench)" in shown
+    assert "--with-builtins run the default built-ins too" in shown
+    assert "ransac:weighted=true" in shown
+
+
+@pytest.mark.parametrize("expected", default_contenders(), ids=lambda c: c.label)
+def test_every_default_label_given_to_localizer_builds_that_very_contender(expected):
+    assert cli._contenders([expected.label], with_builtins=False) == [expected]
+
+
+def test_a_label_never_means_two_localizers():
+    labels = {c.label: c for c in default_contenders()}
+    assert len(labels) == len(default_contenders())
+    exhaustive = cli._contenders(["mex"], with_builtins=False)
+    assert exhaustive == [Contender("mex", "mex", {})]
+    assert "mex" not in labels and labels["mex-coarse"].params == {"coarse_step": 0.1}
+
+
+def test_hyperparameters_on_the_command_line_and_the_label_they_get():
+    assert cli._contenders(["ransac:weighted=true", "lsq:max_iter=20", "ransac-weighted"],
+                           with_builtins=False) == [
+        Contender("ransac-weighted", "ransac", {"weighted": True}),
+        Contender("lsq:max_iter=20", "lsq", {"max_iter": 20})]
+
+
+def test_with_builtins_adds_the_defaults_to_the_named_localizers():
+    named = cli._contenders(["lsq:max_iter=20"], with_builtins=False)
+    both = cli._contenders(["lsq:max_iter=20", "ransac"], with_builtins=True)
+    assert both == default_contenders() + named
+    assert cli._contenders([], with_builtins=True) == default_contenders()
+
+
+@pytest.fixture
+def no_run(monkeypatch):
+    """A bench run that fails the test if it starts: the refusals come before any frame."""
+    def never(*_args, **_kwargs):
+        raise AssertionError("the run started")
+
+    monkeypatch.setattr(runner, "run_benchmark", never)
+
+
+BROKEN = textwrap.dedent("""
+    class Raises:
+        def __init__(self, *, size=1):
+            raise RuntimeError("no licence file")
+
+        def localize(self, measurements, beacons):
+            return None
+""")
+
+
+@pytest.mark.parametrize(("spec", "message"), [
+    ("ransak", "cannot build ransak: unknown localizer 'ransak'. Did you mean 'ransac'?"),
+    ("ransac:wieghted=true", "unknown hyperparameter 'wieghted'. Did you mean 'weighted'?"),
+    ("ransac:pr_hit=2", "cannot build ransac:pr_hit=2: Ransac.pr_hit must be in (0.0, 1.0)"),
+    ("ransac:weighted", "hyperparameters are written ransac:NAME=VALUE"),
+    ("{tmp}/no_such.py:Mine", "no file"),
+    ("{tmp}/broken.py:Raises:size=2", "RuntimeError: no licence file"),
+    ("{tmp}/broken.py:Raises:sise=2", "Did you mean 'size'?"),
+    ("{tmp}/broken.py:Missing", "has no attribute 'Missing'"),
+])
+def test_a_localizer_that_cannot_be_built_stops_bench_before_the_run(spec, message, tmp_path,
+                                                                     no_run, capsys):
+    (tmp_path / "broken.py").write_text(BROKEN)
+    out = tmp_path / "out"
+    argv = ["bench", "--localizer", "lsq", "--localizer", spec.format(tmp=tmp_path),
+            "--out", str(out)]
+    assert cli.main(argv) == 2
+    assert re.search(re.escape(message), capsys.readouterr().err)
+    assert not out.exists()
+
+
+def test_check_prints_what_passed_and_refuses_a_bad_spec(capsys):
+    assert cli.main(["check", "ransac-weighted"]) == 0
+    assert "check_localizer: Ransac passed all 7 checks" in capsys.readouterr().out
+    assert cli.main(["check", "ransac:wieghted=true"]) == 2
+    assert "Did you mean 'weighted'?" in capsys.readouterr().err
+
+
+def test_localizers_lists_the_presets_with_what_they_are(capsys):
+    assert cli.main(["localizers"]) == 0
+    listed = capsys.readouterr().out
+    assert re.search(r"^ransac-weighted +ransac with weighted=true$", listed, re.M)
+    assert re.search(r"^mex-coarse +mex with coarse_step=0.1$", listed, re.M)

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import azgym
-from azgym.cli import main
+from azgym.cli import _contenders, main
 
 README = Path(__file__).parent.parent / "README.md"
 
@@ -33,11 +33,16 @@ def test_the_plugin_example_checks_benchmarks_and_submits(tmp_path, monkeypatch,
     section = README.read_text(encoding="utf-8").split("## Plug in your localizer", 1)[1]
     shell = re.search(r"```bash\n(.*?)```", section, re.S).group(1).replace("\\\n", " ")
     commands = [shlex.split(line) for line in shell.splitlines() if line.startswith("azgym")]
-    assert [c[1] for c in commands] == ["bench", "leaderboard", "leaderboard"]
-    bench = commands[0] + ["--suite", "stress", "--quick", "--workers", "1"]
+    assert [c[1] for c in commands] == ["check", "bench", "leaderboard", "leaderboard"]
+    capsys.readouterr()
+    assert main(commands[0][1:]) == 0
+    assert "MedianOfTriplets passed all 6 checks" in capsys.readouterr().out
+    bench = commands[1] + ["--suite", "stress", "--quick", "--workers", "1"]
     assert main(bench[1:]) == 0
-    assert main(commands[1][1:]) == 0
+    label = "my_localizer.py:MedianOfTriplets:max_triplets=100"  # the table shows the spec
+    assert re.search(rf"^ *\d+ {re.escape(label)} ", capsys.readouterr().out, re.M)
     assert main(commands[2][1:]) == 0
+    assert main(commands[3][1:]) == 0
     assert (tmp_path / "leaderboard" / "entries" / "median-of-triplets.json").is_file()
     assert "median-of-triplets" in (tmp_path / "leaderboard" / "README.md").read_text()
     sys.modules.pop("my_localizer", None)
@@ -58,3 +63,24 @@ def python_blocks() -> list[tuple[str, str]]:
 def test_every_python_example_runs_as_written(section, code, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     exec(compile(code, f"README.md ({section})", "exec"), {"__name__": "__readme__"})
+
+
+def test_every_localizer_spec_the_readme_gives_builds(tmp_path, monkeypatch):
+    """Every ``--localizer``, ``azgym check`` and quoted spec of the README is one azgym takes
+    (the README's own plug-in file in place, a placeholder ``path/to/`` file written there)."""
+    text = README.read_text(encoding="utf-8")
+    specs = {spec for spec in re.findall(r"(?:--localizer|azgym check) ([^\s`]+)", text)
+             if not spec.isupper()}  # not the SPEC of a usage line
+    specs |= {spec for spec in re.findall(r"`([\w./-]+:[\w:=.,-]+)`", text) if "=" in spec}
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my_localizer.py").write_text(plugin_source())
+    (tmp_path / "path" / "to").mkdir(parents=True)
+    (tmp_path / "path" / "to" / "mine.py").write_text("".join(
+        f"class {name}:\n    def __init__(self, *, tag=''):\n        pass\n\n"
+        "    def localize(self, measurements, beacons):\n        pass\n\n\n"
+        for name in ("Mine", "MyLocalizer")))
+    assert {"ransac:weighted=true", "my_localizer.py:MedianOfTriplets",
+            "ransac:max_iter=20"} <= specs
+    for spec in sorted(specs):
+        (contender,) = _contenders([spec], with_builtins=False)
+        assert _contenders([contender.label], with_builtins=False) == [contender], spec

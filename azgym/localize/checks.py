@@ -55,6 +55,7 @@ def check_localizer(
     *,
     position_tol: float = 0.01,
     heading_tol: float = 0.01,
+    verbose: bool = True,
 ) -> None:
     """Run every conformance check on ``localizer``; raise on the first failure.
 
@@ -63,7 +64,7 @@ def check_localizer(
     to rotating and translating the whole scene; determinism; ids not in the map are never
     inliers; fewer than three usable measurements give ``ok=False`` with a reason and a NaN pose
     (not an exception); for subclasses of :class:`Localizer`, arguments of the wrong type raise an
-    azgym error.
+    azgym error. When every check passes, prints what was checked (unless ``verbose`` is false).
 
     Raises:
         LocalizerCheckError: Naming the failed check.
@@ -77,9 +78,17 @@ def check_localizer(
     _check_determinism_and_permutation(localizer, beacons, frame, position_tol)
     _check_scene_invariance(localizer, pose, position_tol, heading_tol)
     _check_unusable_measurements(localizer, beacons, frame)
+    checked = [f"noise-free recovery of {len(poses)} poses (within {position_tol:g} m and "
+               f"{heading_tol:g} rad), the Estimate and its inlier mask", "determinism",
+               "permutation invariance", "rotation/translation invariance",
+               "ids not in the map never inliers", "too few measurements give ok=False"]
     if isinstance(localizer, Localizer):
         _expect_raises(lambda: localizer.localize((frame.ids, frame.azimuth), beacons),
                        "wrong argument type")
+        checked.append("a wrong argument type raises an azgym error")
+    if verbose:
+        print(f"check_localizer: {type(localizer).__name__} passed all {len(checked)} checks:"
+              + "".join(f"\n  passed: {check}" for check in checked))
 
 
 def _check_recovery(

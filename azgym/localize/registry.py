@@ -1,8 +1,19 @@
-"""Names → localizer factories: the built-ins, the ``azgym.localizers`` entry points, and specs.
+"""Names → localizer factories: built-ins, presets, ``azgym.localizers`` entry points, specs.
 
-A spec is a registered name (``"ransac"``), an importable ``"package.module:Class"``, or a file
-``"path/to/file.py:Class"``. Third-party packages register a name by declaring, in their
-pyproject.toml::
+A spec is a target, optionally followed by hyperparameters::
+
+    TARGET[:NAME=VALUE[,NAME=VALUE...]]
+
+The target is a registered name (``ransac``), a preset (``ransac-weighted``: a built-in with
+hyperparameters, listed in ``PRESETS``), an importable ``package.module:Class`` or a file
+``path/to/file.py:Class``. The hyperparameters start at the first colon that is followed by
+``NAME=``, which a target's own colon (``file.py:Class``, ``C:/dir``) never is:
+``ransac:weighted=true``, ``path/mine.py:Mine:max_iter=50,tag=fast``. A value is read as a JSON
+scalar (``true``, ``false``, ``null``, a number, a ``"quoted string"``; Python's ``True``,
+``False`` and ``None`` too); any other word is a string (``tag=fast``). :func:`spec_label` writes
+the one canonical spec of a target and its hyperparameters, which :func:`parse_spec` reads back.
+
+Third-party packages register a name by declaring, in their pyproject.toml::
 
     [project.entry-points."azgym.localizers"]
     mylocalizer = "mypackage.module:MyLocalizer"
@@ -13,6 +24,9 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
+import inspect
+import json
+import re
 import sys
 from collections.abc import Callable
 from importlib.metadata import entry_points
@@ -43,6 +57,13 @@ _BUILTIN: dict[str, str] = {
     "lsq": "azgym.localize.lsq:LeastSquares",
     "loo": "azgym.localize.loo:LeaveOneOut",
 }
+PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
+    "ransac-weighted": ("ransac", {"weighted": True}),
+    "mex-coarse": ("mex", {"coarse_step": 0.1}),
+}
+"""Named built-ins with hyperparameters: ``name -> (target, params)``; the bench's defaults use
+them. A preset is only a short spec: it expands to its target and hyperparameters wherever it is
+read, so results and leaderboard entries record ``ransac`` with ``weighted=true``."""
 _REGISTERED: dict[str, Factory] = {}
 
 
@@ -54,7 +75,7 @@ def register_localizer(name: str, factory: Factory) -> None:
     """
     if not isinstance(name, str) or not name:
         raise InvalidInputError(f"localizer name must be a non-empty string, got {name!r}")
-    if name in _BUILTIN or name in _REGISTERED:
+    if name in _BUILTIN or name in PRESETS or name in _REGISTERED:
         raise InvalidInputError(f"a localizer named {name!r} is already registered")
     _REGISTERED[name] = factory
 
@@ -65,7 +86,7 @@ def _entry_points() -> dict[str, Any]:
 
 def list_localizers() -> list[str]:
     """Every name ``make_localizer`` accepts: built-ins, registered and entry-point localizers."""
-    return sorted(set(_BUILTIN) | set(_REGISTERED) | set(_entry_points()))
+    return sorted(set(_BUILTIN) | set(PRESETS) | set(_REGISTERED) | set(_entry_points()))
 
 
 def _load_attribute(spec: str) -> Factory:
@@ -123,12 +144,99 @@ def resolve(name: str) -> Factory:
         return _REGISTERED[name]
     if name in _BUILTIN:
         return _load_attribute(_BUILTIN[name])
+    if name in PRESETS:
+        return resolve(PRESETS[name][0])
     if ":" in name:
+        registered = name.partition(":")[0]
+        if registered in list_localizers():
+            raise InvalidInputError(
+                f"localizer spec {name!r}: {registered!r} is a registered name; its "
+                f"hyperparameters are written {registered}:NAME=VALUE[,NAME=VALUE...]")
         return _load_attribute(name)
     plugins = _entry_points()
     if name in plugins:
         return _localizer_class(name, plugins[name].load())
     raise unknown_name("localizer", name, list_localizers())
+
+
+_PARAMS_START = re.compile(r":(?=\s*[A-Za-z_]\w*\s*=)")
+_PARAM = re.compile(r'\s*([A-Za-z_]\w*)\s*=\s*("(?:[^"\\]|\\.)*"|[^,]*?)\s*(?:,|$)')
+_PYTHON_WORDS = {"True": True, "False": False, "None": None}
+
+
+def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
+    """Split a spec into its target and hyperparameters, a preset expanded (module docstring).
+
+    Raises:
+        InvalidInputError: Hyperparameters that are not ``NAME=VALUE`` pairs, a name given twice,
+            a value that is not a scalar.
+    """
+    if not isinstance(spec, str):
+        raise InvalidInputError(f"localizer name must be a string, got {type(spec).__name__}")
+    start = _PARAMS_START.search(spec)
+    target, text = (spec, "") if start is None else (spec[:start.start()], spec[start.end():])
+    params: dict[str, Any] = {}
+    position = 0
+    while position < len(text):
+        pair = _PARAM.match(text, position)
+        if pair is None or not pair.group(2) or pair.end() == position:
+            raise InvalidInputError(
+                f"localizer spec {spec!r}: cannot read hyperparameters from {text[position:]!r}; "
+                "write NAME=VALUE[,NAME=VALUE...]")
+        name = pair.group(1)
+        if name in params:
+            raise InvalidInputError(f"localizer spec {spec!r}: hyperparameter {name!r} twice")
+        params[name] = _scalar(spec, name, pair.group(2))
+        position = pair.end()
+    if text.rstrip().endswith(","):
+        raise InvalidInputError(f"localizer spec {spec!r}: a comma with nothing after it")
+    if target in PRESETS:
+        target, params = PRESETS[target][0], {**PRESETS[target][1], **params}
+    return target, params
+
+
+def _scalar(spec: str, name: str, text: str) -> Any:
+    """A hyperparameter's value: a JSON scalar, Python's True/False/None, or else a bare string."""
+    if text in _PYTHON_WORDS:
+        return _PYTHON_WORDS[text]
+    if text.startswith(("[", "{")):
+        raise InvalidInputError(f"localizer spec {spec!r}: {name} must be a scalar (true, false, "
+                                f"null, a number or a string), got {text}")
+    try:
+        return json.loads(text)
+    except ValueError:
+        if text.startswith('"'):
+            raise InvalidInputError(
+                f"localizer spec {spec!r}: {name}={text} is not a valid quoted string") from None
+        return text
+
+
+def spec_label(target: str, params: dict[str, Any]) -> str:
+    """The canonical spec of a target and hyperparameters, which :func:`parse_spec` reads back.
+
+    A preset's name where one matches, else the target and the hyperparameters sorted by name.
+    """
+    text = _canonical(target, params)
+    for preset, (preset_target, preset_params) in PRESETS.items():
+        if preset_target == target and _canonical(target, preset_params) == text:
+            return preset
+    return text
+
+
+def _canonical(target: str, params: dict[str, Any]) -> str:
+    pairs = ",".join(f"{name}={_written(params[name])}" for name in sorted(params))
+    return f"{target}:{pairs}" if pairs else target
+
+
+def _written(value: Any) -> str:
+    """A value as a spec writes it: a plain word bare if it reads back as itself, else JSON."""
+    if isinstance(value, str):
+        try:
+            if parse_spec(f"x:v={value}") == ("x", {"v": value}):
+                return value
+        except InvalidInputError:
+            pass
+    return json.dumps(value)
 
 
 def make_localizer(name: str, **params: Any) -> SupportsLocalize:
@@ -139,19 +247,50 @@ def make_localizer(name: str, **params: Any) -> SupportsLocalize:
         >>> localizer = azgym.make_localizer("ransac", weighted=True)
         >>> localizer.get_params()["weighted"]
         True
+        >>> azgym.make_localizer("ransac:weighted=true").get_params()["weighted"]
+        True
 
     Raises:
         UnknownNameError: No such localizer ("Did you mean ...?").
-        InvalidInputError: A spec that cannot be imported, or a hyperparameter it does not take.
+        InvalidInputError: A spec that cannot be imported, or a hyperparameter it does not take
+            (naming the closest one it does).
     """
-    factory = resolve(name)
+    target, inline = parse_spec(name)
+    both = sorted(set(inline) & set(params))
+    if both:
+        raise InvalidInputError(f"localizer {name!r}: hyperparameter {both[0]!r} given both in "
+                                "the spec and as a keyword")
+    params = {**inline, **params}
+    factory = resolve(target)
+    _check_param_names(target, factory, params)
     try:
         localizer = factory(**params)
     except TypeError as exc:
-        raise InvalidInputError(f"localizer {name!r}: {exc}") from None
+        raise InvalidInputError(f"localizer {target!r}: {exc}") from None
     if not isinstance(localizer, SupportsLocalize):
         raise InvalidInputError(
-            f"localizer {name!r} built a {type(localizer).__name__}, which has no "
+            f"localizer {target!r} built a {type(localizer).__name__}, which has no "
             "localize(measurements, beacons) method"
         )
     return localizer
+
+
+def _check_param_names(target: str, factory: Factory, params: dict[str, Any]) -> None:
+    """Refuse a hyperparameter the factory does not take, naming the closest one it does.
+
+    A factory that takes ``**kwargs`` (or whose signature cannot be read) is left to raise
+    its own TypeError when called.
+    """
+    try:
+        signature = inspect.signature(factory)
+    except (TypeError, ValueError):
+        return
+    kinds = {p.kind for p in signature.parameters.values()}
+    if inspect.Parameter.VAR_KEYWORD in kinds:
+        return
+    valid = [p.name for p in signature.parameters.values()
+             if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    for key in params:
+        if key not in valid:
+            raise InvalidInputError(
+                f"localizer {target!r}: {unknown_name('hyperparameter', key, valid)}")

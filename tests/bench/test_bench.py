@@ -126,7 +126,7 @@ def test_cli_default_run_prints_a_ranked_table_and_writes_results(tmp_path, caps
     assert "warehouse-static v1 (dev, seed 7, quick)" in printed
     summary = json.loads((tmp_path / "results.json").read_text())
     assert set(summary["localizers"]) == {"ransac", "ransac-weighted", "loo", "lsq", "triplet",
-                                          "mex"}
+                                          "mex-coarse"}
     lines = (tmp_path / "frames.csv").read_text().splitlines()
     assert len(lines) == 1 + 6 * summary["n_frames"]
 

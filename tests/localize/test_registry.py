@@ -83,10 +83,14 @@ def test_name_must_be_a_string():
         azgym.make_localizer(3)
 
 
-def test_a_bad_keyword_raises_invalid_input():
-    with pytest.raises(InvalidInputError, match=re.escape("localizer 'ransac'")) as info:
-        azgym.make_localizer("ransac", pr_hti=0.99)
-    assert "pr_hti" in str(info.value)
+def test_a_misspelt_hyperparameter_names_the_closest_and_the_valid_ones():
+    with pytest.raises(InvalidInputError, match=re.escape(
+            "localizer 'ransac': unknown hyperparameter 'wieghted'. Did you mean 'weighted'? "
+            "Valid hyperparameters: coverage, degeneracy_tol,")) as info:
+        azgym.make_localizer("ransac", wieghted=True)
+    assert "random_state, weighted." in str(info.value)
+    with pytest.raises(InvalidInputError, match=re.escape("Did you mean 'pr_hit'?")):
+        azgym.make_localizer("ransac:pr_hti=0.99")
 
 
 def test_hyperparameters_are_keyword_only():
@@ -122,6 +126,7 @@ def test_file_spec_loads_a_plugin(tmp_path, paper_beacons):
     check_plugin_works(localizer, paper_beacons)
     # Loading the same file again gives the same class (the module is imported once).
     assert type(azgym.make_localizer(f"{path}:Wrapped")) is type(localizer)
+    check_plugin_works(azgym.make_localizer(f"{path}:Wrapped:max_iter=9,tag=x"), paper_beacons)
 
 
 def test_module_spec_loads_a_plugin(tmp_path, monkeypatch, paper_beacons):
@@ -159,8 +164,84 @@ def test_a_factory_without_localize_is_rejected(tmp_path):
 
 def test_a_bad_keyword_for_a_plugin(tmp_path):
     path = plugin_file(tmp_path)
-    with pytest.raises(InvalidInputError, match="unexpected keyword argument 'nope'"):
-        azgym.make_localizer(f"{path}:Wrapped", nope=1)
+    with pytest.raises(InvalidInputError, match=re.escape(
+            "unknown hyperparameter 'max_itr'. Did you mean 'max_iter'? Valid hyperparameters: "
+            "max_iter, tag.")):
+        azgym.make_localizer(f"{path}:Wrapped", max_itr=1)
+
+
+def test_a_factory_taking_any_keyword_reports_its_own_error(clean_registry):
+    def picky(**params):
+        raise TypeError(f"picky takes nothing, got {sorted(params)}")
+
+    azgym.register_localizer("picky", picky)
+    with pytest.raises(InvalidInputError, match=re.escape("localizer 'picky': picky takes")):
+        azgym.make_localizer("picky:anything=1")
+
+
+SPECS = [
+    ("ransac", "ransac", {}),
+    ("ransac:weighted=true", "ransac", {"weighted": True}),
+    ("ransac: max_iter = 7 ,weighted=True", "ransac", {"max_iter": 7, "weighted": True}),
+    ("ransac-weighted", "ransac", {"weighted": True}),
+    ("ransac-weighted:weighted=false", "ransac", {"weighted": False}),
+    ("mex-coarse:n_candidates=4", "mex", {"coarse_step": 0.1, "n_candidates": 4}),
+    ("mex:bounds=null,step=2e-2", "mex", {"bounds": None, "step": 0.02}),
+    ("path/to/mine.py:Mine", "path/to/mine.py:Mine", {}),
+    ('path/to/mine.py:Mine:tag=fast,note="a, b",n="3"', "path/to/mine.py:Mine",
+     {"tag": "fast", "note": "a, b", "n": "3"}),
+    (r"C:\dir\mine.py:Mine:x=-1.5", r"C:\dir\mine.py:Mine", {"x": -1.5}),
+    ("pkg.module:Mine:flag=None", "pkg.module:Mine", {"flag": None}),
+]
+
+
+@pytest.mark.parametrize(("spec", "target", "params"), SPECS, ids=[s for s, _, _ in SPECS])
+def test_a_spec_reads_its_target_and_hyperparameters_and_its_label_reads_back(spec, target,
+                                                                              params):
+    assert registry.parse_spec(spec) == (target, params)
+    label = registry.spec_label(target, params)
+    assert registry.parse_spec(label) == (target, params)
+    assert registry.spec_label(*registry.parse_spec(label)) == label
+
+
+def test_a_label_is_canonical_and_a_preset_name_where_one_matches():
+    assert registry.spec_label("ransac", {"weighted": True}) == "ransac-weighted"
+    assert registry.spec_label("ransac", {"weighted": 1}) == "ransac:weighted=1"
+    assert registry.spec_label("mex", {"coarse_step": 0.1}) == "mex-coarse"
+    assert registry.spec_label("ransac", {"weighted": True, "max_iter": 7}) == \
+        "ransac:max_iter=7,weighted=true"
+    assert registry.spec_label("m.py:M", {"tag": "fast", "n": "3", "s": "a,b"}) == \
+        'm.py:M:n="3",s="a,b",tag=fast'
+
+
+@pytest.mark.parametrize(("spec", "message"), [
+    ("ransac:weighted", "'ransac' is a registered name; its hyperparameters are written "
+                        "ransac:NAME=VALUE"),
+    ("ransac:weighted=", "cannot read hyperparameters from 'weighted='"),
+    ("ransac:weighted=true,", "a comma with nothing after it"),
+    ("ransac:max_iter=1,max_iter=2", "hyperparameter 'max_iter' twice"),
+    ("mex:bounds=[0,0,1,1]", "bounds must be a scalar"),
+    ('m.py:M:tag="open', 'tag="open is not a valid quoted string'),
+])
+def test_a_malformed_spec_is_refused_with_what_is_wrong(spec, message):
+    with pytest.raises(InvalidInputError, match=re.escape(message)):
+        azgym.make_localizer(spec)
+
+
+def test_spec_hyperparameters_build_the_localizer_and_clash_with_keywords():
+    assert azgym.make_localizer("ransac-weighted").get_params()["weighted"] is True
+    mex = azgym.make_localizer("mex-coarse:step=0.02")
+    assert (mex.coarse_step, mex.step) == (0.1, 0.02)
+    assert azgym.make_localizer("ransac:max_iter=7", weighted=True).get_params()["max_iter"] == 7
+    with pytest.raises(InvalidInputError, match=re.escape(
+            "hyperparameter 'max_iter' given both in the spec and as a keyword")):
+        azgym.make_localizer("ransac:max_iter=7", max_iter=8)
+
+
+def test_presets_are_listed_and_their_names_taken(clean_registry):
+    assert {"ransac-weighted", "mex-coarse"} <= set(azgym.list_localizers())
+    with pytest.raises(InvalidInputError, match="already registered"):
+        azgym.register_localizer("mex-coarse", Mex)
 
 
 def test_register_a_factory(clean_registry, paper_beacons):
@@ -279,3 +360,12 @@ def test_a_spec_that_is_not_a_localizer_class_is_refused_before_it_is_called(spe
     with pytest.raises(InvalidInputError, match="not a localizer class"):
         azgym.make_localizer(spec, command="touch pwned", args="touch pwned", shell=True)
     assert not (tmp_path / "pwned").exists()
+
+
+def test_check_localizer_says_what_it_checked_when_everything_passes(capsys):
+    azgym.check_localizer(azgym.make_localizer("lsq"))
+    printed = capsys.readouterr().out
+    assert printed.startswith("check_localizer: LeastSquares passed all 7 checks:")
+    assert "noise-free recovery of 3 poses" in printed and "permutation invariance" in printed
+    azgym.check_localizer(azgym.make_localizer("lsq"), verbose=False)
+    assert capsys.readouterr().out == ""
