@@ -1,7 +1,7 @@
 """azgym: benchmark azimuth-based indoor localizers, and reproduce the papers they come from.
 
 azgym bench [--suite S] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
-            [--workers N] [--quick] [--out DIR]
+            [--workers N] [--time-limit SECONDS] [--quick] [--out DIR]
 azgym leaderboard submit|build|verify ...
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
 azgym study error-model [--scenario S] [--frames N] [--noise SIGMA] [--calibration-px PX]
@@ -15,12 +15,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.errors import AzgymError
 
 if TYPE_CHECKING:
@@ -66,12 +68,12 @@ def _bench(args: argparse.Namespace) -> int:
     # With no suite named, the default suite runs in its quick size: the README's main job.
     quick = args.quick or args.suite is None
     suite = get_suite(args.suite or DEFAULT_SUITE)
-    contenders = _contenders(args.localizer, args.with_builtins)
+    contenders = _contenders(args.localizer, args.with_builtins, args.time_limit)
     workers = args.workers or default_workers()
     prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
     started = time.perf_counter()
     result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
-                           progress=_progress_printer())
+                           time_limit=args.time_limit, progress=_progress_printer())
     written = result.write(Path(args.out))
     print()
     print(ranked_table(result.summary))
@@ -79,13 +81,13 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
-def _contenders(specs: Sequence[str], with_builtins: bool) -> list[Contender]:
+def _contenders(specs: Sequence[str], with_builtins: bool,
+                time_limit: float = DEFAULT_TIME_LIMIT) -> list[Contender]:
     """The contenders ``--localizer`` names (every built-in if none), each built once first.
 
     A bad name, spec or hyperparameter stops the command here, before any frame is drawn,
-    rather than scoring a localizer that cannot run as failing every frame. Building a plug-in
-    runs its module and constructor in this process: acceptable for the command's own
-    ``--localizer``, which the user asked to run (the runner builds it again in its worker).
+    rather than scoring a localizer that cannot run as failing every frame. Each is built in a
+    worker process, as the run would build it, within the time limit.
     """
     from azgym.bench.contenders import (
         check_buildable,
@@ -98,7 +100,7 @@ def _contenders(specs: Sequence[str], with_builtins: bool) -> list[Contender]:
     for candidate in map(contender, specs):
         named.setdefault(candidate.label, candidate)
     for candidate in named.values():
-        check_buildable(candidate)
+        check_buildable(candidate, time_limit)
     if not named:
         return default_contenders()
     return with_defaults(named.values()) if with_builtins else list(named.values())
@@ -251,6 +253,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _seconds(text: str) -> float:
+    """A command-line duration: a finite number of seconds > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a number of seconds > 0, got {text!r}")
+    return value
+
+
 def _add_bench(commands: argparse._SubParsersAction) -> None:
     """``azgym bench``: score localizers on a suite."""
     from azgym.bench.contenders import DEFAULT_SPECS
@@ -269,6 +282,10 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     bench.add_argument("--split", choices=("dev", "test"), default="dev",
                        help="dev: the suite's fixed seed; test: a fresh seed, reported")
     bench.add_argument("--workers", type=int, default=0, help="processes (0: one per core)")
+    bench.add_argument("--time-limit", type=_seconds, default=DEFAULT_TIME_LIMIT,
+                       metavar="SECONDS",
+                       help="time a localizer may take on one frame (or to be built); a frame "
+                            "over it is scored unavailable")
     bench.add_argument("--quick", action="store_true", help="the suite's small version")
     bench.add_argument("--out", default="results/bench", help="output folder")
     bench.set_defaults(handler=_bench)

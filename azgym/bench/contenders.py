@@ -14,11 +14,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
-from azgym.core import BeaconMap, Measurements
-from azgym.errors import AzgymError, InvalidInputError
-from azgym.localize.registry import make_localizer, parse_spec, spec_label
+from azgym.bench.isolation import DEFAULT_TIME_LIMIT, build_problem
+from azgym.errors import InvalidInputError
+from azgym.localize.registry import parse_spec, spec_label
 
 REFERENCE = "ransac"
 """The localizer every runtime is compared with (added to a run that lacks it)."""
@@ -70,26 +68,16 @@ def with_defaults(contenders: Iterable[Contender]) -> list[Contender]:
     return defaults + [c for c in contenders if c.label not in labels]
 
 
-def check_buildable(candidate: Contender) -> None:
-    """Build the contender once: a bad name, spec or hyperparameter raises here, not per frame.
+def check_buildable(candidate: Contender, time_limit: float = DEFAULT_TIME_LIMIT) -> None:
+    """Build the contender once, in a worker: a bad name, spec or hyperparameter raises here.
 
-    For a :class:`~azgym.localize.base.Localizer`, the hyperparameters are checked too (they are
-    validated on its first frame: here an empty one). This runs the localizer's code in the
-    calling process: a plug-in's module and its constructor.
+    The build runs where the benchmark runs the localizer (:mod:`azgym.bench.isolation`), with
+    the same time limit, so a plug-in whose module or constructor hangs or crashes is reported
+    instead of stopping the caller.
 
     Raises:
         InvalidInputError: Naming the contender and what went wrong.
     """
-    from azgym.localize.base import Localizer  # here: it loads the compiled kernels
-
-    beacons = BeaconMap(np.arange(3), np.array([[1.0, 0.0, 2.5], [0.0, 1.0, 2.5],
-                                                [-1.0, 0.0, 2.5]]))
-    try:
-        localizer = make_localizer(candidate.spec, **candidate.params)
-        if isinstance(localizer, Localizer):
-            localizer.localize(Measurements(np.arange(0), np.zeros(0)), beacons)
-    except AzgymError as exc:
-        raise InvalidInputError(f"cannot build {candidate.label}: {exc}") from None
-    except Exception as exc:  # noqa: BLE001 - a plug-in's own error, reported, not a traceback
-        raise InvalidInputError(
-            f"cannot build {candidate.label}: {type(exc).__name__}: {exc}") from None
+    problem = build_problem(candidate.spec, candidate.params, time_limit)
+    if problem:
+        raise InvalidInputError(f"cannot build {candidate.label}: {problem}")

@@ -233,8 +233,8 @@ class IsolatedRun:
                 w.ready = True
                 self._send(w)
             elif message[0] == "unbuildable":
-                self.unbuildable = message[1]
-                self._skip(w.batch, message[1])
+                self.unbuildable = f"cannot build {self.spec!r}: {message[1]}"
+                self._skip(w.batch, self.unbuildable)
                 w.batch = None
                 _stop(w)
                 self.running.remove(w)
@@ -309,6 +309,31 @@ def _caller_main_hidden() -> Iterator[None]:
         yield
     finally:
         sys.modules["__main__"] = main
+
+
+def build_problem(spec: str, params: dict[str, Any], time_limit: float) -> str:
+    """Why the localizer cannot be built in a worker ("" when it can), within the time limit.
+
+    The check runs where a benchmark runs the localizer, so a plug-in whose module or
+    constructor hangs, crashes or exits is caught without harm to the caller.
+    """
+    run = IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit, batch_size=1,
+                      say=lambda _line: None)
+    w = run._start()
+    try:
+        while True:
+            if _poll(w.conn):
+                message = w.conn.recv()
+                w.ready = message[0] == "ready"
+                return "" if w.ready else message[1]
+            if not w.process.is_alive():
+                return _death(w.process)
+            if run._overran(w):
+                return run._overrun_reason(w)
+            multiprocessing.connection.wait([w.conn, w.process.sentinel],
+                                            timeout=run._next_deadline([w]))
+    finally:
+        _stop(w)
 
 
 def _poll(conn: Any) -> bool:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import textwrap
 import time
 
@@ -12,6 +13,7 @@ from azgym.bench.contenders import Contender
 from azgym.bench.isolation import GIVE_UP_AFTER
 from azgym.bench.runner import run_contenders
 from azgym.bench.suites import get_suite
+from azgym.cli import main
 
 PLUGINS = {
     "sleeper": """
@@ -186,3 +188,30 @@ def test_a_localizer_that_cannot_be_built_in_time_is_scored_unavailable(cases, p
 def test_the_time_limit_must_be_a_positive_number(cases, bad):
     with pytest.raises(Exception, match="time_limit must be a finite number > 0"):
         run_contenders(cases, [Contender("ransac", "ransac")], time_limit=bad)
+
+
+def test_bench_with_a_sleeper_finishes_within_frames_times_the_limit(plugins, tmp_path, capsys):
+    begun = time.monotonic()
+    code = main(["bench", "--suite", "stress", "--quick", "--localizer", plugins["sleeper"].spec,
+                 "--time-limit", "0.5", "--workers", "1", "--out", str(tmp_path)])
+    assert code == 0
+    frames = json.loads((tmp_path / "results.json").read_text())["n_frames"]
+    assert time.monotonic() - begun < frames * 0.5
+    assert "timed out: took longer than the 0.5 s limit" in capsys.readouterr().out
+
+
+def test_bench_refuses_a_localizer_whose_constructor_hangs_before_the_run(plugins, tmp_path,
+                                                                         capsys):
+    code = main(["bench", "--localizer", plugins["slow_builder"].spec, "--time-limit", "0.5",
+                 "--out", str(tmp_path / "out")])
+    assert code == 2
+    assert "building the localizer took longer than the 0.5 s limit" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("bad", ["0", "-2", "nan", "soon"])
+def test_bench_refuses_a_time_limit_that_is_not_a_positive_number(bad, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["bench", "--time-limit", bad])
+    assert stop.value.code == 2
+    assert "--time-limit: must be a number of seconds > 0" in capsys.readouterr().err

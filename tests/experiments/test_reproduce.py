@@ -106,11 +106,11 @@ def test_cli_quick_run_writes_every_output(tmp_path, capsys):
     assert {"results.json", "results.md", "runs.npz", "error_cdf.png", "error_map_k0.png",
             "error_map_k1.png"} <= names
     results = json.loads((out / "results.json").read_text())
-    assert set(results["localizers"]) == {"ransac", "ransac-weighted", "mex", "lsq", "loo",
-                                          "triplet"}
+    assert set(results["localizers"]) == {"ransac", "ransac-weighted", "mex-coarse", "lsq",
+                                          "loo", "triplet"}
     assert set(results["limit"]) == {"0", "1", "3", "5"}
     table = (out / "results.md").read_text()
-    assert "| ransac | 2.65 |" in table and "| mex | 2.67 |" in table
+    assert "| ransac | 2.65 |" in table and "| mex-coarse | 2.67 |" in table
     runs = np.load(out / "runs.npz")
     assert runs["ransac__k0"].shape == (results["localizers"]["ransac"]["by_k"]["0"]["all"]["n"],)
     assert "Exhaustive 1 cm MEX" in capsys.readouterr().out

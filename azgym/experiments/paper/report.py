@@ -60,10 +60,11 @@ def markdown_table(results: dict[str, Any]) -> str:
             if row is None:
                 continue
             everything, far = row["all"], row["far"]
-            paper = PAPER_MEAN_ERROR_CM.get(label) if k == "0" else None
-            if paper is None and label == "ransac" and int(k) in ACCEPTANCE_RANSAC_CM:
+            method = paper_method(entry)
+            paper = PAPER_MEAN_ERROR_CM.get(method or "") if k == "0" else None
+            if paper is None and method == "ransac" and int(k) in ACCEPTANCE_RANSAC_CM:
                 paper_text = f"(≤ {ACCEPTANCE_RANSAC_CM[int(k)]} target)"
-            elif paper is None and label == "mex" and k != "0":
+            elif paper is None and method == "mex" and k != "0":
                 paper_text = "no usable result"
             else:
                 paper_text = _fmt(paper)
@@ -78,6 +79,17 @@ def markdown_table(results: dict[str, Any]) -> str:
             )
         lines.append("")
     return "\n".join(lines)
+
+
+def paper_method(entry: dict[str, Any]) -> str | None:
+    """Which of the paper's methods a contender is: "ransac", "mex" or None.
+
+    The paper's RANSAC is ``ransac`` with its default hyperparameters; its MEX is ``mex`` with
+    any step schedule (coarse-to-fine returns the exhaustive search's grid point).
+    """
+    if entry["spec"] == "ransac" and not entry["params"]:
+        return "ransac"
+    return "mex" if entry["spec"] == "mex" else None
 
 
 def write_outputs(reproduction: Reproduction, out: Path, figures: bool = True) -> list[Path]:
@@ -104,7 +116,9 @@ def _figures(reproduction: Reproduction, out: Path) -> list[Path]:
     import matplotlib.pyplot as plt
 
     per_point = reproduction.results["per_point"]
-    labels = [label for label in ("ransac", "mex") if label in per_point]
+    methods = {paper_method(entry): label
+               for label, entry in reproduction.results["localizers"].items()}
+    labels = [methods[m] for m in ("ransac", "mex") if methods.get(m) in per_point]
     written = [_error_map(plt, per_point, labels, k, out / f"error_map_k{k}.png")
                for k in ("0", "1") if labels and k in per_point[labels[0]]]
     written.append(_error_cdfs(plt, reproduction, out / "error_cdf.png"))
