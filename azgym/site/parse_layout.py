@@ -2,8 +2,9 @@
 
 ``[[beacons]]``, ``[[racks]]``, ``[[walls]]``, ``[[routes]]``, ``[[bumps]]`` and ``[[lights]]``
 place things in the room, so besides their own fields they are checked against
-each other: a beacon or a lamp must not sit inside a rack, a route's legs must keep
-``ROUTE_CLEARANCE`` off the racks, route names must be unique. Those geometric rules are
+each other: a beacon must stand in the room (on its walls at most) and, like a lamp, not inside
+a rack; a route's legs must keep ``ROUTE_CLEARANCE`` off the racks and walls (the forklift drives
+them among pymunk's solid racks and walls); route names must be unique. Those geometric rules are
 kept here, next to the tables they relate; the sensor's tables (camera, fisheye, error model,
 faults) are in :mod:`azgym.site.parse_sensor`, and field-level checks and their messages in
 :mod:`azgym.site.reader`.
@@ -25,8 +26,9 @@ from azgym.site.elements import (
     Route,
     Wall,
     leg_hits_rack,
+    leg_wall_distance,
 )
-from azgym.site.reader import Reader
+from azgym.site.reader import MAX_INTEGER, Reader, shown
 
 _DEFAULT_KEYS = {"width", "z"}
 _BEACON_KEYS = {"id", "xy", "xyz", "width", "z", "moved_to"}
@@ -36,11 +38,21 @@ _ROUTE_KEYS = {"name", "waypoints", "reverse", "speed"}
 _BUMP_KEYS = {"center", "size", "tilt_deg"}
 _LIGHT_KEYS = {"name", "xyz", "width", "tall", "power"}
 
+ON_WALL_TOLERANCE = 0.05
+"""How far outside the room's bounds a beacon may stand [m]: beacons hang on the walls, and one
+mounted on a wall's face has its centre a few centimetres off the wall's line."""
+MAX_ROUTE_SPEED = 20.0
+"""The fastest a route may be driven [m/s]: no warehouse vehicle is faster."""
+
 
 # --------------------------------------------------------------------------- beacons
 
-def parse_beacons(read: Reader, data: dict[str, Any]) -> tuple[BeaconMap, FloatArray]:
-    """The ``[[beacons]]`` as a map, and where each physically is (see ``moved_to``), (N, 3)."""
+def parse_beacons(read: Reader, data: dict[str, Any],
+                  bounds: tuple[float, float, float, float]) -> tuple[BeaconMap, FloatArray]:
+    """The ``[[beacons]]`` as a map, and where each physically is (see ``moved_to``), (N, 3).
+
+    Both positions of a beacon must be in the room: within ``ON_WALL_TOLERANCE`` of its bounds.
+    """
     defaults = read.table(data.get("beacon_defaults", {}), "beacon_defaults", _DEFAULT_KEYS)
     default_width = read.number(defaults.get("width", 0.03), "beacon_defaults.width",
                                 positive=True)
@@ -55,16 +67,25 @@ def parse_beacons(read: Reader, data: dict[str, Any]) -> tuple[BeaconMap, FloatA
         read.table(entry, f"beacons[{k}]", _BEACON_KEYS)
         ids.append(_beacon_id(read, entry, where, ids))
         position = _beacon_position(read, entry, where, default_z)
-        xyz.append(position)
-        physical.append(_moved_to(read, entry, position, where))
+        xyz.append(_in_room(read, position, f"{where}{'xyz' if 'xyz' in entry else 'xy'}",
+                            ids[-1], bounds))
+        physical.append(_in_room(read, _moved_to(read, entry, position, where),
+                                 f"{where}moved_to", ids[-1], bounds))
         width.append(read.number(entry.get("width", default_width), f"{where}width",
                                  positive=True))
     return BeaconMap(np.array(ids), np.array(xyz), np.array(width)), np.array(physical)
 
 
 def _beacon_id(read: Reader, entry: dict[str, Any], where: str, earlier: list[int]) -> int:
-    """A beacon's ``id``: an integer that none of the ``earlier`` beacons has."""
-    beacon_id = read.integer(read.require(entry, "id", where), f"{where}id")
+    """A beacon's ``id``: an integer >= 0 that none of the ``earlier`` beacons has.
+
+    Negative ids are refused: −1 marks the empty slots of an environment's observation.
+    """
+    value = read.require(entry, "id", where)
+    if isinstance(value, int) and not isinstance(value, bool) and value < 0:
+        raise read.fail(f"{where}id", f"must be >= 0 (-1 marks an empty slot in observations), "
+                        f"got {shown(value)}")
+    beacon_id = read.integer(value, f"{where}id", minimum=0, maximum=MAX_INTEGER)
     if beacon_id in earlier:
         raise read.fail(f"{where}id",
                         f"duplicate id {beacon_id} (also beacons[{earlier.index(beacon_id)}])")
@@ -93,6 +114,18 @@ def _moved_to(read: Reader, entry: dict[str, Any], position: list[float],
     if isinstance(moved, list) and len(moved) == 2:
         return read.vector(moved, f"{where}moved_to", 2) + [position[2]]
     return read.vector(moved, f"{where}moved_to", 3)
+
+
+def _in_room(read: Reader, xyz: list[float], field: str, beacon_id: int,
+             bounds: tuple[float, float, float, float]) -> list[float]:
+    """``xyz``, checked to be in the room: within ``ON_WALL_TOLERANCE`` of its ``bounds``."""
+    x_min, y_min, x_max, y_max = bounds
+    if not (x_min - ON_WALL_TOLERANCE <= xyz[0] <= x_max + ON_WALL_TOLERANCE
+            and y_min - ON_WALL_TOLERANCE <= xyz[1] <= y_max + ON_WALL_TOLERANCE):
+        raise read.fail(field, f"beacon {beacon_id} at ({xyz[0]:g}, {xyz[1]:g}) is outside the "
+                        f"room [{x_min:g}, {x_max:g}] x [{y_min:g}, {y_max:g}] (by more than "
+                        f"{ON_WALL_TOLERANCE:g} m)")
+    return xyz
 
 
 def check_beacons_outside_racks(read: Reader, ids: IntArray, physical_xyz: FloatArray,
@@ -128,7 +161,8 @@ def parse_rack(read: Reader, entry: dict[str, Any], k: int) -> Rack:
     center, size = _footprint(read, entry, where)
     return Rack(
         center=(center[0], center[1]), size=(size[0], size[1]),
-        angle=math.radians(read.number(entry.get("angle_deg", 0.0), f"{where}angle_deg")),
+        angle=math.radians(read.number(entry.get("angle_deg", 0.0), f"{where}angle_deg",
+                                       maximum=360.0)),
         height=read.number(read.require(entry, "height", where), f"{where}height",
                            positive=True),
         reflectivity=_reflectivity(read, entry, where),
@@ -152,19 +186,21 @@ def parse_wall(read: Reader, entry: dict[str, Any], k: int) -> Wall:
 # --------------------------------------------------------------------------- routes
 
 def parse_route(read: Reader, entry: dict[str, Any], k: int, *,
-                bounds: tuple[float, float, float, float], racks: tuple[Rack, ...]) -> Route:
-    """The ``k``-th ``[[routes]]`` table: waypoints in the room whose legs keep off the racks."""
+                bounds: tuple[float, float, float, float], racks: tuple[Rack, ...],
+                walls: tuple[Wall, ...]) -> Route:
+    """The ``k``-th ``[[routes]]`` table: waypoints in the room, legs clear of racks and walls."""
     where = f"routes[{k}]."
     read.keys(entry, _ROUTE_KEYS, where)
     name = read.text(read.require(entry, "name", where), f"{where}name")
     points = _waypoints(read, entry, where, bounds)
     reverse = entry.get("reverse", [False] * (len(points) - 1))
-    if not (isinstance(reverse, list) and len(reverse) == len(points) - 1
-            and all(isinstance(r, bool) for r in reverse)):
+    if not (isinstance(reverse, list) and len(reverse) == len(points) - 1):
         raise read.fail(f"{where}reverse",
                         f"must be a list of {len(points) - 1} booleans, one per leg")
-    _check_legs_clear_racks(read, points, racks, where)
-    speed = read.number(entry.get("speed", 1.5), f"{where}speed", positive=True)
+    reverse = [read.boolean(r, f"{where}reverse[{i}]") for i, r in enumerate(reverse)]
+    _check_legs_clear(read, points, racks, walls, where, name)
+    speed = read.number(entry.get("speed", 1.5), f"{where}speed", positive=True,
+                        maximum=MAX_ROUTE_SPEED)
     return Route(name=name, waypoints=points, reverse=tuple(reverse), speed=speed)
 
 
@@ -181,17 +217,26 @@ def _waypoints(read: Reader, entry: dict[str, Any], where: str,
     return points
 
 
-def _check_legs_clear_racks(read: Reader, points: FloatArray, racks: tuple[Rack, ...],
-                            where: str) -> None:
-    """Reject a route leg within ``ROUTE_CLEARANCE`` of a rack: the forklift would scrape it."""
+def _check_legs_clear(read: Reader, points: FloatArray, racks: tuple[Rack, ...],
+                      walls: tuple[Wall, ...], where: str, name: str) -> None:
+    """Reject a route leg within ``ROUTE_CLEARANCE`` of a rack or a wall.
+
+    The forklift would scrape it, or (a wall crossed) drive into it: pymunk's racks and walls
+    are solid.
+    """
     for leg in range(len(points) - 1):
+        start, end = points[leg], points[leg + 1]
+        what = (f"leg {leg} from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, {end[1]:g}) of "
+                f"route {name!r}")
         for r, rack in enumerate(racks):
-            if leg_hits_rack(points[leg], points[leg + 1], rack, ROUTE_CLEARANCE):
-                raise read.fail(
-                    f"{where}waypoints",
-                    f"leg {leg} from ({points[leg][0]:g}, {points[leg][1]:g}) to "
-                    f"({points[leg + 1][0]:g}, {points[leg + 1][1]:g}) passes within "
-                    f"{ROUTE_CLEARANCE} m of racks[{r}]")
+            if leg_hits_rack(start, end, rack, ROUTE_CLEARANCE):
+                raise read.fail(f"{where}waypoints",
+                                f"{what} passes within {ROUTE_CLEARANCE} m of racks[{r}]")
+        for w, wall in enumerate(walls):
+            distance = leg_wall_distance(start, end, wall)
+            if distance < ROUTE_CLEARANCE:
+                problem = "crosses" if distance == 0.0 else f"passes within {ROUTE_CLEARANCE} m of"
+                raise read.fail(f"{where}waypoints", f"{what} {problem} walls[{w}]")
 
 
 def check_route_names_unique(read: Reader, routes: tuple[Route, ...]) -> None:
