@@ -8,7 +8,9 @@ a height and a reflectivity, the form the compiled sensor kernels take.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -41,13 +43,16 @@ class Rack:
                           [-half_l, half_d]])
         return local @ np.array([[c, s], [-s, c]]) + np.asarray(self.center)
 
-    def contains(self, x: float, y: float, margin: float = 1e-6) -> bool:
-        """Whether (x, y) lies inside the footprint, more than ``margin`` [m] from its faces."""
+    def contains(self, x: Any, y: Any, margin: float = 1e-6) -> Any:
+        """Whether (x, y) lies inside the footprint, more than ``margin`` [m] from its faces.
+
+        A bool for one point; for arrays of points, an array of them (element by element).
+        """
         c, s = math.cos(self.angle), math.sin(self.angle)
         dx, dy = x - self.center[0], y - self.center[1]
         along, across = c * dx + s * dy, -s * dx + c * dy
-        return (abs(along) < 0.5 * self.size[0] - margin
-                and abs(across) < 0.5 * self.size[1] - margin)
+        return ((abs(along) < 0.5 * self.size[0] - margin)
+                & (abs(across) < 0.5 * self.size[1] - margin))
 
 
 @dataclass(frozen=True)
@@ -166,7 +171,8 @@ ROUTE_CLEARANCE = 0.7
 margin."""
 
 
-def leg_hits_rack(start: FloatArray, end: FloatArray, rack: Rack, clearance: float) -> bool:
+def leg_hits_rack(start: Sequence[float], end: Sequence[float], rack: Rack,
+                  clearance: float) -> bool:
     """Whether the straight leg start→end comes within ``clearance`` of the rack's footprint.
 
     Liang-Barsky clipping of the leg, in the rack's own frame, against its footprint grown by the
@@ -195,14 +201,21 @@ def leg_hits_rack(start: FloatArray, end: FloatArray, rack: Rack, clearance: flo
     return True
 
 
-def leg_wall_distance(start: FloatArray, end: FloatArray, wall: Wall) -> float:
+def leg_wall_distance(start: Sequence[float], end: Sequence[float], wall: Wall,
+                      within: float = math.inf) -> float:
     """The shortest distance between the straight leg start→end and the wall's line [m].
 
     Zero when the leg crosses the wall; otherwise the nearest of the four end points to the
-    other segment (two segments that do not cross are nearest at an end of one of them).
+    other segment (two segments that do not cross are nearest at an end of one of them). When
+    the bounding boxes of leg and wall are more than ``within`` apart, ``inf`` without measuring:
+    the quick answer for the many walls far from a leg.
     """
     a, b = (float(start[0]), float(start[1])), (float(end[0]), float(end[1]))
     c, d = wall.start, wall.end
+    if (min(a[0], b[0]) - max(c[0], d[0]) > within or min(c[0], d[0]) - max(a[0], b[0]) > within
+            or min(a[1], b[1]) - max(c[1], d[1]) > within
+            or min(c[1], d[1]) - max(a[1], b[1]) > within):
+        return math.inf
     if _crosses(a, b, c, d):
         return 0.0
     return min(_point_segment_distance(a, c, d), _point_segment_distance(b, c, d),

@@ -130,12 +130,14 @@ def _in_room(read: Reader, xyz: list[float], field: str, beacon_id: int,
 
 def check_beacons_outside_racks(read: Reader, ids: IntArray, physical_xyz: FloatArray,
                                 racks: tuple[Rack, ...]) -> None:
-    """Reject a beacon whose physical position lies in a rack's footprint."""
-    for k, position in enumerate(physical_xyz):
-        for r, rack in enumerate(racks):
-            if rack.contains(position[0], position[1]):
-                raise read.fail(f"beacons[{k}]", f"beacon {ids[k]} at ({position[0]:g}, "
-                                f"{position[1]:g}) is inside racks[{r}]")
+    """Reject a beacon whose physical position lies in a rack's footprint (the first such)."""
+    if not racks:
+        return
+    inside = np.array([rack.contains(physical_xyz[:, 0], physical_xyz[:, 1]) for rack in racks])
+    if inside.any():
+        k, r = (int(i) for i in np.argwhere(inside.T)[0])  # the first beacon, its first rack
+        raise read.fail(f"beacons[{k}]", f"beacon {ids[k]} at ({physical_xyz[k, 0]:g}, "
+                        f"{physical_xyz[k, 1]:g}) is inside racks[{r}]")
 
 
 # --------------------------------------------------------------------------- racks and walls
@@ -224,8 +226,9 @@ def _check_legs_clear(read: Reader, points: FloatArray, racks: tuple[Rack, ...],
     The forklift would scrape it, or (a wall crossed) drive into it: pymunk's racks and walls
     are solid.
     """
-    for leg in range(len(points) - 1):
-        start, end = points[leg], points[leg + 1]
+    xy = points.tolist()  # plain floats: these loops are the slowest part of loading a file
+    for leg in range(len(xy) - 1):
+        start, end = xy[leg], xy[leg + 1]
         what = (f"leg {leg} from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, {end[1]:g}) of "
                 f"route {name!r}")
         for r, rack in enumerate(racks):
@@ -233,7 +236,7 @@ def _check_legs_clear(read: Reader, points: FloatArray, racks: tuple[Rack, ...],
                 raise read.fail(f"{where}waypoints",
                                 f"{what} passes within {ROUTE_CLEARANCE} m of racks[{r}]")
         for w, wall in enumerate(walls):
-            distance = leg_wall_distance(start, end, wall)
+            distance = leg_wall_distance(start, end, wall, within=ROUTE_CLEARANCE)
             if distance < ROUTE_CLEARANCE:
                 problem = "crosses" if distance == 0.0 else f"passes within {ROUTE_CLEARANCE} m of"
                 raise read.fail(f"{where}waypoints", f"{what} {problem} walls[{w}]")
