@@ -229,17 +229,17 @@ def _check_legs_clear(read: Reader, points: FloatArray, racks: tuple[Rack, ...],
     xy = points.tolist()  # plain floats: these loops are the slowest part of loading a file
     for leg in range(len(xy) - 1):
         start, end = xy[leg], xy[leg + 1]
-        what = (f"leg {leg} from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, {end[1]:g}) of "
-                f"route {name!r}")
+        leg_at = f"leg {leg} from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, {end[1]:g})"
         for r, rack in enumerate(racks):
             if leg_hits_rack(start, end, rack, ROUTE_CLEARANCE):
-                raise read.fail(f"{where}waypoints",
-                                f"{what} passes within {ROUTE_CLEARANCE} m of racks[{r}]")
+                raise read.fail(f"{where}waypoints", f"{leg_at} passes within {ROUTE_CLEARANCE} "
+                                f"m of racks[{r}] (route {shown(name)})")
         for w, wall in enumerate(walls):
             distance = leg_wall_distance(start, end, wall, within=ROUTE_CLEARANCE)
             if distance < ROUTE_CLEARANCE:
                 problem = "crosses" if distance == 0.0 else f"passes within {ROUTE_CLEARANCE} m of"
-                raise read.fail(f"{where}waypoints", f"{what} {problem} walls[{w}]")
+                raise read.fail(f"{where}waypoints",
+                                f"{leg_at} {problem} walls[{w}] (route {shown(name)})")
 
 
 def check_route_names_unique(read: Reader, routes: tuple[Route, ...]) -> None:

@@ -29,13 +29,13 @@ EXPECTED = {
     "04-beacon-south-of-the-room.toml":
         "beacons[1].xyz: beacon 2 at (10, -20) is outside the room",
     "05-route-through-wall.toml":
-        "routes[0].waypoints: leg 1 from (3, 5) to (8, 5) of route 'ghost' crosses walls[0]",
+        "routes[0].waypoints: leg 1 from (3, 5) to (8, 5) crosses walls[0] (route 'ghost')",
     "06-route-grazes-wall.toml":
-        "routes[0].waypoints: leg 0 from (2, 1.5) to (8, 1.5) of route 'scrape' passes within "
-        "0.7 m of walls[0]",
+        "routes[0].waypoints: leg 0 from (2, 1.5) to (8, 1.5) passes within 0.7 m of walls[0] "
+        "(route 'scrape')",
     "07-route-into-wall-end.toml":
-        "routes[0].waypoints: leg 1 from (4, 8) to (8, 5) of route 'corner' passes within 0.7 m "
-        "of walls[0]",
+        "routes[0].waypoints: leg 1 from (4, 8) to (8, 5) passes within 0.7 m of walls[0] "
+        "(route 'corner')",
     "08-negative-beacon-id.toml":
         "beacons[1].id: must be >= 0 (-1 marks an empty slot in observations), got -1",
     "09-boolean-beacon-id.toml": "beacons[1].id: must be an integer in [0, 2147483647], got True",

@@ -75,7 +75,7 @@ def test_a_route_into_a_wall_is_refused_naming_route_and_leg(waypoints, problem)
     route = {"name": "bad", "waypoints": waypoints}
     with pytest.raises(ScenarioError, match=re.escape(
             f"rules.toml: routes[0].waypoints: leg 0 from ({x0:g}, {y0:g}) to ({x1:g}, {y1:g}) "
-            f"of route 'bad' {problem}")):
+            f"{problem} (route 'bad')")):
         parse_scenario(scenario_data(walls=[WALL], routes=[route]), "rules.toml")
 
 

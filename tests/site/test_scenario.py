@@ -248,8 +248,8 @@ EXPECTED_PROBLEMS = {
     "03-duplicate-id.toml": "beacons[3].id: duplicate id 2 (also beacons[1])",
     "04-beacon-inside-rack.toml": "beacons[3]: beacon 4 at (5, 5) is inside racks[0]",
     "05-negative-rack-size.toml": "racks[0].size: must be positive",
-    "06-route-through-rack.toml": "routes[0].waypoints: leg 0 from (5, 1) to (5, 9) of route "
-                                  "'through' passes within 0.7 m of racks[0]",
+    "06-route-through-rack.toml": "routes[0].waypoints: leg 0 from (5, 1) to (5, 9) passes within "
+                                  "0.7 m of racks[0] (route 'through')",
     "07-inverted-bounds.toml": "room.bounds: must be [x_min, y_min, x_max, y_max] with max > min",
     "08-two-beacons.toml": "beacons: must be an array of at least 3",
     "09-zero-width.toml": "beacons[0].width: must be > 0",
