@@ -201,21 +201,14 @@ def leg_hits_rack(start: Sequence[float], end: Sequence[float], rack: Rack,
     return True
 
 
-def leg_wall_distance(start: Sequence[float], end: Sequence[float], wall: Wall,
-                      within: float = math.inf) -> float:
+def leg_wall_distance(start: Sequence[float], end: Sequence[float], wall: Wall) -> float:
     """The shortest distance between the straight leg start→end and the wall's line [m].
 
     Zero when the leg crosses the wall; otherwise the nearest of the four end points to the
-    other segment (two segments that do not cross are nearest at an end of one of them). When
-    the bounding boxes of leg and wall are more than ``within`` apart, ``inf`` without measuring:
-    the quick answer for the many walls far from a leg.
+    other segment (two segments that do not cross are nearest at an end of one of them).
     """
     a, b = (float(start[0]), float(start[1])), (float(end[0]), float(end[1]))
     c, d = wall.start, wall.end
-    if (min(a[0], b[0]) - max(c[0], d[0]) > within or min(c[0], d[0]) - max(a[0], b[0]) > within
-            or min(a[1], b[1]) - max(c[1], d[1]) > within
-            or min(c[1], d[1]) - max(a[1], b[1]) > within):
-        return math.inf
     if _crosses(a, b, c, d):
         return 0.0
     return min(_point_segment_distance(a, c, d), _point_segment_distance(b, c, d),

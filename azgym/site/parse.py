@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from azgym.site.parse_layout import (
+    Obstacles,
     check_beacons_outside_racks,
     check_route_names_unique,
     parse_beacons,
@@ -58,8 +59,8 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
     walls = parse_tables(read, data, "walls", parse_wall)
     check_beacons_outside_racks(read, beacons.ids, physical_xyz, racks)
     routes = parse_tables(read, data, "routes",
-                          functools.partial(parse_route, bounds=bounds, racks=racks,
-                                            walls=walls))
+                          functools.partial(parse_route, bounds=bounds,
+                                            obstacles=Obstacles(racks, walls)))
     check_route_names_unique(read, routes)
     return Scenario(name=name, description=description, version=version, bounds=bounds,
                     beacons=beacons, error_model=error_model, racks=racks, walls=walls,

@@ -12,6 +12,7 @@ faults) are in :mod:`azgym.site.parse_sensor`, and field-level checks and their 
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -41,6 +42,10 @@ _LIGHT_KEYS = {"name", "xyz", "width", "tall", "power"}
 ON_WALL_TOLERANCE = 0.05
 """How far outside the room's bounds a beacon may stand [m]: beacons hang on the walls, and one
 mounted on a wall's face has its centre a few centimetres off the wall's line."""
+MAX_LEG_PAIRS = 500_000
+"""The most (route leg, rack or wall) pairs a scenario may ask to check, all routes together:
+tens of routes of tens of legs among hundreds of racks, and a bound on the time a crafted file
+can take to load (about a second)."""
 MAX_ROUTE_SPEED = 20.0
 """The fastest a route may be driven [m/s]: no warehouse vehicle is faster."""
 
@@ -60,6 +65,7 @@ def parse_beacons(read: Reader, data: dict[str, Any],
     entries = read.require(data, "beacons")
     if not isinstance(entries, list) or len(entries) < 3:
         raise read.fail("beacons", "must be an array of at least 3 [[beacons]] tables")
+    read.count(entries, "beacons")
     ids: list[int] = []
     xyz, width, physical = [], [], []
     for k, entry in enumerate(entries):
@@ -131,11 +137,13 @@ def _in_room(read: Reader, xyz: list[float], field: str, beacon_id: int,
 def check_beacons_outside_racks(read: Reader, ids: IntArray, physical_xyz: FloatArray,
                                 racks: tuple[Rack, ...]) -> None:
     """Reject a beacon whose physical position lies in a rack's footprint (the first such)."""
-    if not racks:
-        return
-    inside = np.array([rack.contains(physical_xyz[:, 0], physical_xyz[:, 1]) for rack in racks])
-    if inside.any():
-        k, r = (int(i) for i in np.argwhere(inside.T)[0])  # the first beacon, its first rack
+    first: tuple[int, int] | None = None  # (beacon, rack): the first beacon, its first rack
+    for r, rack in enumerate(racks):  # every beacon at once, rack by rack: O(beacons) memory
+        inside = np.flatnonzero(rack.contains(physical_xyz[:, 0], physical_xyz[:, 1]))
+        if inside.size and (first is None or inside[0] < first[0]):
+            first = (int(inside[0]), r)
+    if first is not None:
+        k, r = first
         raise read.fail(f"beacons[{k}]", f"beacon {ids[k]} at ({physical_xyz[k, 0]:g}, "
                         f"{physical_xyz[k, 1]:g}) is inside racks[{r}]")
 
@@ -187,9 +195,50 @@ def parse_wall(read: Reader, entry: dict[str, Any], k: int) -> Wall:
 
 # --------------------------------------------------------------------------- routes
 
+class Obstacles:
+    """The racks and walls a route's legs must keep ``ROUTE_CLEARANCE`` off.
+
+    Each one's bounding box, grown by the clearance, is kept, and a route's legs are compared
+    with all of them in one array step: a leg is measured exactly only against the few whose box
+    its own box meets, so a site of many racks and long routes still loads in seconds.
+    """
+
+    def __init__(self, racks: tuple[Rack, ...], walls: tuple[Wall, ...]) -> None:
+        self.racks, self.walls = racks, walls
+        self.pairs_left = MAX_LEG_PAIRS
+
+    @functools.cached_property
+    def _boxes(self) -> tuple[FloatArray, FloatArray]:
+        """Lowest and highest (x, y) of each obstacle, grown by the clearance, (O, 2) each."""
+        shapes = [rack.corners() for rack in self.racks] + [
+            np.array([wall.start, wall.end]) for wall in self.walls]
+        low = np.array([shape.min(axis=0) for shape in shapes]).reshape(-1, 2)
+        high = np.array([shape.max(axis=0) for shape in shapes]).reshape(-1, 2)
+        return low - ROUTE_CLEARANCE, high + ROUTE_CLEARANCE
+
+    def near(self, read: Reader, points: FloatArray, field: str) -> list[list[int]]:
+        """(leg, obstacle) pairs whose boxes meet, leg by leg; obstacles are racks, then walls.
+
+        Args:
+            read: Reports the route (``field``) that takes the scenario past ``MAX_LEG_PAIRS``.
+            points: A route's waypoints, shape (P, 2); leg k runs from point k to point k + 1.
+            field: The route's ``waypoints`` field.
+        """
+        pairs = (len(points) - 1) * (len(self.racks) + len(self.walls))
+        if pairs > self.pairs_left:
+            raise read.fail(field, f"too many legs to check against {len(self.racks)} racks and "
+                            f"{len(self.walls)} walls: a scenario's routes may make at most "
+                            f"{MAX_LEG_PAIRS} (leg, rack or wall) pairs")
+        self.pairs_left -= pairs
+        low, high = self._boxes
+        leg_low = np.minimum(points[:-1], points[1:])[:, None, :]
+        leg_high = np.maximum(points[:-1], points[1:])[:, None, :]
+        meet = ((low <= leg_high) & (high >= leg_low)).all(axis=2)  # (legs, obstacles)
+        return np.argwhere(meet).tolist()
+
+
 def parse_route(read: Reader, entry: dict[str, Any], k: int, *,
-                bounds: tuple[float, float, float, float], racks: tuple[Rack, ...],
-                walls: tuple[Wall, ...]) -> Route:
+                bounds: tuple[float, float, float, float], obstacles: Obstacles) -> Route:
     """The ``k``-th ``[[routes]]`` table: waypoints in the room, legs clear of racks and walls."""
     where = f"routes[{k}]."
     read.keys(entry, _ROUTE_KEYS, where)
@@ -200,7 +249,7 @@ def parse_route(read: Reader, entry: dict[str, Any], k: int, *,
         raise read.fail(f"{where}reverse",
                         f"must be a list of {len(points) - 1} booleans, one per leg")
     reverse = [read.boolean(r, f"{where}reverse[{i}]") for i, r in enumerate(reverse)]
-    _check_legs_clear(read, points, racks, walls, where, name)
+    _check_legs_clear(read, points, obstacles, where, name)
     speed = read.number(entry.get("speed", 1.5), f"{where}speed", positive=True,
                         maximum=MAX_ROUTE_SPEED)
     return Route(name=name, waypoints=points, reverse=tuple(reverse), speed=speed)
@@ -212,6 +261,7 @@ def _waypoints(read: Reader, entry: dict[str, Any], where: str,
     raw = read.require(entry, "waypoints", where)
     if not isinstance(raw, list) or len(raw) < 2:
         raise read.fail(f"{where}waypoints", "must be a list of at least 2 [x, y] points")
+    read.count(raw, f"{where}waypoints")
     points = np.array([read.vector(p, f"{where}waypoints[{i}]", 2) for i, p in enumerate(raw)])
     for i, (x, y) in enumerate(points):
         if not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
@@ -219,27 +269,29 @@ def _waypoints(read: Reader, entry: dict[str, Any], where: str,
     return points
 
 
-def _check_legs_clear(read: Reader, points: FloatArray, racks: tuple[Rack, ...],
-                      walls: tuple[Wall, ...], where: str, name: str) -> None:
+def _check_legs_clear(read: Reader, points: FloatArray, obstacles: Obstacles, where: str,
+                      name: str) -> None:
     """Reject a route leg within ``ROUTE_CLEARANCE`` of a rack or a wall.
 
     The forklift would scrape it, or (a wall crossed) drive into it: pymunk's racks and walls
     are solid.
     """
-    xy = points.tolist()  # plain floats: these loops are the slowest part of loading a file
-    for leg in range(len(xy) - 1):
+    xy = points.tolist()  # plain floats for the exact tests
+    n_racks = len(obstacles.racks)
+    for leg, index in obstacles.near(read, points, f"{where}waypoints"):
         start, end = xy[leg], xy[leg + 1]
-        leg_at = f"leg {leg} from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, {end[1]:g})"
-        for r, rack in enumerate(racks):
-            if leg_hits_rack(start, end, rack, ROUTE_CLEARANCE):
-                raise read.fail(f"{where}waypoints", f"{leg_at} passes within {ROUTE_CLEARANCE} "
-                                f"m of racks[{r}] (route {shown(name)})")
-        for w, wall in enumerate(walls):
-            distance = leg_wall_distance(start, end, wall, within=ROUTE_CLEARANCE)
-            if distance < ROUTE_CLEARANCE:
-                problem = "crosses" if distance == 0.0 else f"passes within {ROUTE_CLEARANCE} m of"
-                raise read.fail(f"{where}waypoints",
-                                f"{leg_at} {problem} walls[{w}] (route {shown(name)})")
+        if index < n_racks:
+            if not leg_hits_rack(start, end, obstacles.racks[index], ROUTE_CLEARANCE):
+                continue
+            problem, what = f"passes within {ROUTE_CLEARANCE} m of", f"racks[{index}]"
+        else:
+            distance = leg_wall_distance(start, end, obstacles.walls[index - n_racks])
+            if distance >= ROUTE_CLEARANCE:
+                continue
+            problem = "crosses" if distance == 0.0 else f"passes within {ROUTE_CLEARANCE} m of"
+            what = f"walls[{index - n_racks}]"
+        raise read.fail(f"{where}waypoints", f"leg {leg} from ({start[0]:g}, {start[1]:g}) to "
+                        f"({end[0]:g}, {end[1]:g}) {problem} {what} (route {shown(name)})")
 
 
 def check_route_names_unique(read: Reader, routes: tuple[Route, ...]) -> None:

@@ -31,6 +31,9 @@ light. Far beyond any site, and small enough that squares and sums of coordinate
 far below a millimetre."""
 MAX_TEXT = 1000
 """The longest text a scenario file may give (a name, a description) [characters]."""
+MAX_ENTRIES = 10_000
+"""The most tables an array of them (``[[beacons]]``, ``[[racks]]``, ...) or points a route may
+have: far more than any site, and a bound on the checks that relate tables pairwise."""
 MAX_INTEGER = 2**31 - 1
 """The largest integer a scenario file may give (a version, a beacon id): a signed 32-bit one."""
 
@@ -122,6 +125,11 @@ class Reader:
             raise self.fail(field, f"must be true or false, got {shown(value)}")
         return value
 
+    def count(self, entries: list[Any], field: str, most: int = MAX_ENTRIES) -> None:
+        """Reject an array of more than ``most`` (:data:`MAX_ENTRIES`) entries."""
+        if len(entries) > most:
+            raise self.fail(field, f"must have at most {most} entries, got {len(entries)}")
+
     def vector(self, value: Any, field: str, length: int) -> list[float]:
         """``value`` as a list of ``length`` finite numbers."""
         if not isinstance(value, list) or len(value) != length:
@@ -151,4 +159,5 @@ def parse_tables(read: Reader, data: dict[str, Any], key: str,
     entries = data.get(key, [])
     if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
         raise read.fail(key, f"must be an array of [[{key}]] tables")
+    read.count(entries, key)
     return tuple(parse(read, entry, k) for k, entry in enumerate(entries))

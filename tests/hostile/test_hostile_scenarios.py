@@ -3,7 +3,7 @@
 The corpus in ``scenarios/`` holds small files a careless or malicious author could write (a
 beacon outside the room, a route through a wall, ``coverage = "no"``, a 400-digit id, a
 200000 x 200000 fisheye image, invalid UTF-8, ...), each pinned to its message; files too big to
-commit (more than the size limit, 5000 nested arrays) are made here.
+commit (more than the size limit, 5000 nested arrays, too many tables or legs) are made here.
 """
 
 from __future__ import annotations
@@ -14,8 +14,10 @@ from pathlib import Path
 import pytest
 
 from azgym import ScenarioError
-from azgym.site import load_scenario
+from azgym.site import load_scenario, parse_scenario
 from azgym.site.load import MAX_FILE_BYTES
+from azgym.site.parse_layout import MAX_LEG_PAIRS
+from azgym.site.reader import MAX_ENTRIES
 
 CORPUS = Path(__file__).parent / "scenarios"
 EXPECTED = {
@@ -140,3 +142,30 @@ def test_a_huge_or_deep_value_makes_a_short_message(tmp_path, value):
                                                       "numbers, got ")) as info:
         load_scenario(path)
     assert len(str(info.value)) - len(str(path)) <= LONGEST_MESSAGE
+
+
+def made_data(**tables) -> dict:
+    """A valid 10 m x 10 m scenario's data (three beacons), with the given tables added."""
+    return {"name": "made", "description": "made", "version": 1,
+            "room": {"bounds": [0.0, 0.0, 10.0, 10.0]},
+            "beacons": [{"id": k, "xy": [float(k), 0.0]} for k in range(3)], **tables}
+
+
+def test_an_array_of_too_many_tables_is_refused_before_they_are_read():
+    walls = [{"start": [0.0, 0.0], "end": [1.0, 0.0], "height": 1.0}] * (MAX_ENTRIES + 1)
+    with pytest.raises(ScenarioError, match=re.escape(
+            f"made.toml: walls: must have at most {MAX_ENTRIES} entries, got {MAX_ENTRIES + 1}")):
+        parse_scenario(made_data(walls=walls), "made.toml")
+
+
+def test_routes_that_would_take_long_to_check_against_the_racks_are_refused():
+    # Every (leg, rack) pair counts, whether their boxes meet or not: a crafted file whose legs
+    # all came near the racks would have each pair measured exactly, for minutes.
+    racks = [{"center": [9.0, 9.0], "size": [0.1, 0.1], "height": 1.0}] * 500
+    legs = MAX_LEG_PAIRS // len(racks) + 1
+    route = {"name": "long", "waypoints": [[1.0, 1.0], [8.0, 1.5]] * (legs // 2 + 1)}
+    with pytest.raises(ScenarioError, match=re.escape(
+            "made.toml: routes[0].waypoints: too many legs to check against 500 racks and 0 "
+            f"walls: a scenario's routes may make at most {MAX_LEG_PAIRS} (leg, rack or wall) "
+            "pairs")):
+        parse_scenario(made_data(racks=racks, routes=[route]), "made.toml")
