@@ -152,7 +152,8 @@ class BeaconMap:
     """The known beacons: ids, 3-D positions and horizontal sizes. Immutable.
 
     Attributes:
-        ids: Unique integer beacon ids, shape (N,).
+        ids: Unique integer beacon ids >= 0, shape (N,). Negative ids are refused: −1 marks the
+            empty slots of an environment's observation, and a map id must never look like one.
         xyz: Beacon positions in the world frame [m], shape (N, 3).
         width: Horizontal size W of each beacon [m], shape (N,), used by the coverage error
             of eq. 2. A scalar is broadcast to every beacon.
@@ -166,6 +167,13 @@ class BeaconMap:
 
     def __init__(self, ids: ArrayLike, xyz: ArrayLike, width: ArrayLike = 0.03) -> None:
         id_array = _as_ids("BeaconMap", "ids", ids)
+        negative = np.flatnonzero(id_array < 0)
+        if negative.size:  # also an unsigned id past int64's range, wrapped negative
+            k = int(negative[0])
+            raise InvalidInputError(
+                f"BeaconMap.ids must be >= 0 (-1 marks an empty slot in observations), got "
+                f"{np.asarray(ids).reshape(-1)[k]} at index {k}"
+            )
         n = id_array.size
         unique, counts = np.unique(id_array, return_counts=True)
         if (counts > 1).any():
@@ -230,9 +238,12 @@ class Measurements:
 
     M may differ from the number of beacons: beacons may be missing, the same id may appear twice
     (a mirror ghost beside the real beacon) and an id may be absent from the map (misdecoded).
+    A negative id is accepted and is in no map (map ids are >= 0), so it reads like any unknown
+    id: a detector may give −1 to a detection it could not decode, and an environment's padded
+    slots (id −1) are never taken for a beacon.
 
     Attributes:
-        ids: Decoded beacon id of each detection, shape (M,).
+        ids: Decoded beacon id of each detection, shape (M,); negative for none.
         azimuth: Azimuth of each detection in the camera frame [rad], shape (M,), finite.
         quality: Optional per-detection quality (e.g. blob size), shape (M,) or (M, Q).
     """

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import azgym
 from azgym import BeaconMap, Estimate, InvalidInputError, Measurements, wrap_angle
 
 XYZ3 = np.array([[0.0, 0.0, 2.5], [1.0, 0.0, 2.5], [0.0, 1.0, 2.5]])
@@ -117,6 +118,17 @@ def test_beacon_map_non_numeric_width_names_the_field():
         BeaconMap([1, 2, 3], XYZ3, width=["a", "b", "c"])
 
 
+@pytest.mark.parametrize(("ids", "shown"), [
+    ([1, -1, 3], "got -1 at index 1"),
+    (np.array([1, 2, 2**63], dtype=np.uint64), "got 9223372036854775808 at index 2"),  # wraps
+])
+def test_beacon_map_refuses_negative_ids_which_would_read_as_padding(ids, shown):
+    # An environment's observation pads its id slots with -1: a beacon -1 would look empty.
+    with pytest.raises(InvalidInputError, match=re.escape(
+            f"BeaconMap.ids must be >= 0 (-1 marks an empty slot in observations), {shown}")):
+        BeaconMap(ids, XYZ3)
+
+
 @pytest.mark.filterwarnings("ignore:invalid value encountered in cast:RuntimeWarning")
 @pytest.mark.parametrize("bad_id", [np.inf, 1e30])
 def test_beacon_map_rejects_non_representable_ids(bad_id):
@@ -146,7 +158,7 @@ def test_index_of_on_an_empty_map_is_all_unknown():
 
 
 @settings(max_examples=50, deadline=None)
-@given(st.sets(st.integers(-1000, 1000), min_size=1, max_size=30),
+@given(st.sets(st.integers(0, 1000), min_size=1, max_size=30),
        st.lists(st.integers(-1100, 1100), max_size=30))
 def test_index_of_agrees_with_a_dictionary(ids, query):
     ids = sorted(ids, key=lambda v: (v * 7919) % 1009)  # an arbitrary, unsorted order
@@ -209,6 +221,22 @@ def test_measurements_accept_two_dimensional_quality():
 def test_measurements_reject_bad_input_naming_the_field(ids, azimuth, quality, field):
     with pytest.raises(InvalidInputError, match=re.escape(field)):
         Measurements(ids, azimuth, quality)
+
+
+def test_negative_measured_ids_read_as_unknown_ids():
+    # A detector's "undecoded" (-1), or an observation's padding passed on unmasked, is in no
+    # map: it never becomes a beacon, and a localizer leaves it out as it would any unknown id.
+    beacons = BeaconMap([10, 11, 12, 13], [[5.0, 0.0, 2.5], [0.0, 5.0, 2.5], [-5.0, 0.0, 2.5],
+                                           [0.0, -5.0, 2.5]])
+    azimuth = np.arctan2(beacons.xy[:, 1] - 1.0, beacons.xy[:, 0] - 0.5)
+    clean = Measurements(beacons.ids, azimuth)
+    padded = Measurements([*beacons.ids, -1, -1], [*azimuth, 0.0, 0.0])
+    assert beacons.index_of(padded.ids).tolist() == [0, 1, 2, 3, -1, -1]
+    localizer = azgym.make_localizer("lsq")
+    expected, got = localizer.localize(clean, beacons), localizer.localize(padded, beacons)
+    assert got.ok and got.pose == pytest.approx(expected.pose)
+    assert got.pose == pytest.approx((0.5, 1.0, 0.0), abs=1e-6)
+    assert got.inliers.tolist() == [True] * 4 + [False] * 2
 
 
 @pytest.mark.filterwarnings("ignore:invalid value encountered in cast:RuntimeWarning")

@@ -8,7 +8,9 @@ a height and a reflectivity, the form the compiled sensor kernels take.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -41,13 +43,16 @@ class Rack:
                           [-half_l, half_d]])
         return local @ np.array([[c, s], [-s, c]]) + np.asarray(self.center)
 
-    def contains(self, x: float, y: float, margin: float = 1e-6) -> bool:
-        """Whether (x, y) lies inside the footprint, more than ``margin`` [m] from its faces."""
+    def contains(self, x: Any, y: Any, margin: float = 1e-6) -> Any:
+        """Whether (x, y) lies inside the footprint, more than ``margin`` [m] from its faces.
+
+        A bool for one point; for arrays of points, an array of them (element by element).
+        """
         c, s = math.cos(self.angle), math.sin(self.angle)
         dx, dy = x - self.center[0], y - self.center[1]
         along, across = c * dx + s * dy, -s * dx + c * dy
-        return (abs(along) < 0.5 * self.size[0] - margin
-                and abs(across) < 0.5 * self.size[1] - margin)
+        return ((abs(along) < 0.5 * self.size[0] - margin)
+                & (abs(across) < 0.5 * self.size[1] - margin))
 
 
 @dataclass(frozen=True)
@@ -162,10 +167,12 @@ class Light:
 
 
 ROUTE_CLEARANCE = 0.7
-"""A route must keep this far from every rack [m]: half a forklift's width and a margin."""
+"""A route must keep this far from every rack and wall [m]: half a forklift's width and a
+margin."""
 
 
-def leg_hits_rack(start: FloatArray, end: FloatArray, rack: Rack, clearance: float) -> bool:
+def leg_hits_rack(start: Sequence[float], end: Sequence[float], rack: Rack,
+                  clearance: float) -> bool:
     """Whether the straight leg start→end comes within ``clearance`` of the rack's footprint.
 
     Liang-Barsky clipping of the leg, in the rack's own frame, against its footprint grown by the
@@ -192,6 +199,41 @@ def leg_hits_rack(start: FloatArray, end: FloatArray, rack: Rack, clearance: flo
         if lo > hi:
             return False
     return True
+
+
+def leg_wall_distance(start: Sequence[float], end: Sequence[float], wall: Wall) -> float:
+    """The shortest distance between the straight leg start→end and the wall's line [m].
+
+    Zero when the leg crosses the wall; otherwise the nearest of the four end points to the
+    other segment (two segments that do not cross are nearest at an end of one of them).
+    """
+    a, b = (float(start[0]), float(start[1])), (float(end[0]), float(end[1]))
+    c, d = wall.start, wall.end
+    if _crosses(a, b, c, d):
+        return 0.0
+    return min(_point_segment_distance(a, c, d), _point_segment_distance(b, c, d),
+               _point_segment_distance(c, a, b), _point_segment_distance(d, a, b))
+
+
+def _crosses(a: tuple[float, float], b: tuple[float, float], c: tuple[float, float],
+             d: tuple[float, float]) -> bool:
+    """Whether segments ab and cd cross or touch (their ends on opposite sides of each other)."""
+    def side(p: tuple[float, float], q: tuple[float, float], r: tuple[float, float]) -> float:
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    return (side(a, b, c) * side(a, b, d) <= 0 and side(c, d, a) * side(c, d, b) <= 0
+            and min(a[0], b[0]) <= max(c[0], d[0]) and min(c[0], d[0]) <= max(a[0], b[0])
+            and min(a[1], b[1]) <= max(c[1], d[1]) and min(c[1], d[1]) <= max(a[1], b[1]))
+
+
+def _point_segment_distance(p: tuple[float, float], a: tuple[float, float],
+                            b: tuple[float, float]) -> float:
+    """The distance from point p to the segment ab [m]."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    squared = dx * dx + dy * dy
+    t = 0.0 if squared == 0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy)
+                                              / squared))
+    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
 
 
 SEG_X1, SEG_Y1, SEG_X2, SEG_Y2, SEG_HEIGHT, SEG_REFLECTIVITY = range(6)

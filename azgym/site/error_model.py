@@ -39,6 +39,10 @@ class ErrorModel:
             raise InvalidInputError(
                 f"ErrorModel.delta_alpha_d must be in [0, π/2) rad, got {self.delta_alpha_d}"
             )
+        if not isinstance(self.coverage, (bool, np.bool_)):  # "no" would read as True
+            raise InvalidInputError(
+                f"ErrorModel.coverage must be True or False, got {self.coverage!r}"
+            )
 
     @classmethod
     def from_camera(

@@ -19,6 +19,11 @@ from numpy.typing import ArrayLike
 from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 
+MAX_IMAGE_SIDE = 4096
+"""The widest and tallest image the fisheye may have [px]: a 16-megapixel frame. The image
+sensor keeps a bank of noise frames of this size, so a larger one would be refused only once
+gigabytes were allocated."""
+
 
 @dataclass(frozen=True)
 class FisheyeCamera:
@@ -42,9 +47,11 @@ class FisheyeCamera:
                 and self.focal_px > 0):
             raise InvalidInputError(f"{name}.focal_px must be > 0, got {self.focal_px!r}")
         width, height = self.image_size
-        if not (isinstance(width, int) and isinstance(height, int) and width > 0 and height > 0):
+        if not all(isinstance(side, int) and not isinstance(side, bool)
+                   and 0 < side <= MAX_IMAGE_SIDE for side in (width, height)):
             raise InvalidInputError(
-                f"{name}.image_size must be two positive integers, got {self.image_size!r}"
+                f"{name}.image_size must be two integers in [1, {MAX_IMAGE_SIDE}] px, got "
+                f"{self.image_size!r}"
             )
         cx, cy = self.principal_point
         if not (0.0 <= cx <= width and 0.0 <= cy <= height):

@@ -1,6 +1,9 @@
 """Scenario files: the shipped ones found by name (``envs/*.toml``), a user's by path.
 
-Nothing is read at import: a file is read and validated when it is loaded.
+Nothing is read at import: a file is read and validated when it is loaded. A user's file may be
+hostile, so before its fields are checked (:mod:`azgym.site.parse`) it must be at most
+:data:`MAX_FILE_BYTES` long (only that much is read), UTF-8 text, and TOML nested shallowly
+enough to parse.
 """
 
 from __future__ import annotations
@@ -16,6 +19,8 @@ from azgym.site.scenario import Scenario
 
 SCENARIO_PACKAGE = "azgym.site.scenarios"
 """The package the shipped scenario files are installed as (the repository's ``envs/``)."""
+MAX_FILE_BYTES = 4 * 1024 * 1024
+"""The largest scenario file read [bytes]: a site of tens of thousands of beacons fits."""
 
 
 def _shipped() -> dict[str, Any]:
@@ -42,16 +47,31 @@ def load_scenario(scenario: str | Path | Scenario) -> Scenario:
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
             raise ScenarioError(f"{path}: no such scenario file")
-        text, origin = path.read_text(encoding="utf-8"), str(path)
+        with path.open("rb") as file:
+            raw, origin = file.read(MAX_FILE_BYTES + 1), str(path)
     else:
         shipped = _shipped()
         if str(scenario) not in shipped:
             raise unknown_name("scenario", str(scenario), shipped)
-        entry = shipped[str(scenario)]
-        text, origin = entry.read_text(encoding="utf-8"), f"{scenario}.toml"
+        raw, origin = shipped[str(scenario)].read_bytes(), f"{scenario}.toml"
+    parsed = parse_scenario(_toml(raw, origin), origin)
+    return Scenario(**{**parsed.__dict__, "source": path if path.is_file() else None})
+
+
+def _toml(raw: bytes, origin: str) -> dict[str, Any]:
+    """A file's bytes as TOML data: at most ``MAX_FILE_BYTES``, UTF-8, not nested too deeply."""
+    if len(raw) > MAX_FILE_BYTES:
+        raise ScenarioError(f"{origin}: too large: a scenario file has at most {MAX_FILE_BYTES} "
+                            "bytes")
     try:
-        data = tomllib.loads(text)
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{origin}: not UTF-8 text: byte 0x{raw[exc.start]:02x} at offset "
+                            f"{exc.start}") from None
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{origin}: not valid TOML: {exc}") from None
-    parsed = parse_scenario(data, origin)
-    return Scenario(**{**parsed.__dict__, "source": path if path.is_file() else None})
+    except RecursionError:  # tomllib recurses once per nested array or inline table
+        raise ScenarioError(f"{origin}: not valid TOML: arrays or tables nested too deeply") \
+            from None

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from azgym.site.parse_layout import (
+    Obstacles,
     check_beacons_outside_racks,
     check_route_names_unique,
     parse_beacons,
@@ -53,12 +54,13 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
     version = read.integer(read.require(data, "version"), "version", minimum=1)
     bounds = _parse_room(read, data)
     error_model = parse_error_model(read, data.get("error_model", {}))
-    beacons, physical_xyz = parse_beacons(read, data)
+    beacons, physical_xyz = parse_beacons(read, data, bounds)
     racks = parse_tables(read, data, "racks", parse_rack)
     walls = parse_tables(read, data, "walls", parse_wall)
     check_beacons_outside_racks(read, beacons.ids, physical_xyz, racks)
     routes = parse_tables(read, data, "routes",
-                          functools.partial(parse_route, bounds=bounds, racks=racks))
+                          functools.partial(parse_route, bounds=bounds,
+                                            obstacles=Obstacles(racks, walls)))
     check_route_names_unique(read, routes)
     return Scenario(name=name, description=description, version=version, bounds=bounds,
                     beacons=beacons, error_model=error_model, racks=racks, walls=walls,

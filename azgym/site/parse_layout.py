@@ -2,8 +2,9 @@
 
 ``[[beacons]]``, ``[[racks]]``, ``[[walls]]``, ``[[routes]]``, ``[[bumps]]`` and ``[[lights]]``
 place things in the room, so besides their own fields they are checked against
-each other: a beacon or a lamp must not sit inside a rack, a route's legs must keep
-``ROUTE_CLEARANCE`` off the racks, route names must be unique. Those geometric rules are
+each other: a beacon must stand in the room (on its walls at most) and, like a lamp, not inside
+a rack; a route's legs must keep ``ROUTE_CLEARANCE`` off the racks and walls (the forklift drives
+them among pymunk's solid racks and walls); route names must be unique. Those geometric rules are
 kept here, next to the tables they relate; the sensor's tables (camera, fisheye, error model,
 faults) are in :mod:`azgym.site.parse_sensor`, and field-level checks and their messages in
 :mod:`azgym.site.reader`.
@@ -11,6 +12,7 @@ faults) are in :mod:`azgym.site.parse_sensor`, and field-level checks and their 
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -25,8 +27,9 @@ from azgym.site.elements import (
     Route,
     Wall,
     leg_hits_rack,
+    leg_wall_distance,
 )
-from azgym.site.reader import Reader
+from azgym.site.reader import MAX_INTEGER, Reader, shown
 
 _DEFAULT_KEYS = {"width", "z"}
 _BEACON_KEYS = {"id", "xy", "xyz", "width", "z", "moved_to"}
@@ -36,11 +39,25 @@ _ROUTE_KEYS = {"name", "waypoints", "reverse", "speed"}
 _BUMP_KEYS = {"center", "size", "tilt_deg"}
 _LIGHT_KEYS = {"name", "xyz", "width", "tall", "power"}
 
+ON_WALL_TOLERANCE = 0.05
+"""How far outside the room's bounds a beacon may stand [m]: beacons hang on the walls, and one
+mounted on a wall's face has its centre a few centimetres off the wall's line."""
+MAX_LEG_PAIRS = 500_000
+"""The most (route leg, rack or wall) pairs a scenario may ask to check, all routes together:
+tens of routes of tens of legs among hundreds of racks, and a bound on the time a crafted file
+can take to load (about a second)."""
+MAX_ROUTE_SPEED = 20.0
+"""The fastest a route may be driven [m/s]: no warehouse vehicle is faster."""
+
 
 # --------------------------------------------------------------------------- beacons
 
-def parse_beacons(read: Reader, data: dict[str, Any]) -> tuple[BeaconMap, FloatArray]:
-    """The ``[[beacons]]`` as a map, and where each physically is (see ``moved_to``), (N, 3)."""
+def parse_beacons(read: Reader, data: dict[str, Any],
+                  bounds: tuple[float, float, float, float]) -> tuple[BeaconMap, FloatArray]:
+    """The ``[[beacons]]`` as a map, and where each physically is (see ``moved_to``), (N, 3).
+
+    Both positions of a beacon must be in the room: within ``ON_WALL_TOLERANCE`` of its bounds.
+    """
     defaults = read.table(data.get("beacon_defaults", {}), "beacon_defaults", _DEFAULT_KEYS)
     default_width = read.number(defaults.get("width", 0.03), "beacon_defaults.width",
                                 positive=True)
@@ -48,6 +65,7 @@ def parse_beacons(read: Reader, data: dict[str, Any]) -> tuple[BeaconMap, FloatA
     entries = read.require(data, "beacons")
     if not isinstance(entries, list) or len(entries) < 3:
         raise read.fail("beacons", "must be an array of at least 3 [[beacons]] tables")
+    read.count(entries, "beacons")
     ids: list[int] = []
     xyz, width, physical = [], [], []
     for k, entry in enumerate(entries):
@@ -55,16 +73,25 @@ def parse_beacons(read: Reader, data: dict[str, Any]) -> tuple[BeaconMap, FloatA
         read.table(entry, f"beacons[{k}]", _BEACON_KEYS)
         ids.append(_beacon_id(read, entry, where, ids))
         position = _beacon_position(read, entry, where, default_z)
-        xyz.append(position)
-        physical.append(_moved_to(read, entry, position, where))
+        xyz.append(_in_room(read, position, f"{where}{'xyz' if 'xyz' in entry else 'xy'}",
+                            ids[-1], bounds))
+        physical.append(_in_room(read, _moved_to(read, entry, position, where),
+                                 f"{where}moved_to", ids[-1], bounds))
         width.append(read.number(entry.get("width", default_width), f"{where}width",
                                  positive=True))
     return BeaconMap(np.array(ids), np.array(xyz), np.array(width)), np.array(physical)
 
 
 def _beacon_id(read: Reader, entry: dict[str, Any], where: str, earlier: list[int]) -> int:
-    """A beacon's ``id``: an integer that none of the ``earlier`` beacons has."""
-    beacon_id = read.integer(read.require(entry, "id", where), f"{where}id")
+    """A beacon's ``id``: an integer >= 0 that none of the ``earlier`` beacons has.
+
+    Negative ids are refused: −1 marks the empty slots of an environment's observation.
+    """
+    value = read.require(entry, "id", where)
+    if isinstance(value, int) and not isinstance(value, bool) and value < 0:
+        raise read.fail(f"{where}id", f"must be >= 0 (-1 marks an empty slot in observations), "
+                        f"got {shown(value)}")
+    beacon_id = read.integer(value, f"{where}id", minimum=0, maximum=MAX_INTEGER)
     if beacon_id in earlier:
         raise read.fail(f"{where}id",
                         f"duplicate id {beacon_id} (also beacons[{earlier.index(beacon_id)}])")
@@ -95,14 +122,30 @@ def _moved_to(read: Reader, entry: dict[str, Any], position: list[float],
     return read.vector(moved, f"{where}moved_to", 3)
 
 
+def _in_room(read: Reader, xyz: list[float], field: str, beacon_id: int,
+             bounds: tuple[float, float, float, float]) -> list[float]:
+    """``xyz``, checked to be in the room: within ``ON_WALL_TOLERANCE`` of its ``bounds``."""
+    x_min, y_min, x_max, y_max = bounds
+    if not (x_min - ON_WALL_TOLERANCE <= xyz[0] <= x_max + ON_WALL_TOLERANCE
+            and y_min - ON_WALL_TOLERANCE <= xyz[1] <= y_max + ON_WALL_TOLERANCE):
+        raise read.fail(field, f"beacon {beacon_id} at ({xyz[0]:g}, {xyz[1]:g}) is outside the "
+                        f"room [{x_min:g}, {x_max:g}] x [{y_min:g}, {y_max:g}] (by more than "
+                        f"{ON_WALL_TOLERANCE:g} m)")
+    return xyz
+
+
 def check_beacons_outside_racks(read: Reader, ids: IntArray, physical_xyz: FloatArray,
                                 racks: tuple[Rack, ...]) -> None:
-    """Reject a beacon whose physical position lies in a rack's footprint."""
-    for k, position in enumerate(physical_xyz):
-        for r, rack in enumerate(racks):
-            if rack.contains(position[0], position[1]):
-                raise read.fail(f"beacons[{k}]", f"beacon {ids[k]} at ({position[0]:g}, "
-                                f"{position[1]:g}) is inside racks[{r}]")
+    """Reject a beacon whose physical position lies in a rack's footprint (the first such)."""
+    first: tuple[int, int] | None = None  # (beacon, rack): the first beacon, its first rack
+    for r, rack in enumerate(racks):  # every beacon at once, rack by rack: O(beacons) memory
+        inside = np.flatnonzero(rack.contains(physical_xyz[:, 0], physical_xyz[:, 1]))
+        if inside.size and (first is None or inside[0] < first[0]):
+            first = (int(inside[0]), r)
+    if first is not None:
+        k, r = first
+        raise read.fail(f"beacons[{k}]", f"beacon {ids[k]} at ({physical_xyz[k, 0]:g}, "
+                        f"{physical_xyz[k, 1]:g}) is inside racks[{r}]")
 
 
 # --------------------------------------------------------------------------- racks and walls
@@ -128,7 +171,8 @@ def parse_rack(read: Reader, entry: dict[str, Any], k: int) -> Rack:
     center, size = _footprint(read, entry, where)
     return Rack(
         center=(center[0], center[1]), size=(size[0], size[1]),
-        angle=math.radians(read.number(entry.get("angle_deg", 0.0), f"{where}angle_deg")),
+        angle=math.radians(read.number(entry.get("angle_deg", 0.0), f"{where}angle_deg",
+                                       maximum=360.0)),
         height=read.number(read.require(entry, "height", where), f"{where}height",
                            positive=True),
         reflectivity=_reflectivity(read, entry, where),
@@ -151,20 +195,63 @@ def parse_wall(read: Reader, entry: dict[str, Any], k: int) -> Wall:
 
 # --------------------------------------------------------------------------- routes
 
+class Obstacles:
+    """The racks and walls a route's legs must keep ``ROUTE_CLEARANCE`` off.
+
+    Each one's bounding box, grown by the clearance, is kept, and a route's legs are compared
+    with all of them in one array step: a leg is measured exactly only against the few whose box
+    its own box meets, so a site of many racks and long routes still loads in seconds.
+    """
+
+    def __init__(self, racks: tuple[Rack, ...], walls: tuple[Wall, ...]) -> None:
+        self.racks, self.walls = racks, walls
+        self.pairs_left = MAX_LEG_PAIRS
+
+    @functools.cached_property
+    def _boxes(self) -> tuple[FloatArray, FloatArray]:
+        """Lowest and highest (x, y) of each obstacle, grown by the clearance, (O, 2) each."""
+        shapes = [rack.corners() for rack in self.racks] + [
+            np.array([wall.start, wall.end]) for wall in self.walls]
+        low = np.array([shape.min(axis=0) for shape in shapes]).reshape(-1, 2)
+        high = np.array([shape.max(axis=0) for shape in shapes]).reshape(-1, 2)
+        return low - ROUTE_CLEARANCE, high + ROUTE_CLEARANCE
+
+    def near(self, read: Reader, points: FloatArray, field: str) -> list[list[int]]:
+        """(leg, obstacle) pairs whose boxes meet, leg by leg; obstacles are racks, then walls.
+
+        Args:
+            read: Reports the route (``field``) that takes the scenario past ``MAX_LEG_PAIRS``.
+            points: A route's waypoints, shape (P, 2); leg k runs from point k to point k + 1.
+            field: The route's ``waypoints`` field.
+        """
+        pairs = (len(points) - 1) * (len(self.racks) + len(self.walls))
+        if pairs > self.pairs_left:
+            raise read.fail(field, f"too many legs to check against {len(self.racks)} racks and "
+                            f"{len(self.walls)} walls: a scenario's routes may make at most "
+                            f"{MAX_LEG_PAIRS} (leg, rack or wall) pairs")
+        self.pairs_left -= pairs
+        low, high = self._boxes
+        leg_low = np.minimum(points[:-1], points[1:])[:, None, :]
+        leg_high = np.maximum(points[:-1], points[1:])[:, None, :]
+        meet = ((low <= leg_high) & (high >= leg_low)).all(axis=2)  # (legs, obstacles)
+        return np.argwhere(meet).tolist()
+
+
 def parse_route(read: Reader, entry: dict[str, Any], k: int, *,
-                bounds: tuple[float, float, float, float], racks: tuple[Rack, ...]) -> Route:
-    """The ``k``-th ``[[routes]]`` table: waypoints in the room whose legs keep off the racks."""
+                bounds: tuple[float, float, float, float], obstacles: Obstacles) -> Route:
+    """The ``k``-th ``[[routes]]`` table: waypoints in the room, legs clear of racks and walls."""
     where = f"routes[{k}]."
     read.keys(entry, _ROUTE_KEYS, where)
     name = read.text(read.require(entry, "name", where), f"{where}name")
     points = _waypoints(read, entry, where, bounds)
     reverse = entry.get("reverse", [False] * (len(points) - 1))
-    if not (isinstance(reverse, list) and len(reverse) == len(points) - 1
-            and all(isinstance(r, bool) for r in reverse)):
+    if not (isinstance(reverse, list) and len(reverse) == len(points) - 1):
         raise read.fail(f"{where}reverse",
                         f"must be a list of {len(points) - 1} booleans, one per leg")
-    _check_legs_clear_racks(read, points, racks, where)
-    speed = read.number(entry.get("speed", 1.5), f"{where}speed", positive=True)
+    reverse = [read.boolean(r, f"{where}reverse[{i}]") for i, r in enumerate(reverse)]
+    _check_legs_clear(read, points, obstacles, where, name)
+    speed = read.number(entry.get("speed", 1.5), f"{where}speed", positive=True,
+                        maximum=MAX_ROUTE_SPEED)
     return Route(name=name, waypoints=points, reverse=tuple(reverse), speed=speed)
 
 
@@ -174,6 +261,7 @@ def _waypoints(read: Reader, entry: dict[str, Any], where: str,
     raw = read.require(entry, "waypoints", where)
     if not isinstance(raw, list) or len(raw) < 2:
         raise read.fail(f"{where}waypoints", "must be a list of at least 2 [x, y] points")
+    read.count(raw, f"{where}waypoints")
     points = np.array([read.vector(p, f"{where}waypoints[{i}]", 2) for i, p in enumerate(raw)])
     for i, (x, y) in enumerate(points):
         if not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
@@ -181,17 +269,29 @@ def _waypoints(read: Reader, entry: dict[str, Any], where: str,
     return points
 
 
-def _check_legs_clear_racks(read: Reader, points: FloatArray, racks: tuple[Rack, ...],
-                            where: str) -> None:
-    """Reject a route leg within ``ROUTE_CLEARANCE`` of a rack: the forklift would scrape it."""
-    for leg in range(len(points) - 1):
-        for r, rack in enumerate(racks):
-            if leg_hits_rack(points[leg], points[leg + 1], rack, ROUTE_CLEARANCE):
-                raise read.fail(
-                    f"{where}waypoints",
-                    f"leg {leg} from ({points[leg][0]:g}, {points[leg][1]:g}) to "
-                    f"({points[leg + 1][0]:g}, {points[leg + 1][1]:g}) passes within "
-                    f"{ROUTE_CLEARANCE} m of racks[{r}]")
+def _check_legs_clear(read: Reader, points: FloatArray, obstacles: Obstacles, where: str,
+                      name: str) -> None:
+    """Reject a route leg within ``ROUTE_CLEARANCE`` of a rack or a wall.
+
+    The forklift would scrape it, or (a wall crossed) drive into it: pymunk's racks and walls
+    are solid.
+    """
+    xy = points.tolist()  # plain floats for the exact tests
+    n_racks = len(obstacles.racks)
+    for leg, index in obstacles.near(read, points, f"{where}waypoints"):
+        start, end = xy[leg], xy[leg + 1]
+        if index < n_racks:
+            if not leg_hits_rack(start, end, obstacles.racks[index], ROUTE_CLEARANCE):
+                continue
+            problem, what = f"passes within {ROUTE_CLEARANCE} m of", f"racks[{index}]"
+        else:
+            distance = leg_wall_distance(start, end, obstacles.walls[index - n_racks])
+            if distance >= ROUTE_CLEARANCE:
+                continue
+            problem = "crosses" if distance == 0.0 else f"passes within {ROUTE_CLEARANCE} m of"
+            what = f"walls[{index - n_racks}]"
+        raise read.fail(f"{where}waypoints", f"leg {leg} from ({start[0]:g}, {start[1]:g}) to "
+                        f"({end[0]:g}, {end[1]:g}) {problem} {what} (route {shown(name)})")
 
 
 def check_route_names_unique(read: Reader, routes: tuple[Route, ...]) -> None:

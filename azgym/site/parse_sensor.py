@@ -15,8 +15,8 @@ from typing import Any
 from azgym.errors import InvalidInputError
 from azgym.site.elements import Camera, Faults
 from azgym.site.error_model import ErrorModel
-from azgym.site.fisheye import FisheyeCamera
-from azgym.site.reader import Reader
+from azgym.site.fisheye import MAX_IMAGE_SIDE, FisheyeCamera
+from azgym.site.reader import Reader, shown
 
 _CAMERA_KEYS = {"height", "min_elevation_deg", "max_range"}
 _FISHEYE_KEYS = {"focal_px", "principal_point", "image_size", "distortion"}
@@ -45,8 +45,11 @@ def parse_fisheye(read: Reader, table: Any) -> FisheyeCamera:
     read.table(table, "fisheye", _FISHEYE_KEYS)
     default = FisheyeCamera()
     size = table.get("image_size", list(default.image_size))
-    if not (isinstance(size, list) and len(size) == 2 and all(isinstance(v, int) for v in size)):
-        raise read.fail("fisheye.image_size", f"must be [width, height] in pixels, got {size!r}")
+    if not (isinstance(size, list) and len(size) == 2):
+        raise read.fail("fisheye.image_size", f"must be [width, height] in pixels, got "
+                        f"{shown(size)}")
+    size = [read.integer(side, f"fisheye.image_size[{k}]", minimum=1, maximum=MAX_IMAGE_SIDE)
+            for k, side in enumerate(size)]
     point = read.vector(table.get("principal_point", list(default.principal_point)),
                         "fisheye.principal_point", 2)
     distortion = read.vector(table.get("distortion", list(default.distortion)),
@@ -65,9 +68,7 @@ def parse_fisheye(read: Reader, table: Any) -> FisheyeCamera:
 def parse_error_model(read: Reader, table: Any) -> ErrorModel:
     """The ``[error_model]`` table: Δα_d in degrees, or the camera's pixel errors (eq. 1)."""
     read.table(table, "error_model", _ERROR_KEYS)
-    coverage = table.get("coverage", True)
-    if not isinstance(coverage, bool):
-        raise read.fail("error_model.coverage", f"must be true or false, got {coverage!r}")
+    coverage = read.boolean(table.get("coverage", True), "error_model.coverage")
     camera_keys = {"center_error_px", "horizon_radius_px"} & set(table)
     if camera_keys and "delta_alpha_d_deg" in table:
         raise read.fail("error_model.delta_alpha_d_deg",

@@ -6,18 +6,45 @@ worded here, as ``<file>: <field>: <problem>`` (e.g.
 (:mod:`azgym.site.parse`, :mod:`azgym.site.parse_layout`, :mod:`azgym.site.parse_sensor`) say
 which field must be what; this module alone says how a number, a list, a table or a key is
 checked and what the message is, so a rule and its wording live in one place.
+
+A file may be hostile, so every value is bounded: no number's magnitude exceeds
+:data:`MAX_MAGNITUDE` (a 400-digit integer or 1e300 is refused before it becomes a float), and a
+value quoted in a message is shortened (:func:`shown`), so a huge or deeply nested value makes a
+short message.
 """
 
 from __future__ import annotations
 
 import difflib
 import math
+import reprlib
 from collections.abc import Callable
 from typing import Any, TypeVar
 
 from azgym.errors import ScenarioError
 
 _Element = TypeVar("_Element")
+
+MAX_MAGNITUDE = 1e5
+"""No number in a scenario file is larger in magnitude: 100 km, 100 000 px, 10⁵ times a beacon's
+light. Far beyond any site, and small enough that squares and sums of coordinates stay exact to
+far below a millimetre."""
+MAX_TEXT = 1000
+"""The longest text a scenario file may give (a name, a description) [characters]."""
+MAX_ENTRIES = 10_000
+"""The most tables an array of them (``[[beacons]]``, ``[[racks]]``, ...) or points a route may
+have: far more than any site, and a bound on the checks that relate tables pairwise."""
+MAX_INTEGER = 2**31 - 1
+"""The largest integer a scenario file may give (a version, a beacon id): a signed 32-bit one."""
+
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxstring, _SHORT.maxother = 2, 6, 40, 40
+_SHORT.maxlong = 24
+
+
+def shown(value: Any) -> str:
+    """``repr(value)``, shortened: a hostile value (huge, deeply nested) makes a short message."""
+    return _SHORT.repr(value)
 
 
 class Reader:
@@ -34,9 +61,10 @@ class Reader:
         """Reject a key not in ``allowed``, suggesting the closest valid one (typos)."""
         for key in table:
             if key not in allowed:
-                close = difflib.get_close_matches(key, sorted(allowed), n=1)
+                close = difflib.get_close_matches(key[:100], sorted(allowed), n=1)
                 hint = f" Did you mean {close[0]!r}?" if close else ""
-                raise self.fail(f"{where}{key}", f"unknown key.{hint} "
+                name = key if len(key) <= 40 else f"{key[:37]}..."
+                raise self.fail(f"{where}{name}", f"unknown key.{hint} "
                                 f"Valid keys: {', '.join(sorted(allowed))}")
 
     def table(self, value: Any, field: str, allowed: set[str]) -> dict[str, Any]:
@@ -53,15 +81,24 @@ class Reader:
         return table[key]
 
     def number(self, value: Any, field: str, *, positive: bool = False,
-               non_negative: bool = False, below: float | None = None) -> float:
-        """``value`` as a finite float, optionally > 0, >= 0 and/or < ``below``."""
+               non_negative: bool = False, below: float | None = None,
+               maximum: float = MAX_MAGNITUDE) -> float:
+        """``value`` as a finite float, optionally > 0, >= 0 and/or < ``below``.
+
+        Its magnitude must be at most ``maximum`` (:data:`MAX_MAGNITUDE` unless the field has a
+        tighter bound).
+        """
         if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                not math.isfinite(value):
-            raise self.fail(field, f"must be a finite number, got {value!r}")
+                (isinstance(value, float) and not math.isfinite(value)):
+            raise self.fail(field, f"must be a finite number, got {shown(value)}")
         if positive and not value > 0:
-            raise self.fail(field, f"must be > 0, got {value!r}")
+            raise self.fail(field, f"must be > 0, got {shown(value)}")
         if non_negative and value < 0:
-            raise self.fail(field, f"must be >= 0, got {value!r}")
+            raise self.fail(field, f"must be >= 0, got {shown(value)}")
+        if abs(value) > maximum:  # compared before float(): a 400-digit int would overflow
+            bound = (f"<= {maximum:g}" if positive or non_negative
+                     else f"in [{-maximum:g}, {maximum:g}]")
+            raise self.fail(field, f"must be {bound}, got {shown(value)}")
         if below is not None and value >= below:
             raise self.fail(field, f"must be < {below:g}, got {float(value)}")
         return float(value)
@@ -73,24 +110,45 @@ class Reader:
             raise self.fail(field, f"must be in [0, 1], got {share}")
         return share
 
-    def integer(self, value: Any, field: str, minimum: int | None = None) -> int:
-        """``value`` as an integer (booleans are not), optionally >= ``minimum``."""
+    def integer(self, value: Any, field: str, minimum: int = -MAX_INTEGER,
+                maximum: int = MAX_INTEGER) -> int:
+        """``value`` as an integer (booleans are not) in [``minimum``, ``maximum``]."""
         if isinstance(value, bool) or not isinstance(value, int) or \
-                (minimum is not None and value < minimum):
-            bound = "" if minimum is None else f" >= {minimum}"
-            raise self.fail(field, f"must be an integer{bound}, got {value!r}")
+                not minimum <= value <= maximum:
+            raise self.fail(field, f"must be an integer in [{minimum}, {maximum}], "
+                            f"got {shown(value)}")
         return value
+
+    def boolean(self, value: Any, field: str) -> bool:
+        """``value`` as a boolean: TOML's ``true`` or ``false``, never a string or a number."""
+        if not isinstance(value, bool):
+            raise self.fail(field, f"must be true or false, got {shown(value)}")
+        return value
+
+    def count(self, entries: list[Any], field: str, most: int = MAX_ENTRIES) -> None:
+        """Reject an array of more than ``most`` (:data:`MAX_ENTRIES`) entries."""
+        if len(entries) > most:
+            raise self.fail(field, f"must have at most {most} entries, got {len(entries)}")
 
     def vector(self, value: Any, field: str, length: int) -> list[float]:
         """``value`` as a list of ``length`` finite numbers."""
         if not isinstance(value, list) or len(value) != length:
-            raise self.fail(field, f"must be a list of {length} numbers, got {value!r}")
+            raise self.fail(field, f"must be a list of {length} numbers, got {shown(value)}")
         return [self.number(v, f"{field}[{k}]") for k, v in enumerate(value)]
 
     def text(self, value: Any, field: str) -> str:
-        """``value`` as a string that is not blank."""
+        """``value`` as one printable line that is not blank, at most :data:`MAX_TEXT` long.
+
+        Printable: a name or description is printed in listings, where a control character (an
+        escape sequence) would act on the terminal.
+        """
         if not isinstance(value, str) or not value.strip():
-            raise self.fail(field, f"must be a non-empty string, got {value!r}")
+            raise self.fail(field, f"must be a non-empty string, got {shown(value)}")
+        if len(value) > MAX_TEXT:
+            raise self.fail(field, f"must be at most {MAX_TEXT} characters, got {len(value)}")
+        if not value.isprintable():
+            raise self.fail(field, f"must be one line of printable characters, got "
+                            f"{shown(value)}")
         return value
 
 
@@ -101,4 +159,5 @@ def parse_tables(read: Reader, data: dict[str, Any], key: str,
     entries = data.get(key, [])
     if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
         raise read.fail(key, f"must be an array of [[{key}]] tables")
+    read.count(entries, key)
     return tuple(parse(read, entry, k) for k, entry in enumerate(entries))

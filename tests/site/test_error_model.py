@@ -47,6 +47,14 @@ def test_error_model_rejects_out_of_range_delta(bad):
         ErrorModel(delta_alpha_d=bad)
 
 
+@pytest.mark.parametrize("bad", ["no", "false", 0, None])
+def test_error_model_coverage_must_be_a_boolean(bad):
+    # "no" is truthy: read as a flag, it would switch the coverage error on.
+    with pytest.raises(InvalidInputError, match=re.escape(
+            f"ErrorModel.coverage must be True or False, got {bad!r}")):
+        ErrorModel(coverage=bad)
+
+
 def test_eq2_coverage_bound_hand_values():
     model = ErrorModel(delta_alpha_d=PAPER_DELTA_D)
     # W = 3 cm at D = 2 m: atan(0.0075) = 0.0075 − 0.0075³/3 + … = 0.00749985937975

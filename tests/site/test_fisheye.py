@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from azgym import InvalidInputError
-from azgym.site.fisheye import FisheyeCamera
+from azgym.site.fisheye import MAX_IMAGE_SIDE, FisheyeCamera
 
 CAMERA = FisheyeCamera(focal_px=152.0, principal_point=(241.5, 238.25), image_size=(480, 480),
                        distortion=(-0.02, 0.004, -0.0005, 0.00002))
@@ -69,7 +69,12 @@ def test_the_horizon_radius_is_f_times_distorted_ninety_degrees():
     [
         ({"focal_px": 0.0}, "FisheyeCamera.focal_px must be > 0"),
         ({"focal_px": -5.0}, "FisheyeCamera.focal_px must be > 0"),
-        ({"image_size": (0, 480)}, "FisheyeCamera.image_size must be two positive integers"),
+        ({"image_size": (0, 480)}, "FisheyeCamera.image_size must be two integers in [1, "),
+        # refused before any image is allocated (the image sensor keeps 8 noise frames)
+        ({"image_size": (200_000, 200_000), "principal_point": (100_000.0, 100_000.0)},
+         f"FisheyeCamera.image_size must be two integers in [1, {MAX_IMAGE_SIDE}] px, got "
+         "(200000, 200000)"),
+        ({"image_size": (True, 480)}, "FisheyeCamera.image_size must be two integers"),
         ({"principal_point": (500.0, 240.0)}, "FisheyeCamera.principal_point (500.0, 240.0) is "
                                               "off the 480 x 480 image"),
         ({"distortion": (-0.5, 0.0, 0.0, 0.0)}, "makes the projection non-monotonic"),
@@ -86,7 +91,12 @@ def test_bad_intrinsics_are_refused_naming_the_field(kwargs, message):
     [
         ({"focal_px": -1.0}, "fisheye.focal_px: must be > 0, got -1.0"),
         ({"principal_point": [600.0, 10.0]}, "fisheye.principal_point: (600.0, 10.0) is off"),
-        ({"image_size": [480.5, 480]}, "fisheye.image_size: must be [width, height] in pixels"),
+        ({"image_size": [480]}, "fisheye.image_size: must be [width, height] in pixels"),
+        ({"image_size": [480.5, 480]}, "fisheye.image_size[0]: must be an integer in [1, 4096]"),
+        ({"image_size": [480, True]}, "fisheye.image_size[1]: must be an integer in [1, 4096]"),
+        ({"image_size": [200_000, 200_000]},
+         "fisheye.image_size[0]: must be an integer in [1, 4096], got 200000"),
+        ({"focal_px": 1e300}, "fisheye.focal_px: must be in [-100000, 100000], got 1e+300"),
         ({"distortion": [-0.5, 0.0, 0.0, 0.0]}, "fisheye.distortion: (-0.5, 0.0, 0.0, 0.0) makes"),
         ({"focal": 150.0}, "fisheye.focal: unknown key. Did you mean 'focal_px'?"),
     ],
