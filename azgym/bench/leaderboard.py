@@ -37,8 +37,9 @@ from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
 
-__all__ = ["ENTRY_FORMAT", "SUITES", "LeaderboardError", "frames_file_text", "load_all", "load_entries",
-           "load_entry", "make_entry", "schema", "submit", "validate_entry", "verify"]
+__all__ = ["ENTRY_FORMAT", "SUITES", "LeaderboardError", "frames_file_text", "load_all",
+           "load_entries", "load_entry", "make_entry", "schema", "submit", "validate_entry",
+           "verify"]
 
 def frames_file_text(rows: list[list[str]]) -> str:
     """The per-frame results file of one localizer: CSV with FRAME_COLUMNS, LF line ends."""
