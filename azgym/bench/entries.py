@@ -5,7 +5,7 @@ An entry (format in ``entry.schema.json``) is sound when:
 - it matches the schema, its ``name`` is its file's stem and its ``results_file`` is
   ``NAME.frames.csv.gz`` (an entry cannot borrow another's results);
 - its suite exists at the version it was scored on (an entry of an older version is refused:
-  rerun it), a ``dev`` entry uses the suite's dev seed, ``azgym_version`` is a version no newer
+  rerun it), a ``dev`` entry uses the suite's dev seed and a ``test`` entry another, ``azgym_version`` is a version no newer
   than the azgym checking it, ``timestamp`` an ISO 8601 time with a zone and not in the future,
   and a plug-in file is named relative to the entry's folder, with its SHA-256;
 - its per-frame results match ``results_sha256``, are well formed row by row
@@ -123,6 +123,9 @@ def _check_run(entry: dict[str, Any], origin: str) -> None:
     if entry["split"] == "dev" and entry["seed"] != suite.dev_seed:
         raise LeaderboardError(f"{origin}: seed: the dev split of {suite.name} is drawn from seed "
                                f"{suite.dev_seed}, the entry says {entry['seed']}")
+    if entry["split"] == "test" and entry["seed"] == suite.dev_seed:
+        raise LeaderboardError(f"{origin}: seed: a test split is drawn from a fresh seed; "
+                               f"{suite.dev_seed} is the dev split's")
     _check_version(entry["azgym_version"], origin)
     _check_timestamp(entry["timestamp"], origin)
     localizer = entry["localizer"]
