@@ -5,9 +5,10 @@ An entry (format in ``entry.schema.json``) is sound when:
 - it matches the schema, its ``name`` is its file's stem and its ``results_file`` is
   ``NAME.frames.csv.gz`` (an entry cannot borrow another's results);
 - its suite exists at the version it was scored on (an entry of an older version is refused:
-  rerun it), a ``dev`` entry uses the suite's dev seed and a ``test`` entry another, ``azgym_version`` is a version no newer
-  than the azgym checking it, ``timestamp`` an ISO 8601 time with a zone and not in the future,
-  and a plug-in file is named relative to the entry's folder, with its SHA-256;
+  rerun it), a ``dev`` entry uses the suite's dev seed and a ``test`` entry another seed,
+  ``azgym_version`` is a version no newer than the azgym checking it, ``timestamp`` an ISO 8601
+  time with a zone and not in the future, and a plug-in file is named relative to the entry's
+  folder, with its SHA-256;
 - its per-frame results match ``results_sha256``, are well formed row by row
   (:func:`~azgym.bench.entry_files.parse_frames`) and cover exactly the suite's frames: the
   suite is redrawn for the entry's seed and size, the digest of the cases must be

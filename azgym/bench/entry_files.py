@@ -57,11 +57,18 @@ def read_bytes(path: Path, limit: int, what: str) -> bytes:
     return data
 
 
-def read_json(path: Path, what: str) -> Any:
-    """A JSON file's value; no NaN or Infinity, nesting at most :data:`MAX_JSON_DEPTH`."""
+def read_json(path: Path, what: str, allow_nan: bool = False) -> Any:
+    """A JSON file's value, nested at most :data:`MAX_JSON_DEPTH` deep.
+
+    Args:
+        path: The file.
+        what: What it is, for messages.
+        allow_nan: Accept NaN and Infinity (``results.json`` has them; an entry has null).
+    """
     data = read_bytes(path, MAX_JSON_BYTES, what)
     try:
-        value = json.loads(data.decode("utf-8"), parse_constant=_refuse_constant)
+        value = json.loads(data.decode("utf-8"),
+                           parse_constant=None if allow_nan else _refuse_constant)
     except UnicodeDecodeError as exc:
         raise LeaderboardError(f"{path}: not UTF-8 text: {exc}") from None
     except RecursionError:

@@ -59,7 +59,8 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
     if link and not link.startswith(("http://", "https://")):
         raise LeaderboardError(f"link: must be an http:// or https:// address (or empty), got "
                                f"{link!r}")
-    summary = read_json(results_dir / "results.json", "results.json of an azgym bench run")
+    summary = read_json(results_dir / "results.json", "results.json of an azgym bench run",
+                        allow_nan=True)
     localizers = summary.get("localizers") if isinstance(summary, dict) else None
     if not isinstance(localizers, dict) or not isinstance(localizers.get(label, {}), dict):
         raise LeaderboardError(f"{results_dir / 'results.json'}: localizers: not what azgym "
