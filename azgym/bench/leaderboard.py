@@ -41,6 +41,7 @@ __all__ = ["ENTRY_FORMAT", "SUITES", "LeaderboardError", "frames_file_text", "lo
            "load_entries", "load_entry", "make_entry", "schema", "submit", "validate_entry",
            "verify"]
 
+
 def frames_file_text(rows: list[list[str]]) -> str:
     """The per-frame results file of one localizer: CSV with FRAME_COLUMNS, LF line ends."""
     buffer = io.StringIO()
