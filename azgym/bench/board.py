@@ -40,9 +40,18 @@ def markdown_cell(text: str) -> str:
     return " ".join(escaped.splitlines())
 
 
-def _ranked(entries: list[dict[str, Any]], suite: str) -> list[dict[str, Any]]:
-    rows = [e for e in entries if e["suite"] == suite]
-    return sorted(rows, key=lambda e: rank_key(e["metrics"]["all"], e["name"]))
+KINDS = (("dev", False, "dev split, full size: the ranking"),
+         ("dev", True, "dev split, quick size: fewer frames, ranked apart"),
+         ("test", False, "test split: each entry on frames drawn from its own seed, ranked apart"),
+         ("test", True, "test split, quick size: ranked apart"))
+"""The tables of a suite: runs of different splits or sizes are never ranked together."""
+
+
+def _ranked(loaded: list[tuple[dict[str, Any], str]], suite: str, split: str,
+            quick: bool) -> list[tuple[dict[str, Any], str]]:
+    rows = [(e, frames) for e, frames in loaded
+            if (e["suite"], e["split"], e["quick"]) == (suite, split, quick)]
+    return sorted(rows, key=lambda pair: rank_key(pair[0]["metrics"]["all"], pair[0]["name"]))
 
 
 def _interval(bounds: list[float] | None) -> str:
@@ -81,38 +90,51 @@ def _cells(rank: int, entry: dict[str, Any]) -> list[str]:
 def build(entries_dir: Path, out_dir: Path) -> list[Path]:
     """Write the board: README.md (tables) and index.html (sortable, self-contained).
 
+    Each suite has one table per split and size (:data:`KINDS`); only the dev split's full
+    size is the suite's ranking.
+
     Raises:
         LeaderboardError: The entries folder is missing or holds no entry (a typo must not
-            replace the board with an empty one).
+            replace the board with an empty one), or an entry is not sound.
     """
     if not entries_dir.is_dir() or not any(entries_dir.glob("*.json")):
         raise LeaderboardError(f"{entries_dir}: no leaderboard entries there (*.json); the "
                                "board is left as it is")
     loaded = load_all(entries_dir)
-    entries = [entry for entry, _ in loaded]
-    frames = {entry["name"]: text for entry, text in loaded}
-    suites = [name for name in SUITES if any(e["suite"] == name for e in entries)]
     lines = ["# azgym leaderboard", "",
              f"Ranked by the 75th percentile of the position error (EvAAL's headline). Generated "
-             f"by `azgym leaderboard build` from {len(entries)} entries in `entries/`; every "
-             "entry's figures are recomputed from its per-frame results when it is read.", ""]
+             f"by `azgym leaderboard build` from {len(loaded)} entries in `entries/`; every "
+             "entry's figures are recomputed from its per-frame results when it is read, and "
+             "its frames are checked to be the suite's. Runs of the dev split at full size are "
+             "the ranking; quick runs and the test split have tables of their own.", ""]
     sections = []
-    for suite in suites:
+    for suite in SUITES:
+        tables = [(split, quick, title, _ranked(loaded, suite, split, quick))
+                  for split, quick, title in KINDS]
+        tables = [table for table in tables if table[3]]
+        if not tables:
+            continue
         description = get_suite(suite).description
-        header = [c for c, _ in COLUMNS]
-        rows = [_cells(rank, entry) for rank, entry in enumerate(_ranked(entries, suite), 1)]
-        lines += [f"## {suite} — {description}", "",
-                  "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-        lines += ["| " + " | ".join(_markdown_row(row, entry)) + " |"
-                  for row, entry in zip(rows, _ranked(entries, suite), strict=True)]
-        lines.append("")
-        links = [web_link(entry["link"]) for entry in _ranked(entries, suite)]
-        sections.append((suite, description, header, rows, links,
-                         _cdf_png(_ranked(entries, suite), frames)))
+        lines += [f"## {suite} — {description}", ""]
+        for split, quick, title, ranked in tables:
+            table_id = f"board-{suite}" if (split, quick) == ("dev", False) else \
+                f"board-{suite}-{split}-{'quick' if quick else 'full'}"
+            rows = [_cells(rank, entry) for rank, (entry, _) in enumerate(ranked, 1)]
+            lines += [f"### {title}", "", *_markdown_table(rows, [e for e, _ in ranked]), ""]
+            sections.append((suite, description, title, table_id, rows,
+                             [web_link(entry["link"]) for entry, _ in ranked], _cdf_png(ranked)))
     prepare_folder(out_dir)
     readme = write_file(out_dir / "README.md", "\n".join(lines))
-    page = write_file(out_dir / "index.html", _html(sections, len(entries)))
+    page = write_file(out_dir / "index.html", _html(sections, len(loaded)))
     return [readme, page]
+
+
+def _markdown_table(rows: list[list[str]], entries: list[dict[str, Any]]) -> list[str]:
+    """A ranked table's Markdown lines: header, rule, one escaped line per entry."""
+    header = [c for c, _ in COLUMNS]
+    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
+            *("| " + " | ".join(_markdown_row(row, entry)) + " |"
+              for row, entry in zip(rows, entries, strict=True))]
 
 
 _SORT_SCRIPT = """
@@ -135,8 +157,11 @@ document.querySelectorAll("table.board th").forEach(function (th) {
 """
 
 
-def _cdf_png(entries: list[dict[str, Any]], frames: dict[str, str]) -> str | None:
-    """The suite's error CDFs as a base64 PNG (None without matplotlib)."""
+def _cdf_png(ranked: list[tuple[dict[str, Any], str]]) -> str | None:
+    """A table's error CDFs, each from its entry's own per-frame results, as a base64 PNG.
+
+    None without matplotlib.
+    """
     if importlib.util.find_spec("matplotlib") is None:
         return None
     import matplotlib
@@ -145,8 +170,8 @@ def _cdf_png(entries: list[dict[str, Any]], frames: dict[str, str]) -> str | Non
     import matplotlib.pyplot as plt
 
     figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
-    for entry in entries:
-        rows = list(csv.DictReader(io.StringIO(frames[entry["name"]])))
+    for entry, frames in ranked:
+        rows = list(csv.DictReader(io.StringIO(frames)))
         # A missing estimate is a failure: it sits at +inf, never at zero error.
         errors = np.sort([float(r["position_error_m"]) * 100 if r["ok"] == "1" else np.inf
                           for r in rows])
@@ -182,8 +207,12 @@ def _html_cells(row: list[str], link: str | None) -> str:
     return "".join(f"<td>{cell}</td>" for cell in cells)
 
 
-def _html(sections: list[tuple[str, str, list[str], list[list[str]], list[str | None],
-                               str | None]], count: int) -> str:
+Section = tuple[str, str, str, str, list[list[str]], list[str | None], str | None]
+"""A table of the page: suite, its description, the table's title and id, rows, each row's
+link, the CDF image."""
+
+
+def _html(sections: list[Section], count: int) -> str:
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              "<title>azgym leaderboard</title><style>",
              "body{font-family:sans-serif;margin:2em}table{border-collapse:collapse;margin:1em 0}",
@@ -192,12 +221,17 @@ def _html(sections: list[tuple[str, str, list[str], list[list[str]], list[str | 
              "th[data-order=descending]::after{content:' ▼'}</style></head><body>",
              "<h1>azgym leaderboard</h1>",
              f"<p>{count} entries, ranked by p75 position error. Click a column to sort.</p>"]
-    for suite, description, header, rows, links, cdf in sections:
-        parts.append(f'<h2>{html.escape(suite)}</h2><p>{html.escape(description)}</p>')
+    header = [c for c, _ in COLUMNS]
+    previous = None
+    for suite, description, title, table_id, rows, links, cdf in sections:
+        if suite != previous:
+            parts.append(f'<h2>{html.escape(suite)}</h2><p>{html.escape(description)}</p>')
+            previous = suite
+        parts.append(f"<h3>{html.escape(title)}</h3>")
         if cdf is not None:
             parts.append(f'<img alt="error CDFs, {html.escape(suite)}" '
                          f'src="data:image/png;base64,{cdf}">')
-        parts.append(f'<table class="board" id="board-{html.escape(suite)}"><thead><tr>')
+        parts.append(f'<table class="board" id="{html.escape(table_id)}"><thead><tr>')
         parts += [f"<th>{html.escape(cell)}</th>" for cell in header]
         parts.append("</tr></thead><tbody>")
         for row, link in zip(rows, links, strict=True):

@@ -1,12 +1,12 @@
-"""The leaderboard's entries: what a researcher submits, and the checks they cannot fake.
+"""The leaderboard's entries: making one from a run, submitting, reading and rerunning them.
 
 An entry (``leaderboard/entries/NAME.json``, format in ``entry.schema.json``) holds a localizer's
 metrics on one suite, and beside it the per-frame results they were computed from
-(``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Validation checks the schema,
-that the suite and its version exist, that the per-frame file matches the entry's SHA-256, and
-that the metrics recomputed from it are the entry's: a tampered number, a swapped file or an old
-suite is rejected with the reason. ``verify`` reruns the entry's localizer and compares;
-:mod:`azgym.bench.board` publishes the entries.
+(``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Every entry read is checked by
+:func:`~azgym.bench.entries.validate_entry`, which recomputes every figure it shows; ``submit``
+never writes over another entry's files; ``verify`` reruns the entry's localizer (a plug-in file
+is found relative to the entry's folder, and must still have the SHA-256 it was scored with)
+and compares. :mod:`azgym.bench.board` publishes the entries.
 """
 
 from __future__ import annotations
@@ -16,46 +16,30 @@ import gzip
 import hashlib
 import io
 import json
-import math
 import os
 import platform
 import sys
 from datetime import UTC, datetime
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import jsonschema
-import numpy as np
-
-from azgym.bench.metrics import summarize_errors
+from azgym.bench.entries import ENTRY_FORMAT, clean, close, schema, validate_entry
+from azgym.bench.entry_files import (
+    MAX_FRAMES_BYTES,
+    LeaderboardError,
+    read_bytes,
+    read_frames,
+    read_json,
+)
+from azgym.bench.plugin_files import file_sha256, plugin_path, relative_spec, resolve_spec
 from azgym.bench.results import FRAME_COLUMNS
 from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import SUITES, get_suite
-from azgym.errors import AzgymError
 from azgym.files import prepare_folder, write_file
 
-ENTRY_FORMAT = 1
-
-
-class LeaderboardError(AzgymError, ValueError):
-    """An entry is malformed, tampered with, or does not match what it claims."""
-
-
-def schema() -> dict[str, Any]:
-    """The JSON Schema of an entry."""
-    return json.loads(resources.files("azgym.bench").joinpath("entry.schema.json").read_text())
-
-
-def _clean(value: Any) -> Any:
-    """NaN and inf become null: JSON has no NaN."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_clean(v) for v in value]
-    return value
+__all__ = ["ENTRY_FORMAT", "SUITES", "LeaderboardError", "frames_file_text", "load_all",
+           "load_entries", "load_entry", "make_entry", "schema", "submit", "validate_entry",
+           "verify"]
 
 
 def frames_file_text(rows: list[list[str]]) -> str:
@@ -67,105 +51,130 @@ def frames_file_text(rows: list[list[str]]) -> str:
     return buffer.getvalue()
 
 
-def metrics_from_frames(text: str) -> dict[str, Any]:
-    """The overall statistics recomputed from a per-frame results file."""
-    reader = csv.DictReader(io.StringIO(text))
-    if reader.fieldnames != FRAME_COLUMNS:
-        raise LeaderboardError(f"per-frame results: columns must be {FRAME_COLUMNS}, got "
-                               f"{reader.fieldnames}")
-    ok, position, heading = [], [], []
-    for row in reader:
-        ok.append(row["ok"] == "1")
-        position.append(float(row["position_error_m"]))
-        heading.append(float(row["heading_error_rad"]))
-    return _clean(summarize_errors(np.array(position), np.array(heading), np.array(ok)))
+def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, version: str,
+               authors: list[str], link: str) -> tuple[dict[str, Any], str]:
+    """An entry for localizer ``label`` from an ``azgym bench`` output folder, and its frames.
 
-
-def make_entry(results_dir: Path, label: str, *, name: str, version: str, authors: list[str],
-               link: str) -> tuple[dict[str, Any], str]:
-    """An entry for localizer ``label`` from an ``azgym bench`` output folder, and its frames."""
+    A plug-in file's spec is stored relative to ``entries_dir``, with the file's SHA-256.
+    """
     if link and not link.startswith(("http://", "https://")):
         raise LeaderboardError(f"link: must be an http:// or https:// address (or empty), got "
                                f"{link!r}")
-    summary = json.loads((results_dir / "results.json").read_text(encoding="utf-8"))
-    if label not in summary["localizers"]:
+    summary = read_json(results_dir / "results.json", "results.json of an azgym bench run",
+                        allow_nan=True)
+    localizers = summary.get("localizers") if isinstance(summary, dict) else None
+    if not isinstance(localizers, dict) or not isinstance(localizers.get(label, {}), dict):
+        raise LeaderboardError(f"{results_dir / 'results.json'}: localizers: not what azgym "
+                               "bench writes")
+    if label not in localizers:
         raise LeaderboardError(f"{results_dir}: no localizer {label!r} in the results; there "
-                               f"are: {', '.join(summary['localizers'])}")
-    with (results_dir / "frames.csv").open(newline="", encoding="utf-8") as handle:
-        rows = [row for row in csv.reader(handle)][1:]
-    text = frames_file_text([row for row in rows if row[0] == label])
-    row = summary["localizers"][label]
-    entry = {
-        "format": ENTRY_FORMAT, "name": name, "version": version, "authors": authors,
-        "link": link, "localizer": {"spec": row["spec"], "params": row["params"]},
-        "suite": summary["suite"], "suite_version": summary["suite_version"],
-        "split": summary["split"], "seed": summary["seed"], "quick": summary["quick"],
-        "n_frames": summary["n_frames"], "azgym_version": summary["azgym_version"],
-        "metrics": _clean({key: row[key] for key in ("all", "ci95", "by_cause", "by_group",
-                                                     "runtime_us")}),
-        "machine": {"platform": platform.platform(), "processor": platform.processor() or
-                    platform.machine(), "cpus": os.cpu_count(), "python": sys.version.split()[0]},
-        "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
-        "results_file": f"{name}.frames.csv.gz",
-        "results_sha256": hashlib.sha256(text.encode()).hexdigest(),
-    }
+                               f"are: {', '.join(localizers)}")
+    row = localizers[label]
+    try:
+        text = _frames_of(results_dir / "frames.csv", label)
+        entry = {
+            "format": ENTRY_FORMAT, "name": name, "version": version, "authors": authors,
+            "link": link, "localizer": _portable(row, entries_dir),
+            "suite": summary["suite"], "suite_version": summary["suite_version"],
+            "split": summary["split"], "seed": summary["seed"], "quick": summary["quick"],
+            "n_frames": summary["n_frames"], "cases_sha256": summary["cases_sha256"],
+            "azgym_version": summary["azgym_version"],
+            "metrics": clean({key: row[key] for key in ("all", "ci95", "by_cause", "by_group",
+                                                        "runtime_us")}),
+            "machine": {"platform": platform.platform(), "processor": platform.processor() or
+                        platform.machine(), "cpus": os.cpu_count(),
+                        "python": sys.version.split()[0]},
+            "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
+            "results_file": f"{name}.frames.csv.gz",
+            "results_sha256": hashlib.sha256(text.encode()).hexdigest(),
+        }
+    except (KeyError, TypeError) as exc:
+        raise LeaderboardError(f"{results_dir / 'results.json'}: not what azgym bench writes "
+                               f"(no field {exc})") from None
     return entry, text
 
 
-def validate_entry(entry: Any, frames_text: str | None, origin: str) -> None:
-    """Raise :class:`LeaderboardError` naming the problem unless the entry is sound."""
-    validator = jsonschema.Draft202012Validator(schema())
-    errors = sorted(validator.iter_errors(entry), key=lambda e: list(e.absolute_path))
-    if errors:
-        first = errors[0]
-        where = "/".join(str(p) for p in first.absolute_path) or "(top level)"
-        raise LeaderboardError(f"{origin}: {where}: {first.message}")
-    suite = SUITES.get(entry["suite"])
-    if suite is None:
-        raise LeaderboardError(f"{origin}: suite: unknown suite {entry['suite']!r}")
-    if entry["suite_version"] != suite.version:
-        raise LeaderboardError(
-            f"{origin}: suite_version: {entry['suite']} is at version {suite.version}, the entry "
-            f"was scored on version {entry['suite_version']}; rerun it on the current suite"
-        )
-    if frames_text is None:
-        raise LeaderboardError(f"{origin}: results_file: {entry['results_file']} is missing")
-    digest = hashlib.sha256(frames_text.encode()).hexdigest()
-    if digest != entry["results_sha256"]:
-        raise LeaderboardError(f"{origin}: results_sha256: the per-frame results file does not "
-                               f"match (its SHA-256 is {digest})")
-    recomputed = metrics_from_frames(frames_text)
-    for key, claimed in entry["metrics"]["all"].items():
-        actual = recomputed.get(key)
-        if not _close(claimed, actual):
-            raise LeaderboardError(f"{origin}: metrics/all/{key}: the entry says {claimed}, its "
-                                   f"per-frame results give {actual}")
-    if recomputed["n"] != entry["n_frames"]:
-        raise LeaderboardError(f"{origin}: n_frames: the entry says {entry['n_frames']}, its "
-                               f"per-frame results hold {recomputed['n']}")
+def _frames_of(path: Path, label: str) -> str:
+    """One localizer's rows of a run's frames.csv, as an entry's per-frame results."""
+    data = read_bytes(path, MAX_FRAMES_BYTES, "frames.csv of an azgym bench run")
+    try:
+        rows = list(csv.reader(io.StringIO(data.decode("utf-8"), newline="")))[1:]
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise LeaderboardError(f"{path}: not a CSV file: {exc}") from None
+    return frames_file_text([row for row in rows if row and row[0] == label])
 
 
-def _close(a: Any, b: Any) -> bool:
-    if a is None or b is None:
-        return a is None and b is None
-    return math.isclose(float(a), float(b), rel_tol=1e-9, abs_tol=1e-9)
+def _portable(row: dict[str, Any], entries_dir: Path) -> dict[str, Any]:
+    """The localizer as an entry stores it: a plug-in file relative to the entries folder."""
+    spec, params = row["spec"], row["params"]
+    if not isinstance(spec, str) or plugin_path(spec) is None:
+        return {"spec": spec, "params": params}
+    path = Path(row["file"]) if "file" in row else plugin_path(spec)
+    if not path.is_file():
+        raise LeaderboardError(f"localizer/spec: the plug-in file {path} the results were made "
+                               "with is missing")
+    digest = file_sha256(path)
+    if "file_sha256" in row and digest != row["file_sha256"]:
+        raise LeaderboardError(f"localizer/spec: plug-in file changed since the run: {path} has "
+                               f"sha256 {digest}, the run used {row['file_sha256']}")
+    try:
+        return {"spec": relative_spec(path, spec, entries_dir), "params": params,
+                "sha256": digest}
+    except ValueError as exc:
+        raise LeaderboardError(f"localizer/spec: {path} cannot be named relative to "
+                               f"{entries_dir}: {exc}") from None
 
 
 def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, version: str,
            authors: list[str], link: str = "", overwrite: bool = False) -> Path:
-    """Validate an entry from a results folder and write it (and its frames) to entries_dir."""
-    entry, text = make_entry(results_dir, label, name=name, version=version, authors=authors,
-                             link=link)
-    validate_entry(entry, text, f"entry {name!r}")
+    """Validate an entry from a results folder and write it (and its frames) to entries_dir.
+
+    Raises:
+        LeaderboardError: The entry is not sound, or its files would replace another entry's
+            (or, without ``overwrite``, its own).
+    """
+    if not results_dir.is_dir():
+        raise LeaderboardError(f"{results_dir}: no such folder (give the folder azgym bench "
+                               "wrote)")
     prepare_folder(entries_dir)
+    entry, text = make_entry(results_dir, label, entries_dir, name=name, version=version,
+                             authors=authors, link=link)
+    validate_entry(entry, text, f"entry {name!r}")
     path = entries_dir / f"{name}.json"
-    if path.exists() and not overwrite:
-        raise LeaderboardError(f"{path}: an entry of that name exists; pick another name or "
-                               "pass --overwrite")
+    _claim(entries_dir, name, overwrite)
     # mtime=0: the same results give the same bytes.
     write_file(entries_dir / entry["results_file"], gzip.compress(text.encode(), mtime=0))
     write_file(path, json.dumps(entry, indent=1) + "\n")
     return path
+
+
+def _claim(entries_dir: Path, name: str, overwrite: bool) -> None:
+    """Refuse to write an entry's two files where another entry's files are."""
+    mine = {f"{name}.json", f"{name}.frames.csv.gz"}
+    folded = {file.lower() for file in mine}
+    for existing in sorted(entries_dir.iterdir()):
+        if existing.name.lower() in folded and existing.name not in mine:
+            raise LeaderboardError(f"{existing}: another entry's file, whose name differs from "
+                                   f"{name!r}'s only in case; pick another name")
+        if existing.suffix == ".json" and existing.name not in mine:
+            claimed = _results_file_of(existing)
+            if claimed is not None and claimed.lower() in folded:
+                raise LeaderboardError(f"{existing}: that entry's results_file is {claimed}; "
+                                       f"submit will not replace another entry's files")
+    taken = [entries_dir / file for file in sorted(mine) if (entries_dir / file).exists()]
+    if taken and not overwrite:
+        raise LeaderboardError(f"{taken[0]}: an entry of that name exists; pick another name "
+                               "or pass --overwrite")
+
+
+def _results_file_of(path: Path) -> str | None:
+    """The per-frame file an entry in the folder claims, if it can be read."""
+    try:
+        entry = read_json(path, "leaderboard entry")
+    except LeaderboardError:
+        return None
+    claimed = entry.get("results_file") if isinstance(entry, dict) else None
+    return Path(claimed).name if isinstance(claimed, str) else None
 
 
 def load_entry(path: Path) -> dict[str, Any]:
@@ -175,20 +184,13 @@ def load_entry(path: Path) -> dict[str, Any]:
 
 def _load(path: Path) -> tuple[dict[str, Any], str]:
     """The validated entry and its per-frame results text."""
-    try:
-        entry = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise LeaderboardError(f"{path}: not valid JSON: {exc}") from None
+    entry = read_json(path, "leaderboard entry")
     frames = None
     if isinstance(entry, dict) and isinstance(entry.get("results_file"), str):
         frames_path = path.parent / Path(entry["results_file"]).name
         if frames_path.is_file():
-            try:
-                frames = gzip.decompress(frames_path.read_bytes()).decode("utf-8")
-            except (OSError, EOFError, UnicodeDecodeError) as exc:
-                raise LeaderboardError(f"{frames_path}: not a gzip-compressed CSV: {exc}") \
-                    from None
-    validate_entry(entry, frames, str(path))
+            frames = read_frames(frames_path)
+    validate_entry(entry, frames, str(path), stem=path.name.removesuffix(".json"))
     return entry, frames
 
 
@@ -198,23 +200,77 @@ def load_entries(entries_dir: Path) -> list[dict[str, Any]]:
 
 
 def load_all(entries_dir: Path) -> list[tuple[dict[str, Any], str]]:
-    """Every entry of the folder with its per-frame results, validated."""
-    return [_load(path) for path in sorted(entries_dir.glob("*.json"))]
+    """Every entry of the folder with its per-frame results, validated; names unique.
+
+    Names must differ in more than case: on a file system that ignores case, two such entries
+    would share their files.
+    """
+    loaded: list[tuple[dict[str, Any], str]] = []
+    seen: dict[str, str] = {}
+    for path in sorted(entries_dir.glob("*.json")):
+        entry, frames = _load(path)
+        twin = seen.setdefault(entry["name"].lower(), entry["name"])
+        if twin != entry["name"]:
+            raise LeaderboardError(f"{path}: name: {entry['name']!r} and {twin!r} differ only in "
+                                   "case; entry names must be unique")
+        loaded.append((entry, frames))
+    return loaded
+
+
+def runnable_spec(path: Path, entry: dict[str, Any]) -> str:
+    """The entry's localizer spec, a plug-in file found relative to the entry and unchanged.
+
+    Raises:
+        LeaderboardError: The plug-in file is missing, or changed since the entry was made.
+    """
+    spec, file = resolve_spec(entry["localizer"]["spec"], path.parent)
+    if file is None:
+        return spec
+    if not file.is_file():
+        raise LeaderboardError(f"{path}: localizer/spec: the plug-in file {file} does not exist "
+                               "(a plug-in is named relative to the entry's folder); put the "
+                               "file there to verify the entry")
+    digest, stored = file_sha256(file), entry["localizer"]["sha256"]
+    if digest != stored:
+        raise LeaderboardError(f"{path}: localizer/sha256: plug-in file changed since the entry "
+                               f"was made: sha256 {digest}, the entry was scored with {stored}")
+    return spec
 
 
 def verify(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]]:
     """Rerun an entry's localizer on its suite, split and seed; return differing figures.
 
-    Runtimes are not compared (they depend on the machine). An empty answer means the entry's
-    accuracy figures were reproduced.
+    Every accuracy figure (overall, intervals, by cause, by group) is compared; runtimes are
+    not (they depend on the machine). An empty answer means the entry was reproduced.
+
+    Raises:
+        LeaderboardError: The entry is not sound, its plug-in file is missing or changed, or
+            the localizer cannot be built.
     """
     entry = load_entry(path)
-    result = run_benchmark(get_suite(entry["suite"]),
-                           [Contender(entry["name"], entry["localizer"]["spec"],
-                                      entry["localizer"]["params"])],
-                           split=entry["split"], seed=entry["seed"], quick=entry["quick"],
-                           workers=workers)
-    fresh = _clean(result.summary["localizers"][entry["name"]]["all"])
-    return {key: (claimed, fresh.get(key)) for key, claimed in entry["metrics"]["all"].items()
-            if not math.isclose(claimed or 0.0, fresh.get(key) or 0.0, rel_tol=1e-6,
-                                abs_tol=1e-6)}
+    contender = Contender(entry["name"], runnable_spec(path, entry),
+                          entry["localizer"]["params"])
+    result = run_benchmark(get_suite(entry["suite"]), [contender], split=entry["split"],
+                           seed=entry["seed"], quick=entry["quick"], workers=workers)
+    fresh = result.summary["localizers"][entry["name"]]
+    if fresh["crashes"] == entry["n_frames"]:
+        raise LeaderboardError(f"{path}: the localizer could not run on any frame: "
+                               f"{fresh['first_error']}")
+    claimed = {key: entry["metrics"][key] for key in ("all", "ci95", "by_cause", "by_group")}
+    return _differences(claimed, clean({key: fresh[key] for key in claimed}), "")
+
+
+def _differences(claimed: Any, fresh: Any, where: str) -> dict[str, tuple[Any, Any]]:
+    """Every figure that differs by more than 1e-6, by its path (``by_cause/clean/p75_cm``)."""
+    if isinstance(claimed, dict) and isinstance(fresh, dict):
+        found: dict[str, tuple[Any, Any]] = {}
+        for key in dict.fromkeys([*claimed, *fresh]):
+            found |= _differences(claimed.get(key), fresh.get(key), f"{where}{key}/")
+        return found
+    if isinstance(claimed, list) and isinstance(fresh, list) and len(claimed) == len(fresh) \
+            and all(close(a, b, 1e-6) for a, b in zip(claimed, fresh, strict=True)):
+        return {}
+    if isinstance(claimed, (dict, list)) or isinstance(fresh, (dict, list)) or \
+            not close(claimed, fresh, 1e-6):
+        return {where.rstrip("/"): (claimed, fresh)}
+    return {}

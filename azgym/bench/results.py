@@ -8,6 +8,7 @@ files share.
 from __future__ import annotations
 
 import csv
+import hashlib
 import importlib.util
 import io
 import json
@@ -24,6 +25,7 @@ from azgym._version import __version__
 from azgym.bench.contenders import Contender
 from azgym.bench.metrics import confidence_intervals
 from azgym.bench.outcome import Outcome
+from azgym.bench.plugin_files import plugin_record
 from azgym.bench.suites import CAUSES, Case, Suite
 from azgym.files import prepare_folder, write_file
 
@@ -47,30 +49,71 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
         outcomes: Each contender's outcome, by label.
         reference: The label whose median runtime the others are compared with.
     """
-    causes = np.array([case.cause for case in cases])
-    groups = np.array([case.group for case in cases])
+    causes = [case.cause for case in cases]
+    groups = [case.group for case in cases]
     reference_us = float(np.nanmedian(outcomes[reference].micros))
     results: dict[str, Any] = {}
     for contender in contenders:
         outcome = outcomes[contender.label]
-        timed = outcome.micros[np.isfinite(outcome.micros)]
-        median_us = float(np.median(timed)) if timed.size else math.nan
         results[contender.label] = {
             "spec": contender.spec, "params": contender.params,
-            "all": outcome.stats(),
-            "ci95": confidence_intervals(outcome.position, outcome.ok),
-            "by_cause": {c: outcome.select(causes == c).stats() for c in CAUSES
-                         if (causes == c).any()},
-            "by_group": {g: outcome.select(groups == g).stats() for g in dict.fromkeys(groups)},
-            "runtime_us": {"median": median_us,
-                           "p99": float(np.percentile(timed, 99)) if timed.size else math.nan,
-                           "ratio_to_ransac": median_us / reference_us},
+            **plugin_record(contender.spec),
+            **contender_metrics(outcome, causes, groups, reference_us),
             "crashes": sum(1 for e in outcome.errors if e),
             "first_error": next((e for e in outcome.errors if e), ""),
         }
     return {"suite": suite.name, "suite_version": suite.version, "split": split, "seed": seed,
-            "quick": quick, "n_frames": len(cases), "azgym_version": __version__,
-            "python": sys.version.split()[0], "localizers": results}
+            "quick": quick, "n_frames": len(cases), "cases_sha256": cases_digest(cases),
+            "azgym_version": __version__, "python": sys.version.split()[0],
+            "localizers": results}
+
+
+def contender_metrics(outcome: Outcome, causes: Sequence[str], groups: Sequence[str],
+                      reference_us: float) -> dict[str, Any]:
+    """One contender's figures: overall, 95 % intervals, by cause, by group, runtimes.
+
+    The one rule for them: the runner's summary and a leaderboard entry's check (which
+    recomputes them from the entry's per-frame results) both call this.
+
+    Args:
+        outcome: Its outcome on each case.
+        causes: Each case's cause.
+        groups: Each case's group.
+        reference_us: The reference localizer's median runtime in the same run [µs].
+    """
+    cause_of, group_of = np.array(causes, dtype=object), np.array(groups, dtype=object)
+    timed = outcome.micros[np.isfinite(outcome.micros)]
+    median_us = float(np.median(timed)) if timed.size else math.nan
+    return {
+        "all": outcome.stats(),
+        "ci95": confidence_intervals(outcome.position, outcome.ok),
+        "by_cause": {c: outcome.select(cause_of == c).stats() for c in CAUSES
+                     if (cause_of == c).any()},
+        "by_group": {g: outcome.select(group_of == g).stats() for g in dict.fromkeys(groups)},
+        "runtime_us": {"median": median_us,
+                       "p99": float(np.percentile(timed, 99)) if timed.size else math.nan,
+                       "ratio_to_ransac": median_us / reference_us,
+                       "reference_us": reference_us},
+    }
+
+
+def cases_digest(cases: Sequence[Case]) -> str:
+    """SHA-256 of the cases a run drew: scenario, group, cause, true pose and measurements.
+
+    A leaderboard entry stores it, and its check redraws the suite and compares, so an entry's
+    per-frame results are known to cover exactly the suite's frames. Numbers are rounded to
+    1e-9 (m, rad) first, so that the last bit of a float, which may differ between machines,
+    does not change the digest.
+    """
+    digest = hashlib.sha256()
+    for case in cases:
+        m = case.measurements
+        digest.update("\0".join((case.scenario, case.group, case.cause, "")).encode())
+        for values in (case.pose, m.azimuth, () if m.quality is None else m.quality):
+            array = np.round(np.asarray(values, dtype=float), 9) + 0.0  # + 0.0: no -0.0
+            digest.update(repr(array.shape).encode() + array.tobytes())
+        digest.update(np.asarray(m.ids, dtype=np.int64).tobytes())
+    return digest.hexdigest()
 
 
 def frame_rows(label: str, cases: Sequence[Case], outcome: Outcome) -> list[list[str]]:

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import csv
 import gzip
+import hashlib
 import html
+import io
 import json
 import re
 import shutil
@@ -13,8 +16,12 @@ import pytest
 
 from azgym.bench import board as B
 from azgym.bench import leaderboard as L
+from azgym.bench.entries import clean
+from azgym.bench.entry_files import parse_frames
+from azgym.bench.results import contender_metrics
 from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import get_suite
+from azgym.cli import main
 
 
 @pytest.fixture(scope="module")
@@ -129,6 +136,158 @@ def test_submit_refuses_unknown_localizers_and_overwrites(results, entry_path):
     with pytest.raises(L.LeaderboardError, match="an entry of that name exists"):
         L.submit(results, "lsq", entry_path.parent, name="lsq-ref", version="1", authors=["a"])
 
+
+
+PLUGIN = """from azgym.localize.lsq import LeastSquares
+
+
+class Plug(LeastSquares):
+    \"\"\"lsq, from a file.\"\"\"
+"""
+
+
+def plugin_entry(tmp_path, monkeypatch, attribute="Plug"):
+    """An entry of a plug-in file, run from its own folder and submitted to another."""
+    work = tmp_path / "work"
+    work.mkdir()
+    (work / "plug.py").write_text(PLUGIN)
+    monkeypatch.chdir(work)
+    run_benchmark(get_suite("stress"), [Contender("plug", f"plug.py:{attribute}")],
+                  quick=True).write(work / "out", figures=False)
+    path = L.submit(work / "out", "plug", tmp_path / "site" / "entries", name="plug",
+                    version="1", authors=["a"])
+    monkeypatch.chdir(tmp_path / "site")  # verify runs from elsewhere
+    return work / "plug.py", path
+
+
+def test_a_plugin_entry_verifies_from_any_folder_and_names_a_changed_or_missing_file(
+        tmp_path, monkeypatch):
+    plugin, path = plugin_entry(tmp_path, monkeypatch)
+    stored = json.loads(path.read_text())["localizer"]
+    assert stored["spec"] == "../../work/plug.py:Plug"  # relative to the entry's folder
+    assert stored["sha256"] == hashlib.sha256(plugin.read_bytes()).hexdigest()
+    assert L.verify(path) == {}
+    plugin.write_text(PLUGIN + "# changed\n")
+    with pytest.raises(L.LeaderboardError, match="localizer/sha256: plug-in file changed since "
+                       "the entry was made: sha256 [0-9a-f]{64}, the entry was scored with"):
+        L.verify(path)
+    plugin.unlink()
+    with pytest.raises(L.LeaderboardError, match=r"localizer/spec: the plug-in file \S+plug.py "
+                       "does not exist .a plug-in is named relative to the entry's folder"):
+        L.verify(path)
+
+
+def test_submit_refuses_a_plugin_file_changed_since_the_run(tmp_path, monkeypatch):
+    plugin, _ = plugin_entry(tmp_path, monkeypatch)
+    plugin.write_text(PLUGIN + "# changed\n")
+    with pytest.raises(L.LeaderboardError, match="plug-in file changed since the run"):
+        L.submit(tmp_path / "work" / "out", "plug", tmp_path / "site" / "entries",
+                 name="plug2", version="1", authors=["a"])
+
+
+def test_verify_says_why_a_localizer_cannot_run(tmp_path, monkeypatch):
+    _, path = plugin_entry(tmp_path, monkeypatch, attribute="Missing")
+    with pytest.raises(L.LeaderboardError, match="could not run on any frame: cannot build "
+                       ".*has no attribute 'Missing'"):
+        L.verify(path)
+
+
+def test_a_consistent_forgery_passes_the_checks_and_verify_catches_it(entry_path):
+    # Halve every error and redo the bookkeeping: the figures match the forged rows, so only a
+    # rerun can tell.
+    frames = entry_path.parent / "lsq-ref.frames.csv.gz"
+    rows = list(csv.reader(io.StringIO(gzip.decompress(frames.read_bytes()).decode())))[1:]
+    for row in rows:
+        if row[5] == "1":
+            row[6] = repr(float(row[6]) / 2)
+    text = L.frames_file_text(rows)
+    frames.write_bytes(gzip.compress(text.encode()))
+    table = parse_frames(text, "forged")
+    entry = json.loads(entry_path.read_text())
+    entry["results_sha256"] = hashlib.sha256(text.encode()).hexdigest()
+    entry["metrics"] = clean(contender_metrics(table.outcome, table.cause, table.group,
+                                               entry["metrics"]["runtime_us"]["reference_us"]))
+    entry_path.write_text(json.dumps(entry))
+    assert L.load_entry(entry_path)["name"] == "lsq-ref"
+    differences = L.verify(entry_path)
+    assert "all/p75_cm" in differences and "by_group/warehouse-large, heavy/mean_cm" in differences
+
+
+def test_submit_never_replaces_another_entrys_files(results, entry_path):
+    entries = entry_path.parent
+    victim = json.loads(entry_path.read_text())
+    victim["results_file"] = "other.frames.csv.gz"  # hand-written: it claims that file
+    entry_path.write_text(json.dumps(victim))
+    (entries / "other.frames.csv.gz").write_bytes(b"the victim's results")
+    with pytest.raises(L.LeaderboardError, match="lsq-ref.json: that entry's results_file is "
+                       "other.frames.csv.gz; submit will not replace another entry's files"):
+        L.submit(results, "lsq", entries, name="other", version="1", authors=["a"],
+                 overwrite=True)
+    assert (entries / "other.frames.csv.gz").read_bytes() == b"the victim's results"
+    with pytest.raises(L.LeaderboardError, match=r"lsq-ref\.\S+: another entry's file, whose "
+                       "name differs from 'LSQ-ref''s only in case"):
+        L.submit(results, "lsq", entries, name="LSQ-ref", version="1", authors=["a"],
+                 overwrite=True)
+    (entries / "orphan.frames.csv.gz").write_bytes(b"whose?")
+    with pytest.raises(L.LeaderboardError, match="orphan.frames.csv.gz: an entry of that name "
+                       "exists"):
+        L.submit(results, "lsq", entries, name="orphan", version="1", authors=["a"])
+    assert (entries / "orphan.frames.csv.gz").read_bytes() == b"whose?"
+
+
+def test_names_must_differ_in_more_than_case(entry_path, tmp_path):
+    entries = entry_path.parent
+    entry = json.loads(entry_path.read_text())
+    entry.update(name="LSQ-REF", results_file="LSQ-REF.frames.csv.gz")
+    (entries / "LSQ-REF.json").write_text(json.dumps(entry))
+    shutil.copy(entries / "lsq-ref.frames.csv.gz", entries / "LSQ-REF.frames.csv.gz")
+    with pytest.raises(L.LeaderboardError, match="name: 'lsq-ref' and 'LSQ-REF' differ only in "
+                       "case"):
+        B.build(entries, tmp_path / "board")
+
+
+def test_missing_files_and_deep_json_are_named_errors(results, entry_path, tmp_path):
+    with pytest.raises(L.LeaderboardError, match="nowhere.json: no such leaderboard entry"):
+        L.verify(tmp_path / "nowhere.json")
+    with pytest.raises(L.LeaderboardError, match="nowhere: no such folder"):
+        L.submit(tmp_path / "nowhere", "lsq", tmp_path / "e", name="x", version="1",
+                 authors=["a"])
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    shutil.copy(results / "results.json", bare)
+    with pytest.raises(L.LeaderboardError, match="frames.csv: no such frames.csv of an azgym "
+                       "bench run"):
+        L.submit(bare, "lsq", tmp_path / "e", name="x", version="1", authors=["a"])
+    entry_path.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(L.LeaderboardError, match="not valid JSON: nested deeper than 16"):
+        L.load_entry(entry_path)
+
+
+def test_the_verify_command_warns_first_and_names_a_missing_entry(entry_path, capsys):
+    assert main(["leaderboard", "verify", str(entry_path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "which is the submitter's code" in out[0]
+    assert out[-1].endswith("reproduced (every accuracy figure within 1e-6)")
+    assert main(["leaderboard", "verify", str(entry_path.parent / "typo.json")]) == 2
+    assert "typo.json: no such leaderboard entry" in capsys.readouterr().err
+
+
+def test_quick_runs_and_the_test_split_are_never_ranked_with_full_dev_runs(results, tmp_path):
+    stress, entries = get_suite("stress"), tmp_path / "entries"
+    for split, quick in (("dev", False), ("test", True)):
+        run_benchmark(stress, [Contender("lsq", "lsq")], split=split, quick=quick).write(
+            tmp_path / split, figures=False)
+    L.submit(tmp_path / "dev", "lsq", entries, name="full-dev", version="1", authors=["a"])
+    L.submit(tmp_path / "test", "ransac", entries, name="test-run", version="1", authors=["a"])
+    L.submit(results, "ransac", entries, name="quick-dev", version="1", authors=["a"])
+    readme, page = B.build(entries, tmp_path / "board")
+    tables = {part.splitlines()[0]: part for part in readme.read_text().split("### ")[1:]}
+    assert list(tables) == [B.KINDS[k][2] for k in (0, 1, 3)]
+    for title, name in zip(tables, ("full-dev", "quick-dev", "test-run"), strict=True):
+        ranked = [line for line in tables[title].splitlines() if line.startswith("| 1 ")]
+        assert len(ranked) == 1 and f"| {name} |" in ranked[0]  # each alone, ranked first
+    assert 'id="board-stress"' in page.read_text() and 'id="board-stress-test-quick"' in \
+        page.read_text()
 
 
 def body_attributes(chromium: str, harness, tmp_path) -> dict[str, str]:

@@ -1,0 +1,243 @@
+"""A leaderboard entry's checks: every figure it shows is recomputed, every claim is checked.
+
+An entry (format in ``entry.schema.json``) is sound when:
+
+- it matches the schema, its ``name`` is its file's stem and its ``results_file`` is
+  ``NAME.frames.csv.gz`` (an entry cannot borrow another's results);
+- its suite exists at the version it was scored on (an entry of an older version is refused:
+  rerun it), a ``dev`` entry uses the suite's dev seed and a ``test`` entry another seed,
+  ``azgym_version`` is a version no newer than the azgym checking it, ``timestamp`` an ISO 8601
+  time with a zone and not in the future, and a plug-in file is named relative to the entry's
+  folder, with its SHA-256;
+- its per-frame results match ``results_sha256``, are well formed row by row
+  (:func:`~azgym.bench.entry_files.parse_frames`) and cover exactly the suite's frames: the
+  suite is redrawn for the entry's seed and size, the digest of the cases must be
+  ``cases_sha256`` and each row's scenario, group and cause the drawn frame's;
+- every figure under ``metrics`` (overall, 95 % intervals, by cause, by group, runtimes) equals
+  the one recomputed from the per-frame results, and ``n_frames`` their count.
+
+Runtimes are the submitter's measurements: they are checked for consistency with the per-frame
+results, and only a rerun (``azgym leaderboard verify``) measures them again.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import math
+import re
+from datetime import UTC, datetime, timedelta
+from importlib import resources
+from typing import Any
+
+import jsonschema
+
+from azgym._version import __version__
+from azgym.bench.entry_files import FrameTable, LeaderboardError, parse_frames
+from azgym.bench.plugin_files import is_portable, plugin_path
+from azgym.bench.results import cases_digest, contender_metrics
+from azgym.bench.suites import SUITES
+
+ENTRY_FORMAT = 2
+"""The entry format this azgym writes and reads (``format`` in ``entry.schema.json``)."""
+CLOCK_SLACK = timedelta(minutes=10)
+"""A timestamp may be this far ahead of the checking machine's clock."""
+_VERSION = re.compile(r"^(\d+(?:\.\d+)*)(?:(?:a|b|rc)\d+)?(?:\.post\d+)?(?:\.dev\d+)?"
+                      r"(?:\+[A-Za-z0-9.]+)?$")
+"""A PEP 440 version (the forms azgym's releases take); the release part is compared."""
+
+
+def schema() -> dict[str, Any]:
+    """The JSON Schema of an entry."""
+    return json.loads(resources.files("azgym.bench").joinpath("entry.schema.json").read_text())
+
+
+def clean(value: Any) -> Any:
+    """NaN and inf become null: JSON has no NaN."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: clean(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [clean(v) for v in value]
+    return value
+
+
+def validate_entry(entry: Any, frames_text: str | None, origin: str,
+                   stem: str | None = None) -> None:
+    """Raise :class:`LeaderboardError` naming the problem unless the entry is sound.
+
+    Args:
+        entry: The entry, as read from its JSON.
+        frames_text: Its per-frame results (None: the file is missing).
+        origin: Where it came from, for messages.
+        stem: Its file's name without ``.json`` (None: not yet written; its name is used).
+    """
+    _check_schema(entry, origin)
+    _check_identity(entry, origin, entry["name"] if stem is None else stem)
+    _check_run(entry, origin)
+    if frames_text is None:
+        raise LeaderboardError(f"{origin}: results_file: {entry['results_file']} is missing")
+    digest = hashlib.sha256(frames_text.encode()).hexdigest()
+    if digest != entry["results_sha256"]:
+        raise LeaderboardError(f"{origin}: results_sha256: the per-frame results file does not "
+                               f"match (its SHA-256 is {digest})")
+    table = parse_frames(frames_text, origin)
+    _check_coverage(entry, table, origin)
+    _check_figures(entry, table, origin)
+
+
+def _check_schema(entry: Any, origin: str) -> None:
+    if isinstance(entry, dict) and entry.get("format", ENTRY_FORMAT) != ENTRY_FORMAT:
+        raise LeaderboardError(f"{origin}: format: the entry is in format {entry['format']!r}, "
+                               f"this azgym reads format {ENTRY_FORMAT}; make it again with "
+                               "azgym bench and azgym leaderboard submit")
+    validator = jsonschema.Draft202012Validator(schema())
+    errors = sorted(validator.iter_errors(entry), key=lambda e: list(map(str, e.absolute_path)))
+    if errors:
+        first = errors[0]
+        where = "/".join(str(p) for p in first.absolute_path) or "(top level)"
+        raise LeaderboardError(f"{origin}: {where}: {first.message}")
+
+
+def _check_identity(entry: dict[str, Any], origin: str, stem: str) -> None:
+    """The name is the file's stem, and the per-frame results are the entry's own file."""
+    if entry["name"] != stem:
+        raise LeaderboardError(f"{origin}: name: {entry['name']!r}, but the file is "
+                               f"{stem}.json (an entry's name is its file's name)")
+    expected = f"{entry['name']}.frames.csv.gz"
+    if entry["results_file"] != expected:
+        raise LeaderboardError(f"{origin}: results_file: must be {expected}, got "
+                               f"{entry['results_file']!r}")
+
+
+def _check_run(entry: dict[str, Any], origin: str) -> None:
+    """Suite and version, seed, azgym version, time and the plug-in's spec."""
+    suite = SUITES.get(entry["suite"])
+    if suite is None:
+        raise LeaderboardError(f"{origin}: suite: unknown suite {entry['suite']!r}")
+    if entry["suite_version"] != suite.version:
+        raise LeaderboardError(
+            f"{origin}: suite_version: {entry['suite']} is at version {suite.version}, the entry "
+            f"was scored on version {entry['suite_version']}; rerun it on the current suite")
+    if entry["split"] == "dev" and entry["seed"] != suite.dev_seed:
+        raise LeaderboardError(f"{origin}: seed: the dev split of {suite.name} is drawn from seed "
+                               f"{suite.dev_seed}, the entry says {entry['seed']}")
+    if entry["split"] == "test" and entry["seed"] == suite.dev_seed:
+        raise LeaderboardError(f"{origin}: seed: a test split is drawn from a fresh seed; "
+                               f"{suite.dev_seed} is the dev split's")
+    _check_version(entry["azgym_version"], origin)
+    _check_timestamp(entry["timestamp"], origin)
+    localizer = entry["localizer"]
+    if plugin_path(localizer["spec"]) is not None:
+        if not is_portable(localizer["spec"]):
+            raise LeaderboardError(f"{origin}: localizer/spec: {localizer['spec']!r} is an "
+                                   "absolute path; a plug-in file is named relative to the "
+                                   "entry's folder")
+        if "sha256" not in localizer:
+            raise LeaderboardError(f"{origin}: localizer/sha256: a plug-in file's SHA-256 is "
+                                   "required (submit records it)")
+
+
+def release(version: str) -> tuple[int, ...] | None:
+    """The release numbers of a version (``"1.2.0rc1"`` → (1, 2)), or None if it is none."""
+    match = _VERSION.match(version)
+    if match is None:
+        return None
+    numbers = [int(part) for part in match.group(1).split(".")]
+    while len(numbers) > 1 and numbers[-1] == 0:
+        numbers.pop()
+    return tuple(numbers)
+
+
+def _check_version(version: str, origin: str) -> None:
+    claimed = release(version)
+    if claimed is None:
+        raise LeaderboardError(f"{origin}: azgym_version: {version!r} is not a version")
+    running = release(__version__)
+    if running is not None and claimed > running:
+        raise LeaderboardError(f"{origin}: azgym_version: {version} is newer than the azgym "
+                               f"checking it ({__version__})")
+
+
+def _check_timestamp(text: str, origin: str) -> None:
+    try:
+        moment = datetime.fromisoformat(text)
+    except ValueError:
+        moment = None
+    if moment is None or moment.tzinfo is None:
+        raise LeaderboardError(f"{origin}: timestamp: {text!r} is not an ISO 8601 date and time "
+                               "with a time zone (e.g. 2026-01-31T12:00:00+00:00)")
+    if moment > datetime.now(UTC) + CLOCK_SLACK:
+        raise LeaderboardError(f"{origin}: timestamp: {text} is in the future")
+
+
+@functools.lru_cache(maxsize=16)
+def suite_frames(name: str, version: int, seed: int, quick: bool
+                 ) -> tuple[str, tuple[tuple[str, str, str], ...]]:
+    """The digest of a suite's cases and each case's (scenario, group, cause), drawn once.
+
+    ``version`` is part of the key so that a cache never outlives a suite's change.
+    """
+    cases = SUITES[name].build(seed, quick)
+    return cases_digest(cases), tuple((c.scenario, c.group, c.cause) for c in cases)
+
+
+def _check_coverage(entry: dict[str, Any], table: FrameTable, origin: str) -> None:
+    """The per-frame results hold exactly the frames the suite draws for the entry."""
+    digest, frames = suite_frames(entry["suite"], entry["suite_version"], entry["seed"],
+                                  entry["quick"])
+    size = "quick" if entry["quick"] else "full"
+    if entry["cases_sha256"] != digest:
+        raise LeaderboardError(
+            f"{origin}: cases_sha256: the entry was scored on other frames than {entry['suite']} "
+            f"v{entry['suite_version']} draws now (seed {entry['seed']}, {size}; their digest is "
+            f"{digest}); rerun it on the current suite")
+    if len(table.cause) != len(frames):
+        raise LeaderboardError(
+            f"{origin}: per-frame results: {len(table.cause)} frames, but {entry['suite']} "
+            f"(seed {entry['seed']}, {size}) has {len(frames)}")
+    rows = zip(table.scenario, table.group, table.cause, strict=True)
+    for index, (row, drawn) in enumerate(zip(rows, frames, strict=True)):
+        if row != drawn:
+            raise LeaderboardError(
+                f"{origin}: per-frame results: line {index + 2}: frame {index} is "
+                f"{'/'.join(drawn)} (scenario/group/cause), the file says {'/'.join(row)}")
+    if entry["n_frames"] != len(frames):
+        raise LeaderboardError(f"{origin}: n_frames: the entry says {entry['n_frames']}, its "
+                               f"per-frame results hold {len(frames)}")
+
+
+def _check_figures(entry: dict[str, Any], table: FrameTable, origin: str) -> None:
+    """Every stored figure is the one its per-frame results give."""
+    reference_us = entry["metrics"]["runtime_us"]["reference_us"]
+    recomputed = clean(contender_metrics(table.outcome, table.cause, table.group, reference_us))
+    _compare(entry["metrics"], recomputed, "metrics", origin)
+
+
+def _compare(claimed: Any, actual: Any, where: str, origin: str) -> None:
+    """``claimed`` equals ``actual`` (to 1e-9): the same keys, lengths and numbers."""
+    if isinstance(actual, dict):
+        if not isinstance(claimed, dict) or set(claimed) != set(actual):
+            have = sorted(claimed) if isinstance(claimed, dict) else claimed
+            raise LeaderboardError(f"{origin}: {where}: the entry has {have}, its per-frame "
+                                   f"results give {sorted(actual)}")
+        for key, value in actual.items():
+            _compare(claimed[key], value, f"{where}/{key}", origin)
+    elif isinstance(actual, list):
+        if not isinstance(claimed, list) or len(claimed) != len(actual):
+            raise LeaderboardError(f"{origin}: {where}: the entry says {claimed}, its per-frame "
+                                   f"results give {actual}")
+        for k, (a, b) in enumerate(zip(claimed, actual, strict=True)):
+            _compare(a, b, f"{where}/{k}", origin)
+    elif not close(claimed, actual):
+        raise LeaderboardError(f"{origin}: {where}: the entry says {claimed}, its per-frame "
+                               f"results give {actual}")
+
+
+def close(a: Any, b: Any, tolerance: float = 1e-9) -> bool:
+    """Whether two figures agree (None, for a figure that does not exist, only with None)."""
+    if a is None or b is None:
+        return a is None and b is None
+    return math.isclose(float(a), float(b), rel_tol=tolerance, abs_tol=tolerance)

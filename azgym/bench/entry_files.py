@@ -1,0 +1,219 @@
+"""Reading what a leaderboard submitter wrote, safely: JSON, gzip and per-frame CSV.
+
+Anyone can write these files, so each reader bounds what it takes (size, nesting, the
+decompressed size of a gzip file) and turns every way a file can be malformed into a
+:class:`LeaderboardError` that names the file, and the row, column or field at fault, instead
+of a crash inside a library.
+"""
+
+from __future__ import annotations
+
+import csv
+import gzip
+import io
+import json
+import math
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from azgym.bench.outcome import Outcome
+from azgym.bench.results import FRAME_COLUMNS
+from azgym.errors import AzgymError
+
+MAX_JSON_BYTES = 16 * 2**20
+"""An entry or results.json larger than this is refused (a real one is a few kB)."""
+MAX_JSON_DEPTH = 16
+"""Deepest nesting of lists and objects an entry may have (a real one has 4)."""
+MAX_FRAMES_BYTES = 64 * 2**20
+"""Per-frame results larger than this, compressed or decompressed, are refused (the largest
+suite's are about 4 MB)."""
+HEADING_LIMIT = math.pi + 1e-9
+"""A heading error is wrapped to [0, π] [rad]."""
+
+
+class LeaderboardError(AzgymError, ValueError):
+    """An entry is malformed, tampered with, or does not match what it claims."""
+
+
+def _refuse_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def read_bytes(path: Path, limit: int, what: str) -> bytes:
+    """A file's bytes, refused when missing, unreadable or larger than ``limit``."""
+    try:
+        with path.open("rb") as handle:
+            data = handle.read(limit + 1)
+    except FileNotFoundError:
+        raise LeaderboardError(f"{path}: no such {what}") from None
+    except OSError as exc:
+        raise LeaderboardError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise LeaderboardError(f"{path}: the {what} is larger than {limit // 2**20} MiB")
+    return data
+
+
+def read_json(path: Path, what: str, allow_nan: bool = False) -> Any:
+    """A JSON file's value, nested at most :data:`MAX_JSON_DEPTH` deep.
+
+    Args:
+        path: The file.
+        what: What it is, for messages.
+        allow_nan: Accept NaN and Infinity (``results.json`` has them; an entry has null).
+    """
+    data = read_bytes(path, MAX_JSON_BYTES, what)
+    try:
+        value = json.loads(data.decode("utf-8"),
+                           parse_constant=None if allow_nan else _refuse_constant)
+    except UnicodeDecodeError as exc:
+        raise LeaderboardError(f"{path}: not UTF-8 text: {exc}") from None
+    except RecursionError:
+        raise LeaderboardError(f"{path}: not valid JSON: nested deeper than "
+                               f"{MAX_JSON_DEPTH} levels") from None
+    except ValueError as exc:  # JSONDecodeError, NaN, an integer of too many digits
+        raise LeaderboardError(f"{path}: not valid JSON: {exc}") from None
+    _check_depth(value, path)
+    return value
+
+
+def _check_depth(value: Any, path: Path) -> None:
+    """Refuse nesting deeper than :data:`MAX_JSON_DEPTH` (walked without recursion)."""
+    stack = [(value, 0)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, (dict, list)):
+            if depth >= MAX_JSON_DEPTH:
+                raise LeaderboardError(f"{path}: not valid JSON: nested deeper than "
+                                       f"{MAX_JSON_DEPTH} levels")
+            children = item.values() if isinstance(item, dict) else item
+            stack.extend((child, depth + 1) for child in children)
+
+
+def read_frames(path: Path) -> str:
+    """The text of a gzip-compressed per-frame results file, its decompressed size capped."""
+    data = read_bytes(path, MAX_FRAMES_BYTES, "per-frame results file")
+    try:
+        with gzip.GzipFile(fileobj=io.BytesIO(data)) as stream:
+            text = stream.read(MAX_FRAMES_BYTES + 1)
+    except (OSError, EOFError, zlib.error) as exc:
+        raise LeaderboardError(f"{path}: not a gzip-compressed CSV: {exc}") from None
+    if len(text) > MAX_FRAMES_BYTES:
+        raise LeaderboardError(f"{path}: decompresses to more than {MAX_FRAMES_BYTES // 2**20} "
+                               "MiB; refused (a real per-frame file is a few MB)")
+    try:
+        return text.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise LeaderboardError(f"{path}: not UTF-8 text: {exc}") from None
+
+
+@dataclass
+class FrameTable:
+    """A per-frame results file, checked row by row.
+
+    Attributes:
+        label: The localizer's label in the run (the same on every row).
+        scenario: Each frame's scenario.
+        group: Each frame's group.
+        cause: Each frame's cause.
+        outcome: Each frame's outcome, as the runner recorded it.
+    """
+
+    label: str
+    scenario: list[str]
+    group: list[str]
+    cause: list[str]
+    outcome: Outcome
+
+
+def parse_frames(text: str, origin: str) -> FrameTable:
+    """Read per-frame results (:data:`FRAME_COLUMNS`), refusing any row the runner cannot write.
+
+    Frames are numbered 0, 1, … in order; an estimate (``ok`` 1) has finite errors, the
+    position's non-negative and the heading's in [0, π]; a frame without one (``ok`` 0) has NaN
+    errors; a runtime is NaN (the call raised) or finite and non-negative; a frame that raised
+    has no estimate.
+    """
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        header = next(reader, None)
+        if header != FRAME_COLUMNS:
+            raise LeaderboardError(f"{origin}: per-frame results: the columns must be "
+                                   f"{','.join(FRAME_COLUMNS)}, got {header}")
+        table = FrameTable("", [], [], [], Outcome.empty(0))
+        values: list[tuple[bool, float, float, float]] = []
+        errors: list[str] = []
+        for row in reader:
+            ok, position, heading, micros = _frame_row(row, reader.line_num, len(values),
+                                                       origin, table)
+            values.append((ok, position, heading, micros))
+            errors.append(row[-1])
+    except csv.Error as exc:
+        raise LeaderboardError(f"{origin}: per-frame results: line {reader.line_num}: not CSV: "
+                               f"{exc}") from None
+    columns = list(zip(*values, strict=True)) or [(), (), (), ()]
+    table.outcome = Outcome(np.array(columns[0], dtype=bool),
+                            *(np.array(column, dtype=float) for column in columns[1:]), errors)
+    return table
+
+
+def _frame_row(row: list[str], line: int, index: int, origin: str,
+               table: FrameTable) -> tuple[bool, float, float, float]:
+    """One row's checked values; the row's labels are added to ``table``."""
+    where = f"{origin}: per-frame results: line {line}"
+    if len(row) != len(FRAME_COLUMNS):
+        raise LeaderboardError(f"{where}: {len(row)} columns, expected {len(FRAME_COLUMNS)} "
+                               f"({','.join(FRAME_COLUMNS)})")
+    label, frame, scenario, group, cause, ok, position, heading, micros, error = row
+    if index == 0:
+        table.label = label
+    elif label != table.label:
+        raise LeaderboardError(f"{where}, column localizer: {label!r}, but the first row's is "
+                               f"{table.label!r} (one localizer a file)")
+    if frame != str(index):
+        raise LeaderboardError(f"{where}, column frame: expected {index} (frames in order, "
+                               f"from 0), got {frame!r}")
+    if ok not in ("0", "1"):
+        raise LeaderboardError(f"{where}, column ok: must be 0 or 1, got {ok!r}")
+    numbers = [_number(text, name, where) for text, name in
+               ((position, "position_error_m"), (heading, "heading_error_rad"),
+                (micros, "micros"))]
+    _check_errors(ok == "1", numbers[0], numbers[1], where)
+    if not (math.isnan(numbers[2]) or 0.0 <= numbers[2] < math.inf):
+        raise LeaderboardError(f"{where}, column micros: must be NaN or finite and >= 0, got "
+                               f"{micros!r}")
+    if error and ok == "1":
+        raise LeaderboardError(f"{where}, column error: a frame that raised has no estimate "
+                               "(ok must be 0)")
+    if not error and math.isnan(numbers[2]):
+        raise LeaderboardError(f"{where}, column micros: NaN, but the frame did not raise")
+    table.scenario.append(scenario)
+    table.group.append(group)
+    table.cause.append(cause)
+    return ok == "1", numbers[0], numbers[1], numbers[2]
+
+
+def _number(text: str, column: str, where: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise LeaderboardError(f"{where}, column {column}: not a number: {text!r}") from None
+
+
+def _check_errors(ok: bool, position: float, heading: float, where: str) -> None:
+    """An estimate's errors are finite and in range; a missing estimate's are NaN."""
+    if not ok:
+        for value, column in ((position, "position_error_m"), (heading, "heading_error_rad")):
+            if not math.isnan(value):
+                raise LeaderboardError(f"{where}, column {column}: must be NaN where ok is 0 "
+                                       f"(no estimate), got {value!r}")
+        return
+    if not 0.0 <= position < math.inf:
+        raise LeaderboardError(f"{where}, column position_error_m: must be finite and >= 0, "
+                               f"got {position!r}")
+    if not 0.0 <= heading <= HEADING_LIMIT:
+        raise LeaderboardError(f"{where}, column heading_error_rad: must be in [0, π], got "
+                               f"{heading!r}")
