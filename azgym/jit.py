@@ -138,4 +138,13 @@ def _delete_kernels(folder: Path, names: set[str]) -> bool:
     return dropped
 
 
+def localizers_compiled(package_dir: Path = PACKAGE_DIR) -> bool:
+    """Whether the localizers' kernels are in numba's cache (False: the next run compiles them).
+
+    Looks for the index of the reference localizer's kernel, the last one a first run compiles.
+    """
+    return any(folder.is_dir() and any(folder.glob("ransac._ransac_frame-*.nbi"))
+               for folder in _cache_dirs(package_dir))
+
+
 drop_stale_cache()

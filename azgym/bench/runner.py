@@ -27,6 +27,7 @@ from azgym.bench.suites import Case, Suite
 from azgym.bench.worker import frame_data
 from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError
+from azgym.jit import localizers_compiled
 from azgym.site import load_scenario
 
 BATCHES_PER_WORKER = 4
@@ -142,6 +143,9 @@ def run_benchmark(
     say = progress or (lambda _line: None)
     if seed is None:
         seed = suite.dev_seed if split == "dev" else secrets.randbits(31)
+    if not localizers_compiled():
+        say("compiling azgym's kernels: the first run on an installation takes about 20 s "
+            "longer; they are cached for the next runs")
     start_fork_server()  # its warm-up overlaps the drawing of the cases
     started = time.perf_counter()
     cases = suite.build(seed, quick)

@@ -27,16 +27,18 @@ def ranked_table(summary: dict[str, Any]) -> str:
     """The contenders of a run, ranked (:func:`rank_key`), as a text table."""
     rows = sorted(summary["localizers"].items(), key=lambda item: rank_key(item[1]["all"],
                                                                            item[0]))
+    width = max([len("localizer"), *(len(label) for label, _row in rows)])
     lines = [f"{summary['suite']} v{summary['suite_version']} ({summary['split']}, seed "
              f"{summary['seed']}{', quick' if summary['quick'] else ''}): "
              f"{summary['n_frames']} frames; errors in cm",
-             f"{'#':>2} {'localizer':<18} {'avail':>6} {'mean':>8} {'median':>8} {'p75':>8} "
+             f"{'#':>2} {'localizer':<{width}} {'avail':>6} {'mean':>8} {'median':>8} {'p75':>8} "
              f"{'p75 95% CI':>15} {'p95':>8} {'fail':>6} {'µs':>9} {'×ransac':>8}"]
     for rank, (label, row) in enumerate(rows, 1):
         a, t = row["all"], row["runtime_us"]
         low, high = row["ci95"].get("p75_cm", [math.nan, math.nan])
-        lines.append(f"{rank:>2} {label:<18} {100 * a['availability']:5.1f}% {a['mean_cm']:8.2f} "
-                     f"{a['median_cm']:8.2f} {a['p75_cm']:8.2f} {f'{low:.2f}-{high:.2f}':>15} "
+        lines.append(f"{rank:>2} {label:<{width}} {100 * a['availability']:5.1f}% "
+                     f"{a['mean_cm']:8.2f} {a['median_cm']:8.2f} {a['p75_cm']:8.2f} "
+                     f"{f'{low:.2f}-{high:.2f}':>15} "
                      f"{a['p95_cm']:8.1f} {100 * a['failure_rate']:5.1f}% {t['median']:9.1f} "
                      f"{t['ratio_to_ransac']:8.2f}")
         if row["crashes"]:

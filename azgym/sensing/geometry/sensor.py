@@ -59,7 +59,8 @@ class GeometrySensor:
     def __init__(self, scenario: Scenario) -> None:
         self.scenario = scenario
         self._segments = occluder_table(scenario.racks, scenario.walls)
-        self._xyz = np.ascontiguousarray(scenario.beacon_positions)
+        self._xyz = np.array(scenario.beacon_positions, dtype=np.float64, order="C")
+        self._xyz.setflags(write=False)  # as the map's: one compiled kernel for every scenario
         self._width = scenario.beacons.width
         self._moved = np.any(self._xyz != scenario.beacons.xyz, axis=1)
         camera = scenario.camera
