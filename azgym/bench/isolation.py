@@ -43,8 +43,6 @@ compiles azgym's kernels in the fork server (tens of seconds); later runs take m
 GIVE_UP_AFTER = 3
 """Frames lost in a row (time-outs or dead workers) after which a contender's other frames are
 skipped."""
-SLOW_START_NOTICE = 1.0
-"""Seconds of waiting for the first worker after which the run says why it waits."""
 PRELOAD = "azgym.bench.preload"
 
 Report = Callable[[int], None]
@@ -116,10 +114,9 @@ class IsolatedRun:
 
     def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[FrameData],
                  maps: Mapping[str, MapData], *, workers: int, time_limit: float,
-                 batch_size: int, say: Callable[[str], None]) -> None:
+                 batch_size: int) -> None:
         self.spec, self.params, self.frames, self.maps = spec, params, frames, maps
         self.workers, self.time_limit, self.batch_size = workers, time_limit, batch_size
-        self.say = say
         self.answers = Answers.unanswered(len(frames))
         self.queue = [_Batch(s, min(s + batch_size, len(frames)))
                       for s in range(0, len(frames), batch_size)]
@@ -127,7 +124,6 @@ class IsolatedRun:
         self.lost_in_a_row = 0
         self.finished = 0
         self.unbuildable = ""
-        self.noticed_slow_start = False
 
     def run(self, report: Report) -> Answers:
         """Run every frame; ``report`` hears how many are finished after each batch."""
@@ -207,13 +203,7 @@ class IsolatedRun:
         return w.batch.sent + STARTUP_LIMIT if w.batch else time.monotonic() + 1.0
 
     def _overran(self, w: _Worker) -> bool:
-        late = time.monotonic() > self._deadline(w)
-        if not w.ready and not late and not self.noticed_slow_start:
-            if time.monotonic() - w.started > SLOW_START_NOTICE:
-                self.noticed_slow_start = True
-                self.say("  (starting the workers: the first run compiles azgym's kernels; "
-                         "they are cached for the next runs)")
-        return late
+        return time.monotonic() > self._deadline(w)
 
     def _overrun_reason(self, w: _Worker) -> str:
         if not w.ready:
@@ -317,8 +307,7 @@ def build_problem(spec: str, params: dict[str, Any], time_limit: float) -> str:
     The check runs where a benchmark runs the localizer, so a plug-in whose module or
     constructor hangs, crashes or exits is caught without harm to the caller.
     """
-    run = IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit, batch_size=1,
-                      say=lambda _line: None)
+    run = IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit, batch_size=1)
     w = run._start()
     try:
         while True:

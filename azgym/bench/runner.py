@@ -79,7 +79,7 @@ def run_contenders(
     for contender in contenders:
         begun = time.perf_counter()
         run = IsolatedRun(contender.spec, contender.params, frames, sent_maps, workers=workers,
-                          time_limit=time_limit, batch_size=batch_size, say=say)
+                          time_limit=time_limit, batch_size=batch_size)
         answers = run.run(_progress_bar(contender.label, len(cases), say))
         outcomes[contender.label] = _score(answers, cases)
         say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
