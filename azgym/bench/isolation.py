@@ -198,9 +198,13 @@ class IsolatedRun:
             if phase == worker.BUILDING and since >= w.started:
                 return since + self.time_limit
             return w.started + STARTUP_LIMIT
+        if w.batch is None:
+            return time.monotonic() + 1.0
+        # The whole batch's bound holds even if the localizer scribbles on the shared progress.
+        bound = w.batch.sent + (w.batch.stop - w.batch.start + 1) * self.time_limit
         if w.progress[0] >= 0:
-            return w.progress[1] / 1e9 + self.time_limit
-        return w.batch.sent + STARTUP_LIMIT if w.batch else time.monotonic() + 1.0
+            return min(w.progress[1] / 1e9 + self.time_limit, bound)
+        return bound
 
     def _overran(self, w: _Worker) -> bool:
         return time.monotonic() > self._deadline(w)
@@ -260,8 +264,7 @@ class IsolatedRun:
                 self.unbuildable = reason
             self._skip(batch, reason)
             return
-        phase = int(w.progress[0])
-        done = phase if phase >= 0 else 0
+        done = min(max(int(w.progress[0]), 0), batch.stop - batch.start - 1)
         self._collect(w, done)
         self.answers.errors[batch.start + done] = reason
         self.finished += 1

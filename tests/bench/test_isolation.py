@@ -89,6 +89,25 @@ PLUGINS = {
                     raise RuntimeError(f"found {len(found)} cases")
                 return azgym.Estimate.failure("no truth here", len(measurements))
     """,
+    "forger": """
+        import sys, threading, time
+
+        class Forger:
+            '''Hangs, while a thread keeps telling the runner that a new call just began.'''
+            def localize(self, measurements, beacons):
+                frame = sys._getframe()
+                while "progress" not in frame.f_locals:
+                    frame = frame.f_back
+                progress = frame.f_locals["progress"]
+
+                def forge():
+                    while True:
+                        progress[1] = time.monotonic_ns()
+                        time.sleep(0.01)
+
+                threading.Thread(target=forge, daemon=True).start()
+                time.sleep(3600)
+    """,
     "scribbler": """
         import azgym
 
@@ -146,6 +165,15 @@ def test_a_localizer_that_hangs_costs_at_most_its_time_limit_per_frame(cases, pl
     timed_out = [e for e in outcome.errors if e.startswith("timed out")]
     assert len(timed_out) == GIVE_UP_AFTER
     assert all(e.startswith(("timed out", "not run")) for e in outcome.errors)
+
+
+def test_a_localizer_that_forges_its_progress_is_still_stopped(cases, plugins):
+    limit = 0.3
+    begun = time.monotonic()
+    outcome = run_contenders(cases[:6], [plugins["forger"]], time_limit=limit)["forger"]
+    assert time.monotonic() - begun < 6 * (6 + 1) * limit
+    assert not outcome.ok.any()
+    assert outcome.errors[0].startswith("timed out")
 
 
 def test_segfaults_and_exits_are_scored_and_the_others_figures_do_not_move(cases, plugins,
