@@ -108,6 +108,9 @@ def package(
         out: The refinement's output (``K.POSE_*`` and ``K.REFINED_*`` slots; it may go on).
         cov: The covariance.
         diagnostics: Entries for ``Estimate.diagnostics`` (iterations and cost are added).
+
+    A refinement that ended singular, at the iteration limit or at a non-finite pose gives
+    ``ok=False`` with the reason: its pose is not the minimum of eq. 31, so it is no answer.
     """
     status = int(out[K.REFINED_STATUS])
     diagnostics["n_iterations"] = int(out[K.REFINED_ITERATIONS])
@@ -118,10 +121,24 @@ def package(
             "the measurements used do not determine the pose (singular geometry)",
             inliers.size, diagnostics,
         )
+    if status == K.MAX_ITER:
+        # A refinement still moving after max_iter steps is crawling along a valley the
+        # measurements barely constrain (the camera near the beacons' circle): its pose is
+        # wherever it stopped, centimetres to metres from the minimum.
+        return Estimate.failure(
+            f"the refinement did not converge in {diagnostics['n_iterations']} iterations "
+            "(ill-conditioned geometry, e.g. the camera near the circle through the beacons)",
+            inliers.size, diagnostics,
+        )
+    x, y = float(out[K.POSE_X]), float(out[K.POSE_Y])
+    heading = math.atan2(out[K.POSE_SIN], out[K.POSE_COS])
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
+        return Estimate.failure("the refinement ended at a non-finite pose", inliers.size,
+                                diagnostics)
     return Estimate(
-        x=float(out[K.POSE_X]),
-        y=float(out[K.POSE_Y]),
-        heading=math.atan2(out[K.POSE_SIN], out[K.POSE_COS]),
+        x=x,
+        y=y,
+        heading=heading,
         inliers=inliers,
         covariance=cov,
         diagnostics=diagnostics,
