@@ -189,7 +189,7 @@ class Localizer(ABC):
             raise InvalidInputError(
                 f"beacons must be an azgym.BeaconMap, got {type(beacons).__name__}"
             )
-        if len(measurements) > MAX_MEASUREMENTS:
+        if measurements.ids.size > MAX_MEASUREMENTS:
             raise InvalidInputError(
                 f"measurements has {len(measurements)} detections, more than the "
                 f"{MAX_MEASUREMENTS} a localizer accepts in one frame"
@@ -222,19 +222,21 @@ class Localizer(ABC):
     def _check_params(self) -> None:  # noqa: B027 - optional hook, no parameters by default
         """Raise :class:`InvalidInputError` naming any hyperparameter that is out of range."""
 
-    def _validate_once(self) -> None:
-        """Run ``_check_params`` unless these very hyperparameter objects passed it before.
+    def __setattr__(self, name: str, value: Any) -> None:
+        """Set an attribute; setting a hyperparameter has it checked again before the next frame."""
+        object.__setattr__(self, name, value)
+        if name in _param_names(type(self)):
+            object.__setattr__(self, "_params_checked", False)
 
-        Compared by identity, not equality: ``k_min = 4.0`` equals 4 but is no integer, and an
-        array would not compare to a bool. The objects that passed are kept, so their ids cannot
-        be reused by new ones.
+    def _validate_once(self) -> None:
+        """Run ``_check_params`` unless it passed and no hyperparameter was set since.
+
+        Hyperparameters set after construction are noticed by ``__setattr__``, so a frame costs
+        one dictionary look-up here, not a comparison of every value.
         """
-        values = tuple(map(self.__dict__.get, _param_names(type(self))))
-        identities = tuple(map(id, values))
-        if self.__dict__.get("_validated_ids") != identities:
+        if not self.__dict__.get("_params_checked", False):
             self._check_params()
-            self._validated_params = values
-            self._validated_ids = identities
+            object.__setattr__(self, "_params_checked", True)
 
     def get_params(self) -> dict[str, Any]:
         """The hyperparameters, as given to ``__init__``."""
