@@ -42,7 +42,7 @@ REFINED_COST = POSE_SIZE
 REFINED_ITERATIONS = POSE_SIZE + 1
 """Slot of the refinement's output: the number of Levenberg-Marquardt iterations."""
 REFINED_STATUS = POSE_SIZE + 2
-"""Slot of the refinement's output: CONVERGED, MAX_ITER or SINGULAR."""
+"""Slot of the refinement's output: CONVERGED, MAX_ITER, SINGULAR or ON_BEACON."""
 REFINED_SIZE = POSE_SIZE + 3
 """Length of the refinement's output (``_levenberg_marquardt.refine``)."""
 
@@ -53,3 +53,6 @@ MAX_ITER = 1
 """Refinement status: stopped at the iteration limit before converging."""
 SINGULAR = 2
 """Refinement status: the measurements used do not determine the pose at the answer."""
+ON_BEACON = 3
+"""Refinement status: the answer is on a beacon it used, where that beacon's azimuth is undefined
+(set by ``refinement.refine_with_covariance``)."""

@@ -32,12 +32,18 @@ from azgym.localize._kernels import (
 
 SINGULAR_RATIO = 1e-12
 """A 3×3 normal matrix whose determinant is at most this fraction of its diagonal's product
-counts as singular.
+counts as singular (:func:`determined`).
 
 The diagonal product is the largest value the determinant of a positive semi-definite matrix
 can take (Hadamard's bound), so the ratio is a scale-free conditioning measure; below 1e-12 the
 solution would be mostly rounding error.
 """
+UNDETERMINED_RATIO = 1e-9
+""":func:`singular_at`'s threshold on det(M) / (tr M / 3)³ of the dimensionless information
+matrix M: below it the smallest eigenvalue of M is below about 1e-9 of the others, so an azimuth
+error δ moves the position by more than ~3e4 · δ times the beacons' distance (metres per metre
+for any real δ), and even noise-free azimuths leave it uncertain beyond 1e-6 of the scene: the
+refinement's answer is wherever it stopped in a valley, not the pose."""
 
 # Levenberg-Marquardt (Marquardt's scaling: λ multiplies the diagonal of JᵀWJ).
 INITIAL_DAMPING = 1e-4
@@ -109,11 +115,10 @@ def determined(det, diag):
 
 
 @jit
-def information(bx, by, use, weight, x, y, unit_rows, out):
+def information(bx, by, use, weight, x, y, out):
     """``out`` = Σ_i w_i j_i j_iᵀ over ``use``, with j_i = ∂ε_i/∂(x, y, φ) = (−Δy/D², Δx/D², 1).
 
-    With ``unit_rows`` each j_i is first scaled to unit length. A beacon at (x, y) itself has no
-    defined direction and is left out.
+    A beacon at (x, y) itself has no defined direction and is left out.
     """
     out[:, :] = 0.0
     for m in range(bx.size):
@@ -124,8 +129,6 @@ def information(bx, by, use, weight, x, y, unit_rows, out):
             continue
         j = (jx, jy, 1.0)
         w = weight[m]
-        if unit_rows:
-            w /= j[0] * j[0] + j[1] * j[1] + 1.0
         for r in range(3):
             for c in range(3):
                 out[r, c] += w * j[r] * j[c]
@@ -135,20 +138,47 @@ def information(bx, by, use, weight, x, y, unit_rows, out):
 def singular_at(bx, by, use, x, y):
     """Whether the azimuths of the beacons in ``use`` leave the pose at (x, y) undetermined.
 
-    The test is on the rank of the Jacobian, scale-free: its rows j_i are normalised to unit
-    length (so one beacon very close to the camera, whose row is huge, cannot make the others look
-    negligible), and the pose is undetermined unless :func:`determined` accepts Σ ĵ_i ĵ_iᵀ. That
-    happens when every beacon lies on one line through the camera, or when the camera is on a
-    circle through all of them (the "danger circle" of three beacons).
+    That happens when every beacon lies on one line through the camera, or when the camera is on
+    a circle through all of them (the "danger circle" of three beacons). The test is on the
+    Jacobian's rows j_i = (−Δy/D², Δx/D², 1), made dimensionless and comparable: the position
+    columns are multiplied by the mean distance D̄ of the beacons (so a position error of D̄ and
+    a heading error of 1 rad weigh alike), and each row is scaled to unit length (so one beacon
+    very close to the camera, whose row is huge, cannot make the others look negligible). The
+    pose is undetermined unless det(M) > UNDETERMINED_RATIO · (tr M / 3)³ for M = Σ ĵ_i ĵ_iᵀ, the
+    determinant against its largest value for that trace: a near-zero eigenvalue fails it
+    whatever the others are. (The determinant against the diagonal's product would not do: it
+    does not change when a column is scaled, so a camera 1e-30 m off the line of the beacons,
+    whose x column is 1e-30 of the others, would pass it.)
     """
-    matrix = np.empty((3, 3))
-    information(bx, by, use, np.ones(bx.size), x, y, True, matrix)
-    diag = matrix[0, 0] * matrix[1, 1] * matrix[2, 2]
+    total = 0.0
+    count = 0
+    for m in range(bx.size):
+        if use[m]:
+            d = math.hypot(bx[m] - x, by[m] - y)
+            if d > 0.0:
+                total += d
+                count += 1
+    if count == 0:
+        return True
+    scale = total / count
+    matrix = np.zeros((3, 3))
+    for m in range(bx.size):
+        if not use[m]:
+            continue
+        ok, jx, jy = position_gradient(bx[m] - x, by[m] - y)
+        if not ok:
+            continue
+        j = (jx * scale, jy * scale, 1.0)
+        w = 1.0 / (j[0] * j[0] + j[1] * j[1] + 1.0)
+        for r in range(3):
+            for c in range(3):
+                matrix[r, c] += w * j[r] * j[c]
     c00 = matrix[1, 1] * matrix[2, 2] - matrix[1, 2] * matrix[2, 1]
     c01 = matrix[1, 2] * matrix[2, 0] - matrix[1, 0] * matrix[2, 2]
     c02 = matrix[1, 0] * matrix[2, 1] - matrix[1, 1] * matrix[2, 0]
     det = matrix[0, 0] * c00 + matrix[0, 1] * c01 + matrix[0, 2] * c02
-    return not determined(det, diag)
+    mean_eigenvalue = (matrix[0, 0] + matrix[1, 1] + matrix[2, 2]) / 3.0
+    return not det > UNDETERMINED_RATIO * mean_eigenvalue**3
 
 
 @jit(inline="always")

@@ -3,8 +3,8 @@
 A localizer turns one frame's :class:`~azgym.core.Measurements` and the
 :class:`~azgym.core.BeaconMap` into an :class:`~azgym.core.Estimate`. Hyperparameters are
 keyword-only ``__init__`` arguments stored unchanged (the scikit-learn way), so ``get_params()``
-shows them and ``repr`` reproduces them; they are validated when ``localize`` is called, not in
-``__init__``.
+shows them and ``repr`` reproduces them. They are validated in ``__init__`` (a bad value fails
+where it is written, naming the field) and again by ``localize`` if they were changed since.
 """
 
 from __future__ import annotations
@@ -23,6 +23,14 @@ from azgym.jit import jit
 
 MIN_MEASUREMENTS = 3
 """A 2-D position and a heading are three unknowns: three azimuths are the minimum."""
+MAX_MEASUREMENTS = 1024
+"""Most detections a localizer accepts in one frame; more raise :class:`InvalidInputError`.
+
+A camera sees tens of beacons at a time, so a frame with more than a thousand detections comes
+from a broken detector, not from a scene. The cap bounds every built-in's memory before any work:
+ransac and triplet keep the circle equation of every pair of measurements (an M × M × 4 table,
+32 MB at the cap), and triplet's and loo's run times grow as M³.
+"""
 
 # The rows of Problem.floats. Kernels index the packed array by these names, never by number, so
 # the layout is stated here once and a reordering cannot silently swap, say, x and width.
@@ -151,8 +159,9 @@ class Problem:
 class Localizer(ABC):
     """Base class of every localizer: ``localize`` validates, ``_localize`` computes.
 
-    Subclasses set ``name``, take keyword-only hyperparameters in ``__init__`` (stored as given),
-    may override ``_check_params`` and implement ``_localize``.
+    Subclasses set ``name``, take keyword-only hyperparameters in ``__init__`` (stored as given,
+    then checked by calling ``_validate_once``), may override ``_check_params`` and implement
+    ``_localize``.
     """
 
     name: ClassVar[str] = ""
@@ -169,8 +178,8 @@ class Localizer(ABC):
             beacons: The beacon map.
 
         Raises:
-            InvalidInputError: An argument is not of the expected type, or a hyperparameter is
-                out of range.
+            InvalidInputError: An argument is not of the expected type, the frame has more than
+                MAX_MEASUREMENTS detections, or a hyperparameter is out of range.
         """
         if not isinstance(measurements, Measurements):
             raise InvalidInputError(
@@ -179,6 +188,11 @@ class Localizer(ABC):
         if not isinstance(beacons, BeaconMap):
             raise InvalidInputError(
                 f"beacons must be an azgym.BeaconMap, got {type(beacons).__name__}"
+            )
+        if measurements.ids.size > MAX_MEASUREMENTS:
+            raise InvalidInputError(
+                f"measurements has {len(measurements)} detections, more than the "
+                f"{MAX_MEASUREMENTS} a localizer accepts in one frame"
             )
         self._validate_once()
         return self._localize_frame(measurements, beacons)
@@ -208,12 +222,21 @@ class Localizer(ABC):
     def _check_params(self) -> None:  # noqa: B027 - optional hook, no parameters by default
         """Raise :class:`InvalidInputError` naming any hyperparameter that is out of range."""
 
+    def __setattr__(self, name: str, value: Any) -> None:
+        """Set an attribute; setting a hyperparameter has it checked again before the next frame."""
+        object.__setattr__(self, name, value)
+        if name in _param_names(type(self)):
+            object.__setattr__(self, "_params_checked", False)
+
     def _validate_once(self) -> None:
-        """Run ``_check_params`` unless these exact hyperparameter values passed it before."""
-        values = tuple(map(self.__dict__.get, _param_names(type(self))))
-        if self.__dict__.get("_validated_params") != values:
+        """Run ``_check_params`` unless it passed and no hyperparameter was set since.
+
+        Hyperparameters set after construction are noticed by ``__setattr__``, so a frame costs
+        one dictionary look-up here, not a comparison of every value.
+        """
+        if not self.__dict__.get("_params_checked", False):
             self._check_params()
-            self._validated_params = values
+            object.__setattr__(self, "_params_checked", True)
 
     def get_params(self) -> dict[str, Any]:
         """The hyperparameters, as given to ``__init__``."""
@@ -260,3 +283,9 @@ def check_range(
         lo = "-inf" if low is None else low
         hi = "inf" if high is None else high
         raise InvalidInputError(f"{owner}.{name} must be in {left}{lo}, {hi}{right}, got {value!r}")
+
+
+def check_flag(owner: str, name: str, value: Any) -> None:
+    """Raise :class:`InvalidInputError` unless ``value`` is a bool (``"no"`` is not False)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidInputError(f"{owner}.{name} must be True or False, got {value!r}")

@@ -51,6 +51,7 @@ class LeaveOneOut(Localizer):
         self.r_max = r_max
         self.delta_alpha_d = delta_alpha_d
         self.max_iter = max_iter
+        self._validate_once()
 
     def _check_params(self) -> None:
         name = type(self).__name__

@@ -11,7 +11,7 @@ from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize._circles import circle_row
 from azgym.localize._levenberg_marquardt import determined, refine, solve3
-from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range
+from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_flag, check_range
 from azgym.localize.refinement import refine_estimate
 from azgym.site.error_model import ErrorModel
 
@@ -162,11 +162,14 @@ class LeastSquares(Localizer):
         self.delta_alpha_d = delta_alpha_d
         self.coverage = coverage
         self.max_iter = max_iter
+        self._validate_once()
 
     def _check_params(self) -> None:
         name = type(self).__name__
+        check_flag(name, "weighted", self.weighted)
         check_range(name, "delta_alpha_d", self.delta_alpha_d, low=0.0, high=math.pi / 2,
                     high_open=True)
+        check_flag(name, "coverage", self.coverage)
         check_range(name, "max_iter", self.max_iter, low=1, integer=True)
 
     def _localize(self, problem: Problem) -> Estimate:

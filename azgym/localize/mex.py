@@ -32,6 +32,21 @@ descent normally stops after a few moves of one coarse step)."""
 BEACON_SEED_MOVES = 1
 """Moves of a beacon's window: one. It is there for a basin at the beacon, and a descent that
 leaves the window is heading for a minimum that a coarse seed covers."""
+MAX_GRID_POINTS = 100_000_000
+"""Most points mex evaluates exhaustively in one frame: the whole grid, or the coarse grid.
+
+1e8 is the 1 cm grid of a 100 m × 100 m hall, minutes a frame; beyond it a run would not end in
+useful time (and a tiny step or huge bounds would ask for more points than memory or an integer
+holds), so it is refused with a named error before any work.
+"""
+MAX_COARSE_RATIO = 1000
+"""Largest coarse_step / step: each descent window has (2·ratio + 1)² fine points (4e6 here)."""
+MAX_AXIS_POINTS = 2**31
+"""Most fine-grid points along one axis of a coarse-to-fine search (whose fine grid is never
+evaluated whole): grid indices stay exact integers and exact in floating point."""
+STEP_RESOLUTION = 2.0**-40
+"""The step must be at least this times the grid's largest |coordinate| (about 1e-12): finer,
+neighbouring grid points would round to the same coordinate."""
 
 
 @jit(fastmath=K.VECTOR_MATH)
@@ -117,12 +132,35 @@ def _local_minima(costs: FloatArray, count: int) -> list[tuple[int, int]]:
     return [(int(r), int(c)) for r, c in candidates[order]]
 
 
+def _falls_outside(args: tuple[FloatArray, ...], x0: float, y0: float, step: float,
+                   cell: tuple[int, int], shape: tuple[int, int]) -> bool:
+    """Whether a lattice neighbour outside the grid costs less than the grid point ``cell``.
+
+    ``cell`` is (i, j) of the best grid point and ``shape`` the grid's (nx, ny). Every neighbour
+    inside the grid costs at least as much as the best point, so a lower neighbour outside means
+    that the grid's minimum is only the minimum of its edge, not a minimum of eq. 34: the search
+    stopped where the cost was still falling. The 3 × 3 block is scored in one call, centre
+    included, so the comparison is between costs computed alike.
+    """
+    (i, j), (nx, ny) = cell, shape
+    around = np.empty((3, 3))
+    grid_search(*args, x0 + (i - 1) * step, y0 + (j - 1) * step, step, 3, 3, around)
+    for dj in range(3):
+        for di in range(3):
+            outside = not (0 <= i + di - 1 < nx and 0 <= j + dj - 1 < ny)
+            if outside and around[dj, di] < around[1, 1]:
+                return True
+    return False
+
+
 class Mex(Localizer):
     """Method of exhaustion: the grid point with the smallest mean squared azimuth error (eq. 34).
 
     Every grid point (x, y) is scored with E_ref = mean ε_i² over all measurements, with the
     heading φ' of eq. 29; the answer is the best grid point and its φ'. There is no outlier
     rejection: it is the paper's reference method, guaranteed to find the optimum on the grid.
+    When that optimum is on the grid's edge and the cost still falls beyond it, the camera is
+    outside the searched area and the answer is ``ok=False`` with that reason, not the edge point.
 
     ``coarse_step`` enables a coarse-to-fine search for long studies: the cost on a coarse grid,
     then descents on the fine grid (same lattice as the exhaustive one) from the
@@ -131,7 +169,9 @@ class Mex(Localizer):
 
     Args:
         step: Grid spacing [m] (the paper: 1 cm).
-        bounds: (x_min, y_min, x_max, y_max) [m]; None uses the beacons' bounding box.
+        bounds: (x_min, y_min, x_max, y_max) [m]; None uses the measured beacons' bounding box.
+            The grid may hold at most MAX_GRID_POINTS points (the coarse grid, with
+            ``coarse_step``).
         coarse_step: Spacing of the coarse pass [m], a multiple of ``step``; None: exhaustive.
         n_candidates: Coarse local minima refined on the fine grid.
     """
@@ -150,20 +190,12 @@ class Mex(Localizer):
         self.bounds = bounds
         self.coarse_step = coarse_step
         self.n_candidates = n_candidates
+        self._validate_once()
 
     def _check_params(self) -> None:
         name = type(self).__name__
         check_range(name, "step", self.step, low=0.0, low_open=True)
         check_range(name, "n_candidates", self.n_candidates, low=1, integer=True)
-        if self.bounds is not None:
-            if len(self.bounds) != 4:
-                raise InvalidInputError(
-                    f"{name}.bounds must be (x_min, y_min, x_max, y_max), got {self.bounds!r}"
-                )
-            for value in self.bounds:
-                check_range(name, "bounds", value)
-            if self.bounds[2] < self.bounds[0] or self.bounds[3] < self.bounds[1]:
-                raise InvalidInputError(f"{name}.bounds has max < min: {self.bounds!r}")
         if self.coarse_step is not None:
             check_range(name, "coarse_step", self.coarse_step, low=self.step)
             ratio = self.coarse_step / self.step
@@ -172,17 +204,74 @@ class Mex(Localizer):
                     f"{name}.coarse_step must be a multiple of step={self.step}, "
                     f"got {self.coarse_step}"
                 )
+            if round(ratio) > MAX_COARSE_RATIO:
+                raise InvalidInputError(
+                    f"{name}.coarse_step must be at most {MAX_COARSE_RATIO} steps, got "
+                    f"{self.coarse_step} = {round(ratio)} × step"
+                )
+        if self.bounds is not None:
+            bounds = self.bounds
+            if not isinstance(bounds, (tuple, list, np.ndarray)) or len(bounds) != 4:
+                raise InvalidInputError(
+                    f"{name}.bounds must be (x_min, y_min, x_max, y_max), got {bounds!r}"
+                )
+            for value in bounds:
+                check_range(name, "bounds", value)
+            if bounds[2] < bounds[0] or bounds[3] < bounds[1]:
+                raise InvalidInputError(f"{name}.bounds has max < min: {bounds!r}")
+            self._grid_shape(*(float(v) for v in bounds), "bounds")
 
     def grid(self, problem: Problem) -> tuple[float, float, int, int]:
-        """(x0, y0, nx, ny) of the fine grid for this frame."""
+        """(x0, y0, nx, ny) of the fine grid for this frame.
+
+        Raises:
+            InvalidInputError: The grid is too large to search (see ``_grid_shape``).
+        """
         if self.bounds is not None:
             x_min, y_min, x_max, y_max = (float(v) for v in self.bounds)
+            where = "bounds"
         else:
             x_min, x_max = float(problem.bx.min()), float(problem.bx.max())
             y_min, y_max = float(problem.by.min()), float(problem.by.max())
-        nx = int(math.floor((x_max - x_min) / self.step + STEP_ROUNDING)) + 1
-        ny = int(math.floor((y_max - y_min) / self.step + STEP_ROUNDING)) + 1
+            where = "the measured beacons' bounding box"
+        nx, ny = self._grid_shape(x_min, y_min, x_max, y_max, where)
         return x_min, y_min, nx, ny
+
+    def _grid_shape(self, x_min: float, y_min: float, x_max: float, y_max: float,
+                    where: str) -> tuple[int, int]:
+        """(nx, ny) of the fine grid over a box, refusing a grid that cannot be searched.
+
+        Counted in floating point before any integer or array is made, so huge coordinates or a
+        tiny step give a named error instead of an overflow or an allocation failure.
+
+        Raises:
+            InvalidInputError: More than MAX_GRID_POINTS points to evaluate exhaustively, a
+                coarse-to-fine lattice beyond MAX_AXIS_POINTS a side, or a step below the
+                floating-point resolution of the coordinates.
+        """
+        name, step = type(self).__name__, float(self.step)
+        box = f"({x_min:g}, {y_min:g}, {x_max:g}, {y_max:g})"
+        if step < STEP_RESOLUTION * max(abs(x_min), abs(y_min), abs(x_max), abs(y_max)):
+            raise InvalidInputError(
+                f"{name}.step={self.step} is below the floating-point resolution of the grid "
+                f"over {where} {box}")
+        spans = [(high - low) / step for low, high in ((x_min, x_max), (y_min, y_max))]
+        counts = [math.floor(span + STEP_ROUNDING) + 1 if math.isfinite(span) else math.inf
+                  for span in spans]
+        evaluated = counts
+        if self.coarse_step is not None:
+            if max(counts) > MAX_AXIS_POINTS:
+                raise InvalidInputError(
+                    f"{name}: the grid over {where} {box} at step={self.step} has more than "
+                    f"{MAX_AXIS_POINTS} points a side; use a larger step or smaller bounds")
+            ratio = round(self.coarse_step / self.step)
+            evaluated = [(count - 1) // ratio + 1 for count in counts]
+        if evaluated[0] * evaluated[1] > MAX_GRID_POINTS:
+            raise InvalidInputError(
+                f"{name}: the grid over {where} {box} would have {evaluated[0] * evaluated[1]:.3g}"
+                f" points to evaluate, more than {MAX_GRID_POINTS:.0e}; use a larger step, "
+                "smaller bounds or coarse_step")
+        return int(counts[0]), int(counts[1])
 
     def _localize(self, problem: Problem) -> Estimate:
         args = (problem.bx, problem.by, problem.cos_az, problem.sin_az)
@@ -197,6 +286,14 @@ class Mex(Localizer):
             return Estimate.failure("no grid point has a finite cost", problem.n_measurements)
         x = x0 + i * step
         y = y0 + j * step
+        on_edge = i in (0, nx - 1) or j in (0, ny - 1)
+        if on_edge and _falls_outside(args, x0, y0, step, (i, j), (nx, ny)):
+            return Estimate.failure(
+                f"the best grid point ({x:.6g}, {y:.6g}) is on the edge of the grid and the cost "
+                "keeps falling outside it: the camera is outside the searched area (give bounds "
+                "that contain it)", problem.n_measurements,
+                {"cost": float(cost), "grid_point": (float(x), float(y))},
+            )
         if singular_at(problem.bx, problem.by, np.ones(problem.size, dtype=np.bool_), x, y):
             return Estimate.failure(
                 "the measured beacons do not determine the pose at the best grid point "

@@ -30,6 +30,7 @@ from azgym.localize.base import (
     ROW_WIDTH,
     Localizer,
     Problem,
+    check_flag,
     check_range,
     gather,
 )
@@ -165,7 +166,8 @@ class Ransac(Localizer):
         degeneracy_tol: Triplets whose normalised determinant is below this are skipped
             (collinear with the camera, or the camera on their circle).
         max_iter: Iteration limit of the refinement.
-        random_state: Seed or Generator for random triplets (only used when sampling).
+        random_state: Seed (an integer >= 0), Generator or None for random triplets (only used
+            when sampling).
     """
 
     name = "ransac"
@@ -194,6 +196,7 @@ class Ransac(Localizer):
         self.degeneracy_tol = degeneracy_tol
         self.max_iter = max_iter
         self.random_state = random_state
+        self._validate_once()
 
     def _check_params(self) -> None:
         name = type(self).__name__
@@ -206,6 +209,11 @@ class Ransac(Localizer):
         check_range(name, "max_exhaustive", self.max_exhaustive, low=1, integer=True)
         check_range(name, "degeneracy_tol", self.degeneracy_tol, low=0.0, high=1.0)
         check_range(name, "max_iter", self.max_iter, low=1, integer=True)
+        check_flag(name, "coverage", self.coverage)
+        check_flag(name, "weighted", self.weighted)
+        rng = self.random_state
+        if not (rng is None or isinstance(rng, np.random.Generator)):
+            check_range(name, "random_state", rng, low=0, integer=True)
         settings = np.empty(N_SETTINGS)
         settings[SETTING_DELTA_D] = self.delta_alpha_d
         settings[SETTING_COVERAGE] = bool(self.coverage)

@@ -36,6 +36,31 @@ def _model_variance(width, dist, delta_d, coverage):
     return (delta_d * delta_d + c * c) / 3.0
 
 
+ON_BEACON_RESOLUTION = 1e-9
+"""A camera closer to a beacon than this times its farthest used beacon counts as on it, even
+for a beacon of width 0: rounding cannot place it nearer without placing it there."""
+
+
+@jit
+def _on_beacon(bx, by, width, use, x, y):
+    """Whether (x, y) lies on a used beacon: within half its width W, or within rounding of it.
+
+    There the beacon's direction is undefined (its coverage error, eq. 2, reaches 45° at
+    D = W/2), so its residual can take any value and its Jacobian row any size: the refinement
+    can stall on such a point, a stationary point of eq. 31 that is no answer.
+    """
+    farthest = 0.0
+    for m in range(bx.size):
+        if use[m]:
+            farthest = max(farthest, math.hypot(bx[m] - x, by[m] - y))
+    for m in range(bx.size):
+        if use[m]:
+            d = math.hypot(bx[m] - x, by[m] - y)
+            if d <= 0.5 * width[m] or d <= ON_BEACON_RESOLUTION * farthest:
+                return True
+    return False
+
+
 @jit
 def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, coverage, start,
                            max_iter, out, cov):
@@ -54,8 +79,11 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
     info = np.zeros((3, 3))
     refine(bx, by, ca, sa, weight, use, start[K.POSE_X], start[K.POSE_Y], start[K.POSE_COS],
            start[K.POSE_SIN], max_iter, out, info)
+    if out[K.REFINED_STATUS] != K.SINGULAR and _on_beacon(bx, by, width, use, out[K.POSE_X],
+                                                          out[K.POSE_Y]):
+        out[K.REFINED_STATUS] = K.ON_BEACON
     meat = np.empty((3, 3))
-    information(bx, by, use, weight * weight * var, out[K.POSE_X], out[K.POSE_Y], False, meat)
+    information(bx, by, use, weight * weight * var, out[K.POSE_X], out[K.POSE_Y], meat)
     inverse = np.empty((3, 3))
     unit = np.zeros(3)
     column = np.empty(3)
@@ -108,6 +136,10 @@ def package(
         out: The refinement's output (``K.POSE_*`` and ``K.REFINED_*`` slots; it may go on).
         cov: The covariance.
         diagnostics: Entries for ``Estimate.diagnostics`` (iterations and cost are added).
+
+    A refinement that ended singular, on a beacon, at the iteration limit or at a non-finite pose
+    gives
+    ``ok=False`` with the reason: its pose is not the minimum of eq. 31, so it is no answer.
     """
     status = int(out[K.REFINED_STATUS])
     diagnostics["n_iterations"] = int(out[K.REFINED_ITERATIONS])
@@ -118,10 +150,29 @@ def package(
             "the measurements used do not determine the pose (singular geometry)",
             inliers.size, diagnostics,
         )
+    if status == K.ON_BEACON:
+        return Estimate.failure(
+            "the refinement ended on a beacon it used, whose direction is undefined there",
+            inliers.size, diagnostics,
+        )
+    if status == K.MAX_ITER:
+        # A refinement still moving after max_iter steps is crawling along a valley the
+        # measurements barely constrain (the camera near the beacons' circle): its pose is
+        # wherever it stopped, centimetres to metres from the minimum.
+        return Estimate.failure(
+            f"the refinement did not converge in {diagnostics['n_iterations']} iterations "
+            "(ill-conditioned geometry, e.g. the camera near the circle through the beacons)",
+            inliers.size, diagnostics,
+        )
+    x, y = float(out[K.POSE_X]), float(out[K.POSE_Y])
+    heading = math.atan2(out[K.POSE_SIN], out[K.POSE_COS])
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
+        return Estimate.failure("the refinement ended at a non-finite pose", inliers.size,
+                                diagnostics)
     return Estimate(
-        x=float(out[K.POSE_X]),
-        y=float(out[K.POSE_Y]),
-        heading=math.atan2(out[K.POSE_SIN], out[K.POSE_COS]),
+        x=x,
+        y=y,
+        heading=heading,
         inliers=inliers,
         covariance=cov,
         diagnostics=diagnostics,

@@ -12,6 +12,16 @@ from azgym.localize import _kernels as K
 from azgym.localize._circles import distinct_beacons, pair_table, solve_triplet
 from azgym.localize.base import Localizer, Problem, check_range
 
+DEGENERACY_TOL = 1e-2
+"""Triplet's default ``degeneracy_tol``: the smallest normalised determinant it answers from.
+
+Each azimuth enters the circle equations through sin and cos of angle differences, so an error
+of δ radians changes the normalised determinant by about δ; with Δα_d = 0.4° (7e-3 rad) a
+triplet below 1e-2 could be degenerate up to noise, and its answers were seen metres (up to 20 m)
+off. ransac keeps its own, much smaller tolerance: there a triplet is only a candidate, scored by
+its supporters and then refined on all of them.
+"""
+
 
 @jit
 def _best_triplet(bx, by, ca, sa, beacon_index, degeneracy_tol, pose, chosen):
@@ -50,15 +60,24 @@ class Triplet(Localizer):
     answers with the best-conditioned one (largest normalised determinant), ignoring the rest: the
     minimal-data baseline that shows what redundancy buys.
 
+    A triplet is only as good as its geometry: when its normalised determinant (the
+    ``conditioning`` diagnostic is its square) is small, an azimuth error of a few milliradians
+    moves the solution by metres, so the localizer refuses (``ok=False``) rather than answer from
+    such a triplet.
+
     Args:
-        degeneracy_tol: Triplets whose normalised determinant is below this are rejected
-            (beacons collinear with the camera, or the camera on their circle).
+        degeneracy_tol: Triplets whose normalised determinant |det| / Hadamard bound is below this
+            are rejected (beacons nearly collinear with the camera, or the camera near their
+            circle). The default, DEGENERACY_TOL = 1e-2, is about the relative change an azimuth
+            error of Δα_d = 0.4° makes to the determinant: below it the triplet is degenerate
+            within the noise.
     """
 
     name = "triplet"
 
-    def __init__(self, *, degeneracy_tol: float = 1e-9) -> None:
+    def __init__(self, *, degeneracy_tol: float = DEGENERACY_TOL) -> None:
         self.degeneracy_tol = degeneracy_tol
+        self._validate_once()
 
     def _check_params(self) -> None:
         check_range(type(self).__name__, "degeneracy_tol", self.degeneracy_tol, low=0.0,
@@ -71,8 +90,9 @@ class Triplet(Localizer):
                                 problem.beacon_index, float(self.degeneracy_tol), pose, chosen)
         if quality < 0.0:
             return Estimate.failure(
-                "every triplet is degenerate (beacons collinear with the camera, or the camera "
-                "on their circle)", problem.n_measurements,
+                f"every triplet is degenerate or ill-conditioned (normalised determinant below "
+                f"degeneracy_tol={self.degeneracy_tol:g}: beacons nearly collinear with the "
+                "camera, or the camera near their circle)", problem.n_measurements,
             )
         used = np.zeros(problem.size, dtype=bool)
         used[chosen] = True

@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 import pytest
-from helpers import ideal_frame, pose_error_of
+from helpers import beacon_map, ideal_frame, pose_error_of
 
 from azgym import InvalidInputError, Measurements
 from azgym.localize.base import Problem
@@ -18,8 +18,13 @@ STEP = 0.01
 
 
 def grid_index(estimate, x0: float, y0: float, step: float = STEP) -> tuple[int, int]:
-    """(column, row) of an estimate on the grid from (x0, y0), checking it lies on the grid."""
-    i, j = (estimate.x - x0) / step, (estimate.y - y0) / step
+    """(column, row) of an estimate on the grid from (x0, y0), checking it lies on the grid.
+
+    For an estimate refused because the cost falls beyond the grid's edge, the edge point where
+    the search ended (a coarse-to-fine search must end there as much as the exhaustive one).
+    """
+    x, y = (estimate.x, estimate.y) if estimate.ok else estimate.diagnostics["grid_point"]
+    i, j = (x - x0) / step, (y - y0) / step
     assert abs(i - round(i)) < 1e-6 and abs(j - round(j)) < 1e-6, (estimate.x, estimate.y)
     return round(i), round(j)
 
@@ -67,11 +72,66 @@ def test_exhaustive_grid_over_the_whole_room_by_default(paper_beacons):
     assert Mex(step=0.5, bounds=(0, 0, 2, 1)).grid(problem) == (0.0, 0.0, 5, 3)
 
 
-def test_single_point_grid_returns_that_point(paper_beacons):
+def test_single_point_grid_returns_that_point_when_the_camera_is_there(paper_beacons):
     estimate = Mex(bounds=(1.0, 2.0, 1.0, 2.0)).localize(
-        ideal_frame(1.3, 2.4, 0.7, paper_beacons), paper_beacons)
+        ideal_frame(1.003, 1.998, 0.7, paper_beacons), paper_beacons)
     assert (estimate.x, estimate.y) == (1.0, 2.0)
     assert estimate.diagnostics["grid_shape"] == (1, 1)
+
+
+def test_single_point_grid_away_from_the_camera_is_refused(paper_beacons):
+    # The one grid point is 0.5 m from the camera: its neighbours outside the grid cost less.
+    estimate = Mex(bounds=(1.0, 2.0, 1.0, 2.0)).localize(
+        ideal_frame(1.3, 2.4, 0.7, paper_beacons), paper_beacons)
+    assert not estimate.ok
+    assert "on the edge of the grid and the cost keeps falling outside it" in estimate.reason
+
+
+OUTSIDE = [(9.0, 2.0, 0.3), (-3.0, -4.0, 2.0), (2.0, 12.0, -1.0), (4.6, 4.6, 3.0)]
+
+
+@pytest.mark.parametrize("coarse_step", [None, 0.5])
+@pytest.mark.parametrize(("x", "y", "heading"), OUTSIDE)
+def test_camera_outside_the_grid_is_refused_not_answered_from_the_edge(x, y, heading,
+                                                                       coarse_step):
+    # The default grid is the measured beacons' bounding box, (0, 0)-(4, 5); the camera is
+    # outside it. The old answer was the edge point nearest the cost's slope, metres off, ok=True.
+    beacons = beacon_map([(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0), (2.0, 5.0)])
+    estimate = Mex(step=0.05, coarse_step=coarse_step).localize(
+        ideal_frame(x, y, heading, beacons), beacons)
+    assert not estimate.ok
+    assert "the camera is outside the searched area" in estimate.reason
+    assert math.isnan(estimate.x)
+
+
+@pytest.mark.parametrize(("x", "y"), [(0.01, 2.0), (3.98, 0.52), (1.0, 4.0), (0.0, 1.5)])
+def test_camera_just_inside_the_edge_is_still_found(x, y):
+    # The cost is anisotropic this close to the beacons' hull, so the grid's argmin may be a
+    # neighbour of the nearest grid point: within two steps (test_properties bounds it exactly).
+    beacons = beacon_map([(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0), (2.0, 5.0)])
+    estimate = Mex(step=0.05).localize(ideal_frame(x, y, 0.4, beacons), beacons)
+    assert estimate.ok, estimate.reason
+    assert pose_error_of(estimate, x, y, 0.4)[0] <= 2 * 0.05
+
+
+@pytest.mark.parametrize(
+    ("params", "message"),
+    [({"step": 1e-300}, "Mex.step=1e-300 is below the floating-point resolution"),
+     ({"step": 1e-5}, "points to evaluate, more than 1e+08"),
+     ({"step": 1e-6, "coarse_step": 1e-3}, "points to evaluate, more than 1e+08"),
+     ({"step": 1e-9, "coarse_step": 1e-6}, "points a side")],
+)
+def test_grids_too_large_to_search_raise_before_any_work(params, message):
+    # Each of these used to end in OverflowError, MemoryError or a run of hours.
+    beacons = beacon_map([(0.0, 0.0), (400.0, 0.0), (400.0, 400.0), (0.0, 400.0)])
+    with pytest.raises(InvalidInputError, match=re.escape(message)):
+        Mex(**params).localize(ideal_frame(100.0, 200.0, 0.0, beacons), beacons)
+
+
+def test_beacons_at_huge_coordinates_raise_a_named_error():
+    beacons = beacon_map([(0.0, 0.0), (4e200, 0.0), (4e200, 4e200), (0.0, 4e200)])
+    with pytest.raises(InvalidInputError, match=re.escape("below the floating-point resolution")):
+        Mex().localize(ideal_frame(1e200, 2e200, 0.1, beacons), beacons)
 
 
 def test_every_known_measurement_is_an_inlier(paper_beacons):
@@ -98,9 +158,10 @@ def test_coarse_to_fine_finds_the_exhaustive_argmin_with_outliers(paper_room, se
     bounds = window(x, y)
     exhaustive = Mex(bounds=bounds).localize(frame, paper_room.beacons)
     fast = Mex(bounds=bounds, coarse_step=0.1).localize(frame, paper_room.beacons)
+    assert fast.ok == exhaustive.ok
     assert grid_index(fast, *bounds[:2]) == grid_index(exhaustive, *bounds[:2])
     assert fast.diagnostics["cost"] == pytest.approx(exhaustive.diagnostics["cost"], rel=1e-12)
-    assert abs(fast.heading - exhaustive.heading) < 1e-9
+    assert not fast.ok or abs(fast.heading - exhaustive.heading) < 1e-9
 
 
 @pytest.mark.parametrize("seed", [100, 101])
@@ -108,6 +169,7 @@ def test_coarse_to_fine_matches_exhaustive_over_the_whole_room(paper_room, seed)
     x, y, frame = outlier_frame(paper_room, seed)
     exhaustive = Mex().localize(frame, paper_room.beacons)
     fast = Mex(coarse_step=0.1).localize(frame, paper_room.beacons)
+    assert fast.ok == exhaustive.ok
     assert grid_index(fast, -11.0, -11.0) == grid_index(exhaustive, -11.0, -11.0)
 
 
@@ -137,24 +199,8 @@ def test_coarse_to_fine_matches_exhaustive_with_the_camera_on_a_beacon(paper_roo
     frame = noisy_measurements(x, y, 0.8, beacons, paper_room.error_model, rng)
     exhaustive = Mex().localize(frame, beacons)
     fast = Mex(coarse_step=0.1).localize(frame, beacons)
+    assert fast.ok == exhaustive.ok
     assert grid_index(fast, -11.0, -11.0) == grid_index(exhaustive, -11.0, -11.0)
-
-
-@pytest.mark.parametrize(
-    ("params", "message"),
-    [
-        ({"bounds": (0.0, 0.0, 1.0)}, "Mex.bounds must be (x_min, y_min, x_max, y_max)"),
-        ({"bounds": (0.0, 0.0, 1.0, 1.0, 2.0)}, "Mex.bounds must be (x_min, y_min, x_max, y_max)"),
-        ({"bounds": (0.0, math.nan, 1.0, 1.0)}, "Mex.bounds must be a number"),
-        ({"bounds": (0.0, 0.0, math.inf, 1.0)}, "Mex.bounds must be a number"),
-        ({"bounds": (0.0, "0", 1.0, 1.0)}, "Mex.bounds must be a number"),
-        ({"bounds": (1.0, 0.0, 0.0, 1.0)}, "Mex.bounds has max < min"),
-        ({"bounds": (0.0, 1.0, 1.0, 0.0)}, "Mex.bounds has max < min"),
-    ],
-)
-def test_bounds_are_validated(paper_beacons, params, message):
-    with pytest.raises(InvalidInputError, match=re.escape(message)):
-        Mex(**params).localize(ideal_frame(0.0, 0.0, 0.0, paper_beacons), paper_beacons)
 
 
 def test_coarse_step_must_be_a_multiple_of_step(paper_beacons):
