@@ -26,7 +26,6 @@ import numpy as np
 
 from azgym.core import BeaconMap, Measurements, estimated_pose
 from azgym.errors import AzgymError
-from azgym.localize.base import Localizer
 from azgym.localize.registry import make_localizer
 
 # Phases the worker publishes in progress[0]; a frame's index (>= 0) while it is being localized.
@@ -38,10 +37,6 @@ ANSWER_SIZE = 5
 ANSWER_X, ANSWER_Y, ANSWER_HEADING, ANSWER_STATE, ANSWER_MICROS = range(ANSWER_SIZE)
 PENDING, POSED, NO_POSE, RAISED = 0.0, 1.0, 2.0, 3.0
 """Answer states: not answered yet; a usable pose; an estimate without one; an exception."""
-
-_NO_BEACONS = BeaconMap(np.arange(3), np.array([[1.0, 0.0, 2.5], [0.0, 1.0, 2.5],
-                                                 [-1.0, 0.0, 2.5]]))
-"""A small map for the empty frame :func:`build` gives a localizer."""
 
 FrameData = tuple[str, bytes, bytes, bytes | None, tuple[int, ...]]
 """One frame as sent: scenario name, ids (int64 bytes), azimuths (float64 bytes), quality
@@ -87,7 +82,7 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
     beacon_maps = {name: BeaconMap(*arrays) for name, arrays in maps.items()}
     _mark(progress, BUILDING)
     try:
-        localizer = build(spec, params)
+        localizer = make_localizer(spec, **params)
     except BaseException as exc:  # noqa: BLE001 - reported, the parent scores every frame
         why = str(exc) if isinstance(exc, AzgymError) else _describe(exc)
         conn.send(("unbuildable", why))
@@ -104,18 +99,6 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
         _localize_batch(conn, progress, answers, localizer, frames, beacon_maps)
         _mark(progress, IDLE)
         conn.send(("done",))
-
-
-def build(spec: str, params: dict[str, Any]) -> Any:
-    """Build the localizer, and let an azgym :class:`Localizer` check its hyperparameters.
-
-    A :class:`~azgym.localize.base.Localizer` validates its hyperparameters on its first frame,
-    so it gets an empty one here: a bad value then fails the build instead of every frame.
-    """
-    localizer = make_localizer(spec, **params)
-    if isinstance(localizer, Localizer):
-        localizer.localize(Measurements(np.arange(0), np.zeros(0)), _NO_BEACONS)
-    return localizer
 
 
 def _localize_batch(conn: Any, progress: Any, answers: Any, localizer: Any,

@@ -299,11 +299,14 @@ def test_get_params_lists_every_keyword_unchanged():
     assert mex.get_params() == {"step": 0.5, "bounds": bounds, "coarse_step": None,
                                 "n_candidates": 8}
     assert mex.get_params()["bounds"] is bounds  # stored as given, not converted
-    assert repr(Triplet()) == "Triplet(degeneracy_tol=1e-09)"
+    assert repr(Triplet()) == "Triplet(degeneracy_tol=0.01)"
 
 
-def test_hyperparameters_are_validated_when_called_not_when_built(paper_beacons):
-    localizer = Ransac(pr_hit=2.0)  # no error yet: scikit-learn style
+def test_hyperparameters_are_validated_when_built_and_again_after_a_change(paper_beacons):
+    with pytest.raises(InvalidInputError, match=re.escape("Ransac.pr_hit")):
+        Ransac(pr_hit=2.0)
+    localizer = Ransac()
+    localizer.pr_hit = 2.0
     frame = ideal_frame(0.0, 0.0, 0.0, paper_beacons)
     with pytest.raises(InvalidInputError, match=re.escape("Ransac.pr_hit")):
         localizer.localize(frame, paper_beacons)
