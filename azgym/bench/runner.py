@@ -19,7 +19,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from azgym.arguments import positive_number, whole_number
-from azgym.bench.contenders import REFERENCE, Contender, default_contenders
+from azgym.bench.contenders import REFERENCE, Contender, default_contenders, warm_up
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT, Answers, IsolatedRun, start_fork_server
 from azgym.bench.outcome import Outcome
 from azgym.bench.results import BenchResult, summarize
@@ -143,14 +143,18 @@ def run_benchmark(
     say = progress or (lambda _line: None)
     if seed is None:
         seed = suite.dev_seed if split == "dev" else secrets.randbits(31)
-    if not localizers_compiled():
-        say("compiling azgym's kernels: the first run on an installation takes about 20 s "
+    first_run = not localizers_compiled()
+    if first_run:
+        say("compiling azgym's kernels: the first run on an installation takes about 10 s "
             "longer; they are cached for the next runs")
     start_fork_server()  # its warm-up overlaps the drawing of the cases
     started = time.perf_counter()
     cases = suite.build(seed, quick)
     say(f"{suite.name} v{suite.version} ({split}, seed {seed}): {len(cases)} frames drawn in "
         f"{time.perf_counter() - started:.1f} s")
+    if first_run:
+        # The fork server compiles ransac meanwhile (contenders.warm_up).
+        warm_up(c for c in default_contenders() if c.spec != REFERENCE)
     outcomes = run_contenders(cases, contenders, workers=workers, time_limit=time_limit,
                               progress=progress)
     reference = next(c.label for c in contenders if c.is_reference)

@@ -294,8 +294,9 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
         accepted = False
         # The search for λ stays inline: as a helper taking these arrays it made refine 10 % slower.
         while lam < DAMPING_LIMIT:
-            damped[:, :] = info_matrix
-            for r in range(3):
+            for r in range(3):  # element by element: an array copy compiles a shape check
+                for c in range(3):
+                    damped[r, c] = info_matrix[r, c]
                 damped[r, r] += lam * info_matrix[r, r] + DIAGONAL_FLOOR
             if solve3(damped, rhs, step) == 0.0:
                 lam *= DAMPING_UP

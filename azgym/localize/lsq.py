@@ -130,7 +130,8 @@ def fit_subset(bx, by, ca, sa, beacon_index, use, max_iter, out):
            out[K.POSE_SIN], max_iter, result, info)
     if result[K.REFINED_STATUS] == K.SINGULAR:
         return np.inf
-    out[:K.POSE_SIZE] = result[:K.POSE_SIZE]
+    for slot in range(K.POSE_SIZE):  # slot by slot: an array copy compiles a shape check
+        out[slot] = result[slot]
     return result[K.REFINED_COST] / np.count_nonzero(use)
 
 

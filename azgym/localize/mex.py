@@ -112,8 +112,8 @@ def grid_search(bx, by, ca, sa, x0, y0, step, nx, ny, costs_out):
                 best = cost[i]
                 best_i = i
                 best_j = j
-        if keep:
-            costs_out[j, :] = cost
+            if keep:  # element by element: a row copy compiles a slow shape check
+                costs_out[j, i] = cost[i]
     return best_i, best_j, best
 
 

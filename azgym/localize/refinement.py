@@ -87,14 +87,31 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
     inverse = np.empty((3, 3))
     unit = np.zeros(3)
     column = np.empty(3)
+    # Element by element throughout: array copies and products compile shape checks that take
+    # seconds to compile, for 3×3 matrices.
     for c in range(3):
         unit[:] = 0.0
         unit[c] = 1.0
         if solve3(info, unit, column) == 0.0:
             cov[:, :] = np.nan
             return
-        inverse[:, c] = column
-    cov[:, :] = inverse @ meat @ inverse
+        for r in range(3):
+            inverse[r, c] = column[r]
+    _sandwich(inverse, meat, cov)
+
+
+@jit
+def _sandwich(outer, inner, out):
+    """``out`` = outer @ inner @ outer for 3×3 matrices (the sandwich covariance)."""
+    left = np.empty((3, 3))
+    for r in range(3):
+        for c in range(3):
+            left[r, c] = outer[r, 0] * inner[0, c] + outer[r, 1] * inner[1, c] + \
+                outer[r, 2] * inner[2, c]
+    for r in range(3):
+        for c in range(3):
+            out[r, c] = left[r, 0] * outer[0, c] + left[r, 1] * outer[1, c] + \
+                left[r, 2] * outer[2, c]
 
 
 def refine_estimate(
