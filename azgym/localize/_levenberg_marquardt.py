@@ -275,8 +275,7 @@ def refine(bx, by, ca, sa, weight, use, x, y, ch, sh, max_iter, out, info_matrix
     """
     phi = math.atan2(sh, ch)
     norm = math.hypot(ch, sh)
-    ch /= norm
-    sh /= norm
+    ch, sh = ch / norm, sh / norm
     eps = np.empty(bx.size)  # the residuals at the current pose
     trial_eps = np.empty(bx.size)  # the residuals at the pose a step leads to
     rhs = np.empty(3)

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import json
-import textwrap
+import re
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,119 +16,8 @@ from azgym.bench.runner import run_contenders
 from azgym.bench.suites import get_suite
 from azgym.cli import main
 
-PLUGINS = {
-    "sleeper": """
-        import time
-
-        class Sleeper:
-            def localize(self, measurements, beacons):
-                time.sleep(3600)
-    """,
-    "crasher": """
-        import ctypes
-        import azgym
-
-        class Crasher:
-            '''Segfaults on frames with an even number of detections, else answers as ransac.'''
-            def __init__(self):
-                self.ransac = azgym.make_localizer("ransac")
-
-            def localize(self, measurements, beacons):
-                if len(measurements) % 2 == 0:
-                    ctypes.string_at(0)
-                return self.ransac.localize(measurements, beacons)
-    """,
-    "exiter": """
-        import sys
-
-        class Exiter:
-            def localize(self, measurements, beacons):
-                sys.exit(3)
-    """,
-    "hard_exiter": """
-        import os
-
-        class HardExiter:
-            def localize(self, measurements, beacons):
-                os._exit(4)
-    """,
-    "hoarder": """
-        class Hoarder:
-            def localize(self, measurements, beacons):
-                raise MemoryError("asked for 1 TB")
-    """,
-    "slow_builder": """
-        import time
-
-        class SlowBuilder:
-            def __init__(self):
-                time.sleep(3600)
-
-            def localize(self, measurements, beacons):
-                raise AssertionError("never built")
-    """,
-    "snoop": """
-        import gc, sys
-        import azgym
-
-        def looks_like_truth(value):
-            return type(value).__name__ in ("Case", "Pose", "Frame", "Observation") or (
-                isinstance(value, tuple) and len(value) == 3
-                and all(isinstance(v, float) for v in value))
-
-        class Snoop:
-            '''Answers the true pose if it can find one anywhere in its process.'''
-            def localize(self, measurements, beacons):
-                frame = sys._getframe()
-                while frame is not None:
-                    for name, value in frame.f_locals.items():
-                        if name in ("case", "cases", "truth") or looks_like_truth(value):
-                            raise RuntimeError(f"found {name}")
-                    frame = frame.f_back
-                found = [o for o in gc.get_objects() if type(o).__name__ == "Case"]
-                if found:
-                    raise RuntimeError(f"found {len(found)} cases")
-                return azgym.Estimate.failure("no truth here", len(measurements))
-    """,
-    "forger": """
-        import sys, threading, time
-
-        class Forger:
-            '''Hangs, while a thread keeps telling the runner that a new call just began.'''
-            def localize(self, measurements, beacons):
-                frame = sys._getframe()
-                while "progress" not in frame.f_locals:
-                    frame = frame.f_back
-                progress = frame.f_locals["progress"]
-
-                def forge():
-                    while True:
-                        progress[1] = time.monotonic_ns()
-                        time.sleep(0.01)
-
-                threading.Thread(target=forge, daemon=True).start()
-                time.sleep(3600)
-    """,
-    "scribbler": """
-        import azgym
-
-        class Scribbler:
-            '''Tries to corrupt what the other contenders are given, then answers as ransac.'''
-            def __init__(self):
-                self.ransac = azgym.make_localizer("ransac")
-                self.refused = 0
-
-            def localize(self, measurements, beacons):
-                try:
-                    measurements.azimuth.setflags(write=True)
-                    measurements.azimuth[:] += 1.0
-                except ValueError:
-                    self.refused += 1
-                beacons.xyz.setflags(write=True)
-                beacons.xyz[:] += 5.0
-                return self.ransac.localize(measurements, beacons)
-    """,
-}
+PLUGINS = Path(__file__).parents[1] / "hostile" / "plugins"
+"""Hostile plug-ins, one a file: each names the attack in its docstring."""
 
 
 @pytest.fixture(scope="module")
@@ -136,13 +26,11 @@ def cases():
 
 
 @pytest.fixture(scope="module")
-def plugins(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("plugins")
+def plugins():
     specs = {}
-    for name, source in PLUGINS.items():
-        (folder / f"{name}.py").write_text(textwrap.dedent(source))
-        cls = source.split("class ")[1].split(":")[0].strip()
-        specs[name] = Contender(name, f"{folder / name}.py:{cls}")
+    for path in sorted(PLUGINS.glob("*.py")):
+        name = re.search(r"^class (\w+)", path.read_text(), re.MULTILINE).group(1)
+        specs[path.stem] = Contender(path.stem, f"{path}:{name}")
     return specs
 
 
