@@ -42,12 +42,11 @@ for a beacon of width 0: rounding cannot place it nearer without placing it ther
 
 
 @jit
-def _on_beacon(bx, by, width, use, x, y):
-    """Whether (x, y) lies on a used beacon: within half its width W, or within rounding of it.
+def _beacon_at(bx, by, width, use, x, y):
+    """The used beacon (x, y) lies on, or −1: within half its width W, or within rounding of it.
 
     There the beacon's direction is undefined (its coverage error, eq. 2, reaches 45° at
-    D = W/2), so its residual can take any value and its Jacobian row any size: the refinement
-    can stall on such a point, a stationary point of eq. 31 that is no answer.
+    D = W/2), so its residual can take any value and its Jacobian row any size.
     """
     farthest = 0.0
     for m in range(bx.size):
@@ -57,8 +56,8 @@ def _on_beacon(bx, by, width, use, x, y):
         if use[m]:
             d = math.hypot(bx[m] - x, by[m] - y)
             if d <= 0.5 * width[m] or d <= ON_BEACON_RESOLUTION * farthest:
-                return True
-    return False
+                return m
+    return -1
 
 
 @jit
@@ -67,6 +66,9 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
     """Refine the pose array ``start`` on ``use``; fill ``out`` (as ``refine``) and ``cov``.
 
     The variances are the model's at the start pose; ``weighted`` uses their inverses as weights.
+    A refinement that ends on a beacon it used (the camera right under it, or a stall there)
+    drops that beacon from ``use``, in place, and refines again from there; ending on a beacon
+    again gives status ON_BEACON.
     """
     n = bx.size
     var = np.empty(n)
@@ -79,9 +81,15 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
     info = np.zeros((3, 3))
     refine(bx, by, ca, sa, weight, use, start[K.POSE_X], start[K.POSE_Y], start[K.POSE_COS],
            start[K.POSE_SIN], max_iter, out, info)
-    if out[K.REFINED_STATUS] != K.SINGULAR and _on_beacon(bx, by, width, use, out[K.POSE_X],
-                                                          out[K.POSE_Y]):
-        out[K.REFINED_STATUS] = K.ON_BEACON
+    under = _beacon_at(bx, by, width, use, out[K.POSE_X], out[K.POSE_Y])
+    if out[K.REFINED_STATUS] != K.SINGULAR and under >= 0:
+        # Under a beacon (or stalled on one) its azimuth says nothing: drop it, go on without.
+        use[under] = False
+        refine(bx, by, ca, sa, weight, use, out[K.POSE_X], out[K.POSE_Y], out[K.POSE_COS],
+               out[K.POSE_SIN], max_iter, out, info)
+        if out[K.REFINED_STATUS] != K.SINGULAR and _beacon_at(
+                bx, by, width, use, out[K.POSE_X], out[K.POSE_Y]) >= 0:
+            out[K.REFINED_STATUS] = K.ON_BEACON
     meat = np.empty((3, 3))
     information(bx, by, use, weight * weight * var, out[K.POSE_X], out[K.POSE_Y], meat)
     inverse = np.empty((3, 3))
@@ -136,6 +144,7 @@ def refine_estimate(
     """
     out = np.empty(K.REFINED_SIZE)
     cov = np.empty((3, 3))
+    use = use.copy()  # the refinement may drop a beacon the camera is under
     refine_with_covariance(
         problem.bx, problem.by, problem.cos_az, problem.sin_az, problem.width, use, weighted,
         error_model.delta_alpha_d, error_model.coverage, start, max_iter, out, cov,
@@ -169,7 +178,8 @@ def package(
         )
     if status == K.ON_BEACON:
         return Estimate.failure(
-            "the refinement ended on a beacon it used, whose direction is undefined there",
+            "the refinement ended on a beacon it used, even after dropping the one it ended on "
+            "first: a beacon's direction is undefined right under it",
             inliers.size, diagnostics,
         )
     if status == K.MAX_ITER:

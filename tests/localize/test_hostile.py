@@ -136,17 +136,26 @@ CASES = {
     "beacons-at-one-point": (_beacons_at_one_point,
                              {**DEGENERATE, "mex": "no grid point has a finite cost"}),
     "camera-on-a-beacon": (lambda: (ideal_frame(3.0, 1.5, 0.3, ROOM), ROOM),
-                           {"ransac": ON_BEACON, "lsq": ON_BEACON, "loo": TRUTH,
+                           {"ransac": TRUTH, "lsq": TRUTH, "loo": TRUTH,
                             "triplet": TRUTH, "mex": TRUTH}),
+    "camera-under-two-stacked-beacons": (
+        lambda: _stacked(), {"ransac": ON_BEACON, "lsq": ON_BEACON, "loo": ON_BEACON,
+                             "triplet": TRUTH, "mex": TRUTH}),
     "camera-a-nanometre-from-a-beacon": (
         lambda: (ideal_frame(3.0 - 1e-9, 1.5, 0.3, ROOM), ROOM),
-        {"ransac": ON_BEACON, "lsq": ON_BEACON, "loo": ON_BEACON, "triplet": TRUTH,
+        {"ransac": TRUTH, "lsq": TRUTH, "loo": TRUTH, "triplet": TRUTH,
          "mex": TRUTH}),
     "camera-a-thousand-km-away": (
         lambda: (ideal_frame(1e6, 1e6, 0.1, ROOM), ROOM),
         {**DEGENERATE, "lsq": "do not determine the pose", "mex": OUTSIDE}),
     "coordinates-near-1e200": (_huge_scene, {**DEGENERATE, "triplet": TRUTH}),
 }
+def _stacked():
+    """Two beacons at one spot (at two heights), the camera right under them."""
+    stacked = BeaconMap(np.r_[ROOM.ids, 99], np.r_[ROOM.xyz, [[3.0, 1.5, 3.5]]], width=0.03)
+    return ideal_frame(3.0, 1.5, 0.3, stacked), stacked
+
+
 OUTCOMES = [(case, name) for case, (_, expected) in CASES.items() for name in expected]
 
 
@@ -162,6 +171,7 @@ def test_hostile_frame_outcome(case, name):
     if expected[name] == TRUTH:
         assert estimate.ok, estimate.reason
         pose = {"camera-on-a-beacon": (3.0, 1.5, 0.3),
+                "camera-under-two-stacked-beacons": (3.0, 1.5, 0.3),
                 "camera-a-nanometre-from-a-beacon": (3.0 - 1e-9, 1.5, 0.3),
                 "coordinates-near-1e200": (1e200, 2e200, 0.1)}.get(case, POSE)
         scale = 1e200 if case == "coordinates-near-1e200" else 1.0
