@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import azgym
 from azgym.bench import board, leaderboard
 from azgym.bench.runner import default_contenders, run_benchmark
 from azgym.bench.suites import SUITES
@@ -34,7 +35,7 @@ def main() -> None:
         print(ranked_table(result.summary), flush=True)
         for label in result.summary["localizers"]:
             path = leaderboard.submit(out, label, entries, name=f"{label}-{name}",
-                                      version="0.1.0", authors=["azgym developers"],
+                                      version=azgym.__version__, authors=["azgym developers"],
                                       link="",
                                       overwrite=True)
             print(f"wrote {path}")
