@@ -33,7 +33,8 @@ KERNEL_MODULES = (
     "localize/base.py", "localize/loo.py", "localize/lsq.py", "localize/mex.py",
     "localize/ransac.py", "localize/refinement.py", "localize/triplet.py",
     "sensing/geometry/detections.py", "sensing/geometry/direct.py", "sensing/geometry/frame.py",
-    "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py", "sensing/identities.py",
+    "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py",
+    "sensing/geometry/ordering.py", "sensing/identities.py",
     "sensing/image/render.py", "sensing/labels.py", "sensing/protocol.py", "site/elements.py",
     "site/error_model.py", "site/fisheye.py",
 )

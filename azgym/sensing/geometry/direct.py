@@ -18,6 +18,7 @@ import numpy as np
 from azgym.jit import jit, wrap_compiled
 from azgym.sensing.geometry.detections import list_detection
 from azgym.sensing.geometry.occluders import CROSSING_EPS, crossing
+from azgym.sensing.geometry.ordering import stable_order
 from azgym.sensing.labels import DIRECT, MOVED, PARTIAL
 from azgym.site.elements import SEG_HEIGHT, SEG_X1, SEG_X2, SEG_Y1, SEG_Y2
 
@@ -84,7 +85,7 @@ def _visible_part(covers, n_covers, half):
     A sweep over the covers sorted by their start; the visible part's centroid is
     moment / length.
     """
-    order = np.argsort(covers[_COVER_LO, :n_covers])
+    order = stable_order(covers[_COVER_LO], n_covers)  # ties: the union is the same
     cursor = -half
     length = 0.0
     moment = 0.0

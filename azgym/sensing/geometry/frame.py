@@ -27,6 +27,7 @@ from azgym.sensing.geometry.detections import (
 )
 from azgym.sensing.geometry.direct import direct_view
 from azgym.sensing.geometry.mirrors import mirror_view
+from azgym.sensing.geometry.ordering import stable_order
 from azgym.sensing.identities import misread_row
 from azgym.sensing.labels import GHOST, MISIDENTIFIED
 from azgym.sensing.protocol import AZIMUTH, BEACON, ID, LABEL, MIRRORED, TRUE_AZIMUTH, VISIBLE
@@ -172,7 +173,7 @@ def finish_frame(found, found_ints, count, heading, tilt, uniforms, delta_d, mis
         if uniforms[1, m] < misdecode_rate and n_map > 1:
             ids[m] = map_ids[misread_row(beacon[m], uniforms[2, m], n_map)]
             label[m] = MISIDENTIFIED
-    order = np.argsort(measured, kind="mergesort")
+    order = stable_order(measured, measured.size)
     _write_frame(out_floats, out_ints, order, measured, true_azimuth, ids, mirrored, found,
                  found_ints)
     _pad_frame(out_floats, out_ints, count)
