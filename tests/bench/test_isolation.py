@@ -94,6 +94,11 @@ def test_a_localizer_cannot_change_what_others_are_given(cases, plugins, alone):
     assert not same_scores(outcomes["scribbler"], alone)  # its own map copy is shifted 5 m
 
 
+def test_a_localizer_cannot_fake_its_runtime_by_replacing_the_timer(cases, plugins):
+    outcome = run_contenders(cases[:4], [plugins["clock_forger"]])["clock_forger"]
+    assert outcome.ok.all() and (outcome.micros >= 4000).all()
+
+
 def test_a_localizer_that_cannot_be_built_in_time_is_scored_unavailable(cases, plugins):
     outcome = run_contenders(cases, [plugins["slow_builder"]], time_limit=0.5)["slow_builder"]
     assert not outcome.ok.any()
