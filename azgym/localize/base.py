@@ -9,8 +9,6 @@ where it is written, naming the field) and again by ``localize`` if they were ch
 
 from __future__ import annotations
 
-import functools
-import inspect
 import math
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
@@ -19,6 +17,7 @@ import numpy as np
 
 from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Measurements
 from azgym.errors import InvalidInputError
+from azgym.hyperparameters import Hyperparameters
 from azgym.jit import jit
 
 MIN_MEASUREMENTS = 3
@@ -156,7 +155,7 @@ class Problem:
         return full
 
 
-class Localizer(ABC):
+class Localizer(Hyperparameters, ABC):
     """Base class of every localizer: ``localize`` validates, ``_localize`` computes.
 
     Subclasses set ``name``, take keyword-only hyperparameters in ``__init__`` (stored as given,
@@ -218,44 +217,6 @@ class Localizer(ABC):
     @abstractmethod
     def _localize(self, problem: Problem) -> Estimate:
         """Compute the estimate from validated, usable measurements (K >= 3)."""
-
-    def _check_params(self) -> None:  # noqa: B027 - optional hook, no parameters by default
-        """Raise :class:`InvalidInputError` naming any hyperparameter that is out of range."""
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        """Set an attribute; setting a hyperparameter has it checked again before the next frame."""
-        object.__setattr__(self, name, value)
-        if name in _param_names(type(self)):
-            object.__setattr__(self, "_params_checked", False)
-
-    def _validate_once(self) -> None:
-        """Run ``_check_params`` unless it passed and no hyperparameter was set since.
-
-        Hyperparameters set after construction are noticed by ``__setattr__``, so a frame costs
-        one dictionary look-up here, not a comparison of every value.
-        """
-        if not self.__dict__.get("_params_checked", False):
-            self._check_params()
-            object.__setattr__(self, "_params_checked", True)
-
-    def get_params(self) -> dict[str, Any]:
-        """The hyperparameters, as given to ``__init__``."""
-        return {name: getattr(self, name) for name in _param_names(type(self))}
-
-    def __repr__(self) -> str:
-        params = ", ".join(f"{key}={value!r}" for key, value in self.get_params().items())
-        return f"{type(self).__name__}({params})"
-
-
-@functools.cache
-def _param_names(cls: type) -> tuple[str, ...]:
-    """Names of the keyword-only ``__init__`` arguments of a localizer class."""
-    signature = inspect.signature(cls.__init__)
-    return tuple(
-        name for name, parameter in signature.parameters.items()
-        if parameter.kind is parameter.KEYWORD_ONLY
-    )
-
 
 def check_range(
     owner: str,

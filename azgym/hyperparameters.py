@@ -1,0 +1,58 @@
+"""Hyperparameters, the scikit-learn way: keyword-only, stored as given, checked when set.
+
+Localizers and trackers share this rule. A class takes its hyperparameters as keyword-only
+``__init__`` arguments and stores them unchanged, so ``get_params()`` shows them and ``repr``
+reproduces them. They are checked in ``__init__`` (a bad value fails where it is written, naming
+the field) and, if one was set afterwards, again before the next use.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+from typing import Any
+
+
+class Hyperparameters:
+    """Keyword-only hyperparameters with ``get_params``, ``repr`` and checking on change.
+
+    Subclasses override ``_check_params`` and call ``_validate_once`` at the end of ``__init__``
+    and before each use.
+    """
+
+    def _check_params(self) -> None:  # noqa: B027 - optional hook, no parameters by default
+        """Raise :class:`InvalidInputError` naming any hyperparameter that is out of range."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        """Set an attribute; setting a hyperparameter has it checked again before the next frame."""
+        object.__setattr__(self, name, value)
+        if name in _param_names(type(self)):
+            object.__setattr__(self, "_params_checked", False)
+
+    def _validate_once(self) -> None:
+        """Run ``_check_params`` unless it passed and no hyperparameter was set since.
+
+        Hyperparameters set after construction are noticed by ``__setattr__``, so a frame costs
+        one dictionary look-up here, not a comparison of every value.
+        """
+        if not self.__dict__.get("_params_checked", False):
+            self._check_params()
+            object.__setattr__(self, "_params_checked", True)
+
+    def get_params(self) -> dict[str, Any]:
+        """The hyperparameters, as given to ``__init__``."""
+        return {name: getattr(self, name) for name in _param_names(type(self))}
+
+    def __repr__(self) -> str:
+        params = ", ".join(f"{key}={value!r}" for key, value in self.get_params().items())
+        return f"{type(self).__name__}({params})"
+
+
+@functools.cache
+def _param_names(cls: type) -> tuple[str, ...]:
+    """Names of the keyword-only ``__init__`` arguments of a class."""
+    signature = inspect.signature(cls.__init__)
+    return tuple(
+        name for name, parameter in signature.parameters.items()
+        if parameter.kind is parameter.KEYWORD_ONLY
+    )
