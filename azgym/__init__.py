@@ -31,15 +31,19 @@ from azgym.errors import (
 _LAZY = {
     "ENV_IDS": "azgym.envs.registration",
     "ErrorModel": "azgym.site.error_model",
+    "FrameByFrame": "azgym.track.base",
     "Localizer": "azgym.localize.base",
     "LocalizerCheckError": "azgym.localize.checks",
+    "Motion": "azgym.sensing.motion",
     "Scenario": "azgym.site.scenario",
+    "Tracker": "azgym.track.base",
     "check_localizer": "azgym.localize.checks",
     "evaluate": "azgym.envs.evaluate",
     "list_localizers": "azgym.localize.registry",
     "list_scenarios": "azgym.site.load",
     "load_scenario": "azgym.site.load",
     "make_localizer": "azgym.localize.registry",
+    "make_tracker": "azgym.track.base",
     "register_localizer": "azgym.localize.registry",
 }
 
@@ -49,9 +53,11 @@ if TYPE_CHECKING:
     from azgym.localize.base import Localizer
     from azgym.localize.checks import LocalizerCheckError, check_localizer
     from azgym.localize.registry import list_localizers, make_localizer, register_localizer
+    from azgym.sensing.motion import Motion
     from azgym.site.error_model import ErrorModel
     from azgym.site.load import list_scenarios, load_scenario
     from azgym.site.scenario import Scenario
+    from azgym.track.base import FrameByFrame, Tracker, make_tracker
 
 
 def __getattr__(name: str) -> Any:
@@ -76,12 +82,15 @@ __all__ = [
     "DependencyNotInstalled",
     "ErrorModel",
     "Estimate",
+    "FrameByFrame",
     "InvalidInputError",
     "Localizer",
     "LocalizerCheckError",
     "Measurements",
+    "Motion",
     "Scenario",
     "ScenarioError",
+    "Tracker",
     "UnknownNameError",
     "__version__",
     "check_localizer",
@@ -90,6 +99,7 @@ __all__ = [
     "list_scenarios",
     "load_scenario",
     "make_localizer",
+    "make_tracker",
     "pose_error",
     "register_localizer",
     "wrap_angle",

@@ -37,6 +37,7 @@ from azgym.core import BeaconMap, Estimate, Measurements
 from azgym.errors import InvalidInputError, unknown_name
 
 ENTRY_POINT_GROUP = "azgym.localizers"
+TRACKER_ENTRY_POINT_GROUP = "azgym.trackers"
 
 
 @runtime_checkable
@@ -57,6 +58,8 @@ _BUILTIN: dict[str, str] = {
     "lsq": "azgym.localize.lsq:LeastSquares",
     "loo": "azgym.localize.loo:LeaveOneOut",
 }
+_BUILTIN_TRACKERS: dict[str, str] = {}
+"""Trackers (:mod:`azgym.track`) by name; they share the specs, presets and plug-in rules."""
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "ransac-weighted": ("ransac", {"weighted": True}),
     "mex-coarse": ("mex", {"coarse_step": 0.1}),
@@ -75,18 +78,23 @@ def register_localizer(name: str, factory: Factory) -> None:
     """
     if not isinstance(name, str) or not name:
         raise InvalidInputError(f"localizer name must be a non-empty string, got {name!r}")
-    if name in _BUILTIN or name in PRESETS or name in _REGISTERED:
+    if name in _BUILTIN or name in _BUILTIN_TRACKERS or name in PRESETS or name in _REGISTERED:
         raise InvalidInputError(f"a localizer named {name!r} is already registered")
     _REGISTERED[name] = factory
 
 
 def _entry_points() -> dict[str, Any]:
-    return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
+    return {ep.name: ep for group in (ENTRY_POINT_GROUP, TRACKER_ENTRY_POINT_GROUP)
+            for ep in entry_points(group=group)}
 
 
 def list_localizers() -> list[str]:
-    """Every name ``make_localizer`` accepts: built-ins, registered and entry-point localizers."""
-    return sorted(set(_BUILTIN) | set(PRESETS) | set(_REGISTERED) | set(_entry_points()))
+    """Every registered name: built-ins, presets, registered and entry-point ones.
+
+    ``make_localizer`` builds the localizers among them, ``make_tracker`` every one.
+    """
+    return sorted(set(_BUILTIN) | set(_BUILTIN_TRACKERS) | set(PRESETS) | set(_REGISTERED)
+                  | set(_entry_points()))
 
 
 def _load_attribute(spec: str) -> Factory:
@@ -123,16 +131,22 @@ def _load_attribute(spec: str) -> Factory:
 
 
 def _localizer_class(spec: str, factory: Any) -> Factory:
-    """The factory a spec names, if it is a localizer class: a class with a ``localize`` method.
+    """The factory a spec names, if it is a localizer or tracker class.
 
-    A spec comes from a command line or a leaderboard entry, which anyone can write: refusing
-    anything else before calling it means that ``"os:system"`` or ``"subprocess:Popen"`` with
-    hyperparameters can never run a command.
+    A localizer class has a ``localize`` method; a tracker class has ``reset``, ``predict`` and
+    ``update``. A spec comes from a command line or a leaderboard entry, which anyone can write:
+    refusing anything else before calling it means that ``"os:system"`` or
+    ``"subprocess:Popen"`` with hyperparameters can never run a command.
     """
-    if not (isinstance(factory, type) and callable(getattr(factory, "localize", None))):
+    is_class = isinstance(factory, type)
+    localizer = is_class and callable(getattr(factory, "localize", None))
+    tracker = is_class and all(callable(getattr(factory, method, None))
+                               for method in ("reset", "predict", "update"))
+    if not (localizer or tracker):
         raise InvalidInputError(
             f"localizer spec {spec!r} names a {type(factory).__name__}, not a localizer class "
-            "(a class with a localize(measurements, beacons) method)")
+            "(a class with a localize(measurements, beacons) method) or a tracker class (with "
+            "reset, predict and update)")
     return factory
 
 
@@ -144,6 +158,8 @@ def resolve(name: str) -> Factory:
         return _REGISTERED[name]
     if name in _BUILTIN:
         return _load_attribute(_BUILTIN[name])
+    if name in _BUILTIN_TRACKERS:
+        return _load_attribute(_BUILTIN_TRACKERS[name])
     if name in PRESETS:
         return resolve(PRESETS[name][0])
     if ":" in name:
@@ -255,6 +271,23 @@ def make_localizer(name: str, **params: Any) -> SupportsLocalize:
         InvalidInputError: A spec that cannot be imported, or a hyperparameter it does not take
             (naming the closest one it does).
     """
+    localizer = build(name, **params)
+    if not isinstance(localizer, SupportsLocalize):
+        kind = "tracker" if callable(getattr(localizer, "update", None)) else \
+            type(localizer).__name__
+        raise InvalidInputError(
+            f"{name!r} built a {kind}, which has no localize(measurements, beacons) method "
+            "(a tracker runs with azgym.make_tracker, and in any benchmark)")
+    return localizer
+
+
+def build(name: str, **params: Any) -> Any:
+    """Build whatever a name or spec names (a localizer or a tracker), hyperparameters checked.
+
+    Raises:
+        UnknownNameError: No such name ("Did you mean ...?").
+        InvalidInputError: A spec that cannot be imported, or a hyperparameter it does not take.
+    """
     target, inline = parse_spec(name)
     both = sorted(set(inline) & set(params))
     if both:
@@ -264,15 +297,9 @@ def make_localizer(name: str, **params: Any) -> SupportsLocalize:
     factory = resolve(target)
     _check_param_names(target, factory, params)
     try:
-        localizer = factory(**params)
+        return factory(**params)
     except TypeError as exc:
         raise InvalidInputError(f"localizer {target!r}: {exc}") from None
-    if not isinstance(localizer, SupportsLocalize):
-        raise InvalidInputError(
-            f"localizer {target!r} built a {type(localizer).__name__}, which has no "
-            "localize(measurements, beacons) method"
-        )
-    return localizer
 
 
 def _check_param_names(target: str, factory: Factory, params: dict[str, Any]) -> None:

@@ -86,6 +86,21 @@ class ImuSamples:
     heading: FloatArray
 
 
+@dataclass(frozen=True, eq=False)
+class Motion:
+    """What the motion sensors reported between two camera frames: a tracker's ``predict``.
+
+    Attributes:
+        time: The new frame's time [s]; a tracker predicts its state up to it.
+        odometry: Wheel odometry samples since the previous frame, in time order.
+        imu: IMU samples since the previous frame, in time order.
+    """
+
+    time: float
+    odometry: OdometrySamples
+    imu: ImuSamples
+
+
 class Odometer:
     """Produces odometry samples from the true speed and steering, at the model's rate."""
 

@@ -28,6 +28,7 @@ from azgym.sensing.motion import (
     Imu,
     ImuModel,
     ImuSamples,
+    Motion,
     Odometer,
     OdometryModel,
     OdometrySamples,
@@ -67,6 +68,11 @@ class Frame:
     def measurements(self) -> Measurements:
         """The camera's detections."""
         return self.observation.measurements
+
+    @property
+    def motion(self) -> Motion:
+        """The odometry and IMU samples since the previous frame, up to this frame's time."""
+        return Motion(self.time, self.odometry, self.imu)
 
     @property
     def truth(self) -> DetectionTruth:

@@ -1,0 +1,185 @@
+"""The tracker interface: ``reset``, then per frame ``predict`` (motion) and ``update`` (azimuths).
+
+A tracker is a localizer with memory. Per camera frame the runner calls ``predict(motion)`` with
+the odometry and IMU samples since the previous frame, then ``update(measurements, beacons)``,
+which returns the frame's :class:`~azgym.core.Estimate`, with a covariance where the tracker
+has one. ``reset(seed, initial)`` starts a new sequence (a route), optionally from a known pose
+(a forklift leaving its dock).
+
+The public methods validate and keep the bookkeeping; subclasses implement ``_reset``,
+``_predict`` and ``_update``, with keyword-only hyperparameters as localizers have them
+(:mod:`azgym.hyperparameters`). A per-frame localizer is a tracker without memory
+(:class:`FrameByFrame`), so every suite scores both kinds side by side.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from typing import Any, ClassVar
+
+import numpy as np
+
+from azgym.core import BeaconMap, Estimate, Measurements, Pose
+from azgym.errors import InvalidInputError
+from azgym.hyperparameters import Hyperparameters
+from azgym.localize.base import MAX_MEASUREMENTS
+from azgym.localize.registry import SupportsLocalize, build
+from azgym.sensing.motion import Motion
+
+
+class Tracker(Hyperparameters, ABC):
+    """Base class of every tracker (module docstring); subclasses set ``name``."""
+
+    name: ClassVar[str] = ""
+
+    def reset(self, seed: int | None = None, initial: Pose | None = None) -> None:
+        """Start a new sequence: forget the past, seed any randomness, start at ``initial``.
+
+        Args:
+            seed: Seed of the tracker's own random draws (particles, sampled triplets).
+            initial: A known start pose (x, y, heading) [m, m, rad], or None: unknown.
+
+        Raises:
+            InvalidInputError: ``initial`` is not three finite numbers.
+        """
+        self._validate_once()
+        if initial is not None:
+            try:
+                pose = np.asarray(initial, dtype=np.float64)
+            except (TypeError, ValueError):
+                pose = np.full(0, np.nan)
+            if pose.shape != (3,) or not np.isfinite(pose).all():
+                raise InvalidInputError(
+                    f"{type(self).__name__}.reset: initial must be a finite pose (x, y, "
+                    f"heading), got {initial!r}")
+            initial = (float(pose[0]), float(pose[1]), float(pose[2]))
+        object.__setattr__(self, "_clock", -math.inf)
+        self._reset(np.random.default_rng(seed), initial)
+
+    def predict(self, motion: Motion) -> None:
+        """Move the state to ``motion.time`` with the motion samples since the previous frame.
+
+        Raises:
+            InvalidInputError: Before ``reset``; a time not after the previous one; samples out
+                of order, outside (previous time, time], or not finite (an IMU heading may be
+                NaN: no orientation sensor).
+        """
+        clock = self._started("predict")
+        check_motion(motion, clock)
+        object.__setattr__(self, "_clock", float(motion.time))
+        self._predict(motion)
+
+    def update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        """The frame's estimate, after correcting the state with its measurements.
+
+        Raises:
+            InvalidInputError: Before ``reset``, or arguments of the wrong type or size.
+        """
+        self._started("update")
+        if not isinstance(measurements, Measurements):
+            raise InvalidInputError(
+                f"measurements must be an azgym.Measurements, got {type(measurements).__name__}")
+        if not isinstance(beacons, BeaconMap):
+            raise InvalidInputError(
+                f"beacons must be an azgym.BeaconMap, got {type(beacons).__name__}")
+        if len(measurements) > MAX_MEASUREMENTS:
+            raise InvalidInputError(
+                f"measurements has {len(measurements)} detections, more than the "
+                f"{MAX_MEASUREMENTS} a tracker accepts in one frame")
+        self._validate_once()
+        return self._update(measurements, beacons)
+
+    def _started(self, method: str) -> float:
+        """The time of the last prediction; refuses a call before ``reset``."""
+        clock = self.__dict__.get("_clock")
+        if clock is None:
+            raise InvalidInputError(
+                f"{type(self).__name__}.{method} called before reset(): a tracker starts each "
+                "sequence with reset(seed, initial)")
+        return clock
+
+    @abstractmethod
+    def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:
+        """Start a sequence (validated arguments)."""
+
+    @abstractmethod
+    def _predict(self, motion: Motion) -> None:
+        """Move the state with validated motion samples."""
+
+    @abstractmethod
+    def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        """Correct the state with one frame; return its estimate."""
+
+
+def check_motion(motion: Any, after: float) -> None:
+    """Refuse motion data a tracker cannot use: out of order, in the past, or not finite."""
+    if not isinstance(motion, Motion):
+        raise InvalidInputError(f"motion must be an azgym Motion, got {type(motion).__name__}")
+    if not math.isfinite(motion.time) or motion.time <= after:
+        raise InvalidInputError(
+            f"motion.time must be finite and after the previous frame's ({after}), got "
+            f"{motion.time}")
+    streams = {"odometry": (motion.odometry.time, motion.odometry.speed, motion.odometry.steer),
+               "imu": (motion.imu.time, motion.imu.yaw_rate, motion.imu.accel)}
+    for stream, (time, *values) in streams.items():
+        if time.size and (np.any(np.diff(time) <= 0) or time[0] <= after
+                          or time[-1] > motion.time):
+            raise InvalidInputError(
+                f"motion.{stream}.time must increase within ({after}, {motion.time}], got "
+                f"{time.tolist()[:6]}")
+        for column in (time, *values):
+            if not np.isfinite(column).all():
+                raise InvalidInputError(f"motion.{stream} holds a NaN or infinite value")
+
+
+class FrameByFrame(Tracker):
+    """A localizer as a tracker without memory: ``predict`` ignores motion, ``update`` localizes.
+
+    Args:
+        localizer: Anything with ``localize(measurements, beacons)``.
+    """
+
+    name = "frame-by-frame"
+
+    def __init__(self, *, localizer: SupportsLocalize) -> None:
+        self.localizer = localizer
+        self._validate_once()
+
+    def _check_params(self) -> None:
+        if not isinstance(self.localizer, SupportsLocalize):
+            raise InvalidInputError(
+                f"FrameByFrame.localizer must have a localize(measurements, beacons) method, "
+                f"got {type(self.localizer).__name__}")
+
+    def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:
+        """Nothing to remember."""
+
+    def _predict(self, motion: Motion) -> None:
+        """Motion does not matter to a per-frame localizer."""
+
+    def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        return self.localizer.localize(measurements, beacons)
+
+
+def make_tracker(name: str, **params: Any) -> Tracker:
+    """Build a tracker from a name or spec; a localizer's comes wrapped in :class:`FrameByFrame`.
+
+    Example:
+        >>> import azgym
+        >>> tracker = azgym.make_tracker("ransac")
+        >>> type(tracker).__name__, type(tracker.localizer).__name__
+        ('FrameByFrame', 'Ransac')
+
+    Raises:
+        UnknownNameError: No such name.
+        InvalidInputError: A bad spec or hyperparameter, or an object that is neither.
+    """
+    built = build(name, **params)
+    if isinstance(built, SupportsLocalize):
+        return FrameByFrame(localizer=built)
+    if not all(callable(getattr(built, m, None)) for m in ("reset", "predict", "update")):
+        raise InvalidInputError(
+            f"{name!r} built a {type(built).__name__}, which is neither a localizer nor a "
+            "tracker")
+    return built
