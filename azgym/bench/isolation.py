@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 
 from azgym.bench import worker
-from azgym.bench.worker import ANSWER_SIZE, FrameData, MapData
+from azgym.bench.wire import Packed
+from azgym.bench.worker import ANSWER_SIZE, MapData
 
 DEFAULT_TIME_LIMIT = 10.0
 """Seconds a localizer may take on one frame (or to be built) before it is stopped: 60 times the
@@ -110,16 +111,20 @@ class _Worker:
 
 
 class IsolatedRun:
-    """One contender on a run's frames, in up to ``workers`` worker processes at a time."""
+    """One contender on a run's frames, in up to ``workers`` worker processes at a time.
 
-    def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[FrameData],
+    ``batches`` are the (start, stop) ranges of frames each sent in one round trip; the runner
+    keeps a sequence (a route) within one, so a tracker sees it whole and in order.
+    """
+
+    def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[Packed],
                  maps: Mapping[str, MapData], *, workers: int, time_limit: float,
-                 batch_size: int) -> None:
+                 batches: Sequence[tuple[int, int]]) -> None:
         self.spec, self.params, self.frames, self.maps = spec, params, frames, maps
-        self.workers, self.time_limit, self.batch_size = workers, time_limit, batch_size
+        self.workers, self.time_limit = workers, time_limit
         self.answers = Answers.unanswered(len(frames))
-        self.queue = [_Batch(s, min(s + batch_size, len(frames)))
-                      for s in range(0, len(frames), batch_size)]
+        self.queue = [_Batch(start, stop) for start, stop in batches]
+        self.capacity = max((stop - start for start, stop in batches), default=1)
         self.running: list[_Worker] = []
         self.lost_in_a_row = 0
         self.finished = 0
@@ -157,7 +162,7 @@ class IsolatedRun:
         ctx = context()
         mine, theirs = ctx.Pipe()
         progress = ctx.RawArray("q", [worker.IDLE, 0])
-        answers = ctx.RawArray("d", self.batch_size * ANSWER_SIZE)
+        answers = ctx.RawArray("d", self.capacity * ANSWER_SIZE)
         process = ctx.Process(target=worker.serve, daemon=True, name=f"azgym {self.spec}",
                               args=(theirs, progress, answers, self.spec, self.params,
                                     self.maps))
@@ -310,7 +315,7 @@ def build_problem(spec: str, params: dict[str, Any], time_limit: float) -> str:
     The check runs where a benchmark runs the localizer, so a plug-in whose module or
     constructor hangs, crashes or exits is caught without harm to the caller.
     """
-    run = IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit, batch_size=1)
+    run = IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit, batches=[])
     w = run._start()
     try:
         while True:

@@ -24,7 +24,7 @@ from azgym.bench.isolation import DEFAULT_TIME_LIMIT, Answers, IsolatedRun, star
 from azgym.bench.outcome import Outcome
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import Case, Suite
-from azgym.bench.worker import frame_data
+from azgym.bench.wire import pack
 from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError
 from azgym.jit import localizers_compiled
@@ -72,18 +72,36 @@ def run_contenders(
     say = progress or (lambda _line: None)
     if maps is None:
         maps = {name: load_scenario(name).beacons for name in {case.scenario for case in cases}}
-    frames = [frame_data(case.scenario, case.measurements) for case in cases]
+    frames = [pack(case.scenario, case.measurements, case.sequence, case.initial, case.motion)
+              for case in cases]
     sent_maps = {name: (m.ids, m.xyz, m.width) for name, m in maps.items()}
-    batch_size = max(1, math.ceil(len(cases) / (BATCHES_PER_WORKER * workers)))
+    batches = batch_bounds(cases, max(1, math.ceil(len(cases) / (BATCHES_PER_WORKER * workers))))
     outcomes: dict[str, Outcome] = {}
     for contender in contenders:
         begun = time.perf_counter()
         run = IsolatedRun(contender.spec, contender.params, frames, sent_maps, workers=workers,
-                          time_limit=time_limit, batch_size=batch_size)
+                          time_limit=time_limit, batches=batches)
         answers = run.run(_progress_bar(contender.label, len(cases), say))
         outcomes[contender.label] = _score(answers, cases)
         say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
     return outcomes
+
+
+def batch_bounds(cases: Sequence[Case], size: int) -> list[tuple[int, int]]:
+    """(start, stop) ranges of about ``size`` frames, never splitting a sequence.
+
+    A sequence (a route) goes whole into one batch, in order, so a tracker sees all of it in
+    one worker and the figures do not depend on the number of workers.
+    """
+    bounds: list[tuple[int, int]] = []
+    start = 0
+    for k in range(1, len(cases) + 1):
+        ends_unit = k == len(cases) or not cases[k].sequence or \
+            cases[k].sequence != cases[k - 1].sequence
+        if ends_unit and (k - start >= size or k == len(cases) or cases[k].sequence):
+            bounds.append((start, k))
+            start = k
+    return bounds
 
 
 def _progress_bar(label: str, total: int, say: Progress) -> Callable[[int], None]:

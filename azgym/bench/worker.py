@@ -19,14 +19,16 @@ from __future__ import annotations
 
 import signal
 import time
+import zlib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
+from azgym.bench.wire import WorkerFrame, unpack
 from azgym.core import BeaconMap, Measurements, estimated_pose
 from azgym.errors import AzgymError
-from azgym.localize.registry import make_localizer
+from azgym.track.base import FrameByFrame, Tracker, make_tracker
 
 _CLOCK = time.perf_counter_ns
 """The timer, bound when the worker loads, before any localizer's code runs (a plug-in that
@@ -42,43 +44,28 @@ ANSWER_X, ANSWER_Y, ANSWER_HEADING, ANSWER_STATE, ANSWER_MICROS = range(ANSWER_S
 PENDING, POSED, NO_POSE, RAISED = 0.0, 1.0, 2.0, 3.0
 """Answer states: not answered yet; a usable pose; an estimate without one; an exception."""
 
-FrameData = tuple[str, bytes, bytes, bytes | None, tuple[int, ...]]
-"""One frame as sent: scenario name, ids (int64 bytes), azimuths (float64 bytes), quality
-(float64 bytes or None) and quality's shape."""
-
 MapData = tuple[np.ndarray, np.ndarray, np.ndarray]
 """One beacon map as sent: ids, xyz, width."""
 
 
-def frame_data(scenario: str, measurements: Measurements) -> FrameData:
-    """Pack one frame's measurements for a worker (nothing but the measurements travels)."""
-    quality = measurements.quality
-    return (scenario, np.ascontiguousarray(measurements.ids, dtype=np.int64).tobytes(),
-            np.ascontiguousarray(measurements.azimuth, dtype=np.float64).tobytes(),
-            None if quality is None else np.ascontiguousarray(quality, np.float64).tobytes(),
-            () if quality is None else tuple(quality.shape))
-
-
-def unpack_frame(data: FrameData) -> tuple[str, Measurements]:
-    """The measurements of a packed frame, as read-only views of the received bytes."""
-    scenario, ids, azimuth, quality, shape = data
-    quality_array = None if quality is None else np.frombuffer(quality, np.float64).reshape(shape)
-    return scenario, Measurements._from_frozen(np.frombuffer(ids, np.int64),
-                                               np.frombuffer(azimuth, np.float64), quality_array)
-
-
 def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, Any],
           maps: Mapping[str, MapData]) -> None:
-    """The worker's main loop: build the localizer, then localize batches until told to stop.
+    """The worker's main loop: build the contender, then answer batches until told to stop.
+
+    A localizer runs as a tracker without memory (:class:`~azgym.track.base.FrameByFrame`).
+    The tracker is reset at each new sequence (a frame on its own is a sequence of one), with
+    the sequence's known start pose on its first frame; a worker that takes over in the middle
+    of a sequence (after a lost frame) resets it without one.
 
     Messages to the parent: ``("ready",)`` once built, or ``("unbuildable", why)``; then per
     batch ``("error", k, text)`` for each frame k that raised, and ``("done",)`` at its end.
 
     Args:
-        conn: The pipe to the parent; it sends lists of :data:`FrameData`, or None to stop.
+        conn: The pipe to the parent; it sends lists of packed frames
+            (:mod:`azgym.bench.wire`), or None to stop.
         progress: Shared int64 pair (phase, start time of the current call).
         answers: Shared float64 array, ``ANSWER_SIZE`` slots per frame of a batch.
-        spec: The localizer's spec.
+        spec: The localizer's or tracker's spec.
         params: Its hyperparameters.
         maps: Each scenario's beacon map.
     """
@@ -86,36 +73,46 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
     beacon_maps = {name: BeaconMap(*arrays) for name, arrays in maps.items()}
     _mark(progress, BUILDING)
     try:
-        localizer = make_localizer(spec, **params)
+        tracker = make_tracker(spec, **params)
     except BaseException as exc:  # noqa: BLE001 - reported, the parent scores every frame
         why = str(exc) if isinstance(exc, AzgymError) else _describe(exc)
         conn.send(("unbuildable", why))
         return
     _mark(progress, IDLE)
     conn.send(("ready",))
-    warm = False
+    warm = not isinstance(tracker, FrameByFrame)  # a localizer's first call loads its code
+    sequence = None
     while (batch := _receive(conn)) is not None:
-        frames = [unpack_frame(data) for data in batch]
-        if not warm and frames:  # the first call loads compiled code: run it once untimed
+        frames = [unpack(packed) for packed in batch]
+        if not warm and frames:  # run it once untimed
             _mark(progress, 0)
-            _call_untimed(localizer, frames[0][1], beacon_maps[frames[0][0]])
+            first = frames[0]
+            _call_untimed(tracker.localizer, first.measurements, beacon_maps[first.scenario])
             warm = True
-        _localize_batch(conn, progress, answers, localizer, frames, beacon_maps)
+        sequence = _answer_batch(conn, progress, answers, tracker, frames, beacon_maps, sequence)
         _mark(progress, IDLE)
         conn.send(("done",))
 
 
-def _localize_batch(conn: Any, progress: Any, answers: Any, localizer: Any,
-                    frames: Sequence[tuple[str, Measurements]],
-                    maps: Mapping[str, BeaconMap]) -> None:
-    """Localize each frame, writing its answer (and sending its error) as soon as it is known."""
-    for k, (scenario, measurements) in enumerate(frames):
+def _answer_batch(conn: Any, progress: Any, answers: Any, tracker: Tracker,
+                  frames: Sequence[WorkerFrame], maps: Mapping[str, BeaconMap],
+                  sequence: str | None) -> str | None:
+    """Answer each frame, writing its answer (and sending its error) as soon as it is known.
+
+    Returns the sequence the tracker is in at the end (the next batch may continue it).
+    """
+    for k, frame in enumerate(frames):
         base = k * ANSWER_SIZE
         answers[base + ANSWER_STATE] = PENDING
         _mark(progress, k)
         try:
+            if not frame.sequence or frame.sequence != sequence:
+                sequence = frame.sequence
+                tracker.reset(zlib.crc32(sequence.encode()), frame.initial)
             start = _CLOCK()
-            estimate = localizer.localize(measurements, maps[scenario])
+            if frame.motion is not None:
+                tracker.predict(frame.motion)
+            estimate = tracker.update(frame.measurements, maps[frame.scenario])
             micros = (_CLOCK() - start) / 1000.0
             pose = estimated_pose(estimate)
         except BaseException as exc:  # noqa: BLE001 - SystemExit too: scored, never fatal
@@ -127,6 +124,7 @@ def _localize_batch(conn: Any, progress: Any, answers: Any, localizer: Any,
             answers[base + ANSWER_X], answers[base + ANSWER_Y] = pose[0], pose[1]
             answers[base + ANSWER_HEADING] = pose[2]
         answers[base + ANSWER_STATE] = NO_POSE if pose is None else POSED
+    return sequence
 
 
 def _call_untimed(localizer: Any, measurements: Measurements, beacons: BeaconMap) -> None:

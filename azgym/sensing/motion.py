@@ -101,6 +101,21 @@ class Motion:
     imu: ImuSamples
 
 
+def joined(motions: list[Motion]) -> Motion:
+    """The motion over several frames in a row, as one: every sample, up to the last one's time.
+
+    For a suite that scores every n-th frame: the tracker of a scored frame gets what the motion
+    sensors reported since the previous scored frame.
+    """
+    if len(motions) == 1:
+        return motions[0]
+    odometry = OdometrySamples(*(np.concatenate([getattr(m.odometry, key) for m in motions])
+                                 for key in ("time", "speed", "steer")))
+    imu = ImuSamples(*(np.concatenate([getattr(m.imu, key) for m in motions])
+                       for key in ("time", "yaw_rate", "accel", "heading")))
+    return Motion(motions[-1].time, odometry, imu)
+
+
 class Odometer:
     """Produces odometry samples from the true speed and steering, at the model's rate."""
 

@@ -8,13 +8,19 @@ results can be broken down by cause.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import dataclasses
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from azgym.core import Measurements, Pose
 from azgym.sensing.labels import DIRECT, DISTRACTOR, GHOST, MISIDENTIFIED, MOVED, PARTIAL
+from azgym.sensing.motion import Motion, joined
+
+if TYPE_CHECKING:
+    from azgym.world.drive import Frame
 
 CAUSES = ("clean", "partial", "moved", "ghost", "misidentified", "outlier")
 """Case causes, from harmless to harmful; a case's cause is its worst detection's."""
@@ -33,6 +39,11 @@ class Case:
         pose: The true camera pose (x, y, heading) [m, m, rad].
         cause: The worst fault among the detections (one of ``CAUSES``).
         group: A sub-set name for reports (e.g. "K=3", "warehouse-small, heavy").
+        sequence: The sequence (a driven route) the frame belongs to, in order; "" for a frame
+            on its own. A tracker is reset at the start of each sequence.
+        motion: The odometry and IMU samples since the sequence's previous frame, or None.
+        initial: On a sequence's first frame, its known start pose (the dock the forklift
+            leaves), handed to the tracker's ``reset``; None elsewhere.
     """
 
     scenario: str
@@ -40,6 +51,9 @@ class Case:
     pose: Pose
     cause: str
     group: str
+    sequence: str = ""
+    motion: Motion | None = None
+    initial: Pose | None = None
 
 
 @dataclass(frozen=True)
@@ -65,3 +79,36 @@ def frame_cause(labels: np.ndarray) -> str:
     """The worst cause among a frame's detection labels (:mod:`azgym.sensing.labels`)."""
     worst = max((_LABEL_CAUSE[int(label)] for label in labels), default=0)
     return CAUSES[worst]
+
+
+def route_cases(scenario: str, group: str, frames: Iterable[Frame]) -> list[Case]:
+    """Every frame of a driven route, as one sequence for trackers, from its start pose."""
+    cases = [Case(scenario, frame.measurements, frame.pose, frame_cause(frame.truth.label),
+                  group, sequence=group, motion=frame.motion) for frame in frames]
+    if cases:
+        cases[0] = dataclasses.replace(cases[0], initial=cases[0].pose)
+    return cases
+
+
+def keep_every(cases: list[Case], every: int) -> list[Case]:
+    """Cases 0, every, 2·every, …; a kept frame gets the motion of the frames dropped before it.
+
+    Within a sequence, a kept frame's motion joins the samples since the previous kept frame
+    (:func:`azgym.sensing.motion.joined`), and a sequence's first kept frame carries its pose
+    as the known start.
+    """
+    kept: list[Case] = []
+    pending: list[Motion] = []
+    for k, case in enumerate(cases):
+        if k and case.sequence != cases[k - 1].sequence:
+            pending = []
+        if case.motion is not None:
+            pending.append(case.motion)
+        if k % every:
+            continue
+        first = not kept or kept[-1].sequence != case.sequence or not case.sequence
+        kept.append(dataclasses.replace(
+            case, motion=joined(pending) if pending else None,
+            initial=case.pose if first and case.sequence else case.initial))
+        pending = []
+    return kept

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from azgym.bench.suites.base import Case, frame_cause
+from azgym.bench.suites.base import Case, keep_every, route_cases
 from azgym.bench.suites.warehouse import SCENARIOS
 from azgym.sensing.image.sensor import ImageSensor
 from azgym.site import load_scenario
@@ -21,8 +21,6 @@ def routes(seed: int, quick: bool) -> list[Case]:
         chosen = scenario.routes[:1] if quick else scenario.routes
         for k, route in enumerate(chosen):
             sensor = ImageSensor(scenario, ids="blink")
-            for frame in simulate(scenario, route, [seed, k], sensor=sensor):
-                if frame.index % every == 0:
-                    cases.append(Case(name, frame.measurements, frame.pose,
-                                      frame_cause(frame.truth.label), f"{name}/{route.name}"))
+            frames = simulate(scenario, route, [seed, k], sensor=sensor)
+            cases += keep_every(route_cases(name, f"{name}/{route.name}", frames), every)
     return cases

@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from azgym.bench.suites.base import Case, frame_cause
+from azgym.bench.suites.base import Case, frame_cause, keep_every, route_cases
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.site import Scenario, load_scenario
 from azgym.site.elements import Faults
@@ -62,10 +62,9 @@ def routes(seed: int, quick: bool) -> list[Case]:
         scenario = load_scenario(name)
         chosen = scenario.routes[:1] if quick else scenario.routes
         for k, route in enumerate(chosen):
-            for frame in simulate(scenario, route, seed=seed + k):
-                cases.append(Case(name, frame.measurements, frame.pose,
-                                  frame_cause(frame.truth.label), f"{name}/{route.name}"))
-    return cases[::4] if quick else cases
+            frames = simulate(scenario, route, seed=seed + k)
+            cases += route_cases(name, f"{name}/{route.name}", frames)
+    return keep_every(cases, 4) if quick else cases
 
 
 def stress(seed: int, quick: bool) -> list[Case]:

@@ -1,0 +1,70 @@
+"""Trackers in the runner: whole sequences in order, with their motion, whatever the workers."""
+
+from __future__ import annotations
+
+import textwrap
+
+import pytest
+
+from azgym.bench.contenders import Contender
+from azgym.bench.runner import batch_bounds, run_contenders
+from azgym.bench.suites import get_suite
+from azgym.bench.suites.base import Case
+
+CHECKER = '''
+    import azgym
+
+
+    class Checker(azgym.Tracker):
+        """Raises unless it is reset with a start pose once per route and then fed every
+        odometry sample of the route in order, with no gap; answers the origin."""
+
+        name = "checker"
+
+        def __init__(self):
+            self._validate_once()
+
+        def _reset(self, rng, initial):
+            if initial is None:
+                raise AssertionError("reset without the route's start pose")
+            self.last = None
+
+        def _predict(self, motion):
+            times = motion.odometry.time
+            if times.size and self.last is not None and times[0] - self.last > 0.021:
+                raise AssertionError(f"odometry gap from {self.last} to {times[0]}")
+            if times.size:
+                self.last = times[-1]
+
+        def _update(self, measurements, beacons):
+            return azgym.Estimate(0.0, 0.0, 0.0, inliers=measurements.ids >= 0)
+'''
+
+
+@pytest.fixture(scope="module")
+def checker(tmp_path_factory):
+    path = tmp_path_factory.mktemp("tracker") / "checker.py"
+    path.write_text(textwrap.dedent(CHECKER))
+    return Contender("checker", f"{path}:Checker")
+
+
+def case(sequence):
+    return Case("s", None, (0.0, 0.0, 0.0), "clean", "g", sequence=sequence)
+
+
+@pytest.mark.parametrize(("sequences", "size", "expected"), [
+    (["", "", "", ""], 2, [(0, 2), (2, 4)]),
+    (["a", "a", "a", "b", "b"], 1, [(0, 3), (3, 5)]),
+    (["", "a", "a", "", "", ""], 2, [(0, 1), (1, 3), (3, 5), (5, 6)]),
+    (["a", "a", "a", "a"], 2, [(0, 4)]),
+])
+def test_batches_never_split_a_sequence(sequences, size, expected):
+    assert batch_bounds([case(s) for s in sequences], size) == expected
+
+
+def test_a_tracker_sees_each_route_whole_and_in_order_whatever_the_workers(checker):
+    cases = get_suite("warehouse-routes").build(11, True)
+    assert len({case.sequence for case in cases}) == 2  # quick: one route in each warehouse
+    for workers in (1, 2):
+        outcome = run_contenders(cases, [checker], workers=workers)["checker"]
+        assert outcome.ok.all(), [e for e in outcome.errors if e][:3]
