@@ -62,7 +62,7 @@ DEFAULT_SUITE = "warehouse-static"
 def _bench(args: argparse.Namespace) -> int:
     from azgym.bench.runner import default_workers, run_benchmark
     from azgym.bench.suites import get_suite
-    from azgym.bench.table import ranked_table
+    from azgym.bench.table import ranked_table, tracking_table
     from azgym.files import prepare_folder
 
     # With no suite named, the default suite runs in its quick size: the README's main job.
@@ -77,6 +77,8 @@ def _bench(args: argparse.Namespace) -> int:
     written = result.write(Path(args.out))
     print()
     print(ranked_table(result.summary))
+    if tracks := tracking_table(result.summary):
+        print(f"\n{tracks}")
     print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
     return 0
 

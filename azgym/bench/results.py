@@ -27,6 +27,7 @@ from azgym.bench.metrics import confidence_intervals
 from azgym.bench.outcome import Outcome
 from azgym.bench.plugin_files import plugin_record
 from azgym.bench.suites import CAUSES, Case, Suite
+from azgym.bench.tracking import tracking_metrics
 from azgym.files import prepare_folder, write_file
 
 FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
@@ -59,6 +60,7 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
             "spec": contender.spec, "params": contender.params,
             **plugin_record(contender.spec),
             **contender_metrics(outcome, causes, groups, reference_us),
+            "tracking": tracking_metrics(cases, outcome),
             "crashes": sum(1 for e in outcome.errors if e),
             "first_error": next((e for e in outcome.errors if e), ""),
         }

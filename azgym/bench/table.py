@@ -44,3 +44,25 @@ def ranked_table(summary: dict[str, Any]) -> str:
         if row["crashes"]:
             lines.append(f"   ! {row['crashes']} frames raised: {row['first_error']}")
     return "\n".join(lines)
+
+
+def tracking_table(summary: dict[str, Any]) -> str:
+    """The track figures of a run with sequences (:mod:`azgym.bench.tracking`), or ""."""
+    rows = [(label, row["tracking"]) for label, row in summary["localizers"].items()
+            if row.get("tracking")]
+    if not rows:
+        return ""
+    width = max([len("localizer"), *(len(label) for label, _ in rows)])
+    lines = ["tracks: availability after the first fix; worst error and frames over 1 m outside "
+             "2 s after a kidnapping; seconds to a fix within 10 cm after each event",
+             f"   {'localizer':<{width}} {'avail':>6} {'max cm':>9} {'>1 m':>5}  recovery s"]
+    for label, track in sorted(rows, key=lambda item: rank_key(summary["localizers"][item[0]][
+            "all"], item[0])):
+        recoveries = " ".join(
+            f"{event['event']} " + ("never" if event["recovery_s"] is None
+                                    else f"{event['recovery_s']:.1f}")
+            for event in track["events"]) or "-"
+        lines.append(f"   {label:<{width}} {100 * track['availability_after_first_fix']:5.1f}% "
+                     f"{track['max_cm_outside_kidnaps']:9.1f} "
+                     f"{track['frames_over_1m_outside_kidnaps']:5d}  {recoveries}")
+    return "\n".join(lines)

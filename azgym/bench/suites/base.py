@@ -9,6 +9,7 @@ results can be broken down by cause.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -44,6 +45,9 @@ class Case:
         motion: The odometry and IMU samples since the sequence's previous frame, or None.
         initial: On a sequence's first frame, its known start pose (the dock the forklift
             leaves), handed to the tracker's ``reset``; None elsewhere.
+        time: The frame's time in its sequence [s] (NaN for a frame on its own).
+        event: On the first frame after an event of the sequence ("kidnap": the forklift was
+            carried elsewhere without motion data; "outage": no frames for a while), its name.
     """
 
     scenario: str
@@ -54,6 +58,8 @@ class Case:
     sequence: str = ""
     motion: Motion | None = None
     initial: Pose | None = None
+    time: float = math.nan
+    event: str = ""
 
 
 @dataclass(frozen=True)
@@ -84,7 +90,8 @@ def frame_cause(labels: np.ndarray) -> str:
 def route_cases(scenario: str, group: str, frames: Iterable[Frame]) -> list[Case]:
     """Every frame of a driven route, as one sequence for trackers, from its start pose."""
     cases = [Case(scenario, frame.measurements, frame.pose, frame_cause(frame.truth.label),
-                  group, sequence=group, motion=frame.motion) for frame in frames]
+                  group, sequence=group, motion=frame.motion, time=frame.time)
+             for frame in frames]
     if cases:
         cases[0] = dataclasses.replace(cases[0], initial=cases[0].pose)
     return cases

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from azgym.bench.suites import image, paper, warehouse
+from azgym.bench.suites import events, image, paper, warehouse
 from azgym.bench.suites.base import Suite
 from azgym.errors import unknown_name
 
@@ -16,6 +16,8 @@ SUITES: dict[str, Suite] = {suite.name: suite for suite in (
     Suite("image-routes", 3, "every route of warehouse-small and warehouse-paper through the "
           "fisheye image path: blobs detected from pixels, ids decoded from blinking (30 Hz "
           "camera, every third frame scored)", 17, image.routes),
+    Suite("route-events", 1, "the first route of warehouse-small and warehouse-paper at 10 Hz "
+          "with a 3 s outage and a 10 s kidnapping cut in (for trackers)", 19, events.build),
     Suite("stress", 1, "warehouse-large (64 beacons) with heavy faults: 5 % misreads, bright "
           "mirrors", 13, warehouse.stress),
 )}
