@@ -13,8 +13,7 @@ accepted when ν_i²/S_i is below the gate (chi-square, one degree of freedom). 
 a misread id and a moved beacon sit far from where the prediction puts their beacon, so they
 fail it once the track is tight. A beacon is measured at most once: of two detections with one
 id (a ghost beside the real beacon) only the nearer to the prediction may pass. The accepted
-azimuths then correct the state jointly, in information form, whose cost does not grow with
-their number beyond the sums: P⁺ = (P⁻¹ + Hᵀ R⁻¹ H)⁻¹, x⁺ = x + P⁺ Hᵀ R⁻¹ ν.
+azimuths then correct the state jointly: K = P Hᵀ (H P Hᵀ + R)⁻¹, x⁺ = x + K ν, P⁺ = P − K H P.
 """
 
 from __future__ import annotations
@@ -44,14 +43,15 @@ def innovations(state: FloatArray, cov: FloatArray, floats: FloatArray, delta_d:
     h[:, IPHI] = -1.0
     coverage = np.arctan2(0.5 * floats[ROW_WIDTH], np.sqrt(r2))
     r = (delta_d * delta_d + coverage * coverage) / 3.0 + extra_sigma * extra_sigma
-    s = np.einsum("ki,ij,kj->k", h, cov, h) + r
+    s = ((h @ cov) * h).sum(axis=1) + r
     return nu, h, r, nu * nu / s
 
 
 def gate(d2: FloatArray, beacon_index: IntArray, threshold: float) -> BoolArray:
     """Which measurements pass: below the threshold, and the nearest of any that share a beacon."""
     passed = d2 < threshold
-    if passed.sum() > 1:
+    taken = beacon_index[passed].tolist()
+    if len(set(taken)) < len(taken):
         order = np.argsort(np.where(passed, d2, np.inf), kind="stable")
         taken = beacon_index[order[:int(passed.sum())]]
         _, first = np.unique(taken, return_index=True)
@@ -63,10 +63,12 @@ def gate(d2: FloatArray, beacon_index: IntArray, threshold: float) -> BoolArray:
 
 def correct(state: FloatArray, cov: FloatArray, nu: FloatArray, h: FloatArray,
             r: FloatArray) -> None:
-    """The joint update on the accepted rows, in place (information form, module docstring)."""
-    weighted = h.T / r
-    information = np.linalg.inv(cov) + weighted @ h
-    posterior = np.linalg.inv(information)
-    state += posterior @ (weighted @ nu)
+    """The joint update on the accepted rows, in place (module docstring)."""
+    ph = cov @ h.T
+    innovation_cov = h @ ph
+    innovation_cov[np.diag_indices_from(innovation_cov)] += r
+    gain = ph @ np.linalg.inv(innovation_cov)
+    state += gain @ nu
+    posterior = cov - gain @ ph.T
     state[IPHI] = np.remainder(state[IPHI] + np.pi, 2.0 * np.pi) - np.pi
     cov[:] = 0.5 * (posterior + posterior.T)
