@@ -58,7 +58,10 @@ _BUILTIN: dict[str, str] = {
     "lsq": "azgym.localize.lsq:LeastSquares",
     "loo": "azgym.localize.loo:LeaveOneOut",
 }
-_BUILTIN_TRACKERS: dict[str, str] = {}
+_BUILTIN_TRACKERS: dict[str, str] = {
+    "gated-ekf": "azgym.track.gated_ekf:GatedEkf",
+    "robust": "azgym.track.robust:Robust",
+}
 """Trackers (:mod:`azgym.track`) by name; they share the specs, presets and plug-in rules."""
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "ransac-weighted": ("ransac", {"weighted": True}),

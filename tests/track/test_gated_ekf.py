@@ -1,0 +1,162 @@
+"""gated-ekf: the motion model and the gated azimuth update by hand, gating, following a route."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers import beacon_map, ideal_frame
+
+import azgym
+from azgym import InvalidInputError, Measurements
+from azgym.core import pose_error
+from azgym.localize.base import Problem
+from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
+from azgym.track.azimuth_update import correct, gate, innovations
+from azgym.track.unicycle import MotionNoise, MotionSteps, predict
+from azgym.world.drive import simulate
+
+SILENT = MotionNoise(speed_noise=0.0, speed_scale=0.0, scale_walk=0.0, gyro_noise=0.0,
+                     bias_walk=0.0, position_walk=0.0, heading_walk=0.0)
+BEACONS = beacon_map([(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0), (5.0, 12.0)])
+
+
+def steady(time, speed, yaw_rate, start=0.0, rate=50.0):
+    """Motion samples at ``rate`` over (start, time], constant speed and yaw rate."""
+    times = np.arange(start + 1.0 / rate, time + 1e-9, 1.0 / rate)
+    n = times.size
+    return Motion(time, OdometrySamples(times, np.full(n, speed), np.zeros(n)),
+                  ImuSamples(times, np.full(n, yaw_rate), np.zeros((n, 2)), np.full(n, math.nan)))
+
+
+def test_a_prediction_by_hand():
+    # 1 m/s for 0.1 s at heading 0, no turn, camera 0.5 m behind the steering-free axle.
+    state = np.zeros(5)
+    cov = np.diag([1e-4, 1e-4, 1e-4, 1e-6, 1e-4])
+    predict(state, cov, (1.0, 0.0, 0.1, 0.1), -0.5, SILENT)
+    np.testing.assert_allclose(state, [0.1, 0.0, 0.0, 0.0, 0.0], atol=1e-15)
+    # F: ∂y/∂φ = 0.1, ∂x/∂k = 0.1, ∂φ/∂b = −0.1, ∂y/∂b = −½·0.1·0.1 − (−0.5)·0.1 = 0.045.
+    assert cov[0, 0] == pytest.approx(1e-4 + 0.1**2 * 1e-4)
+    assert cov[1, 1] == pytest.approx(1e-4 + 0.1**2 * 1e-4 + 0.045**2 * 1e-6)
+    assert cov[2, 2] == pytest.approx(1e-4 + 0.1**2 * 1e-6)
+    assert cov[1, 2] == pytest.approx(0.1 * 1e-4 + 0.045 * -0.1 * 1e-6)
+
+
+def test_the_samples_hold_until_the_next_and_a_silent_gap_is_unobserved():
+    steps = MotionSteps(0.02)
+    steps.step(steady(0.1, 2.0, 0.0))
+    speed, rate, observed, dt = steps.step(steady(0.2, 1.0, 0.5, start=0.1))
+    # (0.1, 0.12] still runs on the last sample of the previous frame (2 m/s, no turn).
+    assert (speed, rate) == (pytest.approx(0.02 * 2.0 / 0.1 + 0.08 * 1.0 / 0.1),
+                             pytest.approx(0.08 * 0.5 / 0.1))
+    assert (observed, dt) == (pytest.approx(0.1), pytest.approx(0.1))
+    _, _, observed, dt = steps.step(steady(10.0, 1.0, 0.0, start=9.9))  # 9.7 s without samples
+    # Observed: the old sample's 1.5 periods (0.03 s), then 9.92 … 10.0 up to the frame (0.08 s).
+    assert dt == pytest.approx(9.8) and observed == pytest.approx(0.11)
+
+
+def test_an_update_by_hand():
+    beacons = beacon_map([(1.0, 0.0)], width=0.0)
+    problem = Problem.from_frame(Measurements([1], [0.01]), beacons)
+    state, cov = np.zeros(5), np.diag([1e-2, 1e-2, 1e-4, 1e-6, 1e-4])
+    nu, h, r, d2 = innovations(state, cov, problem.floats, 0.003, 0.0)
+    # α̂ = atan2(0, 1) − 0 = 0, H = [dy/r², −dx/r², −1, 0, 0] = [0, −1, −1, 0, 0], R = Δ²/3.
+    np.testing.assert_allclose(h, [[0.0, -1.0, -1.0, 0.0, 0.0]])
+    s = 1e-2 + 1e-4 + 0.003**2 / 3
+    assert (nu[0], r[0], d2[0]) == (pytest.approx(0.01), pytest.approx(0.003**2 / 3),
+                                    pytest.approx(0.01**2 / s))
+    correct(state, cov, nu, h, r)
+    assert state[1] == pytest.approx(-1e-2 / s * 0.01) and state[2] == pytest.approx(-1e-4 / s
+                                                                                    * 0.01)
+    assert cov[1, 1] == pytest.approx(1e-2 - 1e-4 / s)
+
+
+def test_of_two_detections_of_one_beacon_only_the_nearer_passes():
+    passed = gate(np.array([0.5, 3.0, 0.2, 50.0]), np.array([7, 7, 8, 9]), 10.83)
+    assert passed.tolist() == [True, False, True, False]
+
+
+@pytest.mark.parametrize("name", ["gated-ekf", "robust"])
+def test_the_gate_rejects_a_ghost_and_a_misread_id(name):
+    pose = (4.0, 3.0, 0.3)
+    clean = ideal_frame(*pose, BEACONS)
+    # A mirror ghost of beacon 2 (its azimuth reflected in a wall) and beacon 4's azimuth read
+    # as id 5.
+    ids = np.r_[clean.ids, 2, 5]
+    azimuth = np.r_[clean.azimuth, azgym.wrap_angle(clean.azimuth[1] + 0.4), clean.azimuth[3]]
+    tracker = azgym.make_tracker(name)
+    tracker.reset(initial=pose)
+    estimate = tracker.update(Measurements(ids, azimuth), BEACONS)
+    assert estimate.ok and estimate.inliers.tolist() == [True] * 5 + [False, False]
+    assert pose_error(estimate.pose, pose)[0] < 1e-3
+
+
+def test_uninitialized_it_answers_no_pose_with_a_reason_then_starts_from_a_fix():
+    tracker = azgym.make_tracker("gated-ekf")
+    tracker.reset(seed=0)
+    few = tracker.update(Measurements([1, 2], [0.1, 0.2]), BEACONS)
+    assert not few.ok and few.reason.startswith("not initialized: ransac: fewer than 3")
+    estimate = tracker.update(ideal_frame(4.0, 3.0, 0.3, BEACONS), BEACONS)
+    assert estimate.ok and pose_error(estimate.pose, (4.0, 3.0, 0.3))[0] < 1e-3
+    assert estimate.covariance.shape == (3, 3) and estimate.diagnostics["initialized"]
+    after = tracker.update(Measurements([], []), BEACONS)  # no measurement: the prediction
+    assert after.ok and after.pose == pytest.approx(estimate.pose)
+
+
+def test_reset_forgets_the_track_and_starts_from_the_initial_pose():
+    tracker = azgym.make_tracker("gated-ekf")
+    tracker.reset(initial=(1.0, 2.0, 0.5))
+    assert tracker.update(Measurements([], []), BEACONS).pose == pytest.approx((1.0, 2.0, 0.5))
+    tracker.reset()
+    assert not tracker.update(Measurements([], []), BEACONS).ok
+
+
+@pytest.mark.parametrize(("params", "message"), [
+    ({"gate_probability": 1.0}, r"GatedEkf.gate_probability must be in \(0.0, 1.0\)"),
+    ({"delta_alpha_d": -0.1}, r"GatedEkf.delta_alpha_d must be in"),
+    ({"extra_sigma": "wide"}, r"GatedEkf.extra_sigma must be a number"),
+    ({"position_walk": math.nan}, r"GatedEkf.position_walk must be a number"),
+    ({"initializer": "mex"}, r"GatedEkf.initializer must be one of \('ransac', 'loo'\)"),
+    ({"min_init_inliers": 2}, r"GatedEkf.min_init_inliers must be in \[3, inf\]"),
+    ({"delta_alpha_d": 0.0, "extra_sigma": 0.0}, "gives the azimuths no noise"),
+])
+def test_bad_hyperparameters_are_refused(params, message):
+    with pytest.raises(InvalidInputError, match=message):
+        azgym.make_tracker("gated-ekf", **params)
+
+
+def test_a_hyperparameter_set_later_is_checked_before_the_next_frame():
+    tracker = azgym.make_tracker("gated-ekf:initializer=loo")
+    tracker.gate_probability = 0.0
+    with pytest.raises(InvalidInputError, match="gate_probability"):
+        tracker.reset()
+
+
+def follow(tracker, scenario, frames):
+    """Errors [m] of every answered frame after the first answer, and the unanswered count."""
+    errors, missed = [], 0
+    for frame in frames:
+        tracker.predict(frame.motion)
+        estimate = tracker.update(frame.measurements, scenario.beacons)
+        if estimate.ok:
+            errors.append(pose_error(estimate.pose, frame.pose)[0])
+        elif errors:
+            missed += 1
+    return np.array(errors), missed
+
+
+@pytest.fixture(scope="module")
+def cross_aisle():
+    scenario = azgym.load_scenario("warehouse-small")
+    return scenario, list(simulate(scenario, "cross-aisle", seed=5))
+
+
+@pytest.mark.parametrize("name", ["gated-ekf", "robust"])
+def test_it_follows_a_route_within_a_few_centimetres(name, cross_aisle):
+    scenario, frames = cross_aisle
+    tracker = azgym.make_tracker(name)
+    tracker.reset(seed=0)
+    errors, missed = follow(tracker, scenario, frames)
+    assert missed == 0 and errors.size >= len(frames) - 2
+    assert np.percentile(errors, 95) < 0.05 and errors.max() < 0.15
