@@ -40,6 +40,7 @@ _LAZY = {
     "check_localizer": "azgym.localize.checks",
     "evaluate": "azgym.envs.evaluate",
     "list_localizers": "azgym.localize.registry",
+    "list_trackers": "azgym.localize.registry",
     "list_scenarios": "azgym.site.load",
     "load_scenario": "azgym.site.load",
     "make_localizer": "azgym.localize.registry",
@@ -52,7 +53,12 @@ if TYPE_CHECKING:
     from azgym.envs.registration import ENV_IDS
     from azgym.localize.base import Localizer
     from azgym.localize.checks import LocalizerCheckError, check_localizer
-    from azgym.localize.registry import list_localizers, make_localizer, register_localizer
+    from azgym.localize.registry import (
+        list_localizers,
+        list_trackers,
+        make_localizer,
+        register_localizer,
+    )
     from azgym.sensing.motion import Motion
     from azgym.site.error_model import ErrorModel
     from azgym.site.load import list_scenarios, load_scenario
@@ -96,6 +102,7 @@ __all__ = [
     "check_localizer",
     "evaluate",
     "list_localizers",
+    "list_trackers",
     "list_scenarios",
     "load_scenario",
     "make_localizer",

@@ -200,7 +200,7 @@ def _scenarios(_args: argparse.Namespace) -> int:
 
 
 def _localizers(_args: argparse.Namespace) -> int:
-    from azgym.localize.registry import PRESETS, list_localizers, make_localizer
+    from azgym.localize.registry import PRESETS, build, list_localizers, list_trackers
 
     for name in list_localizers():
         if name in PRESETS:
@@ -208,7 +208,11 @@ def _localizers(_args: argparse.Namespace) -> int:
             pairs = ",".join(f"{key}={json.dumps(value)}" for key, value in params.items())
             print(f"{name:<16} {target} with {pairs}")
             continue
-        doc = (type(make_localizer(name)).__doc__ or "").strip().splitlines()
+        doc = (type(build(name)).__doc__ or "").strip().splitlines()
+        print(f"{name:<16} {doc[0] if doc else ''}")
+    print("\ntrackers (any localizer above runs as one too):")
+    for name in list_trackers():
+        doc = (type(build(name)).__doc__ or "").strip().splitlines()
         print(f"{name:<16} {doc[0] if doc else ''}")
     return 0
 

@@ -86,18 +86,23 @@ def register_localizer(name: str, factory: Factory) -> None:
     _REGISTERED[name] = factory
 
 
-def _entry_points() -> dict[str, Any]:
-    return {ep.name: ep for group in (ENTRY_POINT_GROUP, TRACKER_ENTRY_POINT_GROUP)
-            for ep in entry_points(group=group)}
+def _entry_points(*groups: str) -> dict[str, Any]:
+    groups = groups or (ENTRY_POINT_GROUP, TRACKER_ENTRY_POINT_GROUP)
+    return {ep.name: ep for group in groups for ep in entry_points(group=group)}
 
 
 def list_localizers() -> list[str]:
-    """Every registered name: built-ins, presets, registered and entry-point ones.
+    """Every localizer name: built-ins, presets, registered and entry-point localizers."""
+    return sorted(set(_BUILTIN) | set(PRESETS) | set(_REGISTERED)
+                  | set(_entry_points(ENTRY_POINT_GROUP)))
 
-    ``make_localizer`` builds the localizers among them, ``make_tracker`` every one.
+
+def list_trackers() -> list[str]:
+    """Every tracker name: built-ins and ``azgym.trackers`` entry points.
+
+    Any localizer runs as a tracker too (:func:`azgym.track.base.make_tracker`).
     """
-    return sorted(set(_BUILTIN) | set(_BUILTIN_TRACKERS) | set(PRESETS) | set(_REGISTERED)
-                  | set(_entry_points()))
+    return sorted(set(_BUILTIN_TRACKERS) | set(_entry_points(TRACKER_ENTRY_POINT_GROUP)))
 
 
 def _load_attribute(spec: str) -> Factory:
@@ -167,7 +172,7 @@ def resolve(name: str) -> Factory:
         return resolve(PRESETS[name][0])
     if ":" in name:
         registered = name.partition(":")[0]
-        if registered in list_localizers():
+        if registered in list_localizers() or registered in list_trackers():
             raise InvalidInputError(
                 f"localizer spec {name!r}: {registered!r} is a registered name; its "
                 f"hyperparameters are written {registered}:NAME=VALUE[,NAME=VALUE...]")
@@ -175,7 +180,7 @@ def resolve(name: str) -> Factory:
     plugins = _entry_points()
     if name in plugins:
         return _localizer_class(name, plugins[name].load())
-    raise unknown_name("localizer", name, list_localizers())
+    raise unknown_name("localizer", name, list_localizers() + list_trackers())
 
 
 _PARAMS_START = re.compile(r":(?=\s*[A-Za-z_]\w*\s*=)")
