@@ -1,4 +1,7 @@
-"""Reference leaderboard entries: every built-in localizer on every suite (dev split, full size).
+"""Reference leaderboard entries: built-in localizers on every suite, trackers on the routes.
+
+Every built-in localizer runs on every suite, and every built-in tracker on the suites of driven
+routes (dev split, full size).
 
     python baselines/leaderboard_entries.py [--workers 2] [--suite NAME ...]
 
@@ -14,9 +17,11 @@ from pathlib import Path
 
 import azgym
 from azgym.bench import board, leaderboard
+from azgym.bench.contenders import contender
 from azgym.bench.runner import default_contenders, run_benchmark
 from azgym.bench.suites import SUITES
 from azgym.bench.table import ranked_table
+from azgym.localize.registry import list_trackers
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -28,7 +33,10 @@ def main() -> None:
     args = parser.parse_args()
     entries = ROOT / "leaderboard" / "entries"
     for name in args.suite or list(SUITES):
-        result = run_benchmark(SUITES[name], default_contenders(), workers=args.workers,
+        suite = SUITES[name]
+        contenders = default_contenders() + ([contender(spec) for spec in list_trackers()]
+                                             if suite.routes else [])
+        result = run_benchmark(suite, contenders, workers=args.workers,
                                progress=lambda line: print(line, flush=True))
         out = ROOT / "results" / f"bench-{name}"
         result.write(out)

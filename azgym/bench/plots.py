@@ -1,4 +1,8 @@
-"""Figures of a benchmark run: error CDFs, a breakdown by fault cause, error maps on the floor."""
+"""Figures of a benchmark run: error CDFs, fault causes, error maps and trajectories.
+
+Error CDFs and a breakdown by fault cause; error maps on the floor plan; and, for driven routes,
+each contender's estimates over the true routes, coloured by their error.
+"""
 
 from __future__ import annotations
 
@@ -29,6 +33,10 @@ def write_figures(summary: dict[str, Any], frames: list[Case],
     for scenario_name in dict.fromkeys(f.scenario for f in frames):
         written.append(_error_map(plt, summary, frames, outcomes, scenario_name,
                                   out / f"error_map_{scenario_name}.png"))
+        routed = any(f.sequence for f in frames if f.scenario == scenario_name)
+        if routed and all(o.estimate is not None for o in outcomes.values()):
+            written.append(_trajectories(plt, summary, frames, outcomes, scenario_name,
+                                         out / f"trajectories_{scenario_name}.png"))
     return written
 
 
@@ -75,7 +83,6 @@ def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
     """One floor plan per localizer: its position error at each of the scenario's frames."""
     from matplotlib.colors import LogNorm
 
-    scenario = load_scenario(scenario_name)
     labels = list(summary["localizers"])
     rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
     xy = np.array([frames[k].pose[:2] for k in rows])
@@ -88,17 +95,53 @@ def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
         outcome = outcomes[label]
         # A missing estimate is drawn at the top of the scale, 1000 cm.
         error = np.where(outcome.ok[rows], outcome.position[rows] * 100, 1000.0)
-        for rack in scenario.racks:
-            axes.fill(*rack.corners().T, color="0.75")
-        for wall in scenario.walls:
-            axes.plot(*zip(wall.start, wall.end, strict=True), color="0.3")
+        _floor_plan(axes, scenario_name)
         shown = axes.scatter(xy[:, 0], xy[:, 1], c=np.clip(error, 0.5, 1000.0), s=8,
                              norm=norm, cmap="viridis")
         axes.set_title(label, fontsize=9)
-        axes.set_aspect("equal")
     for axes in grid.ravel()[len(labels):]:
         axes.set_axis_off()
     figure.colorbar(shown, ax=grid.ravel().tolist(), label="position error [cm] (none: top)")
+    return _save(figure, path, plt)
+
+
+def _floor_plan(axes: Any, scenario_name: str) -> None:
+    """The scenario's racks (grey) and walls (dark lines) on the axes."""
+    scenario = load_scenario(scenario_name)
+    for rack in scenario.racks:
+        axes.fill(*rack.corners().T, color="0.75")
+    for wall in scenario.walls:
+        axes.plot(*zip(wall.start, wall.end, strict=True), color="0.3")
+    axes.set_aspect("equal")
+
+
+def _trajectories(plt: Any, summary: dict[str, Any], frames: list[Case],
+                  outcomes: dict[str, Outcome], scenario_name: str, path: Path) -> Path:
+    """One floor plan per contender: the true routes (lines) and its estimates, by error."""
+    from matplotlib.colors import LogNorm
+
+    labels = list(summary["localizers"])
+    rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
+    columns = min(3, len(labels))
+    lines = -(-len(labels) // columns)
+    figure, grid = plt.subplots(lines, columns, figsize=(4.6 * columns, 3.6 * lines),
+                                squeeze=False, constrained_layout=True)
+    norm = LogNorm(vmin=0.5, vmax=1000.0)
+    for axes, label in zip(grid.ravel(), labels, strict=False):
+        _floor_plan(axes, scenario_name)
+        for sequence in dict.fromkeys(frames[k].sequence for k in rows):
+            truth = np.array([frames[k].pose[:2] for k in rows if frames[k].sequence == sequence])
+            axes.plot(truth[:, 0], truth[:, 1], color="black", linewidth=0.6)
+        outcome = outcomes[label]
+        answered = [k for k in rows if outcome.ok[k]]
+        shown = axes.scatter(outcome.estimate[answered, 0], outcome.estimate[answered, 1],
+                             c=np.clip(outcome.position[answered] * 100, 0.5, 1000.0), s=5,
+                             norm=norm, cmap="viridis")
+        axes.set_title(f"{label}: {len(answered)} of {len(rows)} frames answered", fontsize=9)
+    for axes in grid.ravel()[len(labels):]:
+        axes.set_axis_off()
+    figure.colorbar(shown, ax=grid.ravel().tolist(), label="position error [cm]")
+    figure.suptitle(f"{scenario_name}: true routes (lines) and estimates", fontsize=10)
     return _save(figure, path, plt)
 
 

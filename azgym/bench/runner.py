@@ -123,6 +123,7 @@ def _score(answers: Answers, cases: Sequence[Case]) -> Outcome:
     outcome.ok[:] = answers.posed
     outcome.micros[:] = answers.micros
     outcome.errors[:] = answers.errors
+    outcome.estimate[:] = answers.pose
     for k in np.flatnonzero(answers.posed):
         estimate = tuple(float(v) for v in answers.pose[k])
         outcome.position[k], outcome.heading[k] = pose_error(estimate, cases[k].pose)

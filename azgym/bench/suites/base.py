@@ -72,6 +72,7 @@ class Suite:
         description: One line for listings and reports.
         dev_seed: The seed of the public ``dev`` split.
         build: ``build(seed, quick)`` draws the cases.
+        routes: Whether its cases are driven routes (sequences with motion): trackers' suites.
     """
 
     name: str
@@ -79,6 +80,7 @@ class Suite:
     description: str
     dev_seed: int
     build: Callable[[int, bool], list[Case]]
+    routes: bool = False
 
 
 def frame_cause(labels: np.ndarray) -> str:

@@ -12,12 +12,13 @@ SUITES: dict[str, Suite] = {suite.name: suite for suite in (
     Suite("warehouse-static", 1, "random poses in warehouse-small and warehouse-paper; faults "
           "clean, as shipped and heavy", 7, warehouse.static),
     Suite("warehouse-routes", 3, "every route of warehouse-small and warehouse-paper, frame by "
-          "frame at 10 Hz", 11, warehouse.routes),
+          "frame at 10 Hz", 11, warehouse.routes, routes=True),
     Suite("image-routes", 3, "every route of warehouse-small and warehouse-paper through the "
           "fisheye image path: blobs detected from pixels, ids decoded from blinking (30 Hz "
-          "camera, every third frame scored)", 17, image.routes),
+          "camera, every third frame scored)", 17, image.routes, routes=True),
     Suite("route-events", 1, "the first route of warehouse-small and warehouse-paper at 10 Hz "
-          "with a 3 s outage and a 10 s kidnapping cut in (for trackers)", 19, events.build),
+          "with a 3 s outage and a 10 s kidnapping cut in (for trackers)", 19, events.build,
+          routes=True),
     Suite("stress", 1, "warehouse-large (64 beacons) with heavy faults: 5 % misreads, bright "
           "mirrors", 13, warehouse.stress),
 )}
