@@ -28,3 +28,14 @@ def test_write_figures_draws_the_cdf_the_causes_and_one_error_map_per_scenario(t
     for path in written:
         assert path.parent == tmp_path
         assert path.read_bytes().startswith(PNG_SIGNATURE)
+
+
+def test_driven_routes_also_get_their_trajectories_on_the_floor_plan(tmp_path):
+    result = run_benchmark(get_suite("warehouse-routes"), [Contender("ransac", "ransac")],
+                           quick=True)
+    written = write_figures(result.summary, result.cases, result.outcomes, tmp_path)
+    names = [path.name for path in written]
+    assert names == ["cdf.png", "causes.png", "error_map_warehouse-small.png",
+                     "trajectories_warehouse-small.png", "error_map_warehouse-paper.png",
+                     "trajectories_warehouse-paper.png"]
+    assert all(path.read_bytes().startswith(PNG_SIGNATURE) for path in written)
