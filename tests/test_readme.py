@@ -74,6 +74,9 @@ def test_every_localizer_spec_the_readme_gives_builds(tmp_path, monkeypatch):
     specs |= {spec for spec in re.findall(r"`([\w./-]+:[\w:=.,-]+)`", text) if "=" in spec}
     monkeypatch.chdir(tmp_path)
     (tmp_path / "my_localizer.py").write_text(plugin_source())
+    tracker_section = text.split("## Trackers", 1)[1]
+    (tmp_path / "hold_last.py").write_text(
+        re.search(r"```python\n(.*?)```", tracker_section, re.S).group(1))
     (tmp_path / "path" / "to").mkdir(parents=True)
     (tmp_path / "path" / "to" / "mine.py").write_text("".join(
         f"class {name}:\n    def __init__(self, *, tag=''):\n        pass\n\n"
@@ -84,3 +87,21 @@ def test_every_localizer_spec_the_readme_gives_builds(tmp_path, monkeypatch):
     for spec in sorted(specs):
         (contender,) = _contenders([spec], with_builtins=False)
         assert _contenders([contender.label], with_builtins=False) == [contender], spec
+
+
+def test_the_tracker_example_runs_on_the_routes_and_holds_through_dropouts(tmp_path, capsys):
+    section = README.read_text(encoding="utf-8").split("## Trackers", 1)[1]
+    source = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    assert len(source.strip().splitlines()) <= 45
+    (tmp_path / "hold_last.py").write_text(source)
+    command = re.search(r"`(azgym bench --suite route-events [^`]*)`", section).group(1)
+    argv = shlex.split(command)[1:]
+    argv[argv.index("hold_last.py:HoldLast")] = f"{tmp_path / 'hold_last.py'}:HoldLast"
+    assert main([*argv, "--workers", "1", "--out", str(tmp_path / "out")]) == 0
+    printed = capsys.readouterr().out
+    label = f"{tmp_path / 'hold_last.py'}:HoldLast"
+    rows = {line.split()[1]: line.split() for line in printed.splitlines()
+            if re.match(r"^ *\d+ \S", line)}
+    held, ransac = float(rows[label][2].rstrip("%")), float(rows["ransac"][2].rstrip("%"))
+    assert held > ransac  # holding the last fix answers frames ransac cannot
+    assert "tracks:" in printed
