@@ -58,7 +58,11 @@ _BUILTIN: dict[str, str] = {
     "lsq": "azgym.localize.lsq:LeastSquares",
     "loo": "azgym.localize.loo:LeaveOneOut",
 }
-_BUILTIN_TRACKERS: dict[str, str] = {}
+_BUILTIN_TRACKERS: dict[str, str] = {
+    "dead-reckoning": "azgym.track.dead_reckoning:DeadReckoning",
+    "tkf": "azgym.track.plotter:Tkf",
+    "lpkf": "azgym.track.plotter:Lpkf",
+}
 """Trackers (:mod:`azgym.track`) by name; they share the specs, presets and plug-in rules."""
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "ransac-weighted": ("ransac", {"weighted": True}),
