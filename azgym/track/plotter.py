@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, Measurements, Pose
+from azgym.core import BeaconMap, Estimate, Measurements, Pose, wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, build
 from azgym.sensing.motion import Motion
@@ -158,7 +158,7 @@ class Tkf(Tracker):
         x = self._x
         camera, H = camera_observation(x, float(self.camera_from_imu))
         return Estimate(
-            x=float(camera[0]), y=float(camera[1]), heading=float(camera[2]),
+            x=float(camera[0]), y=float(camera[1]), heading=wrap_scalar(float(camera[2])),
             inliers=fix.inliers if used else np.zeros(len(measurements), bool),
             covariance=H @ self._P @ H.T,
             diagnostics={"fix": _fix_state(fix, used), "holdover": since,
