@@ -3,15 +3,16 @@
 :func:`predict` and :func:`update` are the textbook linear steps (Dang et al. 2015, eq. 4-9):
 x⁻ = F x + u, P⁻ = F P Fᵀ + Q; then K = P⁻ Hᵀ (H P⁻ Hᵀ + R)⁻¹, x = x⁻ + K (z − H x⁻),
 P = (I − K H) P⁻. An observation may be nonlinear (an extended filter's step): the caller passes
-h(x) and its Jacobian H. An innovation whose
-squared Mahalanobis distance exceeds a gate is refused (an outlier fix must not pull the state).
+h(x) and its Jacobian H. An innovation whose squared Mahalanobis distance exceeds a gate is
+refused (an outlier fix must not pull the state).
 
 :func:`inertial_step` is the prediction of the trackers in :mod:`azgym.track.plotter` over one
-IMU sample: state (x, y, vₓ, v_y, φ, b) of the IMU's point with the gyro's bias b, the body-frame acceleration turned into the world frame
-by the heading, integrated as eq. 4 does (constant acceleration over the sample), the heading by
-the gyro's yaw rate less its bias (which random-walks: the fixes' headings estimate it). It
-is an extended filter's step: F carries the derivative of the rotated
-acceleration with respect to φ, so a heading error feeds the position's uncertainty.
+IMU sample. The state is (x, y, vₓ, v_y, φ, b): the IMU's position, velocity and heading and the
+gyro's bias b. The body-frame acceleration, turned into the world frame by the heading, is
+integrated as eq. 4 does (constant acceleration over the sample); the heading by the gyro's yaw
+rate less its bias (which random-walks: the fixes' headings estimate it). It is an extended
+filter's step: F carries the derivative of the rotated acceleration with respect to φ, so a
+heading error feeds the position's uncertainty.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ SIZE = 6
 
 def predict(x: FloatArray, P: FloatArray, F: FloatArray, Q: FloatArray,
             u: FloatArray | None = None) -> None:
-    """x ← F x + u, P ← F P Fᵀ + Q (eq. 4-5), in place."""
+    """Predict in place (eq. 4-5): x ← F x + u, P ← F P Fᵀ + Q."""
     x[:] = F @ x if u is None else F @ x + u
     P[:] = F @ P @ F.T + Q
 

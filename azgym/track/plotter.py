@@ -1,24 +1,26 @@
 """Plotter's Kalman trackers (Dang et al. 2015, Sec. IV): ``tkf``, and ``lpkf`` with a low-pass IMU.
 
-The state is the camera's position, velocity and heading (x, y, vₓ, v_y, φ). Between frames the
-IMU predicts it (:func:`azgym.track.kalman.inertial_step`): the body-frame acceleration, turned
-into the world frame by the heading, integrated twice; the heading by the gyro's yaw rate, and,
-when the IMU has an orientation sensor (``ImuModel.orientation_noise``), corrected by each of its
-readings. Plotter predicts from the accelerometer and the orientation sensor only; azgym's IMU
-always has a gyro and has an orientation sensor only when asked, so the gyro carries the heading
-between readings and the sensor, when there is one, keeps it from drifting.
+The state is the IMU's position, velocity and heading and the gyro's bias (x, y, vₓ, v_y, φ, b).
+Between frames the IMU predicts it (:func:`azgym.track.kalman.inertial_step`): the body-frame
+acceleration, turned into the world frame by the heading, integrated twice; the heading by the
+gyro's yaw rate less the bias and, when the IMU has an orientation sensor
+(``ImuModel.orientation_noise``), corrected by each of its readings. Plotter predicts from the
+accelerometer and the orientation sensor only; azgym's IMU always has a gyro and an orientation
+sensor only when asked, so the gyro carries the heading and the fixes' headings (and the sensor,
+when there is one) keep it and the bias in check.
 
 Loosely coupled: the observation is the frame's fix from a per-frame localizer (``ransac`` by
 default) with its covariance (Rátosi–Simon eq. 28-33) as R, in place of Plotter's tracked key
-points. A frame without a fix, or with a fix the filter refuses as an outlier (a χ² gate on the
-innovation), is a hold-over: the estimate is the prediction, with its growing covariance. After
-``max_holdover`` seconds without a fix the tracker answers ``ok=False`` ("no fix for N s") and
-the next fix starts it afresh, so a long gap never ends in a silent jump.
+points. The fix sees the camera, ``camera_from_imu`` ahead of the IMU, so the observation is
+h(x) = (x + r cos φ, y + r sin φ, φ), linearised. A frame without a fix, or with a fix the
+filter refuses as an outlier (a χ² gate on the innovation: ransac can be wrong by metres), is a
+hold-over: the estimate is the prediction, with its growing covariance. After ``max_holdover``
+seconds without a fix the tracker answers ``ok=False`` ("no fix for N s") until a fix passes the
+gate again (which widens as the covariance grows), so a long gap never ends in a silent jump.
 
 ``lpkf`` passes the accelerations through a first-order low-pass filter (1 Hz, the paper's
-Sec. IV-B) before they reach the filter. The IMU sits at the body centre and the camera ahead of
-it, so the acceleration gets the centripetal term −ω² r of that lever arm (the angular
-acceleration's term is left out: it is small and the gyro's differences would be noisy).
+Sec. IV-B) before they reach the filter. docs/plotter.md gives the gap each bridges and why the
+1 Hz filter suits a hand-held phone better than a forklift.
 """
 
 from __future__ import annotations
