@@ -59,6 +59,9 @@ _BUILTIN: dict[str, str] = {
     "loo": "azgym.localize.loo:LeaveOneOut",
 }
 _BUILTIN_TRACKERS: dict[str, str] = {
+    "dead-reckoning": "azgym.track.dead_reckoning:DeadReckoning",
+    "tkf": "azgym.track.plotter:Tkf",
+    "lpkf": "azgym.track.plotter:Lpkf",
     "gated-ekf": "azgym.track.gated_ekf:GatedEkf",
     "robust": "azgym.track.robust:Robust",
 }

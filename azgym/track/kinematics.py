@@ -1,0 +1,80 @@
+"""The motion model the trackers share: the forklift's kinematics and how samples span time.
+
+Wheel odometry reports the speed v of the reference axle (the one that does not steer) and the
+steering angle δ; the forklift then turns at ω = v tan δ / L (:mod:`azgym.world.forklift`'s
+bicycle model). A point ``ahead`` metres in front of that axle along the heading (the camera;
+negative: behind it) moves at v along the heading plus ω·ahead across it.
+
+Samples hold over time the way the simulator's physics uses them: a reading holds from its own
+time until the next one (a zero-order hold). pymunk moves a body with the velocity it had after
+the previous step, so the yaw rate and speed read at t_k are what turns and moves the forklift
+over (t_k, t_k+1]. :func:`held_spans` turns sample times into those intervals, so the dead
+reckoning and the Kalman filters integrate the same way.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from azgym.core import FloatArray, wrap_scalar
+from azgym.world.forklift import ForkliftSpec
+
+_SPEC = ForkliftSpec()
+WHEELBASE = _SPEC.wheelbase
+"""The default forklift's wheelbase L [m]."""
+CAMERA_AHEAD = _SPEC.camera_offset[0] - 0.5 * _SPEC.wheelbase * (1 if _SPEC.rear_steer else -1)
+"""How far the default forklift's camera is ahead of its non-steering axle [m] (negative: behind;
+the rear-steered forklift's reference is the front axle, 0.8 m ahead of the body centre)."""
+CAMERA_FROM_IMU = _SPEC.camera_offset[0]
+"""How far the default forklift's camera is ahead of its body centre, where the IMU sits [m]."""
+
+
+def held_spans(times: FloatArray, start: float, end: float) -> FloatArray:
+    """How long each reading holds between ``start`` and ``end``: shape (K + 1,) for K samples.
+
+    The first span (``start`` to the first sample) belongs to the reading held from before, the
+    others each to one sample, up to the next sample or ``end``.
+    """
+    return np.diff(np.concatenate(([start], times, [end])))
+
+
+def yaw_rates(speed: FloatArray, steer: FloatArray, wheelbase: float) -> FloatArray:
+    """ω = v tan δ / L of the bicycle model [rad/s]."""
+    return speed * np.tan(steer) / wheelbase
+
+
+def advance(pose: tuple[float, float, float], speed: float, yaw_rate: float, ahead: float,
+            dt: float) -> tuple[float, float, float]:
+    """Move a point ``ahead`` of the reference axle for ``dt`` at constant speed and yaw rate.
+
+    Its velocity is v along the heading and ω·ahead across it, taken at the midpoint heading
+    (second-order accurate in dt).
+    """
+    x, y, heading = pose
+    middle = heading + 0.5 * yaw_rate * dt
+    c, s = math.cos(middle), math.sin(middle)
+    across = yaw_rate * ahead
+    return (x + (speed * c - across * s) * dt, y + (speed * s + across * c) * dt,
+            wrap_scalar(heading + yaw_rate * dt))
+
+
+class LowPass:
+    """A first-order low-pass filter (cut-off ``cutoff_hz``) for irregularly spaced samples.
+
+    y ← y + α (x − y) with α = dt / (RC + dt), RC = 1 / (2π f_c): the discrete RC filter. The
+    first sample passes unchanged (no start-up transient from zero).
+    """
+
+    def __init__(self, cutoff_hz: float) -> None:
+        self._rc = 1.0 / (2.0 * math.pi * cutoff_hz)
+        self._value: FloatArray | None = None
+
+    def __call__(self, value: FloatArray, dt: float) -> FloatArray:
+        """The filtered value after ``value`` arrived ``dt`` seconds after the previous one."""
+        if self._value is None:
+            self._value = np.array(value, dtype=np.float64)
+        else:
+            self._value = self._value + dt / (self._rc + dt) * (value - self._value)
+        return self._value
