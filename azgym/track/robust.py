@@ -4,19 +4,23 @@ On top of :class:`~azgym.track.gated_ekf.GatedEkf`:
 
 * **start**: any per-frame fix with three inliers starts the track, but a start from exactly
   three (which any three azimuths fit, a ghost among them or not) stays *tentative*, answering
-  ``ok=False``, until a frame in which four beacons pass the gate confirms it; a tentative track
-  that a frame contradicts (a measured beacon fails the gate) is dropped, and the frame tried
-  for a new start (the idea of Packi & Hanebeck's leave-one-out test: trust a start only once a
-  measurement it was not fitted to agrees with it);
+  ``ok=False``, until a frame in which four beacons pass the gate confirms it, or a frame whose
+  three pass it once the camera has moved ``confirm_travel`` from the start (where only three
+  beacons are in sight, odometry carries the start to a pose it was not fitted to); a tentative
+  track that a frame contradicts (a measured beacon fails the gate) is dropped, and the frame
+  tried for a new start (the idea of Packi & Hanebeck's leave-one-out test: trust a start only
+  once a measurement it was not fitted to agrees with it);
 * **hold-over**: a frame without usable azimuths only predicts; the answer stays ``ok=True``
-  while the predicted position's standard deviation is within ``max_position_std``;
+  while the predicted position's standard deviation is within ``max_position_std``. Beyond it
+  the track is *lost*: it answers ``ok=False`` until a per-frame fix, to whose pose it moves
+  before correcting (one linearized update from metres away passes every azimuth and lands,
+  tightly, wherever the linearization led);
 * **relocalization**: a frame is *inconsistent* when at least three beacons were measured and
   fewer than half of them pass the gate. After ``relocalize_after`` seconds of inconsistent
   frames (a kidnapping: the forklift carried while its motion sensors said it stood still), or
   at once when a per-frame fix has at least ``strong_fix`` inliers (more than twice what the
-  gate let through), or when hold-over has outgrown its bound (a forklift carried with its
-  sensors off: the unobserved time grows the covariance), the track restarts from the
-  initializer's fix.
+  gate let through), the track restarts from the initializer's fix. A forklift carried with its
+  sensors off is lost by the rule above: the unobserved time grows the covariance.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 from azgym.core import BeaconMap, Estimate, Measurements, Pose
 from azgym.localize.base import check_range
 from azgym.track.gated_ekf import GatedEkf
-from azgym.track.unicycle import IX, IY
+from azgym.track.unicycle import IPHI, IX, IY
 
 CONFIRMING_BEACONS = 4
 """Beacons that confirm a start: one more than a pose's three unknowns, so one is a check."""
@@ -43,6 +47,8 @@ class Robust(GatedEkf):
         relocalize_after: Seconds of inconsistent frames after which the track restarts from a
             per-frame fix [s].
         strong_fix: Inliers of a per-frame fix that restart an inconsistent track at once.
+        confirm_travel: Distance from a tentative start after which a frame whose three (or
+            more) beacons all pass the gate confirms it [m].
         **others: As :class:`~azgym.track.gated_ekf.GatedEkf` (``min_init_inliers`` 3).
     """
 
@@ -52,8 +58,10 @@ class Robust(GatedEkf):
                  delta_alpha_d: float = math.radians(0.4), extra_sigma: float = math.radians(0.1),
                  position_walk: float = 0.02, initializer: str = "ransac",
                  min_init_inliers: int = 3, max_position_std: float = 0.5,
-                 relocalize_after: float = 0.5, strong_fix: int = 6) -> None:
+                 relocalize_after: float = 0.5, strong_fix: int = 6,
+                 confirm_travel: float = 1.0) -> None:
         self.max_position_std = max_position_std
+        self.confirm_travel = confirm_travel
         self.relocalize_after = relocalize_after
         self.strong_fix = strong_fix
         super().__init__(gate_probability=gate_probability, delta_alpha_d=delta_alpha_d,
@@ -66,11 +74,13 @@ class Robust(GatedEkf):
         check_range(name, "max_position_std", self.max_position_std, low=0.0, low_open=True)
         check_range(name, "relocalize_after", self.relocalize_after, low=0.0)
         check_range(name, "strong_fix", self.strong_fix, low=4, integer=True)
+        check_range(name, "confirm_travel", self.confirm_travel, low=0.0)
 
     def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:
         super()._reset(rng, initial)
         self._tentative = False
         self._bad_since: float | None = None
+        self._started_at = np.zeros(2)
 
     def _now(self) -> float:
         return self._steps.time if self._steps.time is not None else 0.0
@@ -80,6 +90,7 @@ class Robust(GatedEkf):
         self._start(np.array(fix.pose), fix.covariance)
         self._bad_since = None
         self._tentative = fix.n_inliers < CONFIRMING_BEACONS
+        self._started_at = np.array(fix.pose[:2])
         return self._answer(fix.inliers, {"initialized": True})
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
@@ -88,6 +99,8 @@ class Robust(GatedEkf):
             if fix is None:
                 return Estimate.failure(f"not initialized: {self._why}", len(measurements))
             return self._restart(fix)
+        if self._position_std() > self.max_position_std:
+            return self._relocalize(measurements, beacons)
         inliers, distinct = self._correct(measurements, beacons)
         accepted = int(inliers.sum())
         inconsistent = distinct >= 3 and 2 * accepted < distinct
@@ -95,19 +108,53 @@ class Robust(GatedEkf):
             if accepted < distinct:
                 self._running = False  # a tentative start the frame contradicts
                 return self._update(measurements, beacons)
-            self._tentative = accepted < CONFIRMING_BEACONS
+            self._tentative = not self._confirms(accepted)
         self._bad_since = (self._bad_since if self._bad_since is not None else self._now()) \
             if inconsistent else None
-        if inconsistent or self._position_std() > self.max_position_std:
+        if inconsistent:
             fix = self._fix(measurements, beacons)
             if fix is not None and self._should_restart(fix, accepted):
                 return self._restart(fix)
         return self._answer(inliers)
 
-    def _should_restart(self, fix: Estimate, accepted: int) -> bool:
-        """Whether a per-frame fix should replace the track (module docstring)."""
-        if self._position_std() > self.max_position_std:
+    def _confirms(self, accepted: int) -> bool:
+        """Whether a frame all of whose beacons passed the gate confirms a tentative start.
+
+        Four beacons in one frame do; so do three once the camera has moved ``confirm_travel``
+        from the start: the azimuths of a pose the start was not fitted to, reached by odometry,
+        check it (a standing camera's frames repeat the start's geometry and check nothing).
+        """
+        if accepted >= CONFIRMING_BEACONS:
             return True
+        travel = math.hypot(*(self._state[[IX, IY]] - self._started_at))
+        return accepted >= 3 and travel >= self.confirm_travel
+
+    def _relocalize(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        """A lost track (its prediction beyond ``max_position_std``) moves to a per-frame fix.
+
+        A prediction that wide is not corrected where it stands: one linearized update from
+        metres away lets every azimuth through the gate and lands, with a tight covariance,
+        wherever the linearization led it (8 m off after a kidnapping). The track moves to the
+        fix's pose, keeps its wide covariance (and its gyro bias and odometry scale), and is
+        corrected there by the fix's inliers alone: the frame's azimuths, linearized where they
+        were fitted. Without a fix it only answers that it is lost.
+        """
+        inliers = np.zeros(len(measurements), dtype=bool)
+        fix = self._fix(measurements, beacons)
+        if fix is None:
+            return self._answer(inliers)
+        self._state[[IX, IY, IPHI]] = fix.pose
+        self._started_at = np.array(fix.pose[:2])
+        self._tentative = fix.n_inliers < CONFIRMING_BEACONS
+        self._bad_since = None
+        chosen = np.flatnonzero(fix.inliers)
+        accepted, _ = self._correct(
+            Measurements(measurements.ids[chosen], measurements.azimuth[chosen]), beacons)
+        inliers[chosen[accepted]] = True
+        return self._answer(inliers, {"relocalized": True})
+
+    def _should_restart(self, fix: Estimate, accepted: int) -> bool:
+        """Whether a per-frame fix should replace an inconsistent track (module docstring)."""
         if fix.n_inliers >= self.strong_fix and fix.n_inliers > 2 * accepted:
             return True
         return self._bad_since is not None and \
@@ -119,8 +166,10 @@ class Robust(GatedEkf):
     def _answer(self, inliers: np.ndarray, diagnostics: dict | None = None) -> Estimate:
         """The estimate, or a failure while the start is tentative or the track is too unsure."""
         if self._tentative:
-            return Estimate.failure("tentative start from three inliers, not yet confirmed by "
-                                    f"{CONFIRMING_BEACONS} beacons in one frame", inliers.size)
+            return Estimate.failure(
+                "tentative start from three inliers, not yet confirmed by "
+                f"{CONFIRMING_BEACONS} beacons in one frame or three after confirm_travel="
+                f"{self.confirm_travel} m", inliers.size)
         std = self._position_std()
         if std > self.max_position_std:
             return Estimate.failure(
