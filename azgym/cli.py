@@ -4,6 +4,7 @@ azgym bench [--suite S] [--localizer SPEC ...] [--with-builtins] [--split dev|te
             [--workers N] [--time-limit SECONDS] [--quick] [--out DIR]
 azgym leaderboard submit|build|verify ...
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
+azgym reproduce plotter [--runs N] [--seed S] [--out DIR]
 azgym study error-model [--scenario S] [--frames N] [--noise SIGMA] [--calibration-px PX]
 azgym study ids [--scenario S] [--rate HZ] [--noise SIGMA]
 azgym scenarios
@@ -57,6 +58,27 @@ def _reproduce_paper(args: argparse.Namespace) -> int:
 
 
 DEFAULT_SUITE = "warehouse-static"
+
+
+def _reproduce_plotter(args: argparse.Namespace) -> int:
+    from azgym.experiments.plotter.figure import write_figure
+    from azgym.experiments.plotter.reproduce import reproduce_plotter
+    from azgym.files import prepare_folder, write_file
+
+    out = Path(args.out)
+    prepare_folder(out)
+    result = reproduce_plotter(seed=args.seed, runs=args.runs)
+    summary = {key: value for key, value in result.items() if key != "errors"}
+    written = [write_file(out / "results.json", json.dumps(summary, indent=1) + "\n"),
+               write_figure(result, out / "errors.png")]
+    print(f"{args.runs} runs of a {result['lap_s']:g} s lap, seed {args.seed}: 90th percentile "
+          "of the position error")
+    for method, p90 in result["p90"].items():
+        paper = " (paper: < 2.6 cm)" if method == "lpkf" else ""
+        print(f"  {method:<6} {100 * p90:8.2f} cm{paper}")
+    print(f"  naive after 40 s: {result['naive_at_40s']:.1f} m (paper: 10 m)")
+    print("wrote " + ", ".join(map(str, written)))
+    return 0
 
 
 def _bench(args: argparse.Namespace) -> int:
@@ -331,6 +353,11 @@ def _add_reproduce(commands: argparse._SubParsersAction) -> None:
     paper.add_argument("--seed", type=int, default=2021, help="seed of every random draw")
     paper.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     paper.set_defaults(handler=_reproduce_paper)
+    plotter = target.add_parser("plotter", help="Dang et al. (2015): TKF and LPKF on a square")
+    plotter.add_argument("--runs", type=int, default=100, help="simulated runs of one lap")
+    plotter.add_argument("--seed", type=int, default=0, help="seed of every random draw")
+    plotter.add_argument("--out", default="results/plotter", help="output folder")
+    plotter.set_defaults(handler=_reproduce_plotter)
 
 
 def _add_study(commands: argparse._SubParsersAction) -> None:

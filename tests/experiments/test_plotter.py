@@ -63,3 +63,14 @@ def test_the_full_reproduction_within_its_stated_tolerances():
     assert 0.3 < result["p90"]["naive"] < 0.8
     assert 2.0 < result["naive_at_40s"] < 5.0
     assert math.isfinite(result["p50"]["lpkf"])
+
+
+def test_the_command_writes_the_figures_and_prints_them_beside_the_papers(tmp_path, capsys):
+    from azgym.cli import main
+
+    assert main(["reproduce", "plotter", "--runs", "3", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert "lpkf" in printed and "(paper: < 2.6 cm)" in printed
+    assert {p.name for p in tmp_path.iterdir()} == {"results.json", "errors.png"}
+    assert main(["reproduce", "plotter", "--runs", "0", "--out", str(tmp_path)]) == 2
+    assert "runs must be a whole number >= 1" in capsys.readouterr().err
