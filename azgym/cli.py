@@ -24,61 +24,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.cli_studies import add_reproduce, add_study
 from azgym.errors import AzgymError
 
 if TYPE_CHECKING:
     from azgym.bench.contenders import Contender
 
 
-def _reproduce_paper(args: argparse.Namespace) -> int:
-    from azgym.bench.runner import default_workers
-    from azgym.bench.suites.paper import ProtocolConfig
-    from azgym.experiments.paper.report import write_outputs
-    from azgym.experiments.paper.reproduce import reproduce, time_exhaustive_mex
-    from azgym.site import load_scenario
-
-    config = ProtocolConfig.quick(seed=args.seed) if args.quick else ProtocolConfig(seed=args.seed)
-    workers = args.workers or default_workers()
-    print(f"Reproducing Rátosi & Simon (2021) Sec. 3: grid step {config.grid_step} m, "
-          f"{config.realisations} realisations, K in {config.outlier_counts}, "
-          f"{workers} worker(s)", flush=True)
-    started = time.perf_counter()
-    reproduction = reproduce(config=config, workers=workers,
-                             progress=lambda line: print(line, flush=True))
-    mex_seconds = time_exhaustive_mex(load_scenario("paper-room"), repeats=1 if args.quick else 3)
-    reproduction.results["mex_exhaustive_ms"] = mex_seconds * 1000
-    written = write_outputs(reproduction, Path(args.out), figures=not args.no_figures)
-    print(f"\nExhaustive 1 cm MEX: {mex_seconds * 1000:.0f} ms per estimate")
-    print(f"Done in {time.perf_counter() - started:.0f} s. Wrote:")
-    for path in written:
-        print(f"  {path}")
-    print()
-    print((Path(args.out) / "results.md").read_text(encoding="utf-8"))
-    return 0
-
-
 DEFAULT_SUITE = "warehouse-static"
-
-
-def _reproduce_plotter(args: argparse.Namespace) -> int:
-    from azgym.experiments.plotter.figure import write_figure
-    from azgym.experiments.plotter.reproduce import reproduce_plotter
-    from azgym.files import prepare_folder, write_file
-
-    out = Path(args.out)
-    prepare_folder(out)
-    result = reproduce_plotter(seed=args.seed, runs=args.runs)
-    summary = {key: value for key, value in result.items() if key != "errors"}
-    written = [write_file(out / "results.json", json.dumps(summary, indent=1) + "\n"),
-               write_figure(result, out / "errors.png")]
-    print(f"{args.runs} runs of a {result['lap_s']:g} s lap, seed {args.seed}: 90th percentile "
-          "of the position error")
-    for method, p90 in result["p90"].items():
-        paper = " (paper: < 2.6 cm)" if method == "lpkf" else ""
-        print(f"  {method:<6} {100 * p90:8.2f} cm{paper}")
-    print(f"  naive after 40 s: {result['naive_at_40s']:.1f} m (paper: 10 m)")
-    print("wrote " + ", ".join(map(str, written)))
-    return 0
 
 
 def _bench(args: argparse.Namespace) -> int:
@@ -168,51 +121,6 @@ def _progress_printer():
     return show
 
 
-def _study_error_model(args: argparse.Namespace) -> int:
-    from azgym.experiments.error_model import run
-
-    summary = run(args.scenario, frames=args.frames, noise_sigma=args.noise,
-                  calibration_px=args.calibration_px, seed=args.seed, out=Path(args.out),
-                  figures=not args.no_figures)
-    centre, azimuth = summary["centre_error_px"], summary["azimuth_error_deg"]
-    calibrated = summary["azimuth_error_calibrated_deg"]
-    print(f"{summary['scenario']}: {summary['detections']} beacon detections in "
-          f"{args.frames} frames (noise {args.noise} grey levels)")
-    print(f"  eq. 1 model: centre error ±{summary['model_center_error_px']:.2f} px, "
-          f"Δα_d = {summary['model_delta_alpha_d_deg']:.3f}°")
-    print(f"  centre error [px]:         mean {centre['mean']:.3f}, p95 {centre['p95']:.3f}, "
-          f"max {centre['max']:.2f}")
-    print(f"  azimuth error [deg]:       mean {azimuth['mean']:.4f}, p95 {azimuth['p95']:.4f}; "
-          f"{100 * summary['azimuth_error_within_model']:.1f} % within Δα_d")
-    print(f"  with the principal point {args.calibration_px:g} px off: mean "
-          f"{calibrated['mean']:.3f}, p95 {calibrated['p95']:.3f}; "
-          f"{100 * summary['calibrated_within_model']:.1f} % within Δα_d")
-    if summary["coverage_over_eq2_bound"]:
-        print(f"  coverage error / eq. 2 bound ({summary['partly_covered']} partly covered): "
-              f"median {summary['coverage_over_eq2_bound']['median']:.2f}, max "
-              f"{summary['coverage_over_eq2_bound']['max']:.2f}")
-    print(f"Wrote {args.out}/error_model.json" + ("" if args.no_figures else
-                                                  f" and {args.out}/error_model.png"))
-    return 0
-
-
-def _study_ids(args: argparse.Namespace) -> int:
-    from azgym.experiments.identification import measure_identification
-    from azgym.sensing.image.blink_code import BLINK_CAMERA_RATE_HZ
-
-    stats = measure_identification(args.scenario, camera_rate_hz=args.rate or BLINK_CAMERA_RATE_HZ,
-                                   noise_sigma=args.noise, seed=args.seed)
-    print(f"{stats.scenario}, every route, camera {stats.camera_rate_hz:g} Hz, noise "
-          f"{stats.noise_sigma:g} grey levels: {stats.frames} frames")
-    print(f"  beacons in view for a whole codeword: {stats.eligible} blobs; right id "
-          f"{100 * stats.correct_share:.2f} %, no id "
-          f"{100 * stats.unidentified / max(1, stats.eligible):.2f} %, wrong id "
-          f"{100 * stats.misidentified / max(1, stats.eligible):.2f} %")
-    print(f"  every blob with an id: {stats.with_id}; wrong {stats.wrong_id} "
-          f"({100 * stats.misdecode_rate:.2f} %)")
-    return 0
-
-
 def _scenarios(_args: argparse.Namespace) -> int:
     from azgym.site import list_scenarios, load_scenario
 
@@ -275,8 +183,8 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     _add_bench(commands)
     _add_leaderboard(commands)
-    _add_reproduce(commands)
-    _add_study(commands)
+    add_reproduce(commands)
+    add_study(commands)
     _add_listings(commands)
     return parser
 
@@ -339,49 +247,6 @@ def _add_leaderboard(commands: argparse._SubParsersAction) -> None:
     verify.add_argument("entry", help="path of the entry's .json")
     verify.add_argument("--workers", type=int, default=1)
     board.set_defaults(handler=_leaderboard)
-
-
-def _add_reproduce(commands: argparse._SubParsersAction) -> None:
-    """``azgym reproduce paper``: the paper's Sec. 3 study."""
-    reproduce = commands.add_parser("reproduce", help="reproduce a paper's study")
-    target = reproduce.add_subparsers(dest="target", required=True)
-    paper = target.add_parser("paper", help="Rátosi & Simon (2021), Sec. 3")
-    paper.add_argument("--quick", action="store_true",
-                       help="every other grid point, 2 realisations (about a minute)")
-    paper.add_argument("--out", default="results/paper", help="output folder")
-    paper.add_argument("--workers", type=int, default=0, help="worker processes (0: one per core)")
-    paper.add_argument("--seed", type=int, default=2021, help="seed of every random draw")
-    paper.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
-    paper.set_defaults(handler=_reproduce_paper)
-    plotter = target.add_parser("plotter", help="Dang et al. (2015): TKF and LPKF on a square")
-    plotter.add_argument("--runs", type=int, default=100, help="simulated runs of one lap")
-    plotter.add_argument("--seed", type=int, default=0, help="seed of every random draw")
-    plotter.add_argument("--out", default="results/plotter", help="output folder")
-    plotter.set_defaults(handler=_reproduce_plotter)
-
-
-def _add_study(commands: argparse._SubParsersAction) -> None:
-    """``azgym study error-model|ids``: check azgym's models against what they model."""
-    study = commands.add_parser("study", help="check azgym's models against what they model")
-    studies = study.add_subparsers(dest="study", required=True)
-    model = studies.add_parser("error-model", help="azimuth errors of beacons detected from "
-                               "pixels beside the paper's eq. 1-3")
-    model.add_argument("--scenario", default="warehouse-small")
-    model.add_argument("--frames", type=int, default=600, help="random poses")
-    model.add_argument("--noise", type=float, default=2.0, help="sensor noise [grey levels]")
-    model.add_argument("--calibration-px", type=float, default=1.0,
-                       help="principal point error for the calibrated comparison [px]")
-    model.add_argument("--seed", type=int, default=0)
-    model.add_argument("--out", default="results/study", help="output folder")
-    model.add_argument("--no-figures", action="store_true")
-    model.set_defaults(handler=_study_error_model)
-    ids = studies.add_parser("ids", help="how well blinking ids decode along the routes")
-    ids.add_argument("--scenario", default="warehouse-small")
-    ids.add_argument("--rate", type=float, default=None,
-                     help="camera frames per second (default: the blinking camera's 30)")
-    ids.add_argument("--noise", type=float, default=2.0, help="sensor noise [grey levels]")
-    ids.add_argument("--seed", type=int, default=0)
-    ids.set_defaults(handler=_study_ids)
 
 
 def _add_listings(commands: argparse._SubParsersAction) -> None:

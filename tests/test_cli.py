@@ -8,7 +8,7 @@ import textwrap
 
 import pytest
 
-from azgym import cli
+from azgym import cli, cli_studies
 from azgym.bench import runner
 from azgym.bench.contenders import Contender, default_contenders
 
@@ -30,16 +30,19 @@ PARSED = [
     pytest.param(["leaderboard", "verify", "entry.json"], cli._leaderboard,
                  {"action": "verify", "entry": "entry.json", "workers": 1},
                  id="leaderboard-verify"),
-    pytest.param(["reproduce", "paper"], cli._reproduce_paper,
+    pytest.param(["reproduce", "paper"], cli_studies._reproduce_paper,
                  {"target": "paper", "quick": False, "out": "results/paper", "workers": 0,
                   "seed": 2021, "no_figures": False}, id="reproduce-paper"),
-    pytest.param(["study", "error-model"], cli._study_error_model,
+    pytest.param(["study", "error-model"], cli_studies._study_error_model,
                  {"scenario": "warehouse-small", "frames": 600, "noise": 2.0,
                   "calibration_px": 1.0, "seed": 0, "out": "results/study",
                   "no_figures": False}, id="study-error-model"),
-    pytest.param(["study", "ids"], cli._study_ids,
+    pytest.param(["study", "ids"], cli_studies._study_ids,
                  {"scenario": "warehouse-small", "rate": None, "noise": 2.0, "seed": 0},
                  id="study-ids"),
+    pytest.param(["reproduce", "plotter"], cli_studies._reproduce_plotter,
+                 {"target": "plotter", "runs": 100, "seed": 0, "out": "results/plotter"},
+                 id="reproduce-plotter"),
     pytest.param(["scenarios"], cli._scenarios, {}, id="scenarios"),
     pytest.param(["localizers"], cli._localizers, {}, id="localizers"),
     pytest.param(["check", "ransac:weighted=true"], cli._check,
