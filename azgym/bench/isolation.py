@@ -26,7 +26,7 @@ import sys
 import time
 import types
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -107,7 +107,7 @@ class _Worker:
     answers: Any
     ready: bool = False
     batch: _Batch | None = None
-    started: float = field(default_factory=time.monotonic)
+    started: float = 0.0
 
 
 class IsolatedRun:
@@ -166,10 +166,11 @@ class IsolatedRun:
         process = ctx.Process(target=worker.serve, daemon=True, name=f"azgym {self.spec}",
                               args=(theirs, progress, answers, self.spec, self.params,
                                     self.maps))
+        started = time.monotonic()  # before start(): the worker may begin building at once
         with _caller_main_hidden():
             process.start()
         theirs.close()
-        w = _Worker(process, mine, progress, answers)
+        w = _Worker(process, mine, progress, answers, started=started)
         self.running.append(w)
         return w
 
@@ -199,9 +200,8 @@ class IsolatedRun:
     def _deadline(self, w: _Worker) -> float:
         """When the worker's current step must be over (monotonic seconds)."""
         if not w.ready:
-            phase, since = w.progress[0], w.progress[1] / 1e9
-            if phase == worker.BUILDING and since >= w.started:
-                return since + self.time_limit
+            if w.progress[0] == worker.BUILDING:  # the worker set it: the build has begun
+                return w.progress[1] / 1e9 + self.time_limit
             return w.started + STARTUP_LIMIT
         if w.batch is None:
             return time.monotonic() + 1.0
