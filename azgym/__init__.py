@@ -38,6 +38,7 @@ _LAZY = {
     "Scenario": "azgym.site.scenario",
     "Tracker": "azgym.track.base",
     "check_localizer": "azgym.localize.checks",
+    "check_tracker": "azgym.track.checks",
     "evaluate": "azgym.envs.evaluate",
     "list_localizers": "azgym.localize.registry",
     "list_trackers": "azgym.localize.registry",
@@ -64,6 +65,7 @@ if TYPE_CHECKING:
     from azgym.site.load import list_scenarios, load_scenario
     from azgym.site.scenario import Scenario
     from azgym.track.base import FrameByFrame, Tracker, make_tracker
+    from azgym.track.checks import check_tracker
 
 
 def __getattr__(name: str) -> Any:
@@ -100,6 +102,7 @@ __all__ = [
     "UnknownNameError",
     "__version__",
     "check_localizer",
+    "check_tracker",
     "evaluate",
     "list_localizers",
     "list_trackers",

@@ -149,9 +149,14 @@ def _localizers(_args: argparse.Namespace) -> int:
 
 def _check(args: argparse.Namespace) -> int:
     from azgym.localize.checks import check_localizer
-    from azgym.localize.registry import make_localizer
+    from azgym.localize.registry import SupportsLocalize, build
+    from azgym.track.checks import check_tracker
 
-    check_localizer(make_localizer(args.localizer))  # raises (exit code 2) on a failed check
+    built = build(args.localizer)  # raises (exit code 2) on a failed check, as the checks do
+    if isinstance(built, SupportsLocalize):
+        check_localizer(built)
+    else:
+        check_tracker(built)
     return 0
 
 
