@@ -3,14 +3,20 @@
 Localizers and trackers share this rule. A class takes its hyperparameters as keyword-only
 ``__init__`` arguments and stores them unchanged, so ``get_params()`` shows them and ``repr``
 reproduces them. They are checked in ``__init__`` (a bad value fails where it is written, naming
-the field) and, if one was set afterwards, again before the next use.
+the field) and, if one was set afterwards, again before the next use, with
+:func:`check_range` for numbers and :func:`check_flag` for flags.
 """
 
 from __future__ import annotations
 
 import functools
 import inspect
+import math
 from typing import Any
+
+import numpy as np
+
+from azgym.errors import InvalidInputError
 
 
 class Hyperparameters:
@@ -56,3 +62,42 @@ def _param_names(cls: type) -> tuple[str, ...]:
         name for name, parameter in signature.parameters.items()
         if parameter.kind is parameter.KEYWORD_ONLY
     )
+
+
+def check_range(
+    owner: str,
+    name: str,
+    value: Any,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    integer: bool = False,
+    infinite: bool = False,
+) -> None:
+    """Raise :class:`InvalidInputError` unless ``value`` is a finite number in the given range.
+
+    ``infinite`` also accepts +inf (a gate that refuses nothing, say).
+    """
+    kind = "an integer" if integer else "a number"
+    ok_type = isinstance(value, (int, np.integer)) if integer else isinstance(
+        value, (int, float, np.integer, np.floating)
+    )
+    finite = math.isfinite(float(value)) if ok_type else False
+    if isinstance(value, bool) or not (finite or (infinite and value == math.inf)):
+        raise InvalidInputError(f"{owner}.{name} must be {kind}, got {value!r}")
+    too_low = low is not None and (value <= low if low_open else value < low)
+    too_high = high is not None and (value >= high if high_open else value > high)
+    if too_low or too_high:
+        left = "(" if low_open else "["
+        right = ")" if high_open else "]"
+        lo = "-inf" if low is None else low
+        hi = "inf" if high is None else high
+        raise InvalidInputError(f"{owner}.{name} must be in {left}{lo}, {hi}{right}, got {value!r}")
+
+
+def check_flag(owner: str, name: str, value: Any) -> None:
+    """Raise :class:`InvalidInputError` unless ``value`` is a bool (``"no"`` is not False)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidInputError(f"{owner}.{name} must be True or False, got {value!r}")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -217,36 +217,3 @@ class Localizer(Hyperparameters, ABC):
     @abstractmethod
     def _localize(self, problem: Problem) -> Estimate:
         """Compute the estimate from validated, usable measurements (K >= 3)."""
-
-def check_range(
-    owner: str,
-    name: str,
-    value: Any,
-    *,
-    low: float | None = None,
-    high: float | None = None,
-    low_open: bool = False,
-    high_open: bool = False,
-    integer: bool = False,
-) -> None:
-    """Raise :class:`InvalidInputError` unless ``value`` is a finite number in the given range."""
-    kind = "an integer" if integer else "a number"
-    ok_type = isinstance(value, (int, np.integer)) if integer else isinstance(
-        value, (int, float, np.integer, np.floating)
-    )
-    if isinstance(value, bool) or not ok_type or not math.isfinite(float(value)):
-        raise InvalidInputError(f"{owner}.{name} must be {kind}, got {value!r}")
-    too_low = low is not None and (value <= low if low_open else value < low)
-    too_high = high is not None and (value >= high if high_open else value > high)
-    if too_low or too_high:
-        left = "(" if low_open else "["
-        right = ")" if high_open else "]"
-        lo = "-inf" if low is None else low
-        hi = "inf" if high is None else high
-        raise InvalidInputError(f"{owner}.{name} must be in {left}{lo}, {hi}{right}, got {value!r}")
-
-
-def check_flag(owner: str, name: str, value: Any) -> None:
-    """Raise :class:`InvalidInputError` unless ``value`` is a bool (``"no"`` is not False)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise InvalidInputError(f"{owner}.{name} must be True or False, got {value!r}")

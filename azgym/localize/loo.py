@@ -7,8 +7,9 @@ import math
 import numpy as np
 
 from azgym.core import Estimate
+from azgym.hyperparameters import check_range
 from azgym.localize import _kernels as K
-from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_range
+from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem
 from azgym.localize.lsq import fit_subset
 from azgym.localize.refinement import refine_estimate
 from azgym.site.error_model import ErrorModel

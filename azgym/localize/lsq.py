@@ -7,11 +7,12 @@ import math
 import numpy as np
 
 from azgym.core import Estimate
+from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize._circles import circle_row
 from azgym.localize._levenberg_marquardt import determined, refine, solve3
-from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem, check_flag, check_range
+from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem
 from azgym.localize.refinement import refine_estimate
 from azgym.site.error_model import ErrorModel
 

@@ -8,11 +8,12 @@ import numpy as np
 
 from azgym.core import Estimate, FloatArray
 from azgym.errors import InvalidInputError
+from azgym.hyperparameters import check_range
 from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize._angles import fast_atan2
 from azgym.localize._levenberg_marquardt import singular_at
-from azgym.localize.base import Localizer, Problem, check_range
+from azgym.localize.base import Localizer, Problem
 
 CANCELLED = 1e-18
 """|Σ unit vectors|² below this times n² leaves a grid point's heading (and E_ref) undefined.

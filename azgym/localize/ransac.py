@@ -16,6 +16,7 @@ from itertools import combinations
 import numpy as np
 
 from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Measurements
+from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize._ransac_search import search
@@ -30,8 +31,6 @@ from azgym.localize.base import (
     ROW_WIDTH,
     Localizer,
     Problem,
-    check_flag,
-    check_range,
     gather,
 )
 from azgym.localize.refinement import package, refine_with_covariance

@@ -7,10 +7,11 @@ import math
 import numpy as np
 
 from azgym.core import Estimate
+from azgym.hyperparameters import check_range
 from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize._circles import distinct_beacons, pair_table, solve_triplet
-from azgym.localize.base import Localizer, Problem, check_range
+from azgym.localize.base import Localizer, Problem
 
 DEGENERACY_TOL = 1e-2
 """Triplet's default ``degeneracy_tol``: the smallest normalised determinant it answers from.

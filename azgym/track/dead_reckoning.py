@@ -11,12 +11,11 @@ answers ``ok=False``.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from azgym.core import BeaconMap, Estimate, Measurements, Pose
 from azgym.errors import InvalidInputError
+from azgym.hyperparameters import check_range
 from azgym.sensing.motion import Motion
 from azgym.track.base import Tracker
 from azgym.track.kinematics import CAMERA_AHEAD, WHEELBASE, advance, held_spans, yaw_rates
@@ -49,14 +48,8 @@ class DeadReckoning(Tracker):
             raise InvalidInputError(
                 f"DeadReckoning.yaw_source must be one of {', '.join(YAW_SOURCES)}, got "
                 f"{self.yaw_source!r}")
-        if not (_real(self.wheelbase) and self.wheelbase > 0):
-            raise InvalidInputError(
-                f"DeadReckoning.wheelbase must be a finite number > 0 [m], got "
-                f"{self.wheelbase!r}")
-        if not _real(self.camera_ahead):
-            raise InvalidInputError(
-                f"DeadReckoning.camera_ahead must be a finite number [m], got "
-                f"{self.camera_ahead!r}")
+        check_range("DeadReckoning", "wheelbase", self.wheelbase, low=0.0, low_open=True)
+        check_range("DeadReckoning", "camera_ahead", self.camera_ahead)
 
     def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:
         self._pose = initial
@@ -106,9 +99,3 @@ class DeadReckoning(Tracker):
         x, y, heading = self._pose
         return Estimate(x=x, y=y, heading=heading, inliers=np.zeros(len(measurements), bool),
                         diagnostics={"travelled": self._travelled})
-
-
-def _real(value: object) -> bool:
-    """A finite real number, not a bool."""
-    return (isinstance(value, (int, float)) and not isinstance(value, bool)
-            and math.isfinite(value))

@@ -18,7 +18,8 @@ import numpy as np
 
 from azgym.core import BeaconMap, Estimate, Measurements, Pose, wrap_scalar
 from azgym.errors import InvalidInputError
-from azgym.localize.base import ROW_BEACON_INDEX, ROW_SOURCE, Problem, check_range
+from azgym.hyperparameters import check_range
+from azgym.localize.base import ROW_BEACON_INDEX, ROW_SOURCE, Problem
 from azgym.localize.registry import build
 from azgym.sensing.motion import ImuModel, Motion, OdometryModel
 from azgym.track.azimuth_update import correct, gate, innovations

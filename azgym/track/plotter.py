@@ -26,12 +26,12 @@ Sec. IV-B) before they reach the filter. docs/plotter.md gives the gap each brid
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
 from azgym.core import BeaconMap, Estimate, Measurements, Pose, wrap_scalar
 from azgym.errors import InvalidInputError
+from azgym.hyperparameters import check_range
 from azgym.localize.registry import SupportsLocalize, build
 from azgym.sensing.motion import Motion
 from azgym.track.base import Tracker
@@ -86,11 +86,12 @@ class Tkf(Tracker):
         self._validate_once()
 
     def _check_params(self) -> None:
+        name = type(self).__name__
         for field in ("accel_variance", "orientation_variance", "yaw_rate_variance",
                       "max_holdover", "gate"):
-            _require(self, field, lambda v: v > 0 and not math.isnan(v), "a number > 0",
-                     infinite=field == "gate")
-        _require(self, "camera_from_imu", math.isfinite, "a finite number [m]")
+            check_range(name, field, getattr(self, field), low=0.0, low_open=True,
+                        infinite=field == "gate")
+        check_range(name, "camera_from_imu", self.camera_from_imu)
         if not isinstance(self.localizer, str):
             raise InvalidInputError(f"{type(self).__name__}.localizer must be a localizer "
                                     f"spec (a string), got {self.localizer!r}")
@@ -226,7 +227,7 @@ class Lpkf(Tkf):
                          max_holdover=max_holdover, gate=gate, camera_from_imu=camera_from_imu)
 
     def _check_params(self) -> None:
-        _require(self, "cutoff_hz", lambda v: v > 0, "a finite number > 0 [Hz]")
+        check_range(type(self).__name__, "cutoff_hz", self.cutoff_hz, low=0.0, low_open=True)
         super()._check_params()
 
     def _lowpass(self) -> LowPass:
@@ -236,12 +237,3 @@ class Lpkf(Tkf):
 def _fix_state(fix: Estimate, used: bool) -> str:
     """What became of the frame's fix: used, refused by the gate, or none."""
     return "used" if used else "refused" if fix.ok else "none"
-
-
-def _require(owner: Any, field: str, test: Any, wanted: str, infinite: bool = False) -> None:
-    """Refuse a hyperparameter that is not a real number passing ``test``."""
-    value = getattr(owner, field)
-    real = isinstance(value, (int, float)) and not isinstance(value, bool) and (
-        math.isfinite(value) or (infinite and value == math.inf))
-    if not (real and test(value)):
-        raise InvalidInputError(f"{type(owner).__name__}.{field} must be {wanted}, got {value!r}")

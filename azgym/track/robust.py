@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from azgym.core import BeaconMap, Estimate, Measurements, Pose
-from azgym.localize.base import check_range
+from azgym.hyperparameters import check_range
 from azgym.track.gated_ekf import GatedEkf
 from azgym.track.unicycle import IPHI, IX, IY
 
