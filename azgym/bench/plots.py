@@ -86,10 +86,7 @@ def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
     labels = list(summary["localizers"])
     rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
     xy = np.array([frames[k].pose[:2] for k in rows])
-    columns = min(3, len(labels))
-    lines = -(-len(labels) // columns)
-    figure, grid = plt.subplots(lines, columns, figsize=(4.6 * columns, 3.6 * lines),
-                                squeeze=False, constrained_layout=True)
+    figure, grid = _panels(plt, len(labels))
     norm = LogNorm(vmin=0.5, vmax=1000.0)
     for axes, label in zip(grid.ravel(), labels, strict=False):
         outcome = outcomes[label]
@@ -103,6 +100,14 @@ def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
         axes.set_axis_off()
     figure.colorbar(shown, ax=grid.ravel().tolist(), label="position error [cm] (none: top)")
     return _save(figure, path, plt)
+
+
+def _panels(plt: Any, count: int) -> tuple[Any, Any]:
+    """A figure with one floor-plan panel per contender, three to a row."""
+    columns = min(3, count)
+    lines = -(-count // columns)
+    return plt.subplots(lines, columns, figsize=(4.6 * columns, 3.6 * lines), squeeze=False,
+                        constrained_layout=True)
 
 
 def _floor_plan(axes: Any, scenario_name: str) -> None:
@@ -122,10 +127,7 @@ def _trajectories(plt: Any, summary: dict[str, Any], frames: list[Case],
 
     labels = list(summary["localizers"])
     rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
-    columns = min(3, len(labels))
-    lines = -(-len(labels) // columns)
-    figure, grid = plt.subplots(lines, columns, figsize=(4.6 * columns, 3.6 * lines),
-                                squeeze=False, constrained_layout=True)
+    figure, grid = _panels(plt, len(labels))
     norm = LogNorm(vmin=0.5, vmax=1000.0)
     for axes, label in zip(grid.ravel(), labels, strict=False):
         _floor_plan(axes, scenario_name)
