@@ -283,6 +283,24 @@ class IsolatedRun:
         elif rest.stop > rest.start:
             self.queue.insert(0, rest)
 
+    def build_problem(self) -> str:
+        """Start one worker and wait for it to build the contender: "" or why it cannot."""
+        w = self._start()
+        try:
+            while True:
+                if _poll(w.conn):
+                    message = w.conn.recv()
+                    w.ready = message[0] == "ready"
+                    return "" if w.ready else message[1]
+                if not w.process.is_alive():
+                    return _death(w.process)
+                if self._overran(w):
+                    return self._overrun_reason(w)
+                multiprocessing.connection.wait([w.conn, w.process.sentinel],
+                                                timeout=self._next_deadline([w]))
+        finally:
+            _stop(w)
+
     def _skip(self, batch: _Batch, reason: str) -> None:
         """Score frames that will not run as unavailable, with the reason."""
         for k in range(batch.start, batch.stop):
@@ -315,22 +333,8 @@ def build_problem(spec: str, params: dict[str, Any], time_limit: float) -> str:
     The check runs where a benchmark runs the localizer, so a plug-in whose module or
     constructor hangs, crashes or exits is caught without harm to the caller.
     """
-    run = IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit, batches=[])
-    w = run._start()
-    try:
-        while True:
-            if _poll(w.conn):
-                message = w.conn.recv()
-                w.ready = message[0] == "ready"
-                return "" if w.ready else message[1]
-            if not w.process.is_alive():
-                return _death(w.process)
-            if run._overran(w):
-                return run._overrun_reason(w)
-            multiprocessing.connection.wait([w.conn, w.process.sentinel],
-                                            timeout=run._next_deadline([w]))
-    finally:
-        _stop(w)
+    return IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit,
+                       batches=[]).build_problem()
 
 
 def _poll(conn: Any) -> bool:
