@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 
 from azgym.bench import worker
-from azgym.bench.wire import Packed
-from azgym.bench.worker import ANSWER_SIZE, MapData
+from azgym.bench.wire import MapData, Packed
+from azgym.bench.worker import ANSWER_SIZE
 
 DEFAULT_TIME_LIMIT = 10.0
 """Seconds a localizer may take on one frame (or to be built) before it is stopped: 60 times the

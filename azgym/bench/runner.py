@@ -24,7 +24,7 @@ from azgym.bench.isolation import DEFAULT_TIME_LIMIT, Answers, IsolatedRun, star
 from azgym.bench.outcome import Outcome
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import Case, Suite
-from azgym.bench.wire import pack
+from azgym.bench.wire import pack, pack_map
 from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError
 from azgym.jit import localizers_compiled
@@ -74,7 +74,7 @@ def run_contenders(
         maps = {name: load_scenario(name).beacons for name in {case.scenario for case in cases}}
     frames = [pack(case.scenario, case.measurements, case.sequence, case.initial, case.motion)
               for case in cases]
-    sent_maps = {name: (m.ids, m.xyz, m.width) for name, m in maps.items()}
+    sent_maps = {name: pack_map(beacons) for name, beacons in maps.items()}
     batches = batch_bounds(cases, max(1, math.ceil(len(cases) / (BATCHES_PER_WORKER * workers))))
     outcomes: dict[str, Outcome] = {}
     for contender in contenders:

@@ -1,4 +1,4 @@
-"""What crosses to a worker: each frame packed as immutable bytes, nothing of its truth.
+"""What crosses to a worker: the beacon maps, and each frame packed as immutable bytes.
 
 A frame travels as its scenario's name, its sequence (the route it belongs to, for trackers),
 the known start pose on a sequence's first frame, its measurements and the motion samples since
@@ -13,8 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from azgym.core import Measurements, Pose
+from azgym.core import BeaconMap, Measurements, Pose
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
+
+MapData = tuple[np.ndarray, np.ndarray, np.ndarray]
+"""One beacon map as sent: ids, xyz, width."""
 
 Packed = tuple[str, str, Pose | None, bytes, bytes, bytes | None, tuple[int, ...], bytes | None]
 """One frame as sent: scenario, sequence, initial pose, ids (int64 bytes), azimuths (float64
@@ -38,6 +41,16 @@ class WorkerFrame:
     initial: Pose | None
     measurements: Measurements
     motion: Motion | None
+
+
+def pack_map(beacons: BeaconMap) -> MapData:
+    """A beacon map as sent once to each worker."""
+    return beacons.ids, beacons.xyz, beacons.width
+
+
+def unpack_map(data: MapData) -> BeaconMap:
+    """The worker's own copy of a map (checked and frozen as any map is)."""
+    return BeaconMap(*data)
 
 
 def pack(scenario: str, measurements: Measurements, sequence: str = "",

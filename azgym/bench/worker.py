@@ -23,9 +23,7 @@ import zlib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import numpy as np
-
-from azgym.bench.wire import WorkerFrame, unpack
+from azgym.bench.wire import MapData, WorkerFrame, unpack, unpack_map
 from azgym.core import BeaconMap, Measurements, estimated_pose
 from azgym.errors import AzgymError
 from azgym.track.base import FrameByFrame, Tracker, make_tracker
@@ -43,10 +41,6 @@ ANSWER_SIZE = 5
 ANSWER_X, ANSWER_Y, ANSWER_HEADING, ANSWER_STATE, ANSWER_MICROS = range(ANSWER_SIZE)
 PENDING, POSED, NO_POSE, RAISED = 0.0, 1.0, 2.0, 3.0
 """Answer states: not answered yet; a usable pose; an estimate without one; an exception."""
-
-MapData = tuple[np.ndarray, np.ndarray, np.ndarray]
-"""One beacon map as sent: ids, xyz, width."""
-
 
 def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, Any],
           maps: Mapping[str, MapData]) -> None:
@@ -70,7 +64,7 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
         maps: Each scenario's beacon map.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    beacon_maps = {name: BeaconMap(*arrays) for name, arrays in maps.items()}
+    beacon_maps = {name: unpack_map(data) for name, data in maps.items()}
     _mark(progress, BUILDING)
     try:
         tracker = make_tracker(spec, **params)
