@@ -26,6 +26,7 @@ from azgym.hyperparameters import Hyperparameters
 from azgym.localize.base import MAX_MEASUREMENTS
 from azgym.localize.registry import SupportsLocalize, build
 from azgym.sensing.motion import Motion
+from azgym.track._motion_check import NOT_FINITE, OUT_OF_ORDER, stream_fault
 
 
 class Tracker(Hyperparameters, ABC):
@@ -120,17 +121,18 @@ def check_motion(motion: Any, after: float) -> None:
         raise InvalidInputError(
             f"motion.time must be finite and after the previous frame's ({after}), got "
             f"{motion.time}")
-    streams = {"odometry": (motion.odometry.time, motion.odometry.speed, motion.odometry.steer),
-               "imu": (motion.imu.time, motion.imu.yaw_rate, motion.imu.accel)}
+    odometry, imu = motion.odometry, motion.imu
+    # Three value columns a stream (the odometry's two, its steering given twice).
+    streams = {"odometry": (odometry.time, odometry.speed, odometry.steer, odometry.steer),
+               "imu": (imu.time, imu.yaw_rate, imu.accel[:, 0], imu.accel[:, 1])}
     for stream, (time, *values) in streams.items():
-        if time.size and (np.any(np.diff(time) <= 0) or time[0] <= after
-                          or time[-1] > motion.time):
+        fault = stream_fault(after, float(motion.time), time, *values)
+        if fault == OUT_OF_ORDER:
             raise InvalidInputError(
                 f"motion.{stream}.time must increase within ({after}, {motion.time}], got "
                 f"{time.tolist()[:6]}")
-        for column in (time, *values):
-            if not np.isfinite(column).all():
-                raise InvalidInputError(f"motion.{stream} holds a NaN or infinite value")
+        if fault == NOT_FINITE:
+            raise InvalidInputError(f"motion.{stream} holds a NaN or infinite value")
 
 
 class FrameByFrame(Tracker):
