@@ -22,7 +22,7 @@ from azgym.hyperparameters import check_range
 from azgym.localize.base import ROW_BEACON_INDEX, ROW_SOURCE, Problem
 from azgym.localize.registry import build
 from azgym.sensing.motion import ImuModel, Motion, OdometryModel
-from azgym.track.azimuth_update import correct, gate, innovations
+from azgym.track.azimuth_update import gated_update
 from azgym.track.base import Tracker
 from azgym.track.unicycle import (
     IBIAS,
@@ -150,12 +150,10 @@ class GatedEkf(Tracker):
         inliers = np.zeros(len(measurements), dtype=bool)
         if problem.size == 0:
             return inliers, 0
-        nu, h, r, d2 = innovations(self._state, self._cov, problem.floats, self.delta_alpha_d,
-                                   self.extra_sigma)
-        passed = gate(d2, problem.ints[ROW_BEACON_INDEX], self._threshold)
-        if passed.any():
-            correct(self._state, self._cov, nu[passed], h[passed], r[passed])
-            inliers[problem.ints[ROW_SOURCE][passed]] = True
+        passed, _ = gated_update(self._state, self._cov, problem.floats,
+                                 problem.ints[ROW_BEACON_INDEX], self.delta_alpha_d,
+                                 self.extra_sigma, self._threshold)
+        inliers[problem.ints[ROW_SOURCE][passed]] = True
         return inliers, problem.n_distinct
 
     def _estimate(self, inliers: np.ndarray, diagnostics: dict | None = None) -> Estimate:

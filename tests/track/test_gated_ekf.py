@@ -11,9 +11,7 @@ from helpers import beacon_map, ideal_frame
 import azgym
 from azgym import InvalidInputError, Measurements
 from azgym.core import pose_error
-from azgym.localize.base import Problem
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
-from azgym.track.azimuth_update import correct, gate, innovations
 from azgym.track.unicycle import MotionNoise, MotionSteps, predict
 from azgym.world.drive import simulate
 
@@ -54,27 +52,6 @@ def test_the_samples_hold_until_the_next_and_a_silent_gap_is_unobserved():
     _, _, observed, dt = steps.step(steady(10.0, 1.0, 0.0, start=9.9))  # 9.7 s without samples
     # Observed: the old sample's 1.5 periods (0.03 s), then 9.92 … 10.0 up to the frame (0.08 s).
     assert dt == pytest.approx(9.8) and observed == pytest.approx(0.11)
-
-
-def test_an_update_by_hand():
-    beacons = beacon_map([(1.0, 0.0)], width=0.0)
-    problem = Problem.from_frame(Measurements([1], [0.01]), beacons)
-    state, cov = np.zeros(5), np.diag([1e-2, 1e-2, 1e-4, 1e-6, 1e-4])
-    nu, h, r, d2 = innovations(state, cov, problem.floats, 0.003, 0.0)
-    # α̂ = atan2(0, 1) − 0 = 0, H = [dy/r², −dx/r², −1, 0, 0] = [0, −1, −1, 0, 0], R = Δ²/3.
-    np.testing.assert_allclose(h, [[0.0, -1.0, -1.0, 0.0, 0.0]])
-    s = 1e-2 + 1e-4 + 0.003**2 / 3
-    assert (nu[0], r[0], d2[0]) == (pytest.approx(0.01), pytest.approx(0.003**2 / 3),
-                                    pytest.approx(0.01**2 / s))
-    correct(state, cov, nu, h, r)
-    assert state[1] == pytest.approx(-1e-2 / s * 0.01) and state[2] == pytest.approx(-1e-4 / s
-                                                                                    * 0.01)
-    assert cov[1, 1] == pytest.approx(1e-2 - 1e-4 / s)
-
-
-def test_of_two_detections_of_one_beacon_only_the_nearer_passes():
-    passed = gate(np.array([0.5, 3.0, 0.2, 50.0]), np.array([7, 7, 8, 9]), 10.83)
-    assert passed.tolist() == [True, False, True, False]
 
 
 @pytest.mark.parametrize("name", ["gated-ekf", "robust"])
