@@ -114,9 +114,9 @@ class GatedEkf(Tracker):
         self._running = True
 
     def _predict(self, motion: Motion) -> None:
-        step = self._steps.step(motion)
-        if self._running:
-            predict(self._state, self._cov, step, self._lever, self._noise)
+        for step in self._steps.steps(motion):
+            if self._running:
+                predict(self._state, self._cov, step, self._lever, self._noise)
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         if not self._running:

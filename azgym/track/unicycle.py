@@ -9,7 +9,8 @@ ahead of that axle (negative: behind it), so it also slides sideways at ω · le
 camera, behind its steering-free front axle, swings out in turns (:mod:`azgym.world.forklift`).
 
 Each frame is one step with the mean speed and yaw rate of its samples and the heading at the
-step's midpoint. Time the motion sensors did not cover (a frame whose samples stop early, or a
+step's midpoint; a frame longer than ``MAX_STEP_S`` (the first after an outage) is cut into
+steps of its own. Time the motion sensors did not cover (a frame whose samples stop early, or a
 forklift carried with its sensors off) moves nothing and adds the variance of any motion within
 the forklift's limits: a teleport shows up as a covariance the azimuths then overrule.
 """
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -106,8 +108,33 @@ class HeldStream:
         return total, observed
 
 
+class Step(NamedTuple):
+    """One prediction step: what the motion sensors say happened over ``seconds``.
+
+    Attributes:
+        speed: Mean odometry speed over the observed time [m/s].
+        yaw_rate: Mean measured yaw rate over the observed time [rad/s].
+        observed: Seconds both streams covered.
+        seconds: The step's length [s].
+        unseen: Seconds no sensor watched, charged to this step (see :meth:`MotionSteps.steps`).
+    """
+
+    speed: float
+    yaw_rate: float
+    observed: float
+    seconds: float
+    unseen: float
+
+
+MAX_STEP_S = 0.25
+"""Longest prediction step [s]: a longer frame (the first after an outage, whose motion spans
+seconds) is cut into equal steps no longer than this, each with its own samples' means. One
+step with the mean speed and turn rate of a 3 s gap that held a straight and a turn put the
+track metres off."""
+
+
 class MotionSteps:
-    """Turns each frame's :class:`Motion` into one unicycle step: mean speed, mean yaw rate, time.
+    """Turns each frame's :class:`Motion` into unicycle steps: mean speed, mean yaw rate, time.
 
     Args:
         period: The sample period assumed until a stream's spacing shows its own [s].
@@ -118,27 +145,52 @@ class MotionSteps:
         self.imu = HeldStream(period)
         self.time: float | None = None
 
-    def step(self, motion: Motion) -> tuple[float, float, float, float]:
-        """(speed [m/s], measured yaw rate [rad/s], observed seconds, frame seconds).
+    def steps(self, motion: Motion) -> list[Step]:
+        """The frame's steps: one, unless it spans more than ``MAX_STEP_S``.
 
+        Time no sensor watched is charged whole to the last step: an unobserved stretch is one
+        unknown motion, whose spread grows with its whole length, not a sum of independent ones.
         The first frame of a sequence has no start: it only starts the clock and the holds.
         """
         start = motion.time if self.time is None else self.time
         self.time = motion.time
-        odometry, imu = motion.odometry, motion.imu
-        distance, seen_odometry = self.odometry.integrate(odometry.time, odometry.speed, start,
-                                                          motion.time)
-        angle, seen_imu = self.imu.integrate(imu.time, imu.yaw_rate, start, motion.time)
+        count = max(1, math.ceil((motion.time - start) / MAX_STEP_S))
+        bounds = np.linspace(start, motion.time, count + 1)
+        odometry = _cuts(motion.odometry.time, bounds)
+        imu = _cuts(motion.imu.time, bounds)
+        steps = [self._step(motion, float(bounds[k]), float(bounds[k + 1]), odometry[k], imu[k])
+                 for k in range(count)]
+        unseen = sum(step.seconds - step.observed for step in steps)
+        steps[-1] = steps[-1]._replace(unseen=unseen)
+        return steps
+
+    def _step(self, motion: Motion, start: float, end: float, odometry: slice,
+              imu: slice) -> Step:
+        """One step over (``start``, ``end``], from the samples the slices pick."""
+        distance, seen_odometry = self.odometry.integrate(
+            motion.odometry.time[odometry], motion.odometry.speed[odometry], start, end)
+        angle, seen_imu = self.imu.integrate(motion.imu.time[imu], motion.imu.yaw_rate[imu],
+                                             start, end)
         tau = min(seen_odometry, seen_imu)
         speed = distance / seen_odometry if seen_odometry > 0 else 0.0
         rate = angle / seen_imu if seen_imu > 0 else 0.0
-        return speed, rate, tau, motion.time - start
+        return Step(speed, rate, tau, end - start, 0.0)
 
 
-def predict(state: FloatArray, cov: FloatArray, step: tuple[float, float, float, float],
-            lever: float, noise: MotionNoise) -> None:
-    """Move ``state`` and ``cov`` (in place) by one :meth:`MotionSteps.step`."""
-    read, measured_rate, tau, dt = step
+def _cuts(times: FloatArray, bounds: FloatArray) -> list[slice]:
+    """Each step's samples: those up to its end, after the previous step's.
+
+    The frame's samples all fall in its (start, end] (the tracker's motion check), so the first
+    step takes every one up to its end.
+    """
+    edges = [0, *np.searchsorted(times, bounds[1:-1], side="right").tolist(), times.size]
+    return [slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+
+
+def predict(state: FloatArray, cov: FloatArray, step: Step, lever: float,
+            noise: MotionNoise) -> None:
+    """Move ``state`` and ``cov`` (in place) by one :class:`Step`."""
+    read, measured_rate, tau, dt, unseen = step
     v = read * (1.0 + state[ISCALE])
     omega = measured_rate - state[IBIAS]
     half = state[IPHI] + 0.5 * omega * tau
@@ -157,11 +209,11 @@ def predict(state: FloatArray, cov: FloatArray, step: tuple[float, float, float,
     state[IY] += dy
     state[IPHI] = math.remainder(state[IPHI] + omega * tau, 2.0 * math.pi)
     cov[:] = jacobian @ cov @ jacobian.T
-    _add_noise(cov, v, tau, dt, c, s, noise)
+    _add_noise(cov, v, tau, dt, unseen, c, s, noise)
 
 
-def _add_noise(cov: FloatArray, v: float, tau: float, dt: float, c: float, s: float,
-               noise: MotionNoise) -> None:
+def _add_noise(cov: FloatArray, v: float, tau: float, dt: float, unseen: float, c: float,
+               s: float, noise: MotionNoise) -> None:
     """The step's process noise: along and across the track, heading, bias, unobserved time."""
     samples = max(tau * noise.rate_hz, 1.0)
     along = noise.speed_noise**2 / samples * tau**2 \
@@ -174,7 +226,6 @@ def _add_noise(cov: FloatArray, v: float, tau: float, dt: float, c: float, s: fl
     cov[IPHI, IPHI] += noise.gyro_noise**2 / samples * tau**2 + noise.heading_walk**2 * tau
     cov[IBIAS, IBIAS] += noise.bias_walk**2 * dt
     cov[ISCALE, ISCALE] += noise.scale_walk**2 * dt
-    unseen = dt - tau
     if unseen > 0.0:
         cov[IX, IX] += (noise.max_speed * unseen) ** 2
         cov[IY, IY] += (noise.max_speed * unseen) ** 2

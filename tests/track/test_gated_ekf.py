@@ -12,7 +12,7 @@ import azgym
 from azgym import InvalidInputError, Measurements
 from azgym.core import pose_error
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
-from azgym.track.unicycle import MotionNoise, MotionSteps, predict
+from azgym.track.unicycle import MotionNoise, MotionSteps, Step, predict
 from azgym.world.drive import simulate
 
 SILENT = MotionNoise(speed_noise=0.0, speed_scale=0.0, scale_walk=0.0, gyro_noise=0.0,
@@ -32,7 +32,7 @@ def test_a_prediction_by_hand():
     # 1 m/s for 0.1 s at heading 0, no turn, camera 0.5 m behind the steering-free axle.
     state = np.zeros(5)
     cov = np.diag([1e-4, 1e-4, 1e-4, 1e-6, 1e-4])
-    predict(state, cov, (1.0, 0.0, 0.1, 0.1), -0.5, SILENT)
+    predict(state, cov, Step(1.0, 0.0, 0.1, 0.1, 0.0), -0.5, SILENT)
     np.testing.assert_allclose(state, [0.1, 0.0, 0.0, 0.0, 0.0], atol=1e-15)
     # F: ∂y/∂φ = 0.1, ∂x/∂k = 0.1, ∂φ/∂b = −0.1, ∂y/∂b = −½·0.1·0.1 − (−0.5)·0.1 = 0.045.
     assert cov[0, 0] == pytest.approx(1e-4 + 0.1**2 * 1e-4)
@@ -43,15 +43,20 @@ def test_a_prediction_by_hand():
 
 def test_the_samples_hold_until_the_next_and_a_silent_gap_is_unobserved():
     steps = MotionSteps(0.02)
-    steps.step(steady(0.1, 2.0, 0.0))
-    speed, rate, observed, dt = steps.step(steady(0.2, 1.0, 0.5, start=0.1))
+    steps.steps(steady(0.1, 2.0, 0.0))
+    [(speed, rate, observed, dt, unseen)] = steps.steps(steady(0.2, 1.0, 0.5, start=0.1))
     # (0.1, 0.12] still runs on the last sample of the previous frame (2 m/s, no turn).
     assert (speed, rate) == (pytest.approx(0.02 * 2.0 / 0.1 + 0.08 * 1.0 / 0.1),
                              pytest.approx(0.08 * 0.5 / 0.1))
-    assert (observed, dt) == (pytest.approx(0.1), pytest.approx(0.1))
-    _, _, observed, dt = steps.step(steady(10.0, 1.0, 0.0, start=9.9))  # 9.7 s without samples
-    # Observed: the old sample's 1.5 periods (0.03 s), then 9.92 … 10.0 up to the frame (0.08 s).
-    assert dt == pytest.approx(9.8) and observed == pytest.approx(0.11)
+    assert (observed, dt, unseen) == (pytest.approx(0.1), pytest.approx(0.1),
+                                      pytest.approx(0.0, abs=1e-12))
+    gap = steps.steps(steady(10.0, 1.0, 0.0, start=9.9))  # 9.7 s without samples
+    # Observed: the old sample's 1.5 periods (0.03 s), then 9.92 … 10.0 up to the frame (0.08 s),
+    # in 40 steps of 0.245 s; the 9.69 s unseen are charged to the last step.
+    assert len(gap) == 40 and sum(step.seconds for step in gap) == pytest.approx(9.8)
+    assert sum(step.observed for step in gap) == pytest.approx(0.11)
+    assert [step.unseen for step in gap[:-1]] == [0.0] * 39
+    assert gap[-1].unseen == pytest.approx(9.8 - 0.11)
 
 
 @pytest.mark.parametrize("name", ["gated-ekf", "robust"])
