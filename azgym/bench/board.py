@@ -1,5 +1,8 @@
 """The published board: ranked Markdown tables (``leaderboard/README.md``) and a sortable page.
 
+A suite of driven routes adds track columns (:data:`TRACK_COLUMNS`) after the accuracy ones, and
+one with events (an outage, a kidnapping) the worst recovery (:data:`RECOVERY_COLUMN`).
+
 Everything an entry's submitter wrote (name, version, authors, link) is escaped where it is
 shown: in Markdown, ``|``, backslashes, line breaks and HTML cannot forge a row or a tag; on the
 page, HTML is escaped; a link is shown only when it is an ``http://`` or ``https://`` address.
@@ -21,6 +24,7 @@ import numpy as np
 from azgym.bench.leaderboard import LeaderboardError, load_all
 from azgym.bench.suites import SUITES, get_suite
 from azgym.bench.table import rank_key
+from azgym.bench.tracking import KIDNAP_WINDOW_S, RECOVERED_CM
 from azgym.files import prepare_folder, write_file
 
 WEB_SCHEMES = ("http://", "https://")
@@ -70,21 +74,59 @@ COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
            ("azgym", None)]
 NAME_COLUMN = 1
 """The column of the entry's name, which links to its web link."""
+TRACK_COLUMNS = ("track avail. %", "track max cm")
+"""A route suite's track figures: availability after the first fix, the largest error outside
+kidnapping windows (:mod:`azgym.bench.tracking`)."""
+RECOVERY_COLUMN = "worst recovery s"
+"""On a suite with events: the longest recovery, or ``never (k/N)`` when k of N events had none."""
+TRACKS_AT = [c for c, _ in COLUMNS].index("failures %") + 1
+"""The track columns come after the accuracy ones."""
+TRACKS_NOTE = (
+    "Suites of driven routes add track columns: *track avail. %* is the share of frames with an "
+    "estimate from each route's first fix on, *track max cm* the largest error outside the "
+    f"{KIDNAP_WINDOW_S:g} s after a kidnapping; on a suite with events (an outage, a "
+    f"kidnapping), *{RECOVERY_COLUMN}* is the longest time from an event to an estimate within "
+    f"{RECOVERED_CM:g} cm of the truth, *never (k/N)* when k of its N events were never "
+    "recovered from.")
 
 
-def _cells(rank: int, entry: dict[str, Any]) -> list[str]:
+def _percent(value: float | None) -> str:
+    return _fmt(None if value is None else 100 * value, 1)
+
+
+def _cells(rank: int, entry: dict[str, Any], tracks: int) -> list[str]:
+    """A table row: the entry's figures, with ``tracks`` track cells (0, 2 or 3)."""
     stats, runtime = entry["metrics"]["all"], entry["metrics"]["runtime_us"]
-
-    def percent(value: float | None) -> str:
-        return _fmt(None if value is None else 100 * value, 1)
-
     return [str(rank), entry["name"], entry["version"], ", ".join(entry["authors"]),
-            percent(stats["availability"]), _fmt(stats["mean_cm"]), _fmt(stats["median_cm"]),
+            _percent(stats["availability"]), _fmt(stats["mean_cm"]), _fmt(stats["median_cm"]),
             _fmt(stats["p75_cm"]), _interval(entry["metrics"].get("ci95", {}).get("p75_cm")),
-            _fmt(stats["p95_cm"], 1), percent(stats["failure_rate"]),
+            _fmt(stats["p95_cm"], 1), _percent(stats["failure_rate"]),
+            *_track_cells(entry["metrics"]["tracking"])[:tracks],
             _fmt(runtime["median"], 1), _fmt(runtime["ratio_to_ransac"]),
             f"{entry['split']} ({'quick' if entry['quick'] else 'full'})",
             entry["azgym_version"]]
+
+
+def _track_cells(tracking: dict[str, Any] | None) -> list[str]:
+    """Availability after the first fix, the largest error outside kidnaps, worst recovery."""
+    if tracking is None:
+        return ["–"] * (len(TRACK_COLUMNS) + 1)
+    events = tracking["events"]
+    never = sum(1 for event in events if event["recovery_s"] is None)
+    worst = f"never ({never}/{len(events)})" if never else \
+        _fmt(max((event["recovery_s"] for event in events), default=None), 1)
+    return [_percent(tracking["availability_after_first_fix"]),
+            _fmt(tracking["max_cm_outside_kidnaps"], 1), worst]
+
+
+def _header(entries: list[dict[str, Any]]) -> tuple[list[str], int]:
+    """A table's column names and how many track columns it has (the suite's, for every row)."""
+    tracks = [entry["metrics"]["tracking"] for entry in entries]
+    extra = [*TRACK_COLUMNS] if any(tracks) else []
+    if any(track and track["events"] for track in tracks):
+        extra.append(RECOVERY_COLUMN)
+    names = [c for c, _ in COLUMNS]
+    return names[:TRACKS_AT] + extra + names[TRACKS_AT:], len(extra)
 
 
 def build(entries_dir: Path, out_dir: Path) -> list[Path]:
@@ -106,7 +148,8 @@ def build(entries_dir: Path, out_dir: Path) -> list[Path]:
              f"by `azgym leaderboard build` from {len(loaded)} entries in `entries/`; every "
              "entry's figures are recomputed from its per-frame results when it is read, and "
              "its frames are checked to be the suite's. Runs of the dev split at full size are "
-             "the ranking; quick runs and the test split have tables of their own.", ""]
+             "the ranking; quick runs and the test split have tables of their own.", "",
+             TRACKS_NOTE, ""]
     sections = []
     for suite in SUITES:
         tables = [(split, quick, title, _ranked(loaded, suite, split, quick))
@@ -119,9 +162,11 @@ def build(entries_dir: Path, out_dir: Path) -> list[Path]:
         for split, quick, title, ranked in tables:
             table_id = f"board-{suite}" if (split, quick) == ("dev", False) else \
                 f"board-{suite}-{split}-{'quick' if quick else 'full'}"
-            rows = [_cells(rank, entry) for rank, (entry, _) in enumerate(ranked, 1)]
-            lines += [f"### {title}", "", *_markdown_table(rows, [e for e, _ in ranked]), ""]
-            sections.append((suite, description, title, table_id, rows,
+            header, tracks = _header([entry for entry, _ in ranked])
+            rows = [_cells(rank, entry, tracks) for rank, (entry, _) in enumerate(ranked, 1)]
+            lines += [f"### {title}", "",
+                      *_markdown_table(header, rows, [e for e, _ in ranked]), ""]
+            sections.append((suite, description, title, table_id, header, rows,
                              [web_link(entry["link"]) for entry, _ in ranked], _cdf_png(ranked)))
     prepare_folder(out_dir)
     readme = write_file(out_dir / "README.md", "\n".join(lines))
@@ -129,9 +174,9 @@ def build(entries_dir: Path, out_dir: Path) -> list[Path]:
     return [readme, page]
 
 
-def _markdown_table(rows: list[list[str]], entries: list[dict[str, Any]]) -> list[str]:
+def _markdown_table(header: list[str], rows: list[list[str]],
+                    entries: list[dict[str, Any]]) -> list[str]:
     """A ranked table's Markdown lines: header, rule, one escaped line per entry."""
-    header = [c for c, _ in COLUMNS]
     return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
             *("| " + " | ".join(_markdown_row(row, entry)) + " |"
               for row, entry in zip(rows, entries, strict=True))]
@@ -207,9 +252,9 @@ def _html_cells(row: list[str], link: str | None) -> str:
     return "".join(f"<td>{cell}</td>" for cell in cells)
 
 
-Section = tuple[str, str, str, str, list[list[str]], list[str | None], str | None]
-"""A table of the page: suite, its description, the table's title and id, rows, each row's
-link, the CDF image."""
+Section = tuple[str, str, str, str, list[str], list[list[str]], list[str | None], str | None]
+"""A table of the page: suite, its description, the table's title and id, its column names,
+rows, each row's link, the CDF image."""
 
 
 def _html(sections: list[Section], count: int) -> str:
@@ -220,10 +265,10 @@ def _html(sections: list[Section], count: int) -> str:
              "th{cursor:pointer;background:#eee}th[data-order=ascending]::after{content:' ▲'}",
              "th[data-order=descending]::after{content:' ▼'}</style></head><body>",
              "<h1>azgym leaderboard</h1>",
-             f"<p>{count} entries, ranked by p75 position error. Click a column to sort.</p>"]
-    header = [c for c, _ in COLUMNS]
+             f"<p>{count} entries, ranked by p75 position error. Click a column to sort.</p>",
+             f"<p>{html.escape(TRACKS_NOTE.replace('*', ''))}</p>"]
     previous = None
-    for suite, description, title, table_id, rows, links, cdf in sections:
+    for suite, description, title, table_id, header, rows, links, cdf in sections:
         if suite != previous:
             parts.append(f'<h2>{html.escape(suite)}</h2><p>{html.escape(description)}</p>')
             previous = suite

@@ -13,8 +13,9 @@ An entry (format in ``entry.schema.json``) is sound when:
   (:func:`~azgym.bench.entry_files.parse_frames`) and cover exactly the suite's frames: the
   suite is redrawn for the entry's seed and size, the digest of the cases must be
   ``cases_sha256`` and each row's scenario, group and cause the drawn frame's;
-- every figure under ``metrics`` (overall, 95 % intervals, by cause, by group, runtimes) equals
-  the one recomputed from the per-frame results, and ``n_frames`` their count.
+- every figure under ``metrics`` (overall, 95 % intervals, by cause, by group, runtimes, and the
+  track figures of a suite of driven routes) equals the one recomputed from the per-frame
+  results and the suite's cases as drawn for the coverage check, and ``n_frames`` their count.
 
 Runtimes are the submitter's measurements: they are checked for consistency with the per-frame
 results, and only a rerun (``azgym leaderboard verify``) measures them again.
@@ -37,10 +38,11 @@ from azgym._version import __version__
 from azgym.bench.entry_files import FrameTable, LeaderboardError, parse_frames
 from azgym.bench.plugin_files import is_portable, plugin_path
 from azgym.bench.results import cases_digest, contender_metrics
-from azgym.bench.suites import SUITES
+from azgym.bench.suites import SUITES, Case
 
-ENTRY_FORMAT = 2
-"""The entry format this azgym writes and reads (``format`` in ``entry.schema.json``)."""
+ENTRY_FORMAT = 3
+"""The entry format this azgym writes and reads (``format`` in ``entry.schema.json``); 3 added
+the track figures (``metrics/tracking``)."""
 CLOCK_SLACK = timedelta(minutes=10)
 """A timestamp may be this far ahead of the checking machine's clock."""
 _VERSION = re.compile(r"^(\d+(?:\.\d+)*)(?:(?:a|b|rc)\d+)?(?:\.post\d+)?(?:\.dev\d+)?"
@@ -84,8 +86,8 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
         raise LeaderboardError(f"{origin}: results_sha256: the per-frame results file does not "
                                f"match (its SHA-256 is {digest})")
     table = parse_frames(frames_text, origin)
-    _check_coverage(entry, table, origin)
-    _check_figures(entry, table, origin)
+    cases = _check_coverage(entry, table, origin)
+    _check_figures(entry, table, cases, origin)
 
 
 def _check_schema(entry: Any, origin: str) -> None:
@@ -174,20 +176,22 @@ def _check_timestamp(text: str, origin: str) -> None:
 
 
 @functools.lru_cache(maxsize=16)
-def suite_frames(name: str, version: int, seed: int, quick: bool
-                 ) -> tuple[str, tuple[tuple[str, str, str], ...]]:
-    """The digest of a suite's cases and each case's (scenario, group, cause), drawn once.
+def suite_cases(name: str, version: int, seed: int, quick: bool
+                ) -> tuple[str, tuple[Case, ...]]:
+    """A suite's cases and their digest, drawn once for the coverage check and the figures.
 
     ``version`` is part of the key so that a cache never outlives a suite's change.
     """
     cases = SUITES[name].build(seed, quick)
-    return cases_digest(cases), tuple((c.scenario, c.group, c.cause) for c in cases)
+    return cases_digest(cases), tuple(cases)
 
 
-def _check_coverage(entry: dict[str, Any], table: FrameTable, origin: str) -> None:
-    """The per-frame results hold exactly the frames the suite draws for the entry."""
-    digest, frames = suite_frames(entry["suite"], entry["suite_version"], entry["seed"],
-                                  entry["quick"])
+def _check_coverage(entry: dict[str, Any], table: FrameTable, origin: str
+                    ) -> tuple[Case, ...]:
+    """The per-frame results hold exactly the frames the suite draws for the entry: its cases."""
+    digest, cases = suite_cases(entry["suite"], entry["suite_version"], entry["seed"],
+                                entry["quick"])
+    frames = [(c.scenario, c.group, c.cause) for c in cases]
     size = "quick" if entry["quick"] else "full"
     if entry["cases_sha256"] != digest:
         raise LeaderboardError(
@@ -207,12 +211,14 @@ def _check_coverage(entry: dict[str, Any], table: FrameTable, origin: str) -> No
     if entry["n_frames"] != len(frames):
         raise LeaderboardError(f"{origin}: n_frames: the entry says {entry['n_frames']}, its "
                                f"per-frame results hold {len(frames)}")
+    return cases
 
 
-def _check_figures(entry: dict[str, Any], table: FrameTable, origin: str) -> None:
-    """Every stored figure is the one its per-frame results give."""
+def _check_figures(entry: dict[str, Any], table: FrameTable, cases: tuple[Case, ...],
+                   origin: str) -> None:
+    """Every stored figure is the one its per-frame results (on the suite's cases) give."""
     reference_us = entry["metrics"]["runtime_us"]["reference_us"]
-    recomputed = clean(contender_metrics(table.outcome, table.cause, table.group, reference_us))
+    recomputed = clean(contender_metrics(table.outcome, cases, reference_us))
     _compare(entry["metrics"], recomputed, "metrics", origin)
 
 
@@ -237,7 +243,15 @@ def _compare(claimed: Any, actual: Any, where: str, origin: str) -> None:
 
 
 def close(a: Any, b: Any, tolerance: float = 1e-9) -> bool:
-    """Whether two figures agree (None, for a figure that does not exist, only with None)."""
-    if a is None or b is None:
-        return a is None and b is None
+    """Whether two figures agree: numbers to ``tolerance``, anything else only when equal.
+
+    None (a figure that does not exist) agrees only with None, an event's name only with itself.
+    """
+    if not (_is_number(a) and _is_number(b)):
+        return a == b
     return math.isclose(float(a), float(b), rel_tol=tolerance, abs_tol=tolerance)
+
+
+def _is_number(value: Any) -> bool:
+    """An int or a float (a bool is neither here)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)

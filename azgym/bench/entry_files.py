@@ -27,7 +27,7 @@ from azgym.errors import AzgymError
 MAX_JSON_BYTES = 16 * 2**20
 """An entry or results.json larger than this is refused (a real one is a few kB)."""
 MAX_JSON_DEPTH = 16
-"""Deepest nesting of lists and objects an entry may have (a real one has 4)."""
+"""Deepest nesting of lists and objects an entry may have (a real one has 5)."""
 MAX_FRAMES_BYTES = 64 * 2**20
 """Per-frame results larger than this, compressed or decompressed, are refused (the largest
 suite's are about 4 MB)."""

@@ -70,6 +70,7 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
         raise LeaderboardError(f"{results_dir}: no localizer {label!r} in the results; there "
                                f"are: {', '.join(localizers)}")
     row = localizers[label]
+    figures = schema()["properties"]["metrics"]["required"]  # all, ci95, …, tracking
     try:
         text = _frames_of(results_dir / "frames.csv", label)
         entry = {
@@ -79,8 +80,7 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
             "split": summary["split"], "seed": summary["seed"], "quick": summary["quick"],
             "n_frames": summary["n_frames"], "cases_sha256": summary["cases_sha256"],
             "azgym_version": summary["azgym_version"],
-            "metrics": clean({key: row[key] for key in ("all", "ci95", "by_cause", "by_group",
-                                                        "runtime_us")}),
+            "metrics": clean({key: row[key] for key in figures}),
             "machine": {"platform": platform.platform(), "processor": platform.processor() or
                         platform.machine(), "cpus": os.cpu_count(),
                         "python": sys.version.split()[0]},
@@ -240,8 +240,8 @@ def runnable_spec(path: Path, entry: dict[str, Any]) -> str:
 def verify(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]]:
     """Rerun an entry's localizer on its suite, split and seed; return differing figures.
 
-    Every accuracy figure (overall, intervals, by cause, by group) is compared; runtimes are
-    not (they depend on the machine). An empty answer means the entry was reproduced.
+    Every accuracy figure (overall, intervals, by cause, by group, tracks) is compared;
+    runtimes are not (they depend on the machine). An empty answer means the entry was reproduced.
 
     Raises:
         LeaderboardError: The entry is not sound, its plug-in file is missing or changed, or
@@ -256,20 +256,25 @@ def verify(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]]:
     if fresh["crashes"] == entry["n_frames"]:
         raise LeaderboardError(f"{path}: the localizer could not run on any frame: "
                                f"{fresh['first_error']}")
-    claimed = {key: entry["metrics"][key] for key in ("all", "ci95", "by_cause", "by_group")}
+    claimed = {key: value for key, value in entry["metrics"].items() if key != "runtime_us"}
     return _differences(claimed, clean({key: fresh[key] for key in claimed}), "")
 
 
 def _differences(claimed: Any, fresh: Any, where: str) -> dict[str, tuple[Any, Any]]:
-    """Every figure that differs by more than 1e-6, by its path (``by_cause/clean/p75_cm``)."""
+    """Every figure that differs by more than 1e-6, by its path.
+
+    Paths name keys and list positions: ``by_cause/clean/p75_cm``, ``tracking/events/1/recovery_s``.
+    """
     if isinstance(claimed, dict) and isinstance(fresh, dict):
         found: dict[str, tuple[Any, Any]] = {}
         for key in dict.fromkeys([*claimed, *fresh]):
             found |= _differences(claimed.get(key), fresh.get(key), f"{where}{key}/")
         return found
-    if isinstance(claimed, list) and isinstance(fresh, list) and len(claimed) == len(fresh) \
-            and all(close(a, b, 1e-6) for a, b in zip(claimed, fresh, strict=True)):
-        return {}
+    if isinstance(claimed, list) and isinstance(fresh, list) and len(claimed) == len(fresh):
+        found = {}
+        for k, (a, b) in enumerate(zip(claimed, fresh, strict=True)):
+            found |= _differences(a, b, f"{where}{k}/")
+        return found
     if isinstance(claimed, (dict, list)) or isinstance(fresh, (dict, list)) or \
             not close(claimed, fresh, 1e-6):
         return {where.rstrip("/"): (claimed, fresh)}

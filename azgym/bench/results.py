@@ -1,8 +1,8 @@
 """A run's results: each contender's per-case outcome, the summary, and the files they are kept in.
 
-``results.json`` holds the summary (overall, by cause, by group, runtimes); ``frames.csv`` every
-case's outcome, in the columns of :data:`FRAME_COLUMNS`, which the leaderboard's per-frame
-files share.
+``results.json`` holds the summary (overall, by cause, by group, runtimes, tracks);
+``frames.csv`` every case's outcome, in the columns of :data:`FRAME_COLUMNS`, which the
+leaderboard's per-frame files share.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "posi
 def summarize(suite: Suite, split: str, seed: int, quick: bool,
               contenders: Sequence[Contender], cases: Sequence[Case],
               outcomes: dict[str, Outcome], reference: str) -> dict[str, Any]:
-    """The metrics of every contender, overall, by cause and by group, with runtimes.
+    """The metrics of every contender: overall, by cause, by group, runtimes and tracks.
 
     Args:
         suite: The suite run.
@@ -50,8 +50,6 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
         outcomes: Each contender's outcome, by label.
         reference: The label whose median runtime the others are compared with.
     """
-    causes = [case.cause for case in cases]
-    groups = [case.group for case in cases]
     reference_us = float(np.nanmedian(outcomes[reference].micros))
     results: dict[str, Any] = {}
     for contender in contenders:
@@ -59,8 +57,7 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
         results[contender.label] = {
             "spec": contender.spec, "params": contender.params,
             **plugin_record(contender.spec),
-            **contender_metrics(outcome, causes, groups, reference_us),
-            "tracking": tracking_metrics(cases, outcome),
+            **contender_metrics(outcome, cases, reference_us),
             "crashes": sum(1 for e in outcome.errors if e),
             "first_error": next((e for e in outcome.errors if e), ""),
         }
@@ -70,20 +67,23 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
             "localizers": results}
 
 
-def contender_metrics(outcome: Outcome, causes: Sequence[str], groups: Sequence[str],
-                      reference_us: float) -> dict[str, Any]:
-    """One contender's figures: overall, 95 % intervals, by cause, by group, runtimes.
+def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: float
+                      ) -> dict[str, Any]:
+    """One contender's figures: overall, 95 % intervals, by cause, by group, runtimes, tracks.
 
     The one rule for them: the runner's summary and a leaderboard entry's check (which
-    recomputes them from the entry's per-frame results) both call this.
+    recomputes them from the entry's per-frame results and the suite's cases, drawn again) both
+    call this. ``tracking`` is :func:`~azgym.bench.tracking.tracking_metrics` (None for cases
+    without sequences).
 
     Args:
         outcome: Its outcome on each case.
-        causes: Each case's cause.
-        groups: Each case's group.
+        cases: The cases (their causes and groups; their sequences, times and events).
         reference_us: The reference localizer's median runtime in the same run [µs].
     """
-    cause_of, group_of = np.array(causes, dtype=object), np.array(groups, dtype=object)
+    groups = [case.group for case in cases]
+    cause_of = np.array([case.cause for case in cases], dtype=object)
+    group_of = np.array(groups, dtype=object)
     timed = outcome.micros[np.isfinite(outcome.micros)]
     median_us = float(np.median(timed)) if timed.size else math.nan
     return {
@@ -96,6 +96,7 @@ def contender_metrics(outcome: Outcome, causes: Sequence[str], groups: Sequence[
                        "p99": float(np.percentile(timed, 99)) if timed.size else math.nan,
                        "ratio_to_ransac": median_us / reference_us,
                        "reference_us": reference_us},
+        "tracking": tracking_metrics(cases, outcome),
     }
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import gzip
 import hashlib
 import html
@@ -16,7 +17,7 @@ import pytest
 
 from azgym.bench import board as B
 from azgym.bench import leaderboard as L
-from azgym.bench.entries import clean
+from azgym.bench.entries import clean, suite_cases
 from azgym.bench.entry_files import parse_frames
 from azgym.bench.results import contender_metrics
 from azgym.bench.runner import Contender, run_benchmark
@@ -103,6 +104,9 @@ def rewrite(path, change):
         (lambda e: e.update(suite="nonsense"), "suite: unknown suite 'nonsense'"),
         (lambda e: e.update(results_sha256="0" * 64), "results_sha256: the per-frame results"),
         (lambda e: e.update(name="bad name!"), "name: 'bad name!' does not match"),
+        (lambda e: e.update(format=2), "format: the entry is in format 2, this azgym reads "
+                                       "format 3; make it again"),
+        (lambda e: e["metrics"].pop("tracking"), "metrics: 'tracking' is a required property"),
     ],
 )
 def test_malformed_or_tampered_entries_are_rejected_with_the_reason(entry_path, change, message):
@@ -206,7 +210,8 @@ def test_a_consistent_forgery_passes_the_checks_and_verify_catches_it(entry_path
     table = parse_frames(text, "forged")
     entry = json.loads(entry_path.read_text())
     entry["results_sha256"] = hashlib.sha256(text.encode()).hexdigest()
-    entry["metrics"] = clean(contender_metrics(table.outcome, table.cause, table.group,
+    _, cases = suite_cases("stress", entry["suite_version"], entry["seed"], entry["quick"])
+    entry["metrics"] = clean(contender_metrics(table.outcome, cases,
                                                entry["metrics"]["runtime_us"]["reference_us"]))
     entry_path.write_text(json.dumps(entry))
     assert L.load_entry(entry_path)["name"] == "lsq-ref"
@@ -388,3 +393,161 @@ def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(t
     readme, _ = B.build(root / "entries", tmp_path)
     assert readme.read_text() == (root / "README.md").read_text(), \
         "leaderboard/README.md is stale: run python baselines/leaderboard_entries.py"
+
+
+# Tracks: a route suite's entry carries the figures of its tracks, checked like every other.
+
+@pytest.fixture(scope="module")
+def routes(tmp_path_factory):
+    """route-events (809 frames, two routes, four events): lsq recovers from every event, dead
+    reckoning (which never looks at a beacon after its start) from none."""
+    out = tmp_path_factory.mktemp("routes")
+    run_benchmark(get_suite("route-events"), [Contender("lsq", "lsq"), Contender(
+        "dead-reckoning", "dead-reckoning")], quick=True).write(out, figures=False)
+    return out
+
+
+@pytest.fixture
+def route_entry(routes, tmp_path):
+    return L.submit(routes, "lsq", tmp_path / "entries", name="lsq-events", version="1",
+                    authors=["a"])
+
+
+def test_a_route_entry_carries_the_track_figures_of_its_run(routes, route_entry, entry_path):
+    tracking = L.load_entry(route_entry)["metrics"]["tracking"]
+    run = json.loads((routes / "results.json").read_text())["localizers"]["lsq"]["tracking"]
+    assert tracking == clean(run)
+    assert [event["event"] for event in tracking["events"]] == ["outage", "kidnap"] * 2
+    assert all(event["recovery_s"] is not None for event in tracking["events"])
+    assert L.load_entry(entry_path)["metrics"]["tracking"] is None  # stress: no sequences
+
+
+def set_recovery(entry, seconds):
+    entry["metrics"]["tracking"]["events"][1]["recovery_s"] = seconds
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda e: set_recovery(e, 0.1),
+         r"metrics/tracking/events/1/recovery_s: the entry says 0.1, its per-frame results give "
+         r"\d"),
+        (lambda e: set_recovery(e, None),
+         "metrics/tracking/events/1/recovery_s: the entry says None, its per-frame results give"),
+        (lambda e: e["metrics"]["tracking"]["events"][1].update(event="outage"),
+         "metrics/tracking/events/1/event: the entry says outage, its per-frame results give "
+         "kidnap"),
+        (lambda e: e["metrics"]["tracking"]["events"].pop(),
+         "metrics/tracking/events: the entry says .*, its per-frame results give"),
+        (lambda e: e["metrics"]["tracking"].update(availability_after_first_fix=1.0),
+         "metrics/tracking/availability_after_first_fix: the entry says 1.0"),
+        (lambda e: e["metrics"]["tracking"].update(frames_over_1m_outside_kidnaps=0),
+         "metrics/tracking/frames_over_1m_outside_kidnaps: the entry says 0"),
+        (lambda e: e["metrics"].update(tracking=None),
+         r"metrics/tracking: the entry has None, its per-frame results give \['availability"),
+        (lambda e: set_recovery(e, -1.0), "recovery_s: -1.0 is less than the minimum of 0"),
+    ],
+)
+def test_a_forged_track_figure_is_refused_naming_it(route_entry, change, message):
+    rewrite(route_entry, change)
+    with pytest.raises(L.LeaderboardError, match=message):
+        L.load_entry(route_entry)
+
+
+def test_track_figures_claimed_on_a_suite_without_routes_are_refused(route_entry, entry_path):
+    tracking = json.loads(route_entry.read_text())["metrics"]["tracking"]
+    rewrite(entry_path, lambda e: e["metrics"].update(tracking=tracking))
+    with pytest.raises(L.LeaderboardError, match=r"metrics/tracking: the entry says \{.*\}, its "
+                       "per-frame results give None"):
+        L.load_entry(entry_path)
+
+
+def test_every_read_draws_a_suite_once_for_coverage_and_figures(entry_path, monkeypatch):
+    stress, builds = get_suite("stress"), []
+
+    def counted(seed, quick):
+        builds.append(seed)
+        return stress.build(seed, quick)
+
+    monkeypatch.setitem(L.SUITES, "stress", dataclasses.replace(stress, build=counted))
+    suite_cases.cache_clear()
+    L.load_entry(entry_path)
+    L.load_entry(entry_path)
+    assert builds == [13]
+
+
+def test_verify_compares_the_track_figures(route_entry):
+    assert L.verify(route_entry) == {}
+    claimed = {"tracking": {"events": [{"event": "kidnap", "recovery_s": 0.1}]}}
+    fresh = {"tracking": {"events": [{"event": "kidnap", "recovery_s": 2.8}]}}
+    assert L._differences(claimed, fresh, "") == {"tracking/events/0/recovery_s": (0.1, 2.8)}
+
+
+def board_tables(readme):
+    """Each table of a board's README: its title, header cells and rows' cells by name."""
+    tables = {}
+    for part in readme.read_text().split("\n## ")[1:]:
+        suite = part.split(" — ")[0]
+        lines = [line for line in part.splitlines() if line.startswith("| ")]
+        header = [cell.strip() for cell in lines[0].split("|")[1:-1]]
+        rows = {}
+        for line in lines[1:]:
+            cells = [cell.strip() for cell in line.split("|")[1:-1]]
+            rows[cells[1]] = dict(zip(header, cells, strict=True))
+        tables[suite] = (header, rows)
+    return tables
+
+
+def test_the_board_shows_track_columns_for_route_suites_only(routes, route_entry, results,
+                                                              tmp_path):
+    entries = route_entry.parent
+    L.submit(routes, "dead-reckoning", entries, name="dr-events", version="1", authors=["a"])
+    L.submit(results, "lsq", entries, name="lsq-stress", version="1", authors=["a"])
+    run_benchmark(get_suite("warehouse-routes"), [Contender("lsq", "lsq")], quick=True).write(
+        tmp_path / "plain", figures=False)
+    L.submit(tmp_path / "plain", "lsq", entries, name="lsq-plain", version="1", authors=["a"])
+    readme, page = B.build(entries, tmp_path / "board")
+    tables = board_tables(readme)
+    base = [c for c, _ in B.COLUMNS]
+    assert tables["stress"][0] == base
+    tracks = base[:B.TRACKS_AT] + list(B.TRACK_COLUMNS)
+    assert tables["warehouse-routes"][0] == tracks + base[B.TRACKS_AT:]  # no events: no recovery
+    header, rows = tables["route-events"]
+    assert header == tracks + [B.RECOVERY_COLUMN] + base[B.TRACKS_AT:]
+    tracking = L.load_entry(route_entry)["metrics"]["tracking"]
+    lsq = rows["lsq-events"]
+    assert lsq["track avail. %"] == f"{100 * tracking['availability_after_first_fix']:.1f}"
+    assert lsq["track max cm"] == f"{tracking['max_cm_outside_kidnaps']:.1f}"
+    assert lsq[B.RECOVERY_COLUMN] == f"{max(e['recovery_s'] for e in tracking['events']):.1f}"
+    assert rows["dr-events"][B.RECOVERY_COLUMN] == "never (4/4)"
+    assert "*track avail. %* is the share of frames" in readme.read_text()
+    text = page.read_text()
+    assert f"<th>{B.RECOVERY_COLUMN}</th>" in text and "<td>never (4/4)</td>" in text
+
+
+@pytest.mark.slow
+def test_the_recovery_column_sorts_never_after_every_time_in_headless_chromium(
+        routes, route_entry, tmp_path):
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run installs it)")
+    L.submit(routes, "dead-reckoning", route_entry.parent, name="dr-events", version="1",
+             authors=["a"])
+    _, page = B.build(route_entry.parent, tmp_path / "board")
+    probe = f"""<script>
+      var table = document.querySelector("table.board"), cells = table.tHead.rows[0].cells;
+      var column = Array.prototype.map.call(cells, function (c) {{ return c.textContent; }})
+        .indexOf("{B.RECOVERY_COLUMN}");
+      function values() {{
+        return Array.prototype.map.call(table.tBodies[0].rows,
+          function (row) {{ return row.cells[column].textContent; }}).join(";");
+      }}
+      cells[column].click(); var up = values(); cells[column].click(); var down = values();
+      document.body.setAttribute("data-up", up); document.body.setAttribute("data-down", down);
+    </script>"""
+    harness = tmp_path / "harness.html"
+    harness.write_text(page.read_text().replace("</body>", probe + "</body>"))
+    attributes = body_attributes(chromium, harness, tmp_path)
+    up = attributes["up"].split(";")
+    assert up[-1] == "never (4/4)" and float(up[0]) >= 0
+    assert attributes["down"].split(";") == up[::-1]

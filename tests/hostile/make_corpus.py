@@ -2,17 +2,20 @@
 
     PYTHONPATH=. python tests/hostile/make_corpus.py
 
-Each entry is a sound one (``sound``: ``lsq`` on the stress suite's quick dev split) with one
-attack on it; where the attack needs it, the attacker's own bookkeeping (the SHA-256 of the
-per-frame file, the figures recomputed from the forged rows) is redone, so that the check under
-test is the one that must catch it. ``test_hostile_entries.py`` pins each to its message. Run
-this again when the stress suite's version changes (the ``sound`` entry then fails its test).
+Each entry is a sound one with one attack on it: ``sound`` (``lsq`` on the stress suite's quick
+dev split) for most, ``sound-track`` (``lsq`` on route-events, whose entries carry the figures of
+tracks) for the attacks on track figures. Where the attack needs it, the attacker's own
+bookkeeping (the SHA-256 of the per-frame file, the figures recomputed from the forged rows) is
+redone, so that the check under test is the one that must catch it. ``test_hostile_entries.py``
+pins each to its message. Run this again when the entry format or the version of either suite
+changes (a ``sound`` entry then fails its test).
 """
 
 from __future__ import annotations
 
 import copy
 import csv
+import dataclasses
 import gzip
 import hashlib
 import io
@@ -24,20 +27,28 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.entries import clean
+from azgym.bench.entries import ENTRY_FORMAT, clean
 from azgym.bench.leaderboard import frames_file_text, make_entry
 from azgym.bench.outcome import Outcome
 from azgym.bench.results import contender_metrics
 from azgym.bench.runner import Contender, run_benchmark
-from azgym.bench.suites import get_suite
+from azgym.bench.suites import Case, get_suite
 
 CORPUS = Path(__file__).resolve().parent / "entries"
 Rows = list[list[str]]
 Attack = Callable[[dict[str, Any], Rows], Any]
 
 
+STRESS_CASES: list[Case] = []
+"""The stress suite's cases the sound entry was scored on (``main`` fills it)."""
+
+
 def reseal(entry: dict[str, Any], rows: Rows, figures: bool = False) -> str:
-    """The forged rows as a file, with the entry's SHA-256 (and figures) made to match."""
+    """The forged rows as a file, with the entry's SHA-256 (and figures) made to match.
+
+    The figures are those of the stress cases the rows name (frame column), as the rows label
+    them (group and cause columns).
+    """
     text = frames_file_text(rows)
     entry["results_sha256"] = hashlib.sha256(text.encode()).hexdigest()
     if figures:
@@ -45,9 +56,10 @@ def reseal(entry: dict[str, Any], rows: Rows, figures: bool = False) -> str:
         ok, position, heading, micros, errors = zip(*outcome_rows, strict=True)
         outcome = Outcome(np.array(ok), np.array(position), np.array(heading), np.array(micros),
                           list(errors))
+        cases = [dataclasses.replace(STRESS_CASES[int(r[1])], group=r[3], cause=r[4])
+                 for r in rows]
         reference = entry["metrics"]["runtime_us"]["reference_us"]
-        entry["metrics"] = clean(contender_metrics(outcome, [r[4] for r in rows],
-                                                   [r[3] for r in rows], reference))
+        entry["metrics"] = clean(contender_metrics(outcome, cases, reference))
         entry["n_frames"] = len(rows)
     return text
 
@@ -101,7 +113,7 @@ ATTACKS: dict[str, Attack] = {
     "no-time-zone": lambda e, r: e.update(timestamp="2026-01-01T00:00:00"),
     "future-date": lambda e, r: e.update(timestamp="2999-01-01T00:00:00+00:00"),
     "other-suite-version": lambda e, r: e.update(suite_version=99),
-    "old-format": lambda e, r: e.update(format=1),
+    "old-format": lambda e, r: e.update(format=2),
     "impostor": lambda e, r: e.update(name="sound"),
     "borrowed-results": lambda e, r: e.update(results_file="sound.frames.csv.gz"),
     "absolute-plugin": lambda e, r: e.update(localizer={"spec": "/tmp/evil.py:Evil",
@@ -109,13 +121,24 @@ ATTACKS: dict[str, Attack] = {
     "plugin-without-hash": lambda e, r: e.update(localizer={"spec": "evil.py:Evil",
                                                             "params": {}}),
     "extra-figure": lambda e, r: e["metrics"]["all"].update(rank=1),
+    "tracks-without-routes": lambda e, r: e["metrics"].update(tracking={
+        "availability_after_first_fix": 1.0, "max_cm_outside_kidnaps": 5.0,
+        "frames_over_1m_outside_kidnaps": 0, "events": []}),
 }
 """Attacks on the entry (and its rows), by the name of the corpus entry."""
 
+TRACK_ATTACKS: dict[str, Attack] = {
+    "sound-track": lambda e, r: None,
+    "edited-recovery": lambda e, r: e["metrics"]["tracking"]["events"][1].update(recovery_s=0.1),
+    "edited-track-max": lambda e, r: e["metrics"]["tracking"].update(max_cm_outside_kidnaps=9.5),
+    "dropped-tracking": lambda e, r: e["metrics"].update(tracking=None),
+}
+"""Attacks on the track figures of an entry on route-events (its second event: a kidnapping)."""
+
 RAW: dict[str, Callable[[], tuple[str, bytes | None]]] = {
-    "deep-json": lambda: ('{"format": 2, "name": ' + nested(20) + "}", None),
-    "recursion-json": lambda: ('{"format": 2, "name": ' + nested(5000) + "}", None),
-    "nan-json": lambda: ('{"format": 2, "n_frames": NaN}', None),
+    "deep-json": lambda: (f'{{"format": {ENTRY_FORMAT}, "name": {nested(20)}}}', None),
+    "recursion-json": lambda: (f'{{"format": {ENTRY_FORMAT}, "name": {nested(5000)}}}', None),
+    "nan-json": lambda: (f'{{"format": {ENTRY_FORMAT}, "n_frames": NaN}}', None),
     "not-json": lambda: ("{not json", None),
 }
 """Entries that are not even JSON objects one can read: their text (and frames bytes)."""
@@ -128,27 +151,36 @@ def frames_payloads() -> dict[str, bytes]:
     return {"gzip-bomb": bomb, "not-gzip": b"plain text, not gzip", "huge-field": huge}
 
 
-def main() -> None:
-    suite = get_suite("stress")
+def sound(suite: str) -> tuple[dict[str, Any], str, list[Case]]:
+    """A sound entry of ``lsq`` on the suite's quick dev split, its per-frame text and cases."""
     with tempfile.TemporaryDirectory() as folder:
-        run_benchmark(suite, [Contender("lsq", "lsq")], quick=True).write(Path(folder),
-                                                                          figures=False)
+        result = run_benchmark(get_suite(suite), [Contender("lsq", "lsq")], quick=True)
+        result.write(Path(folder), figures=False)
         base, text = make_entry(Path(folder), "lsq", CORPUS, name="sound", version="1.0",
                                 authors=["A. Author"], link="")
     base.update(timestamp="2026-01-01T00:00:00+00:00",
                 machine={"platform": "Linux", "processor": "x86_64", "cpus": 2,
                          "python": "3.11.7"})
-    rows = list(csv.reader(io.StringIO(text)))[1:]
+    return base, text, result.cases
+
+
+def main() -> None:
+    stress, stress_text, cases = sound("stress")
+    STRESS_CASES[:] = cases
+    track, track_text, _ = sound("route-events")
     for old in CORPUS.glob("*"):
         old.unlink()
     CORPUS.mkdir(exist_ok=True)
-    for name, attack in ATTACKS.items():
-        entry = copy.deepcopy(base) | {"name": name, "results_file": f"{name}.frames.csv.gz"}
-        frames = attack(entry, rows)
-        write(name, json.dumps(entry, indent=1, allow_nan=False),
-              gzip.compress((frames or text).encode(), mtime=0))
+    for base, text, attacks in ((stress, stress_text, ATTACKS),
+                                (track, track_text, TRACK_ATTACKS)):
+        rows = list(csv.reader(io.StringIO(text)))[1:]
+        for name, attack in attacks.items():
+            entry = copy.deepcopy(base) | {"name": name, "results_file": f"{name}.frames.csv.gz"}
+            frames = attack(entry, rows)
+            write(name, json.dumps(entry, indent=1, allow_nan=False),
+                  gzip.compress((frames or text).encode(), mtime=0))
     for name, payload in frames_payloads().items():
-        entry = copy.deepcopy(base) | {"name": name, "results_file": f"{name}.frames.csv.gz"}
+        entry = copy.deepcopy(stress) | {"name": name, "results_file": f"{name}.frames.csv.gz"}
         if name == "huge-field":  # the attacker seals it: the CSV reader must catch it
             entry["results_sha256"] = hashlib.sha256(gzip.decompress(payload)).hexdigest()
         write(name, json.dumps(entry, indent=1), payload)

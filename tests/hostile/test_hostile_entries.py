@@ -1,9 +1,11 @@
 """Hostile leaderboard entries: each is refused with a message naming what is wrong, never a crash.
 
-The corpus (``tests/hostile/entries/``, written by ``make_corpus.py``) is a sound entry and
-copies of it with one attack each: figures forged, frames left out or relabelled, rows that no
-run writes, claims about the run edited, files that are not what they say (deeply nested JSON,
-a gzip bomb). The attacker redoes the bookkeeping (SHA-256, figures) where the attack needs it.
+The corpus (``tests/hostile/entries/``, written by ``make_corpus.py``) is two sound entries
+(``sound`` on the stress suite, ``sound-track`` on route-events, whose entries carry the figures
+of tracks) and copies of them with one attack each: figures forged (track figures too), frames
+left out or relabelled, rows that no run writes, claims about the run edited, files that are
+not what they say (deeply nested JSON, a gzip bomb). The attacker redoes the bookkeeping
+(SHA-256, figures) where the attack needs it.
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ import pytest
 from azgym.bench import leaderboard as L
 
 CORPUS = Path(__file__).resolve().parent / "entries"
+SOUND = {"sound", "sound-track"}
+"""The sound entries the attacks are made on: stress, and route-events (track figures)."""
 
 EXPECTED = {
     # Figures: every one is recomputed from the per-frame results.
@@ -26,6 +30,16 @@ EXPECTED = {
     "dropped-group": "metrics/by_group: the entry has [], its per-frame results give",
     "negative-p75": "metrics/all/p75_cm: -500.0 is less than the minimum of 0",
     "extra-figure": "metrics/all: Additional properties are not allowed ('rank' was unexpected)",
+    # Track figures (a suite of driven routes): recomputed from the per-frame results and the
+    # suite's cases; lsq recovered from the kidnapping (event 1) in 2.8 s.
+    "edited-recovery": "metrics/tracking/events/1/recovery_s: the entry says 0.1, its per-frame "
+                       "results give 2.7999",
+    "edited-track-max": "metrics/tracking/max_cm_outside_kidnaps: the entry says 9.5, its "
+                        "per-frame results give 1424.47",
+    "dropped-tracking": "metrics/tracking: the entry has None, its per-frame results give "
+                        "['availability_after_first_fix', 'events'",
+    "tracks-without-routes": "metrics/tracking: the entry says {'availability_after_first_fix': "
+                             "1.0, 'max_cm_outside_kidnaps': 5.0, 'frames_over_1m_outside_kidn",
     # Frames: exactly the suite's, in order, as the suite draws them.
     "five-frames": "per-frame results: 5 frames, but stress (seed 13, quick) has 60",
     "fake-cases-digest": "cases_sha256: the entry was scored on other frames than stress v1 "
@@ -54,7 +68,7 @@ EXPECTED = {
     "future-date": "timestamp: 2999-01-01T00:00:00+00:00 is in the future",
     "other-suite-version": "suite_version: stress is at version 1, the entry was scored on "
                            "version 99; rerun it",
-    "old-format": "format: the entry is in format 1, this azgym reads format 2",
+    "old-format": "format: the entry is in format 2, this azgym reads format 3; make it again",
     # Identity: an entry is its file, and its results are its own.
     "impostor": "name: 'sound', but the file is impostor.json",
     "borrowed-results": "results_file: must be borrowed-results.frames.csv.gz, got "
@@ -73,8 +87,9 @@ EXPECTED = {
 
 def test_the_corpus_is_the_pinned_one_and_its_sound_entry_loads():
     # A failure here after a change of the stress suite: python tests/hostile/make_corpus.py
-    assert {path.stem for path in CORPUS.glob("*.json")} == set(EXPECTED) | {"sound"}
-    assert L.load_entry(CORPUS / "sound.json")["name"] == "sound"
+    assert {path.stem for path in CORPUS.glob("*.json")} == set(EXPECTED) | SOUND
+    for name in SOUND:
+        assert L.load_entry(CORPUS / f"{name}.json")["name"] == name
 
 
 @pytest.mark.parametrize("name", sorted(EXPECTED))
