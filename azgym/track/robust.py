@@ -31,7 +31,7 @@ import numpy as np
 
 from azgym.core import BeaconMap, Estimate, Measurements, Pose
 from azgym.hyperparameters import check_range
-from azgym.track.gated_ekf import GatedEkf
+from azgym.track.gated_ekf import GatedEkf, subset
 from azgym.track.unicycle import IPHI, IX, IY
 
 CONFIRMING_BEACONS = 4
@@ -101,7 +101,7 @@ class Robust(GatedEkf):
             return self._restart(fix)
         if self._position_std() > self.max_position_std:
             return self._relocalize(measurements, beacons)
-        inliers, distinct = self._correct(measurements, beacons)
+        inliers, distinct = self._apply(measurements, beacons)
         accepted = int(inliers.sum())
         inconsistent = distinct >= 3 and 2 * accepted < distinct
         if self._tentative:
@@ -148,8 +148,7 @@ class Robust(GatedEkf):
         self._tentative = fix.n_inliers < CONFIRMING_BEACONS
         self._bad_since = None
         chosen = np.flatnonzero(fix.inliers)
-        accepted, _ = self._correct(
-            Measurements(measurements.ids[chosen], measurements.azimuth[chosen]), beacons)
+        accepted, _ = self._apply(subset(measurements, chosen), beacons)
         inliers[chosen[accepted]] = True
         return self._answer(inliers, {"relocalized": True})
 
