@@ -15,12 +15,26 @@ fail it once the track is tight. A beacon is measured at most once: of two detec
 id (a ghost beside the real beacon) only the nearer to the prediction may pass (the smaller
 ν²/S; on a tie, the earlier detection).
 
+Passing the gate against the prediction is not enough when the prediction is wide (after a
+start, an outage, a relocalization): a beacon moved since the map was made then passes too, and
+outweighs the few lit beacons beside it, pulling the track tens of centimetres to where its
+azimuth fits; once there, the track is tight and the good beacons fail the gate. What gives it
+away is that the others agree with each other and not with it. So each accepted azimuth also
+faces Packi & Hanebeck's leave-one-out test, against the prediction corrected by all the other
+accepted ones: for the accepted innovations ν with joint covariance S = H P Hᵀ + R (the shared
+pose's cross terms included) and w = S⁻¹ ν, azimuth i's residual given the others, over its
+variance, is w_i² / (S⁻¹)_ii, chi-square with one degree of freedom, held to the gate's own
+threshold. The worst offender is withheld and the gate run again without it (a detection of its
+beacon that lost to it may take its place), until every remaining one passes; one azimuth alone
+has no others to face. Each statistic is at most νᵀ S⁻¹ ν ≤ Σ ν_i² / R_i (S ⪰ R), so a set whose
+innovations are within their noise (a tight track's usual frame) passes without forming S.
+
 The accepted azimuths then correct the state jointly, K = P Hᵀ (H P Hᵀ + R)⁻¹, x⁺ = x + K ν,
 P⁺ = P − K H P, with H linearized at the prediction. Because R is diagonal, this is computed as
 one scalar update per accepted azimuth in turn, each innovation corrected by H_i (x − x⁻) for
 the updates before it: the same posterior without a matrix inverse. The whole step is one
-compiled loop: as numpy calls on a frame's handful of azimuths it cost about 35 µs, over the
-30 µs a Kalman update may take beside a per-frame fix.
+compiled loop: as numpy calls on a frame's handful of azimuths the gate and the update alone
+cost about 35 µs, over the 30 µs a Kalman update may take beside a per-frame fix.
 """
 
 from __future__ import annotations
@@ -51,8 +65,8 @@ def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_
         threshold: The gate: the largest ν²/S accepted.
 
     Returns:
-        Which measurements passed, and each one's squared Mahalanobis distance ν²/S at the
-        prediction.
+        Which measurements passed the gate and the leave-one-out test, and each one's squared
+        Mahalanobis distance ν²/S at the prediction.
     """
     passed = np.zeros(floats.shape[1], dtype=np.bool_)
     distance = np.empty(floats.shape[1])
@@ -84,16 +98,69 @@ def _gated_update(state, cov, floats, beacon_index, delta_d, extra_sigma, thresh
             for b in range(size):
                 spread += rows[i, a] * cov[a, b] * rows[i, b]
         distance[i] = nu[i] * nu[i] / spread
-        passed[i] = distance[i] < threshold
-    for i in range(count):  # one detection per beacon: the nearest to the prediction
+    withheld = np.zeros(count, dtype=np.bool_)
+    _gate(distance, beacon_index, threshold, withheld, passed)
+    while _withhold_worst(nu, rows, noise, cov, threshold, passed, withheld):
+        _gate(distance, beacon_index, threshold, withheld, passed)
+    _update(state, cov, nu, rows, noise, passed)
+
+
+@jit
+def _gate(distance, beacon_index, threshold, withheld, passed):
+    """``passed``: under the threshold, not withheld, and the nearest of its beacon's detections."""
+    count = distance.size
+    for i in range(count):
+        passed[i] = distance[i] < threshold and not withheld[i]
+    for i in range(count):
         for j in range(count):
             if passed[i] and j != i and beacon_index[j] == beacon_index[i] and \
-                    distance[j] < threshold and \
+                    distance[j] < threshold and not withheld[j] and \
                     (distance[j] < distance[i] or (distance[j] == distance[i] and j < i)):
                 passed[i] = False
+
+
+@jit
+def _withhold_worst(nu, rows, noise, cov, threshold, passed, withheld):
+    """The leave-one-out test (module docstring): withhold the worst offender; whether one was."""
+    chosen = np.flatnonzero(passed)
+    count, size = chosen.size, cov.shape[0]
+    if count < 2:
+        return False
+    bound = 0.0
+    for i in chosen:
+        bound += nu[i] * nu[i] / noise[i]
+    if bound < threshold:
+        return False
+    spread = np.zeros((count, count))
+    for p in range(count):
+        for q in range(count):
+            total = noise[chosen[p]] if p == q else 0.0
+            for a in range(size):
+                for b in range(size):
+                    total += rows[chosen[p], a] * cov[a, b] * rows[chosen[q], b]
+            spread[p, q] = total
+    information = np.linalg.inv(spread)
+    worst, largest = 0, -1.0
+    for p in range(count):
+        w = 0.0
+        for q in range(count):
+            w += information[p, q] * nu[chosen[q]]
+        statistic = w * w / information[p, p]
+        if statistic > largest:
+            worst, largest = p, statistic
+    if largest < threshold:
+        return False
+    withheld[chosen[worst]] = True
+    return True
+
+
+@jit
+def _update(state, cov, nu, rows, noise, passed):
+    """The joint update on the passed azimuths, as scalar updates in turn (module docstring)."""
+    size = state.size
     moved = np.zeros(size)
     gain = np.empty(size)
-    for i in range(count):
+    for i in range(nu.size):
         if not passed[i]:
             continue
         innovation = nu[i]

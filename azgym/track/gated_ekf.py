@@ -2,9 +2,9 @@
 
 The filter follows the camera pose and the gyro's bias (:mod:`azgym.track.unicycle`): each frame
 it predicts with the odometry's speed and the gyro's yaw rate, then corrects with the frame's
-azimuths that pass the chi-square gate (:mod:`azgym.track.azimuth_update`) and then agree with
-each other (:func:`leave_one_out`: a moved beacon passes the gate of a wide prediction, not the
-test against the beacons beside it). It starts from the pose given to ``reset`` or, without
+azimuths that pass the chi-square gate and then agree with each other (a leave-one-out test: a
+moved beacon passes the gate of a wide prediction, not the test against the beacons beside it;
+both in :mod:`azgym.track.azimuth_update`). It starts from the pose given to ``reset`` or, without
 one, from the first frame a per-frame localizer (ransac or loo) solves, with that fix's
 covariance; until then it answers ``ok=False``. This is the textbook filter: once started it
 never doubts itself. :class:`~azgym.track.robust.Robust` adds
@@ -18,16 +18,7 @@ from statistics import NormalDist
 
 import numpy as np
 
-from azgym.core import (
-    BeaconMap,
-    BoolArray,
-    Estimate,
-    FloatArray,
-    IntArray,
-    Measurements,
-    Pose,
-    wrap_scalar,
-)
+from azgym.core import BeaconMap, Estimate, Measurements, Pose, wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_range
 from azgym.localize.base import ROW_BEACON_INDEX, ROW_SOURCE, Problem
@@ -137,7 +128,7 @@ class GatedEkf(Tracker):
                 return Estimate.failure(f"not initialized: {self._why}", len(measurements))
             self._start(np.array(fix.pose), fix.covariance)
             return self._estimate(fix.inliers, {"initialized": True})
-        inliers, _ = self._apply(measurements, beacons)
+        inliers, _ = self._correct(measurements, beacons)
         return self._estimate(inliers)
 
     # -- the steps ---------------------------------------------------------------------------
@@ -154,30 +145,6 @@ class GatedEkf(Tracker):
                          f"min_init_inliers={self.min_init_inliers}, or no covariance")
             return None
         return fix
-
-    def _apply(self, measurements: Measurements, beacons: BeaconMap) -> tuple[np.ndarray, int]:
-        """Correct with the azimuths that pass the gate and then the leave-one-out test.
-
-        The inlier mask (M,) and the frame's count of distinct usable beacons. The azimuths
-        :func:`leave_one_out` withholds are left out of the frame given to :meth:`_correct`,
-        which gates the rest exactly as they were gated here.
-        """
-        problem = Problem.from_frame(measurements, beacons)
-        if problem.size < 2:
-            return self._correct(measurements, beacons)
-        nu, h, r, d2 = innovations(self._state, self._cov, problem.floats, self.delta_alpha_d,
-                                   self.extra_sigma)
-        excluded = leave_one_out(nu, h, r, d2, problem.ints[ROW_BEACON_INDEX], self._cov,
-                                 self._threshold)
-        if not excluded.any():
-            return self._correct(measurements, beacons)
-        kept = np.ones(len(measurements), dtype=bool)
-        kept[problem.ints[ROW_SOURCE][excluded]] = False
-        chosen = np.flatnonzero(kept)
-        accepted, _ = self._correct(subset(measurements, chosen), beacons)
-        inliers = np.zeros(len(measurements), dtype=bool)
-        inliers[chosen[accepted]] = True
-        return inliers, problem.n_distinct
 
     def _correct(self, measurements: Measurements,
                  beacons: BeaconMap) -> tuple[np.ndarray, int]:
@@ -205,43 +172,3 @@ def subset(measurements: Measurements, rows: np.ndarray) -> Measurements:
     quality = None if measurements.quality is None else measurements.quality[rows]
     return Measurements(measurements.ids[rows], measurements.azimuth[rows], quality)
 
-
-def leave_one_out(nu: FloatArray, h: FloatArray, r: FloatArray, d2: FloatArray,
-                  beacon_index: IntArray, cov: FloatArray, threshold: float) -> BoolArray:
-    """Which rows to withhold so that every azimuth the gate accepts also agrees with the others.
-
-    Passing the gate against the prediction is not enough when the prediction is wide (after a
-    start, an outage, a relocalization): a beacon moved since the map was made then passes too,
-    and outweighs the few lit beacons beside it, pulling the track tens of centimetres to where
-    its azimuth fits; once there, the track is tight and the good beacons fail the gate. What
-    gives it away is that the others agree with each other and not with it. Packi & Hanebeck's
-    leave-one-out test asks exactly that: each accepted azimuth against the prediction corrected
-    by all the other accepted ones. For the accepted innovations ν with joint covariance
-    S = H P Hᵀ + R (the shared pose's cross terms included) and w = S⁻¹ ν, azimuth i's residual
-    given the others, over its variance, is (w_i)² / (S⁻¹)_ii: chi-square with one degree of
-    freedom, held to the gate's own threshold. The worst offender is withheld and the gate run
-    again without it (a detection of its beacon that lost to it may take its place), until
-    every remaining one passes. One azimuth alone has no others: the gate has judged it.
-
-    Each statistic is at most νᵀ S⁻¹ ν ≤ Σ ν_i² / R_i (S ⪰ R): a set whose innovations are
-    within their noise (a tight track's usual frame) passes without forming S.
-
-    Returns:
-        The withheld rows, a mask over the rows of ``nu``.
-    """
-    excluded = np.zeros(nu.size, dtype=bool)
-    while True:
-        rows = np.flatnonzero(gate(np.where(excluded, np.inf, d2), beacon_index, threshold))
-        if rows.size < 2:
-            return excluded
-        v = nu[rows]
-        if float(v @ (v / r[rows])) < threshold:
-            return excluded
-        hr = h[rows]
-        info = np.linalg.inv(hr @ cov @ hr.T + np.diag(r[rows]))
-        w = info @ v
-        statistic = w * w / np.diag(info)
-        worst = int(np.argmax(statistic))
-        if statistic[worst] < threshold:
-            return excluded
-        excluded[rows[worst]] = True

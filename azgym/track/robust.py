@@ -101,7 +101,7 @@ class Robust(GatedEkf):
             return self._restart(fix)
         if self._position_std() > self.max_position_std:
             return self._relocalize(measurements, beacons)
-        inliers, distinct = self._apply(measurements, beacons)
+        inliers, distinct = self._correct(measurements, beacons)
         accepted = int(inliers.sum())
         inconsistent = distinct >= 3 and 2 * accepted < distinct
         if self._tentative:
@@ -148,7 +148,7 @@ class Robust(GatedEkf):
         self._tentative = fix.n_inliers < CONFIRMING_BEACONS
         self._bad_since = None
         chosen = np.flatnonzero(fix.inliers)
-        accepted, _ = self._apply(subset(measurements, chosen), beacons)
+        accepted, _ = self._correct(subset(measurements, chosen), beacons)
         inliers[chosen[accepted]] = True
         return self._answer(inliers, {"relocalized": True})
 

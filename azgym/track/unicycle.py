@@ -154,7 +154,10 @@ class MotionSteps:
         """
         start = motion.time if self.time is None else self.time
         self.time = motion.time
-        count = max(1, math.ceil((motion.time - start) / MAX_STEP_S))
+        count = math.ceil((motion.time - start) / MAX_STEP_S)
+        if count <= 1:  # the usual frame: one step, every sample
+            step = self._step(motion, start, motion.time, slice(None), slice(None))
+            return [step._replace(unseen=step.seconds - step.observed)]
         bounds = np.linspace(start, motion.time, count + 1)
         odometry = _cuts(motion.odometry.time, bounds)
         imu = _cuts(motion.imu.time, bounds)

@@ -16,8 +16,7 @@ from azgym.bench.suites.base import keep_every, route_cases
 from azgym.core import pose_error
 from azgym.localize.base import ROW_BEACON_INDEX, Problem
 from azgym.sensing.image.sensor import ImageSensor
-from azgym.track.azimuth_update import innovations
-from azgym.track.gated_ekf import leave_one_out
+from azgym.track.azimuth_update import gated_update
 from azgym.world.drive import simulate
 
 BEACONS = beacon_map([(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0), (5.0, 12.0)])
@@ -39,10 +38,14 @@ def moved_frame(row: int, shift: tuple[float, float], measured: list[int]) -> Me
     return Measurements(seen.ids[measured], seen.azimuth[measured])
 
 
-def statistics(state, cov, frame):
-    """The frame's innovations, Jacobian, noise, gate distances and beacon rows at a prediction."""
+def judged(state, cov, frame):
+    """Which azimuths pass the gate and the leave-one-out test, and each one's distance ν²/S.
+
+    ``state`` and ``cov`` are left as they were.
+    """
     problem = Problem.from_frame(frame, BEACONS)
-    return (*innovations(state, cov, problem.floats, *NOISE), problem.ints[ROW_BEACON_INDEX])
+    return gated_update(np.array(state, dtype=float), np.array(cov, dtype=float),
+                        problem.floats, problem.ints[ROW_BEACON_INDEX], *NOISE, GATE)
 
 
 @pytest.mark.parametrize("name", ["gated-ekf", "robust"])
@@ -52,7 +55,7 @@ def test_a_moved_beacon_that_passes_a_wide_gate_is_withheld(name, row, shift, me
     tracker = azgym.make_tracker(name)
     tracker.reset(initial=POSE)  # a start pose is never exact: its covariance is a few cm wide
     # On its own, the moved beacon's azimuth is within the gate of the wide start.
-    *_, d2, _ = statistics(np.r_[POSE, 0.0, 0.0], np.diag([0.005, 0.005, 6e-4, 0.0, 0.0]), frame)
+    _, d2 = judged(np.r_[POSE, 0.0, 0.0], np.diag([0.005, 0.005, 6e-4, 0.0, 0.0]), frame)
     assert d2[measured.index(row)] < GATE
     estimate = tracker.update(frame, BEACONS)
     assert estimate.ok and pose_error(estimate.pose, POSE)[0] < 1e-3
@@ -66,9 +69,15 @@ def test_azimuths_that_agree_pass_however_far_from_a_wide_prediction():
     frame = ideal_frame(*POSE, BEACONS)
     state = np.r_[POSE[0] + 0.15, POSE[1] - 0.1, POSE[2] + 0.02, 0.0, 0.0]  # 18 cm, 1° off
     cov = np.diag([0.04, 0.04, 1e-3, 1e-6, 1e-4])
-    nu, h, r, d2, rows = statistics(state, cov, frame)
-    assert (d2 < GATE).all() and (nu * nu / r).sum() > GATE  # the shortcut does not decide
-    assert not leave_one_out(nu, h, r, d2, rows, cov, GATE).any()
+    passed, d2 = judged(state, cov, frame)
+    # The innovations and their noise by hand (eq. 1-3): the shortcut Σ ν²/R does not decide.
+    offset = BEACONS.xy - state[:2]
+    nu = np.angle(np.exp(1j * (frame.azimuth - np.arctan2(offset[:, 1], offset[:, 0])
+                               + state[2])))
+    coverage = np.arctan2(0.5 * BEACONS.width, np.hypot(*offset.T))
+    noise = (NOISE[0] ** 2 + coverage**2) / 3 + NOISE[1] ** 2
+    assert (d2 < GATE).all() and (nu * nu / noise).sum() > GATE
+    assert passed.all()
 
 
 def test_each_azimuth_is_tested_against_the_prediction_corrected_by_the_others():
@@ -78,10 +87,9 @@ def test_each_azimuth_is_tested_against_the_prediction_corrected_by_the_others()
     twin = Measurements(np.r_[frame.ids, frame.ids[2]],
                         np.r_[frame.azimuth, ideal_frame(*POSE, BEACONS).azimuth[3] + 0.082])
     state, cov = np.r_[POSE, 0.0, 0.0], np.diag([0.005, 0.005, 6e-4, 1e-6, 1e-4])
-    nu, h, r, d2, rows = statistics(state, cov, twin)
+    passed, d2 = judged(state, cov, twin)
     assert d2[2] < d2[4] < GATE  # the moved one nearer the prediction: it wins the gate
-    excluded = leave_one_out(nu, h, r, d2, rows, cov, GATE)
-    assert excluded.tolist() == [False, False, True, False, True]
+    assert passed.tolist() == [True, True, False, True, False]
 
 
 @pytest.mark.parametrize("name", ["gated-ekf", "robust"])
