@@ -8,6 +8,7 @@ azgym reproduce plotter [--runs N] [--seed S] [--out DIR]
 azgym study error-model [--scenario S] [--frames N] [--noise SIGMA] [--calibration-px PX]
 azgym study ids [--scenario S] [--rate HZ] [--noise SIGMA]
 azgym scenarios
+azgym generate --seed N [--out FILE.toml] [--size X Y]
 azgym localizers
 azgym check SPEC
 """
@@ -126,6 +127,15 @@ def _scenarios(_args: argparse.Namespace) -> int:
 
     for name in list_scenarios():
         print(f"{name:<20} {load_scenario(name).description}")
+    return 0
+
+
+def _generate(args: argparse.Namespace) -> int:
+    from azgym.site.generator import write_generated
+
+    path = Path(args.out or f"generated-{args.seed}.toml")
+    scenario = write_generated(path, args.seed, size=args.size)
+    print(f"wrote {path}: {scenario.description} (loads back to the same scenario)")
     return 0
 
 
@@ -255,9 +265,16 @@ def _add_leaderboard(commands: argparse._SubParsersAction) -> None:
 
 
 def _add_listings(commands: argparse._SubParsersAction) -> None:
-    """``azgym scenarios``, ``azgym localizers``: what ships with azgym; ``azgym check``."""
+    """``azgym scenarios``, ``azgym localizers``: what ships; ``azgym generate``, ``check``."""
     commands.add_parser("scenarios", help="list the shipped scenarios").set_defaults(
         handler=_scenarios)
+    generate = commands.add_parser("generate", help="write a procedurally generated warehouse")
+    generate.add_argument("--seed", type=int, required=True, help="the same seed, the same site")
+    generate.add_argument("--out", metavar="FILE.toml",
+                          help="the scenario file to write (default: generated-SEED.toml)")
+    generate.add_argument("--size", type=float, nargs=2, metavar=("X", "Y"),
+                          help="the room's east-west and north-south sides [m] (default: drawn)")
+    generate.set_defaults(handler=_generate)
     commands.add_parser("localizers", help="list the registered localizers and presets"
                         ).set_defaults(handler=_localizers)
     check = commands.add_parser("check", help="run the conformance checks on a localizer")
