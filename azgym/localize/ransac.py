@@ -78,6 +78,19 @@ def n_trials(n_measurements: int, n_good: int, pr_hit: float, p_star: float) -> 
     return max(1, math.ceil(math.log1p(-pr_hit) / math.log1p(-p_reliable)))  # eq. 6
 
 
+def settings_array(delta_alpha_d: float = math.radians(0.4), coverage: bool = True,
+                   degeneracy_tol: float = 1e-9, weighted: bool = False,
+                   max_iter: int = 50) -> FloatArray:
+    """The hyperparameters as the kernels take them, one float array (``SETTING_*`` slots)."""
+    settings = np.empty(N_SETTINGS)
+    settings[SETTING_DELTA_D] = delta_alpha_d
+    settings[SETTING_COVERAGE] = coverage
+    settings[SETTING_DEGENERACY_TOL] = degeneracy_tol
+    settings[SETTING_WEIGHTED] = weighted
+    settings[SETTING_MAX_ITER] = max_iter
+    return settings
+
+
 @lru_cache(maxsize=64)
 def _all_triplets(n: int) -> IntArray:
     triplets = np.array(list(combinations(range(n), 3)), dtype=np.int64).reshape(-1, 3)
@@ -92,7 +105,7 @@ def _random_triplets(n: int, count: int, rng: np.random.Generator) -> IntArray:
 
 
 @jit
-def _ransac(floats, ints, triplets, settings, out, mask, cov):
+def solve_from_triplets(floats, ints, triplets, settings, out, mask, cov):
     """Steps 1-6 in one compiled call on a Problem's packed arrays (steps 1-5: ``search``).
 
     ``settings`` holds the hyperparameters in the ``SETTING_*`` slots. ``out`` (length OUT_SIZE)
@@ -138,7 +151,7 @@ def _ransac_frame(ids, azimuth, sorted_ids, sorted_order, xyz, width, triplets, 
     if distinct >= MIN_MEASUREMENTS:
         if usable < ids.size:
             triplets = triplets[triplets[:, 2] < usable]
-        _ransac(floats, ints, triplets, settings, out, mask, cov)
+        solve_from_triplets(floats, ints, triplets, settings, out, mask, cov)
     return usable, distinct
 
 
@@ -213,13 +226,8 @@ class Ransac(Localizer):
         rng = self.random_state
         if not (rng is None or isinstance(rng, np.random.Generator)):
             check_range(name, "random_state", rng, low=0, integer=True)
-        settings = np.empty(N_SETTINGS)
-        settings[SETTING_DELTA_D] = self.delta_alpha_d
-        settings[SETTING_COVERAGE] = bool(self.coverage)
-        settings[SETTING_DEGENERACY_TOL] = self.degeneracy_tol
-        settings[SETTING_WEIGHTED] = bool(self.weighted)
-        settings[SETTING_MAX_ITER] = self.max_iter
-        self._settings = settings
+        self._settings = settings_array(self.delta_alpha_d, bool(self.coverage),
+                                        self.degeneracy_tol, bool(self.weighted), self.max_iter)
 
     def error_model(self) -> ErrorModel:
         """The error model whose bounds set the tolerance (eq. 25)."""
@@ -260,7 +268,8 @@ class Ransac(Localizer):
         out = np.empty(OUT_SIZE)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
         cov = np.empty((3, 3))
-        _ransac(problem.floats, problem.ints, triplets, self._settings, out, mask, cov)
+        solve_from_triplets(problem.floats, problem.ints, triplets, self._settings, out, mask,
+                            cov)
         return self._estimate(out, mask, cov, int(triplets.shape[0]))
 
     @staticmethod

@@ -99,8 +99,8 @@ def test_ransac_settings_and_output_slots(paper_beacons):
     triplets = localizer.triplets(problem.size)
     out = np.full(ransac.OUT_SIZE, np.nan)
     mask = np.zeros(len(frame), dtype=np.bool_)
-    ransac._ransac(problem.floats, problem.ints, triplets, settings, out, mask,
-                   np.empty((3, 3)))
+    ransac.solve_from_triplets(problem.floats, problem.ints, triplets, settings, out, mask,
+                               np.empty((3, 3)))
     assert np.isfinite(out).all()
     assert out[ransac.OUT_SUPPORT] == len(paper_beacons) == estimate.n_inliers
     assert out[ransac.OUT_VALID_TRIPLETS] == estimate.diagnostics["n_valid_triplets"]
