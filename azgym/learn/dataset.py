@@ -32,13 +32,14 @@ import numpy as np
 
 from azgym.arguments import whole_number
 from azgym.bench.suites.warehouse import fault_levels
-from azgym.core import BeaconMap, Measurements
+from azgym.core import BeaconMap, BoolArray, IntArray, Measurements, Pose
 from azgym.errors import InvalidInputError, ScenarioError
 from azgym.files import write_file
 from azgym.learn.features import FEATURE_LAYOUT, N_FEATURES, measurement_features
 from azgym.localize.base import FLOAT_ROWS, MIN_MEASUREMENTS, Problem
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import DIRECT, PARTIAL
+from azgym.sensing.protocol import Observation
 from azgym.sensing.synthetic import inject_outliers
 from azgym.site import generate
 from azgym.site.sampling import random_free_pose
@@ -77,6 +78,8 @@ class FrameBatch:
         injected: (N, M_max) bool, corrupted by the outlier injection.
         level: (N,) int64, the fault level (index into ``LEVELS``).
         outliers: (N,) int64, K injected in the frame (0: none).
+        quality: (N, M_max) float64, the first quality column of each measurement, 0 padded:
+            with ``floats`` and ``beacon_index``, what the features are computed from.
     """
 
     features: np.ndarray
@@ -90,6 +93,7 @@ class FrameBatch:
     injected: np.ndarray
     level: np.ndarray
     outliers: np.ndarray
+    quality: np.ndarray
 
     def __len__(self) -> int:
         return int(self.layout.size)
@@ -131,7 +135,8 @@ class FrameBatch:
 
 _DTYPES = {"features": np.float32, "floats": np.float64, "beacon_index": np.int64,
            "mask": np.bool_, "inlier": np.bool_, "pose": np.float64, "layout": np.int64,
-           "label": np.int64, "injected": np.bool_, "level": np.int64, "outliers": np.int64}
+           "label": np.int64, "injected": np.bool_, "level": np.int64, "outliers": np.int64,
+           "quality": np.float64}
 """The dtype of each array of a :class:`FrameBatch`."""
 
 
@@ -163,7 +168,7 @@ def _check_shapes(path: Path, batch: FrameBatch) -> None:
     expected = {"features": (n, m, N_FEATURES), "floats": (n, FLOAT_ROWS, m),
                 "beacon_index": (n, m), "mask": (n, m), "inlier": (n, m), "pose": (n, 3),
                 "layout": (n,), "label": (n, m), "injected": (n, m), "level": (n,),
-                "outliers": (n,)}
+                "outliers": (n,), "quality": (n, m)}
     for name, shape in expected.items():
         if getattr(batch, name).shape != shape:
             raise InvalidInputError(f"{path}: {name} has shape {getattr(batch, name).shape}, "
@@ -171,16 +176,44 @@ def _check_shapes(path: Path, batch: FrameBatch) -> None:
 
 
 @dataclass(frozen=True, eq=False)
-class _Frame:
-    """One drawn frame before padding."""
+class Frame:
+    """One frame before padding: its usable measurements, their features and their truth.
+
+    Attributes:
+        problem: The usable measurements (listed by azimuth).
+        quality: (K,) their first quality column.
+        features: (K, N_FEATURES) float64.
+        label: (K,) the sensor's label of each.
+        injected: (K,) corrupted by the outlier injection.
+        pose: The true camera pose.
+        level: The fault level (index into ``LEVELS``).
+        outliers: K injected.
+    """
 
     problem: Problem
+    quality: np.ndarray
     features: np.ndarray
     label: np.ndarray
     injected: np.ndarray
     pose: tuple[float, float, float]
     level: int
     outliers: int
+
+    @property
+    def inlier(self) -> BoolArray:
+        """(K,) the truth the model learns (:func:`inlier_truth`)."""
+        return inlier_truth(self.label, self.injected)
+
+
+def inlier_truth(label: IntArray, injected: BoolArray) -> BoolArray:
+    """Which measurements are inliers: a direct or partly covered view, not injected.
+
+    A ghost (its mirror direction), a misread (another beacon's position) and a moved beacon's
+    view (seen where it is, not where the map puts it) disagree with the map; so does an
+    injected azimuth, whatever its label was. Padding (label −1) is no inlier.
+    """
+    label = np.asarray(label)
+    return ((label == DIRECT) | (label == PARTIAL)) & ~np.asarray(injected, dtype=bool)
 
 
 def make_frames(layout_seeds: Sequence[int], frames_per_layout: int, seed: int, *,
@@ -223,13 +256,13 @@ def _layout_seeds(layout_seeds: Sequence[int]) -> list[int]:
     return [whole_number("layout_seeds entry", value, minimum=0) for value in layout_seeds]
 
 
-def layout_frames(layout_seed: int, count: int, seed: int, outlier_share: float) -> list[_Frame]:
+def layout_frames(layout_seed: int, count: int, seed: int, outlier_share: float) -> list[Frame]:
     """``count`` frames of one generated layout, from its own stream of ``seed``."""
     scenario = generate(layout_seed)
     levels = [(scenario_at, GeometrySensor(scenario_at))
               for scenario_at in fault_levels(scenario).values()]
     rng = np.random.default_rng([seed, layout_seed])
-    frames: list[_Frame] = []
+    frames: list[Frame] = []
     for _ in range(count * DRAWS_PER_FRAME):
         frame = _draw_frame(levels, scenario.beacons, rng, outlier_share)
         if frame is not None:
@@ -242,29 +275,40 @@ def layout_frames(layout_seed: int, count: int, seed: int, outlier_share: float)
 
 
 def _draw_frame(levels: list[tuple], beacons: BeaconMap, rng: np.random.Generator,
-                outlier_share: float) -> _Frame | None:
+                outlier_share: float) -> Frame | None:
     """One frame at a random level and pose, outliers injected; None if it sees < 3 beacons."""
     level = int(rng.integers(len(levels)))
     scenario, sensor = levels[level]
     pose = random_free_pose(scenario, rng)
     observation = sensor.observe(pose, rng)
-    measured = observation.measurements
-    size = len(measured)
     outliers = 0
-    if size and rng.random() < outlier_share:
-        outliers = min(int(rng.integers(1, MAX_OUTLIERS + 1)), size)
+    if len(observation) and rng.random() < outlier_share:
+        outliers = min(int(rng.integers(1, MAX_OUTLIERS + 1)), len(observation))
+    return observed_frame(observation, beacons, pose, level, outliers, rng)
+
+
+def observed_frame(observation: Observation, beacons: BeaconMap, pose: Pose, level: int,
+                   outliers: int, rng: np.random.Generator) -> Frame | None:
+    """A sensor's frame as training data, with ``outliers`` azimuths injected (Sec. 3.1).
+
+    Returns None when the frame sees fewer than three distinct beacons of the map.
+    """
+    measured = observation.measurements
     azimuth, injected = inject_outliers(measured.azimuth, outliers, rng)
     order = np.argsort(azimuth, kind="stable")  # listed by azimuth again, as a detector lists
-    measurements = Measurements(measured.ids[order], azimuth[order], measured.quality[order])
+    quality = None if measured.quality is None else measured.quality[order]
+    measurements = Measurements(measured.ids[order], azimuth[order], quality)
     problem = Problem.from_frame(measurements, beacons)
     if problem.n_distinct < MIN_MEASUREMENTS:
         return None
     source = order[problem.source]
-    return _Frame(problem, measurement_features(problem, measurements.quality),
-                  observation.truth.label[source], injected[source], pose, level, outliers)
+    first = np.zeros(problem.size) if quality is None else (
+        quality if quality.ndim == 1 else quality[:, 0])[problem.source]
+    return Frame(problem, first, measurement_features(problem, quality),
+                 observation.truth.label[source], injected[source], pose, level, outliers)
 
 
-def _pack(frames: list[_Frame], owners: list[int]) -> FrameBatch:
+def _pack(frames: list[Frame], owners: list[int]) -> FrameBatch:
     """The frames padded to the longest one's usable measurements."""
     n = len(frames)
     width = max(frame.problem.size for frame in frames)
@@ -273,6 +317,7 @@ def _pack(frames: list[_Frame], owners: list[int]) -> FrameBatch:
     beacon_index = np.full((n, width), -1, dtype=np.int64)
     label = np.full((n, width), -1, dtype=np.int64)
     injected = np.zeros((n, width), dtype=bool)
+    quality = np.zeros((n, width))
     for f, frame in enumerate(frames):
         k = frame.problem.size
         features[f, :k] = frame.features
@@ -280,11 +325,12 @@ def _pack(frames: list[_Frame], owners: list[int]) -> FrameBatch:
         beacon_index[f, :k] = frame.problem.beacon_index
         label[f, :k] = frame.label
         injected[f, :k] = frame.injected
+        quality[f, :k] = frame.quality
     mask = beacon_index >= 0
-    inlier = mask & ((label == DIRECT) | (label == PARTIAL)) & ~injected
+    inlier = mask & inlier_truth(label, injected)
     return FrameBatch(
         features=features, floats=floats, beacon_index=beacon_index, mask=mask, inlier=inlier,
         pose=np.array([frame.pose for frame in frames], dtype=np.float64).reshape(n, 3),
         layout=np.array(owners, dtype=np.int64), label=label, injected=injected,
         level=np.array([frame.level for frame in frames], dtype=np.int64),
-        outliers=np.array([frame.outliers for frame in frames], dtype=np.int64))
+        outliers=np.array([frame.outliers for frame in frames], dtype=np.int64), quality=quality)

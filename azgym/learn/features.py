@@ -111,7 +111,9 @@ def measurement_features(problem: Problem, quality: FloatArray | None) -> FloatA
         column = np.ascontiguousarray(quality if quality.ndim == 1 else quality[:, 0])
         has_quality = True
     out = np.empty((problem.size, N_FEATURES))
-    frame_features(problem.floats, problem.ints, problem.n_distinct, column, has_quality, out)
+    # Contiguous arrays (no copy when they are already): one compiled signature serves all.
+    frame_features(np.ascontiguousarray(problem.floats), np.ascontiguousarray(problem.ints),
+                   problem.n_distinct, column, has_quality, out)
     return out
 
 
