@@ -13,8 +13,14 @@ beacons, which every localizer refuses, are drawn again.
 
 A measurement is an inlier when it is a direct or partly covered view (DIRECT, PARTIAL) of the
 beacon its id names, not corrupted by the injection. A moved beacon's view (MOVED) is not: it is
-the right beacon, but the map puts it 1-2.5 m from where the camera sees it, so its azimuth
-disagrees with the mapped position as much as a misread's. Ghosts and misreads are not either.
+the right beacon, but the map puts it 1-2.5 m from where the camera sees it, a few degrees off
+at the usual distances, and a pose fitted to it is off by as much. Ghosts and misreads are not
+either.
+
+Measured (200 training layouts × 50 frames, ``outlier_share`` 0.25): about 7,500 frames/s on
+one core; of the usable measurements 84 % are inliers, 7.2 % ghosts, 2.1 % misreads, 1.0 %
+moved views and 5.7 % injected; 5-50-95 % of the frames have 4, 12 and 24 usable measurements
+(warehouse-static's frames 3, 6-8 and 9-13; stress's 3, 12 and 22).
 
 Every layout draws from its own stream, ``default_rng([seed, layout_seed])``, so the same
 arguments give the same arrays bit for bit, and adding layouts leaves the others' frames alone.
