@@ -28,7 +28,8 @@ from azgym.core import wrap_scalar
 
 PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
-    "core.py", "errors.py", "hyperparameters.py", "jit.py", "localize/_angles.py",
+    "core.py", "errors.py", "hyperparameters.py", "jit.py", "learn/network.py",
+    "localize/_angles.py",
     "localize/_circles.py",
     "localize/_kernels.py", "localize/_levenberg_marquardt.py", "localize/_ransac_search.py",
     "localize/base.py", "localize/loo.py", "localize/lsq.py", "localize/mex.py",

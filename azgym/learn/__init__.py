@@ -1,0 +1,1 @@
+"""Learned localizers: models trained in PyTorch on generated warehouses, served in numpy."""
