@@ -29,7 +29,7 @@ from azgym.errors import InvalidInputError, ModelFileError
 from azgym.jit import jit
 
 ARCHITECTURE = "deepsets-context-1"
-"""The ``kind`` of architecture this module computes (see :func:`azgym.learn.weights.array_shapes`)."""
+"""The ``kind`` of architecture this module computes (:func:`azgym.learn.weights.array_shapes`)."""
 ORDER = ("W1", "b1", "W2", "b2", "w3", "b3")
 """The order the weight arrays are packed in, row-major, for the compiled forward."""
 

@@ -158,7 +158,8 @@ def _read_members(path: Path) -> dict[str, np.ndarray]:
             names = [_member_name(path, info) for info in infos]
             if len(set(names)) != len(names):
                 raise ModelFileError(f"{path}: a member is listed twice in the archive")
-            return {name: _read_array(path, archive, info) for name, info in zip(names, infos)}
+            return {name: _read_array(path, archive, info)
+                    for name, info in zip(names, infos, strict=True)}
     except (zipfile.BadZipFile, EOFError, zlib.error, NotImplementedError) as exc:
         raise ModelFileError(f"{path}: damaged archive: {exc}") from None
 
