@@ -1,9 +1,10 @@
 """The inlier scorer in torch, for training: the network of :mod:`azgym.learn.network`, batched.
 
 Frames come padded to the longest one (:class:`azgym.learn.dataset.FrameBatch`), so the
-context pools over each frame's real measurements only: the max over a frame's padding is
-never taken (h1 ≥ 0, so padding set to 0 cannot win, and a frame without measurements pools
-to 0, as the numpy forward does), and the mean divides by the number of real ones. With that,
+context pools over each frame's real measurements only: padding is set to 0 (whatever it held,
+NaN included) before the first layer and after it, where it cannot win the max (h1 ≥ 0; a
+frame without measurements pools to 0, as the numpy forward does), and the mean divides by
+the number of real ones. With that,
 a frame's logits do not depend on how much padding it got, and :func:`export` writes weights
 that give the numpy forward the same logits (``tests/learn/test_network.py`` checks it).
 
@@ -44,9 +45,10 @@ class TorchInlierScorer(nn.Module):
 
         Padded positions get logits too; the loss leaves them out.
         """
-        real = mask.unsqueeze(-1).to(features.dtype)
-        h1 = torch.relu(self.embed(features)) * real
-        count = real.sum(dim=1).clamp(min=1.0)
+        real = mask.unsqueeze(-1)
+        features = torch.where(real, features, 0.0)  # a NaN of padding must not reach a sum
+        h1 = torch.where(real, torch.relu(self.embed(features)), 0.0)
+        count = real.sum(dim=1).clamp(min=1).to(features.dtype)
         pooled = torch.cat([h1.amax(dim=1), h1.sum(dim=1) / count], dim=-1)
         context = pooled.unsqueeze(1).expand(-1, h1.shape[1], -1)
         h2 = torch.relu(self.combine(torch.cat([h1, context], dim=-1)))

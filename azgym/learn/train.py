@@ -208,7 +208,7 @@ def _tensors(batch: Any) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     if features.ndim != 3 or mask.shape != features.shape[:2] or inlier.shape != mask.shape:
         raise InvalidInputError(f"frames: features {features.shape}, mask {mask.shape} and "
                                 f"inlier {inlier.shape} must be (N, M, F), (N, M), (N, M)")
-    inlier &= mask
+    inlier = inlier & mask  # (never in place: the caller's frames stay as they were)
     if not np.isfinite(features[mask]).all():
         raise InvalidInputError("frames: features of real measurements must be finite")
     return (torch.from_numpy(features), torch.from_numpy(mask),

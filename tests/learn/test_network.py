@@ -138,6 +138,7 @@ def test_the_torch_network_and_the_exported_forward_agree(tmp_path):
         mask[0], mask[1] = False, True  # a frame with no measurement, one with no padding
         mask[2] = np.arange(24) == 5  # a single measurement, amid padding
         features[~mask] = 1e3  # padding must not leak into the real measurements' logits
+        features[3][~mask[3]] = np.nan
         with torch.no_grad():
             batched = model(torch.from_numpy(features), torch.from_numpy(mask)).numpy()
         for frame in range(8):

@@ -38,9 +38,9 @@ def synthetic(frames: int, seed: int, m_max: int = 10) -> Frames:
     rng = np.random.default_rng(seed)
     mask = np.arange(m_max) < rng.integers(3, m_max + 1, size=(frames, 1))
     features = rng.uniform(size=(frames, m_max, FEATURES)).astype(np.float32)
-    features[~mask] = 7.0  # padding: must never matter
-    largest = features[..., 2] == np.where(mask, features[..., 2], -1).max(axis=1,
-                                                                              keepdims=True)
+    features[~mask] = np.nan  # padding: must never matter
+    x2 = np.where(mask, features[..., 2], -1)
+    largest = x2 == x2.max(axis=1, keepdims=True)
     inlier = ((features[..., 0] + features[..., 1] > 0.8) | largest) & mask
     return Frames(features, mask, inlier, np.full(frames, seed))
 
