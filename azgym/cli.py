@@ -11,6 +11,8 @@ azgym scenarios
 azgym generate --seed N [--out FILE.toml] [--size X Y]
 azgym localizers
 azgym check SPEC
+azgym train localizer --model ng-ransac --out DIR [--layouts N] [--frames-per-layout N]
+                      [--epochs N] [--seed S] [--hidden H] [--threads N]
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.cli_studies import add_reproduce, add_study
+from azgym.cli_train import add_train
 from azgym.errors import AzgymError
 
 if TYPE_CHECKING:
@@ -200,6 +203,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_leaderboard(commands)
     add_reproduce(commands)
     add_study(commands)
+    add_train(commands)
     _add_listings(commands)
     return parser
 

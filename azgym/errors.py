@@ -30,6 +30,10 @@ class ScenarioError(AzgymError, ValueError):
     """A scenario file is malformed."""
 
 
+class ModelFileError(InvalidInputError):
+    """A learned model's weight file is missing, malformed, or made for another model or azgym."""
+
+
 class DependencyNotInstalled(AzgymError, ImportError):
     """An optional dependency is missing; the message says which extra to install."""
 
