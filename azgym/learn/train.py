@@ -141,6 +141,7 @@ def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = 64,
     Every argument is checked, and the folder made writable, before any frame is drawn.
     ``frames`` is per layout. See :class:`TrainConfig` for the others.
     """
+    from azgym.learn.calibrate import calibrate_weights, card_section
     from azgym.learn.features import FEATURE_LAYOUT
 
     config = TrainConfig(epochs=epochs, seed=seed, hidden=hidden, threads=threads)
@@ -150,8 +151,14 @@ def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = 64,
     started = time.perf_counter()
     train, held_out, info = build_data(seeds, frames, seed)
     info["draw_seconds"] = round(time.perf_counter() - started, 1)
-    return fit(train, held_out, out, config, feature_layout=FEATURE_LAYOUT, data_info=info,
-               progress=progress)
+    result = fit(train, held_out, out, config, feature_layout=FEATURE_LAYOUT, data_info=info,
+                 progress=progress)
+    uncalibrated = hashlib.sha256(result.weights.read_bytes()).hexdigest()
+    calibration = calibrate_weights(result.weights, held_out)
+    calibrated = hashlib.sha256(result.weights.read_bytes()).hexdigest()
+    card = result.card.read_text(encoding="utf-8").replace(uncalibrated, calibrated)
+    write_file(result.card, card + "\n" + card_section(calibration))
+    return result
 
 
 def fit(train: Any, held_out: Any, out_dir: Path, config: TrainConfig, *,

@@ -57,6 +57,7 @@ _BUILTIN: dict[str, str] = {
     "mex": "azgym.localize.mex:Mex",
     "lsq": "azgym.localize.lsq:LeastSquares",
     "loo": "azgym.localize.loo:LeaveOneOut",
+    "ng-ransac": "azgym.localize.ng_ransac:NgRansac",
 }
 _BUILTIN_TRACKERS: dict[str, str] = {
     "dead-reckoning": "azgym.track.dead_reckoning:DeadReckoning",

@@ -3,13 +3,12 @@ without torch or for a model not trainable yet, and a run that writes the model'
 
 from __future__ import annotations
 
-import sys
-import types
+import hashlib
 
-import numpy as np
 import pytest
 
 from azgym import cli, cli_train
+from azgym.learn.weights import load_weights
 
 
 def test_the_command_parses_to_its_handler_with_its_defaults():
@@ -59,21 +58,8 @@ def test_without_torch_the_command_says_how_to_install_it(capsys, tmp_path, monk
     assert not (tmp_path / "o").exists()
 
 
-def test_a_run_writes_the_weights_card_and_curve(capsys, tmp_path, monkeypatch):
+def test_a_run_writes_the_weights_card_and_curve(capsys, tmp_path):
     pytest.importorskip("torch", reason="training needs pip install torch==2.13.0")
-    rng = np.random.default_rng(0)
-
-    def make_frames(layout_seeds, frames_per_layout, seed):
-        n = len(layout_seeds) * frames_per_layout
-        mask = np.arange(8) < rng.integers(3, 9, size=(n, 1))
-        features = rng.uniform(size=(n, 8, 5)).astype(np.float32)
-        return types.SimpleNamespace(features=features, mask=mask,
-                                     inlier=(features[..., 0] > 0.3) & mask)
-
-    monkeypatch.setitem(sys.modules, "azgym.learn.dataset", types.SimpleNamespace(
-        TRAIN_LAYOUTS=range(100, 200), HELD_OUT_LAYOUTS=(1, 2), make_frames=make_frames))
-    monkeypatch.setitem(sys.modules, "azgym.learn.features",
-                        types.SimpleNamespace(FEATURE_LAYOUT="test-features-1"))
     code = cli.main(["train", "localizer", "--model", "ng-ransac", "--out", str(tmp_path),
                      "--layouts", "2", "--frames-per-layout", "10", "--epochs", "2"])
     assert code == 0
@@ -81,7 +67,13 @@ def test_a_run_writes_the_weights_card_and_curve(capsys, tmp_path, monkeypatch):
     assert "epoch 2: train" in out and "ng-ransac: 2 epochs" in out
     assert {p.name for p in tmp_path.iterdir()} == {"ng-ransac.npz", "model-card.md",
                                                    "learning-curve.png", "checkpoint.pt"}
+    card = (tmp_path / "model-card.md").read_text()
+    assert "## Calibration of the answer test" in card
+    digest = hashlib.sha256((tmp_path / "ng-ransac.npz").read_bytes()).hexdigest()
+    assert digest in card  # the calibrated file's digest, not the one before calibration
+    manifest = load_weights(tmp_path / "ng-ransac.npz", "ng-ransac")[1]
+    assert manifest["calibration"]["min_support_weight"] >= 0.0
     code = cli.main(["train", "localizer", "--model", "ng-ransac", "--out", str(tmp_path),
-                     "--layouts", "101"])
+                     "--layouts", "100001"])
     assert code == 2
-    assert "layouts must be at most 100" in capsys.readouterr().err
+    assert "layouts must be at most 100000" in capsys.readouterr().err

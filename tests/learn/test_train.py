@@ -5,7 +5,6 @@ to the very weights of an uninterrupted one; a checkpoint of another run is refu
 from __future__ import annotations
 
 import sys
-import types
 from dataclasses import dataclass
 
 import numpy as np
@@ -152,29 +151,30 @@ def test_progress_is_plain_lines_without_tqdm(tmp_path, monkeypatch, capsys):
     assert "held-out" in lines[0] and "AUC" in lines[0]
 
 
-def test_train_ng_ransac_draws_the_frames_then_trains(tmp_path, monkeypatch):
+def test_train_ng_ransac_draws_the_frames_then_trains_and_calibrates(tmp_path, monkeypatch):
+    from azgym.learn import dataset
+
     drawn = []
+    real = dataset.make_frames
 
     def make_frames(layout_seeds, frames_per_layout, seed):
         drawn.append((list(layout_seeds), frames_per_layout, seed))
-        return synthetic(len(layout_seeds) * frames_per_layout, seed + len(drawn))
+        return real(layout_seeds, frames_per_layout, seed)
 
-    dataset = types.SimpleNamespace(TRAIN_LAYOUTS=range(1000, 1100), HELD_OUT_LAYOUTS=(7, 8),
-                                    make_frames=make_frames)
-    monkeypatch.setitem(sys.modules, "azgym.learn.dataset", dataset)
-    monkeypatch.setitem(sys.modules, "azgym.learn.features",
-                        types.SimpleNamespace(FEATURE_LAYOUT=LAYOUT))
-    result = T.train_ng_ransac(tmp_path, layouts=3, frames=20, epochs=1, seed=5,
+    monkeypatch.setattr(dataset, "make_frames", make_frames)
+    result = T.train_ng_ransac(tmp_path, layouts=3, frames=4, epochs=1, seed=5,
                                progress=False)
-    assert drawn == [([1000, 1001, 1002], 20, 5), ([7, 8], 20, 5)]
-    _, manifest = load_weights(result.weights, "ng-ransac", feature_layout=LAYOUT)
-    assert manifest["training"]["data"]["train_layouts"] == [1000, 1001, 1002]
-    assert manifest["training"]["data"]["held_out"]["frames"] == 40
+    held_out = [int(x) for x in dataset.HELD_OUT_LAYOUTS]
+    assert drawn == [([0, 1, 2], 4, 5), (held_out, 4, 5)]
+    _, manifest = load_weights(result.weights, "ng-ransac")
+    assert manifest["training"]["data"]["train_layouts"] == [0, 1, 2]
+    assert manifest["training"]["data"]["held_out"]["frames"] == 4 * len(held_out)
+    assert manifest["calibration"]["frames"] == 4 * len(held_out)
     drawn.clear()
-    with pytest.raises(InvalidInputError, match="layouts must be at most 100"):
-        T.train_ng_ransac(tmp_path / "x", layouts=101, frames=20, epochs=1)
-    with pytest.raises(InvalidInputError, match=r"layouts: \[8\] are held-out layouts"):
-        T.train_ng_ransac(tmp_path / "x", layouts=[1000, 8], frames=20, epochs=1)
+    with pytest.raises(InvalidInputError, match="layouts must be at most 100000"):
+        T.train_ng_ransac(tmp_path / "x", layouts=100_001, frames=20, epochs=1)
+    with pytest.raises(InvalidInputError, match=rf"layouts: \[{held_out[0]}\] are held-out"):
+        T.train_ng_ransac(tmp_path / "x", layouts=[0, held_out[0]], frames=20, epochs=1)
     with pytest.raises(InvalidInputError, match="frames must be an integer >= 1, got 0"):
         T.train_ng_ransac(tmp_path / "x", layouts=3, frames=0, epochs=1)
     assert drawn == []  # refused before any frame was drawn

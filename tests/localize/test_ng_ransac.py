@@ -1,0 +1,107 @@
+"""ng-ransac: the guided triplet order by hand, the hypothesis budget, the support test."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import subprocess
+import sys
+import textwrap
+from itertools import combinations
+
+import numpy as np
+import pytest
+from helpers import beacon_map, ideal_frame
+
+import azgym
+from azgym import InvalidInputError, Measurements
+from azgym.learn.weights import load_weights
+from azgym.localize.ng_ransac import SHIPPED_WEIGHTS, NgRansac, guided_triplets
+
+
+def log_sigmoid(z):
+    return -np.log1p(np.exp(-np.asarray(z, dtype=float)))
+
+
+def test_the_triplets_come_best_first_from_the_top_ranked():
+    logits = np.array([2.0, -1.0, 0.5, 3.0, -4.0])
+    beacon_index = np.arange(5)
+    triplets = guided_triplets(logits, beacon_index, 4, 10)
+    # The 4 best are measurements 3, 0, 2, 1: their C(4, 3) = 4 triplets, by joint log-probability.
+    ranked = [3, 0, 2, 1]
+    expected = sorted(combinations(ranked, 3), key=lambda t: -log_sigmoid(logits[list(t)]).sum())
+    assert [tuple(t) for t in triplets.tolist()] == [tuple(sorted(t)) for t in expected]
+    assert 4 not in triplets
+
+
+def test_the_budget_caps_the_hypotheses_and_one_beacon_twice_is_never_tried():
+    logits = np.linspace(3.0, -3.0, 12)
+    beacon_index = np.array([0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10])  # a ghost beside beacon 0
+    triplets = guided_triplets(logits, beacon_index, 8, 30)
+    assert triplets.shape == (30, 3)
+    assert not any({0, 1} <= set(t) for t in triplets.tolist())
+    scores = log_sigmoid(logits[triplets]).sum(axis=1)
+    assert (np.diff(scores) <= 0).all()
+
+
+def test_fewer_ranked_than_three_distinct_beacons_gives_no_triplet():
+    assert guided_triplets(np.zeros(3), np.array([4, 4, 5]), 8, 30).shape == (0, 3)
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    return NgRansac()
+
+
+def test_a_clean_frame_is_solved_within_the_budget(shipped):
+    beacons = beacon_map([(0, 0), (10, 0), (10, 10), (0, 10), (5, 12), (12, 5), (-2, 6),
+                          (7, -3)])
+    pose = (4.0, 3.0, 0.3)
+    frame = ideal_frame(*pose, beacons)
+    estimate = shipped.localize(Measurements(frame.ids, frame.azimuth, np.ones(8)), beacons)
+    assert estimate.ok and math.dist(estimate.pose[:2], pose[:2]) < 1e-6
+    assert estimate.diagnostics["n_hypotheses"] <= 30
+
+
+def test_a_support_threshold_no_answer_can_reach_refuses_with_the_reason():
+    beacons = beacon_map([(0, 0), (10, 0), (10, 10), (0, 10)])
+    frame = ideal_frame(4.0, 3.0, 0.3, beacons)
+    estimate = azgym.make_localizer("ng-ransac", min_support_weight=5.0).localize(frame, beacons)
+    assert not estimate.ok
+    assert "under min_support_weight 5.00" in estimate.reason
+
+
+@pytest.mark.parametrize(("params", "message"), [
+    ({"max_hypotheses": 0}, r"NgRansac.max_hypotheses must be in \[1, inf\]"),
+    ({"max_ranked": 2}, r"NgRansac.max_ranked must be in \[3, 64\]"),
+    ({"min_support_weight": -1.0}, r"NgRansac.min_support_weight must be in"),
+    ({"weights": 3}, r"NgRansac.weights must be a path"),
+    ({"weights": "/nonexistent/model.npz"}, r"model.npz"),
+])
+def test_bad_hyperparameters_are_refused(params, message):
+    with pytest.raises(InvalidInputError, match=message):
+        NgRansac(**params)
+
+
+def test_making_and_running_it_never_imports_torch():
+    code = textwrap.dedent("""
+        import sys
+        import azgym
+        from azgym import Measurements
+        localizer = azgym.make_localizer("ng-ransac")
+        beacons = azgym.load_scenario("paper-room").beacons
+        localizer.localize(Measurements(beacons.ids[:5], [0.1, 1.0, 2.0, -1.0, -2.5]), beacons)
+        print(sorted(m for m in ("torch", "tqdm", "matplotlib") if m in sys.modules))
+    """)
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=True).stdout.strip()
+    assert loaded == "[]"
+
+
+def test_the_shipped_weights_are_calibrated_and_their_card_names_them():
+    arrays, manifest = load_weights(SHIPPED_WEIGHTS, "ng-ransac")
+    calibration = manifest["calibration"]
+    assert NgRansac().support_threshold() == calibration["min_support_weight"] > 0.0
+    card = (SHIPPED_WEIGHTS.parent / "model-card.md").read_text(encoding="utf-8")
+    assert hashlib.sha256(SHIPPED_WEIGHTS.read_bytes()).hexdigest() in card
+    assert SHIPPED_WEIGHTS.stat().st_size <= 2 * 1024 * 1024
