@@ -21,8 +21,8 @@ from azgym.learn.network import InlierScorer
 from azgym.learn.weights import load_weights, save_weights
 from azgym.localize import _kernels as K
 from azgym.localize.base import INT_ROWS, ROW_BEACON_INDEX, ROW_SOURCE
-from azgym.localize.ng_ransac import MODEL_NAME, guided_triplets
-from azgym.localize.ransac import OUT_SIZE, OUT_SUPPORT, settings_array, solve_from_triplets
+from azgym.localize.ng_ransac import MODEL_NAME, guided_search, search_array, support_weight
+from azgym.localize.ransac import OUT_SIZE, OUT_SUPPORT, settings_array
 
 RIGHT_M = 1.0
 """An answer within this distance of the truth [m] is right; beyond it, wrong."""
@@ -38,7 +38,8 @@ class GuidedRuns:
         answered: The search found a pose with at least three supporters, (N,).
         error: That pose's position error [m] (inf where none), (N,).
         support_weight: Its supporters' summed inlier probability (0 where none), (N,).
-        hypotheses: Triplets tried, (N,).
+        hypotheses: Triplets the search tried (the features' consensus triplets not counted),
+            (N,).
     """
 
     answered: np.ndarray
@@ -47,10 +48,9 @@ class GuidedRuns:
     hypotheses: np.ndarray
 
 
-def guided_runs(batch: FrameBatch, scorer: InlierScorer, *, max_ranked: int = 8,
-                max_hypotheses: int = 10) -> GuidedRuns:
-    """Run the guided search (ng-ransac's default settings otherwise) on every frame."""
-    settings = settings_array()
+def guided_runs(batch: FrameBatch, scorer: InlierScorer) -> GuidedRuns:
+    """ng-ransac's search (its default settings) on every frame, before its answer test."""
+    settings, search = settings_array(), search_array()
     count = batch.pose.shape[0]
     answered = np.zeros(count, dtype=bool)
     error = np.full(count, np.inf)
@@ -63,17 +63,17 @@ def guided_runs(batch: FrameBatch, scorer: InlierScorer, *, max_ranked: int = 8,
         ints = np.empty((INT_ROWS, size), dtype=np.int64)
         ints[ROW_SOURCE] = np.arange(size)
         ints[ROW_BEACON_INDEX] = batch.beacon_index[n, :size]
+        distinct = int(np.unique(ints[ROW_BEACON_INDEX]).size)
         logits = scorer.logits(batch.features[n, :size].astype(np.float64))
-        triplets = guided_triplets(logits, ints[ROW_BEACON_INDEX], max_ranked, max_hypotheses)
-        hypotheses[n] = triplets.shape[0]
         mask = np.zeros(size, dtype=np.bool_)
-        solve_from_triplets(floats, ints, triplets, settings, out, mask, cov)
+        hypotheses[n] = guided_search(floats, ints, logits, distinct, search, settings, out,
+                                      mask, cov)
         if out[OUT_SUPPORT] < 3 or not np.isfinite(out[K.POSE_X]):
             continue
         answered[n] = True
         error[n] = float(np.hypot(out[K.POSE_X] - batch.pose[n, 0],
                                   out[K.POSE_Y] - batch.pose[n, 1]))
-        weight[n] = float((1.0 / (1.0 + np.exp(-logits[mask]))).sum())
+        weight[n] = support_weight(logits, ints, mask)
     return GuidedRuns(answered, error, weight, hypotheses)
 
 
@@ -110,7 +110,7 @@ def calibrate_weights(path: Path, held_out: FrameBatch,
     arrays, manifest = load_weights(path, MODEL_NAME)
     runs = guided_runs(held_out, InlierScorer(arrays, manifest))
     calibration = choose_threshold(runs, max_right_lost)
-    calibration["guided_hypotheses_median"] = float(np.median(runs.hypotheses))
+    calibration["search_hypotheses_median"] = float(np.median(runs.hypotheses))
     kept = {key: value for key, value in manifest.items()
             if key not in ("format", "model", "azgym_version")}
     save_weights(path, MODEL_NAME, arrays, {**kept, "calibration": calibration})
@@ -127,5 +127,5 @@ def card_section(calibration: dict[str, Any]) -> str:
         f"- held-out frames: {calibration['frames']}; the guided search alone answered "
         f"{calibration['right_before']} right and {calibration['wrong_before']} wrong; with the "
         f"test {calibration['right_kept']} right and {calibration['wrong_kept']} wrong",
-        f"- median triplets tried by the guided search: "
-        f"{calibration['guided_hypotheses_median']:.0f}", ""])
+        f"- median triplets tried by the search (beyond the features' consensus): "
+        f"{calibration['search_hypotheses_median']:.0f}", ""])

@@ -99,12 +99,58 @@ def guided_triplets(logits, beacon_index, max_ranked, max_hypotheses):
     return triplets[order]
 
 
+SEARCH_RANKED = 0
+"""Slot of ``search``: how many of the most probable measurements the first pass draws from."""
+SEARCH_FIRST = 1
+"""Slot of ``search``: most triplets of the first pass."""
+SEARCH_FALLBACK_RANKED = 2
+"""Slot of ``search``: how many form the complete second pass (0: no second pass)."""
+SEARCH_CONFIDENT_SHARE = 3
+"""Slot of ``search``: share of the distinct beacons whose support ends the search."""
+SEARCH_SIZE = 4
+"""Length of ``search``."""
+CONFIDENT_SUPPORT = 4
+"""Fewest supporters that end the search after the first pass: three fit any pose."""
+
+
+@jit
+def guided_search(floats, ints, logits, distinct, search, settings, out, mask, cov):
+    """The guided search and the refinement; returns the number of triplets tried.
+
+    The first pass tries the ``SEARCH_FIRST`` best triplets of the ``SEARCH_RANKED`` most
+    probable measurements. A winner with at least max(CONFIDENT_SUPPORT, share · distinct)
+    supporters ends the search; otherwise every triplet of the ``SEARCH_FALLBACK_RANKED`` most
+    probable measurements is tried, as ransac tries all of them, so a frame the network cannot
+    sort out is never searched less than the paper's way.
+    """
+    triplets = guided_triplets(logits, ints[ROW_BEACON_INDEX], int(search[SEARCH_RANKED]),
+                               int(search[SEARCH_FIRST]))
+    solve_from_triplets(floats, ints, triplets, settings, out, mask, cov)
+    tried = triplets.shape[0]
+    confident = max(CONFIDENT_SUPPORT, math.ceil(search[SEARCH_CONFIDENT_SHARE] * distinct))
+    fallback = int(search[SEARCH_FALLBACK_RANKED])
+    if out[OUT_SUPPORT] >= confident or fallback < 3:
+        return tried
+    everything = guided_triplets(logits, ints[ROW_BEACON_INDEX], fallback,
+                                 _triplet_count(fallback))
+    if everything.shape[0] > tried:  # else the first pass has tried them all already
+        mask[:] = False
+        solve_from_triplets(floats, ints, everything, settings, out, mask, cov)
+        tried += everything.shape[0]
+    return tried
+
+
+@jit(inline="always")
+def _triplet_count(n):
+    return n * (n - 1) * (n - 2) // 6
+
+
 @jit
 def _ng_ransac_frame(ids, azimuth, quality, has_quality, sorted_ids, sorted_order, xyz, width,
-                     params, hidden, max_ranked, max_hypotheses, settings, out, mask, cov):
-    """The whole frame in one compiled call: id lookup, features, logits, guided search, steps 6.
+                     params, hidden, search, settings, out, mask, cov):
+    """The whole frame in one compiled call: id lookup, features, logits, guided search, step 6.
 
-    Returns (distinct beacons, guided triplets tried, the supporters' summed inlier
+    Returns (distinct beacons, triplets tried by the search, the supporters' summed inlier
     probability); with fewer than MIN_MEASUREMENTS distinct beacons nothing else is done.
     """
     floats, ints, distinct = gather(ids, azimuth, sorted_ids, sorted_order, xyz, width)
@@ -113,13 +159,18 @@ def _ng_ransac_frame(ids, azimuth, quality, has_quality, sorted_ids, sorted_orde
     features = np.empty((floats.shape[1], N_FEATURES))
     frame_features(floats, ints, distinct, quality, has_quality, features)
     logits = inlier_logits(features, params, hidden)
-    triplets = guided_triplets(logits, ints[ROW_BEACON_INDEX], max_ranked, max_hypotheses)
-    solve_from_triplets(floats, ints, triplets, settings, out, mask, cov)
+    tried = guided_search(floats, ints, logits, distinct, search, settings, out, mask, cov)
+    return distinct, tried, support_weight(logits, ints, mask)
+
+
+@jit
+def support_weight(logits, ints, mask):
+    """Σ σ(z_u) over the usable measurements ``mask`` (over all M) marks as supporters."""
     weight = 0.0
     for u in range(logits.size):
         if mask[ints[ROW_SOURCE, u]]:
             weight += 1.0 / (1.0 + math.exp(-logits[u]))
-    return distinct, triplets.shape[0], weight
+    return weight
 
 
 @jit(inline="always")
@@ -136,6 +187,17 @@ def _ascending(i, j, k, row):
     row[2] = k
 
 
+def search_array(max_ranked: int = 8, max_hypotheses: int = 10, fallback_ranked: int = 12,
+                 confident_share: float = 0.5) -> FloatArray:
+    """The search's hyperparameters as :func:`guided_search` takes them (``SEARCH_*`` slots)."""
+    search = np.empty(SEARCH_SIZE)
+    search[SEARCH_RANKED] = max_ranked
+    search[SEARCH_FIRST] = max_hypotheses
+    search[SEARCH_FALLBACK_RANKED] = fallback_ranked
+    search[SEARCH_CONFIDENT_SHARE] = confident_share
+    return search
+
+
 class NgRansac(Localizer):
     """The paper's RANSAC on the triplets a network ranks first (module docstring).
 
@@ -145,6 +207,10 @@ class NgRansac(Localizer):
         max_hypotheses: Most triplets the guided search solves and scores per frame, beyond
             the at most 20 the features' consensus pose is chosen from.
         max_ranked: How many of the most probable measurements the triplets are formed from.
+        fallback_ranked: How many of the most probable measurements form every triplet of the
+            second pass, when the first is not confident (0: never a second pass).
+        confident_share: Share of the distinct beacons (at least CONFIDENT_SUPPORT) whose
+            support makes the first pass's winner final.
         min_support_weight: Least summed inlier probability of the winner's supporters for an
             answer; None for the value calibrated with the weights (in their manifest).
         delta_alpha_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1).
@@ -157,13 +223,16 @@ class NgRansac(Localizer):
     name = "ng-ransac"
 
     def __init__(self, *, weights: str | None = None, max_hypotheses: int = 10,
-                 max_ranked: int = 8, min_support_weight: float | None = None,
+                 max_ranked: int = 8, fallback_ranked: int = 12, confident_share: float = 0.5,
+                 min_support_weight: float | None = None,
                  delta_alpha_d: float = math.radians(0.4), coverage: bool = True,
                  weighted: bool = False, degeneracy_tol: float = 1e-9,
                  max_iter: int = 50) -> None:
         self.weights = weights
         self.max_hypotheses = max_hypotheses
         self.max_ranked = max_ranked
+        self.fallback_ranked = fallback_ranked
+        self.confident_share = confident_share
         self.min_support_weight = min_support_weight
         self.delta_alpha_d = delta_alpha_d
         self.coverage = coverage
@@ -176,6 +245,12 @@ class NgRansac(Localizer):
         name = type(self).__name__
         check_range(name, "max_hypotheses", self.max_hypotheses, low=1, integer=True)
         check_range(name, "max_ranked", self.max_ranked, low=3, high=64, integer=True)
+        check_range(name, "fallback_ranked", self.fallback_ranked, low=0, high=24, integer=True)
+        if 0 < self.fallback_ranked < self.max_ranked:
+            raise InvalidInputError(f"{name}.fallback_ranked must be 0 (no second pass) or at "
+                                    f"least max_ranked={self.max_ranked}, got "
+                                    f"{self.fallback_ranked}")
+        check_range(name, "confident_share", self.confident_share, low=0.0, high=1.0)
         check_range(name, "delta_alpha_d", self.delta_alpha_d, low=0.0, high=math.pi / 2,
                     high_open=True)
         check_range(name, "degeneracy_tol", self.degeneracy_tol, low=0.0, high=1.0)
@@ -190,6 +265,8 @@ class NgRansac(Localizer):
         self._load_model()
         self._settings = settings_array(self.delta_alpha_d, bool(self.coverage),
                                         self.degeneracy_tol, bool(self.weighted), self.max_iter)
+        self._search = search_array(self.max_ranked, self.max_hypotheses,
+                                    self.fallback_ranked, self.confident_share)
 
     def _load_model(self) -> None:
         """Load the weights (once per path): the scorer, its feature layout, its calibration."""
@@ -220,33 +297,30 @@ class NgRansac(Localizer):
         out = np.empty(OUT_SIZE)
         mask = np.zeros(len(measurements), dtype=np.bool_)
         cov = np.empty((3, 3))
-        distinct, guided, weight = _ng_ransac_frame(
+        distinct, tried, weight = _ng_ransac_frame(
             measurements.ids, measurements.azimuth, column, has_quality,
-            *beacons.lookup_tables(), self._scorer.params, self._scorer.hidden,
-            int(self.max_ranked), int(self.max_hypotheses), self._settings, out, mask, cov)
+            *beacons.lookup_tables(), self._scorer.params, self._scorer.hidden, self._search,
+            self._settings, out, mask, cov)
         if distinct < MIN_MEASUREMENTS:
             return super()._localize_frame(measurements, beacons)  # the standard refusal
-        return self._answer(distinct, guided, weight, out, mask, cov)
+        return self._answer(distinct, tried, weight, out, mask, cov)
 
     def _localize(self, problem: Problem) -> Estimate:
         """A :class:`Problem` without the frame's quality (the features then do without)."""
         logits = self.inlier_logits(problem, None)
-        triplets = guided_triplets(logits, problem.ints[ROW_BEACON_INDEX],
-                                   int(self.max_ranked), int(self.max_hypotheses))
         out = np.empty(OUT_SIZE)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
         cov = np.empty((3, 3))
-        solve_from_triplets(problem.floats, problem.ints, triplets, self._settings, out, mask,
-                            cov)
-        used = mask[problem.ints[ROW_SOURCE]]
-        weight = float((1.0 / (1.0 + np.exp(-logits[used]))).sum())
-        return self._answer(problem.n_distinct, int(triplets.shape[0]), weight, out, mask, cov)
+        tried = guided_search(problem.floats, problem.ints, logits, problem.n_distinct,
+                              self._search, self._settings, out, mask, cov)
+        return self._answer(problem.n_distinct, tried,
+                            support_weight(logits, problem.ints, mask), out, mask, cov)
 
-    def _answer(self, distinct: int, guided: int, weight: float, out: FloatArray,
+    def _answer(self, distinct: int, tried: int, weight: float, out: FloatArray,
                 mask: np.ndarray, cov: FloatArray) -> Estimate:
         """The estimate of a search: refused when its supporters' inlier weight is too low."""
         consensus = math.comb(min(CONSENSUS_CANDIDATES, distinct), 3)
-        diagnostics = {"n_hypotheses": consensus + guided,
+        diagnostics = {"n_hypotheses": consensus + tried,
                        "n_valid_triplets": int(out[OUT_VALID_TRIPLETS])}
         if out[OUT_SUPPORT] < MIN_MEASUREMENTS:
             return Estimate.failure("no non-degenerate triplet with at least 3 supporters",

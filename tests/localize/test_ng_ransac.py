@@ -16,7 +16,16 @@ from helpers import beacon_map, ideal_frame
 import azgym
 from azgym import InvalidInputError, Measurements
 from azgym.learn.weights import load_weights
-from azgym.localize.ng_ransac import SHIPPED_WEIGHTS, NgRansac, guided_triplets
+from azgym.localize import _kernels as K
+from azgym.localize.base import Problem
+from azgym.localize.ng_ransac import (
+    SHIPPED_WEIGHTS,
+    NgRansac,
+    guided_search,
+    guided_triplets,
+    search_array,
+)
+from azgym.localize.ransac import OUT_SIZE, settings_array
 
 
 def log_sigmoid(z):
@@ -105,3 +114,35 @@ def test_the_shipped_weights_are_calibrated_and_their_card_names_them():
     card = (SHIPPED_WEIGHTS.parent / "model-card.md").read_text(encoding="utf-8")
     assert hashlib.sha256(SHIPPED_WEIGHTS.read_bytes()).hexdigest() in card
     assert SHIPPED_WEIGHTS.stat().st_size <= 2 * 1024 * 1024
+
+
+def search_on(frame, beacons, logits):
+    problem = Problem.from_frame(frame, beacons)
+    out, mask, cov = np.empty(OUT_SIZE), np.zeros(len(frame), dtype=bool), np.empty((3, 3))
+    tried = guided_search(problem.floats, problem.ints, np.asarray(logits, dtype=float),
+                          problem.n_distinct, search_array(), settings_array(), out, mask, cov)
+    return tried, out, mask
+
+
+def test_a_first_pass_without_a_confident_winner_tries_every_triplet_of_the_top_ranked():
+    beacons = beacon_map([(10 * math.cos(a), 10 * math.sin(a))
+                          for a in np.linspace(0, 2 * math.pi, 12, endpoint=False)])
+    pose = (1.0, -2.0, 0.4)
+    frame = ideal_frame(*pose, beacons)
+    clean_tried, out, mask = search_on(frame, beacons, np.linspace(2, -2, 12))
+    assert clean_tried == 10 and mask.all()  # the first pass's winner has all 12: confident
+    # Five azimuths shuffled, and the network trusting exactly those most: the first pass's
+    # triplets are all outliers, so it goes on with every triplet of the 12 most probable.
+    azimuth = frame.azimuth.copy()
+    azimuth[[0, 1, 2, 3, 4]] = azimuth[[3, 4, 0, 1, 2]]
+    logits = np.r_[np.full(5, 3.0), np.full(7, -1.0)]
+    tried, out, mask = search_on(Measurements(frame.ids, azimuth), beacons, logits)
+    assert tried == 10 + 220
+    assert mask.tolist() == [False] * 5 + [True] * 7
+    assert math.hypot(out[K.POSE_X] - pose[0], out[K.POSE_Y] - pose[1]) < 1e-6
+
+
+def test_the_second_pass_draws_from_at_least_the_first_pass_measurements():
+    with pytest.raises(InvalidInputError, match="fallback_ranked must be 0 .* or at least "
+                                                "max_ranked=8, got 6"):
+        NgRansac(fallback_ranked=6)
