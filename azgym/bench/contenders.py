@@ -10,15 +10,12 @@ localizers.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT, build_problem
-from azgym.core import BeaconMap, Measurements
+from azgym.bench.worker import warm_up_localizer
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import make_localizer, parse_spec, spec_label
 
@@ -95,15 +92,9 @@ def warm_up(contenders: Iterable[Contender]) -> None:
     while the fork server compiles ``ransac`` (the longest to compile): the fork server then
     finds the others in numba's cache, which shortens the first run by a third.
     """
-    xyz = np.array([[0.0, 0.0, 3.0], [10.0, 0.0, 3.0], [10.0, 8.0, 3.0], [0.0, 8.0, 3.0],
-                    [5.0, 8.0, 3.0]])
-    beacons = BeaconMap(np.arange(5), xyz)
-    x, y, heading = 3.0, 2.5, 0.3
-    azimuth = [math.remainder(math.atan2(by - y, bx - x) - heading, math.tau)
-               for bx, by, _ in xyz]
-    measurements = Measurements(np.arange(5), azimuth)
     for contender in contenders:
         try:
-            make_localizer(contender.spec, **contender.params).localize(measurements, beacons)
+            warm_up_localizer(make_localizer(contender.spec, **contender.params))
         except Exception:  # noqa: BLE001, S112 - a worker meets (and scores) the same failure
             continue
+

@@ -202,6 +202,8 @@ class IsolatedRun:
         if not w.ready:
             if w.progress[0] == worker.BUILDING:  # the worker set it: the build has begun
                 return w.progress[1] / 1e9 + self.time_limit
+            if w.progress[0] == worker.WARMING:  # a built-in compiling its kernels
+                return w.progress[1] / 1e9 + STARTUP_LIMIT
             return w.started + STARTUP_LIMIT
         if w.batch is None:
             return time.monotonic() + 1.0
@@ -218,6 +220,8 @@ class IsolatedRun:
         if not w.ready:
             if w.progress[0] == worker.BUILDING:
                 return f"building the localizer took longer than the {self.time_limit:g} s limit"
+            if w.progress[0] == worker.WARMING:
+                return f"compiling the built-in took longer than {STARTUP_LIMIT:g} s"
             return f"the worker did not start within {STARTUP_LIMIT:g} s"
         return f"timed out: took longer than the {self.time_limit:g} s limit"
 

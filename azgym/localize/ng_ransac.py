@@ -123,12 +123,17 @@ def guided_search(floats, ints, logits, distinct, search, settings, out, mask, c
     probable measurements is tried, as ransac tries all of them, so a frame the network cannot
     sort out is never searched less than the paper's way.
     """
-    triplets = guided_triplets(logits, ints[ROW_BEACON_INDEX], int(search[SEARCH_RANKED]),
-                               int(search[SEARCH_FIRST]))
+    fallback = int(search[SEARCH_FALLBACK_RANKED])
+    if _triplet_count(min(fallback, logits.size)) <= 2 * int(search[SEARCH_FIRST]):
+        fallback = 0  # a small frame: one pass over every triplet costs less than two
+        triplets = guided_triplets(logits, ints[ROW_BEACON_INDEX], logits.size,
+                                   _triplet_count(logits.size))
+    else:
+        triplets = guided_triplets(logits, ints[ROW_BEACON_INDEX], int(search[SEARCH_RANKED]),
+                                   int(search[SEARCH_FIRST]))
     solve_from_triplets(floats, ints, triplets, settings, out, mask, cov)
     tried = triplets.shape[0]
     confident = max(CONFIDENT_SUPPORT, math.ceil(search[SEARCH_CONFIDENT_SHARE] * distinct))
-    fallback = int(search[SEARCH_FALLBACK_RANKED])
     if out[OUT_SUPPORT] >= confident or fallback < 3:
         return tried
     everything = guided_triplets(logits, ints[ROW_BEACON_INDEX], fallback,

@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 from azgym.core import BeaconMap, Estimate, Measurements
-from azgym.errors import InvalidInputError, unknown_name
+from azgym.errors import AzgymError, InvalidInputError, unknown_name
 
 ENTRY_POINT_GROUP = "azgym.localizers"
 TRACKER_ENTRY_POINT_GROUP = "azgym.trackers"
@@ -99,6 +99,19 @@ def list_localizers() -> list[str]:
     """Every localizer name: built-ins, presets, registered and entry-point localizers."""
     return sorted(set(_BUILTIN) | set(PRESETS) | set(_REGISTERED)
                   | set(_entry_points(ENTRY_POINT_GROUP)))
+
+
+def is_builtin(spec: str) -> bool:
+    """Whether a spec names a localizer or tracker that ships with azgym (hyperparameters aside).
+
+    The benchmark's workers trust a built-in's first call to compile its kernels for as long as
+    that takes; a plug-in's first call has the time limit of any other.
+    """
+    try:
+        target, _ = parse_spec(spec)
+    except AzgymError:
+        return False
+    return target in _BUILTIN or target in _BUILTIN_TRACKERS or target in PRESETS
 
 
 def list_trackers() -> list[str]:

@@ -10,11 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from azgym.bench import worker
 from azgym.bench.contenders import Contender
-from azgym.bench.isolation import GIVE_UP_AFTER
+from azgym.bench.isolation import GIVE_UP_AFTER, STARTUP_LIMIT, IsolatedRun, _Worker
 from azgym.bench.runner import run_contenders
 from azgym.bench.suites import get_suite
 from azgym.cli import main
+from azgym.localize.registry import is_builtin
 
 PLUGINS = Path(__file__).parents[1] / "hostile" / "plugins"
 """Hostile plug-ins, one a file: each names the attack in its docstring."""
@@ -137,3 +139,24 @@ def test_bench_refuses_a_time_limit_that_is_not_a_positive_number(bad, capsys):
         main(["bench", "--time-limit", bad])
     assert stop.value.code == 2
     assert "--time-limit: must be a number of seconds > 0" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("spec", "builtin"), [
+    ("ransac", True), ("ng-ransac:max_hypotheses=5", True), ("mex-coarse", True),
+    ("robust", True), ("my_localizer.py:Mine", False), ("package.module:Class", False),
+    ("not a spec::", False)])
+def test_only_azgym_s_own_localizers_count_as_built_in(spec, builtin):
+    assert is_builtin(spec) is builtin
+
+
+def test_a_built_in_compiling_its_kernels_has_the_startup_allowance_not_the_time_limit():
+    # A built-in's worker warms it up (compiling on a machine's first run) before it is ready;
+    # that phase has the startup allowance, a build or a frame has the time limit.
+    run = IsolatedRun("ransac", {}, [], {}, workers=1, time_limit=0.5, batches=[])
+    began = time.monotonic()
+    progress = [worker.WARMING, int(began * 1e9)]
+    warming = _Worker(process=None, conn=None, progress=progress, answers=None, started=began)
+    assert run._deadline(warming) == pytest.approx(began + STARTUP_LIMIT)
+    assert "compiling the built-in took longer than 300 s" in run._overrun_reason(warming)
+    progress[0] = worker.BUILDING
+    assert run._deadline(warming) == pytest.approx(began + 0.5)
