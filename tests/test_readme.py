@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 import shlex
+import shutil
 import sys
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import pytest
 
 import azgym
 from azgym.cli import _contenders, main
+from azgym.localize.ng_ransac import SHIPPED_WEIGHTS
 
 README = Path(__file__).parent.parent / "README.md"
 
@@ -78,6 +80,8 @@ def test_every_localizer_spec_the_readme_gives_builds(tmp_path, monkeypatch):
     (tmp_path / "hold_last.py").write_text(
         re.search(r"```python\n(.*?)```", tracker_section, re.S).group(1))
     (tmp_path / "path" / "to").mkdir(parents=True)
+    (tmp_path / "runs" / "ng-ransac").mkdir(parents=True)  # what the README's training writes
+    shutil.copy(SHIPPED_WEIGHTS, tmp_path / "runs" / "ng-ransac" / "ng-ransac.npz")
     (tmp_path / "path" / "to" / "mine.py").write_text("".join(
         f"class {name}:\n    def __init__(self, *, tag=''):\n        pass\n\n"
         "    def localize(self, measurements, beacons):\n        pass\n\n\n"
@@ -105,3 +109,22 @@ def test_the_tracker_example_runs_on_the_routes_and_holds_through_dropouts(tmp_p
     held, ransac = float(rows[label][2].rstrip("%")), float(rows["ransac"][2].rstrip("%"))
     assert held > ransac  # holding the last fix answers frames ransac cannot
     assert "tracks:" in printed
+
+
+def test_the_learned_section_trains_a_model_and_benches_it_beside_the_shipped_one(
+        tmp_path, monkeypatch, capsys):
+    pytest.importorskip("torch", reason="training needs pip install torch==2.13.0")
+    section = README.read_text(encoding="utf-8").split("## Learned localizers", 1)[1]
+    shell = re.search(r"```bash\n(.*?)```", section, re.S).group(1)
+    commands = [shlex.split(line.split("#")[0]) for line in shell.splitlines()
+                if line.startswith("azgym")]
+    assert [c[1] for c in commands] == ["train", "bench"]
+    monkeypatch.chdir(tmp_path)  # the weights path is relative: the workers must resolve it here
+    train = commands[0]
+    for option, small in (("--layouts", "4"), ("--frames-per-layout", "10"), ("--epochs", "2")):
+        train[train.index(option) + 1] = small
+    assert main(train[1:]) == 0
+    assert main([*commands[1][1:], "--quick", "--workers", "1", "--out", "out"]) == 0
+    printed = capsys.readouterr().out
+    rows = {line.split()[1] for line in printed.splitlines() if re.match(r"^ *\d+ \S", line)}
+    assert {"ng-ransac", "ng-ransac:weights=runs/ng-ransac/ng-ransac.npz", "ransac"} <= rows

@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import multiprocessing.connection
+import os
 import signal
 import sys
 import time
@@ -165,7 +166,7 @@ class IsolatedRun:
         answers = ctx.RawArray("d", self.capacity * ANSWER_SIZE)
         process = ctx.Process(target=worker.serve, daemon=True, name=f"azgym {self.spec}",
                               args=(theirs, progress, answers, self.spec, self.params,
-                                    self.maps))
+                                    self.maps, os.getcwd()))
         started = time.monotonic()  # before start(): the worker may begin building at once
         with _caller_main_hidden():
             process.start()

@@ -18,6 +18,7 @@ Layouts shared with :mod:`azgym.bench.isolation`: ``progress`` holds (phase, sta
 from __future__ import annotations
 
 import math
+import os
 import signal
 import time
 import zlib
@@ -48,7 +49,7 @@ PENDING, POSED, NO_POSE, RAISED = 0.0, 1.0, 2.0, 3.0
 """Answer states: not answered yet; a usable pose; an estimate without one; an exception."""
 
 def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, Any],
-          maps: Mapping[str, MapData]) -> None:
+          maps: Mapping[str, MapData], folder: str) -> None:
     """The worker's main loop: build the contender, then answer batches until told to stop.
 
     A localizer runs as a tracker without memory (:class:`~azgym.track.base.FrameByFrame`).
@@ -67,8 +68,12 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
         spec: The localizer's or tracker's spec.
         params: Its hyperparameters.
         maps: Each scenario's beacon map.
+        folder: The runner's working folder: relative paths in the spec (a plug-in file, a
+            weight file) mean what they meant where the run was started, whichever folder the
+            fork server was started in.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    os.chdir(folder)
     beacon_maps = {name: unpack_map(data) for name, data in maps.items()}
     _mark(progress, BUILDING)
     try:
