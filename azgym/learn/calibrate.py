@@ -26,7 +26,7 @@ from azgym.localize.ransac import OUT_SIZE, OUT_SUPPORT, settings_array
 
 RIGHT_M = 1.0
 """An answer within this distance of the truth [m] is right; beyond it, wrong."""
-DEFAULT_RIGHT_LOST = 0.01
+DEFAULT_RIGHT_LOST = 0.005
 """Share of the held-out right answers the shipped threshold may give up."""
 
 
