@@ -11,8 +11,9 @@ the frame's measured beacons and s their RMS distance to it, and the measurement
 :mod:`azgym.learn.features` (quality ranks, duplicates, consensus residual and support: what
 tells a token to trust from one to ignore). Centring and scaling per frame let one network
 serve a 6 m room and a 60 m warehouse alike; the position is predicted in that frame and mapped
-back (x = c + s u). The beacon's height is left out: an azimuth is a horizontal direction, and
-the generated warehouses hang every beacon at nearly one height, so it would teach nothing.
+back (x = c + s u). The beacon's height is left out: an azimuth is a horizontal direction that
+the height does not change, so the position follows from the horizontal geometry alone (a
+height token was not tried).
 Rotation is not canonicalised (a frame's world heading is unknown): training rotates every
 frame's world at random, so the network learns to compose camera-frame azimuths with world
 positions whatever the map's orientation.

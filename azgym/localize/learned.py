@@ -23,15 +23,15 @@ round, from the regressed pose, takes every measurement whose trust logit is at 
 ``min_trust`` (all of them if those see fewer than three beacons); each later round those of
 them whose residual at the current pose is within a gate, the gates shrinking by ``GATE_GROWTH``
 per round down to ``gate`` (iteratively trimmed least squares, the hard form of IRLS). The
-defaults (3 rounds, 1°, −2) were chosen on frames of the held-out generated layouts (data seed
-7; 1,200 frames): p75 3.2 cm there; ``min_trust`` −4 let ghosts in (p75 13 cm), 0 dropped good
-views when the network doubted them (8.3 % beyond 1 m instead of 6.8 %); a fourth round or
-another last gate (0.5°, 2°) moved p75 by under 0.3 cm. A round that keeps fewer than three
-beacons, or whose refinement does not converge, ends the refinement with the pose before it.
-``refine_rounds=0`` is the pure regression; the model card and the report give both variants'
-figures. The default is the refinement because the pure regression is metres off in large
-warehouses, where a centimetre azimuth fit is cheap once a start in the right basin is known
-(the network's job).
+defaults (3 rounds, 1°, −2) were chosen with the shipped weights on frames of the held-out
+generated layouts (data seed 7, 1,200 frames; never a suite's): p75 3.2 cm there, 6.8 % beyond 1
+m; ``min_trust`` −4 let the measurements the network doubts in (p75 11 cm), 0 left out good
+views it doubted (8.5 % beyond 1 m); a fourth round or another last gate (0.5°, 2°) moved p75 by
+under 0.3 cm. A round that keeps fewer than three beacons, or whose refinement does not
+converge, ends the refinement with the pose before it. ``refine_rounds=0`` is the pure
+regression; the model card and the report give both variants' figures. The default is the
+refinement because the pure regression is metres off in large warehouses, where a centimetre
+azimuth fit is cheap once a start in the right basin is known (the network's job).
 
 A frame is always answered when it has three distinct beacons (the regression cannot fail), so
 availability is the share of such frames; the covariance says how far to trust it. Everything
