@@ -13,11 +13,14 @@ import time
 from pathlib import Path
 
 from azgym.arguments import whole_number
-from azgym.errors import AzgymError, DependencyNotInstalled, InvalidInputError
+from azgym.errors import AzgymError, DependencyNotInstalled
 
 MODELS = ("ng-ransac", "learned")
-"""The models ``--model`` names; ``learned`` is announced, not yet trainable."""
-TRAINABLE = ("ng-ransac",)
+"""The models ``--model`` names."""
+DEFAULTS = {"ng-ransac": {"layouts": 64, "epochs": 20, "hidden": 16},
+            "learned": {"layouts": 1000, "epochs": 60, "hidden": 32}}
+"""Each model's defaults for the options not given (the shipped weights' settings for
+``learned``; ng-ransac's shipped weights used ``--layouts 400``)."""
 
 
 def _whole(minimum: int):
@@ -42,16 +45,18 @@ def _require_training_extra() -> None:
 
 
 def _train_localizer(args: argparse.Namespace) -> int:
-    if args.model not in TRAINABLE:
-        raise InvalidInputError(f"--model {args.model}: not available yet; trainable models: "
-                                f"{', '.join(TRAINABLE)}")
+    settings = {key: value if value is not None else DEFAULTS[args.model][key]
+                for key, value in (("layouts", args.layouts), ("epochs", args.epochs),
+                                   ("hidden", args.hidden))}
     _require_training_extra()
-    from azgym.learn.train import train_ng_ransac
+    if args.model == "learned":
+        from azgym.learn.train_regression import train_learned as train
+    else:
+        from azgym.learn.train import train_ng_ransac as train
 
     started = time.perf_counter()
-    result = train_ng_ransac(Path(args.out), layouts=args.layouts,
-                             frames=args.frames_per_layout, epochs=args.epochs, seed=args.seed,
-                             hidden=args.hidden, threads=args.threads)
+    result = train(Path(args.out), frames=args.frames_per_layout, seed=args.seed,
+                   threads=args.threads, **settings)
     print(f"{args.model}: {len(result.history)} epochs, {time.perf_counter() - started:.0f} s"
           "; wrote " + ", ".join(map(str, (result.weights, result.card, result.figure))))
     return 0
@@ -66,20 +71,22 @@ def add_train(commands: argparse._SubParsersAction) -> None:
                           "learning curve and model card")
     localizer.add_argument("--model", required=True, choices=MODELS,
                            help="ng-ransac: a network orders the measurements for the "
-                                "triplet search")
+                                "triplet search; learned: a network regresses the pose")
     localizer.add_argument("--out", required=True, metavar="DIR",
                            help="output folder (a checkpoint there is resumed)")
-    localizer.add_argument("--layouts", type=_whole(1), default=64, metavar="N",
-                           help="generated warehouses trained on")
+    localizer.add_argument("--layouts", type=_whole(1), metavar="N",
+                           help="generated warehouses trained on (default: ng-ransac 64, "
+                                "learned 1000)")
     localizer.add_argument("--frames-per-layout", type=_whole(1), default=100, metavar="N",
                            help="frames drawn in each warehouse (held-out ones too)")
-    localizer.add_argument("--epochs", type=_whole(1), default=20, metavar="N",
-                           help="passes over the frames")
+    localizer.add_argument("--epochs", type=_whole(1), metavar="N",
+                           help="passes over the frames (default: ng-ransac 20, learned 60)")
     localizer.add_argument("--seed", type=_whole(0), default=0, metavar="S",
                            help="seed of the frames, the initial weights and the batch order "
                                 "(default: 0)")
-    localizer.add_argument("--hidden", type=_whole(1), default=16, metavar="H",
-                           help="width of the network's hidden layers")
+    localizer.add_argument("--hidden", type=_whole(1), metavar="H",
+                           help="width of the network's hidden layers (default: ng-ransac 16, "
+                                "learned 32)")
     localizer.add_argument("--threads", type=_whole(1), default=1, metavar="N",
                            help="torch's CPU threads")
     localizer.set_defaults(handler=_train_localizer)

@@ -182,9 +182,9 @@ def fit(train: Any, held_out: Any, out_dir: Path, config: TrainConfig, *,
     model = TorchInlierScorer(data[0][0].shape[-1], config.hidden)
     optimizer = torch.optim.Adam(model.parameters(), lr=config.learning_rate)
     pos_weight = torch.tensor(config.pos_weight or _balanced_weight(data[0][2], data[0][1]))
-    fingerprint = _fingerprint(data, config, feature_layout)
+    stamp = fingerprint(data, config, feature_layout)
     checkpoint = out_dir / CHECKPOINT_NAME
-    history, seconds = _resume(checkpoint, model, optimizer, fingerprint)
+    history, seconds = resume(checkpoint, model, optimizer, stamp)
     if len(history) > config.epochs:
         raise InvalidInputError(f"{checkpoint}: holds {len(history)} epochs, more than the "
                                 f"{config.epochs} asked for; delete it to start over")
@@ -196,7 +196,7 @@ def fit(train: Any, held_out: Any, out_dir: Path, config: TrainConfig, *,
         history.append({"epoch": epoch + 1, "train_loss": loss,
                         **evaluate(model, data[1], pos_weight)})
         seconds += time.perf_counter() - started
-        _save_checkpoint(checkpoint, model, optimizer, history, seconds, fingerprint)
+        save_checkpoint(checkpoint, model, optimizer, history, seconds, stamp)
         bar.write(_epoch_line(history[-1]))
     bar.close()
     info = _training_info(config, float(pos_weight), data, data_info, history, seconds)
@@ -278,7 +278,7 @@ def evaluate(model: TorchInlierScorer, data: tuple[torch.Tensor, ...],
     loss = torch.nn.functional.binary_cross_entropy_with_logits(
         logits[data[1]], data[2][data[1]], pos_weight=pos_weight)
     correct = (real > 0) == inlier[mask]
-    return {"held_out_loss": _finite(float(loss)),
+    return {"held_out_loss": finite(float(loss)),
             "held_out_accuracy": float(correct.mean()) if correct.size else None,
             "held_out_auc": auc(real, inlier[mask]),
             "held_out_top3": _top3(np.where(mask, scores, -np.inf), inlier)}
@@ -304,13 +304,17 @@ def _top3(scores: np.ndarray, inlier: np.ndarray) -> float | None:
     return float(np.take_along_axis(inlier[eligible], best, axis=1).all(axis=1).mean())
 
 
-def _finite(value: float) -> float | None:
+def finite(value: float) -> float | None:
+    """The value, or None (JSON's null) when it is not finite."""
     return value if math.isfinite(value) else None
 
 
-def _fingerprint(data: tuple[tuple[torch.Tensor, ...], ...], config: TrainConfig,
-                 feature_layout: str) -> str:
-    """SHA-256 of the data and every setting a resumed run must share (not epochs, threads)."""
+def fingerprint(data: tuple[tuple[torch.Tensor, ...], ...], config: Any,
+                feature_layout: str) -> str:
+    """SHA-256 of the data and every setting a resumed run must share (not epochs, threads).
+
+    ``config`` is a dataclass of the run's hyperparameters (any model's).
+    """
     digest = hashlib.sha256(feature_layout.encode())
     settings = {k: v for k, v in asdict(config).items() if k not in ("epochs", "threads")}
     digest.update(json.dumps(settings, sort_keys=True).encode())
@@ -321,8 +325,8 @@ def _fingerprint(data: tuple[tuple[torch.Tensor, ...], ...], config: TrainConfig
     return digest.hexdigest()
 
 
-def _resume(path: Path, model: TorchInlierScorer, optimizer: torch.optim.Optimizer,
-            fingerprint: str) -> tuple[list[dict[str, Any]], float]:
+def resume(path: Path, model: torch.nn.Module, optimizer: torch.optim.Optimizer,
+           fingerprint: str) -> tuple[list[dict[str, Any]], float]:
     """Load the checkpoint of this very run, if there is one: (history, seconds so far)."""
     if not path.exists():
         return [], 0.0
@@ -341,8 +345,8 @@ def _resume(path: Path, model: TorchInlierScorer, optimizer: torch.optim.Optimiz
     return list(state["history"]), float(state["seconds"])
 
 
-def _save_checkpoint(path: Path, model: TorchInlierScorer, optimizer: torch.optim.Optimizer,
-                     history: list[dict[str, Any]], seconds: float, fingerprint: str) -> None:
+def save_checkpoint(path: Path, model: torch.nn.Module, optimizer: torch.optim.Optimizer,
+                    history: list[dict[str, Any]], seconds: float, fingerprint: str) -> None:
     """The run's state after an epoch, written atomically (an interruption keeps the last)."""
     buffer = io.BytesIO()
     torch.save({"model": model.state_dict(), "optimizer": optimizer.state_dict(),
@@ -369,7 +373,7 @@ def _training_info(config: TrainConfig, pos_weight: float,
     counts = {}
     for name, (_, mask, inlier) in zip(("train", "held_out"), data, strict=True):
         counts[name] = {"frames": len(mask), "measurements": int(mask.sum()),
-                        "inlier_share": _finite(float(inlier[mask].mean()))}
+                        "inlier_share": finite(float(inlier[mask].mean()))}
     return {"data": {**(data_info or {}), **counts},
             "hyperparameters": {**asdict(config), "pos_weight": pos_weight,
                                 "optimizer": "Adam", "loss": "masked BCE on inlier"},

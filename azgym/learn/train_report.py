@@ -43,7 +43,7 @@ class _Lines:
         """Nothing to close."""
 
 
-def progress_bar(total: int, initial: int, enabled: bool) -> Any:
+def progress_bar(total: int, initial: int, enabled: bool, desc: str = "ng-ransac") -> Any:
     """A tqdm bar of ``total`` steps starting at ``initial``, or plain lines without tqdm."""
     try:
         from tqdm import tqdm
@@ -52,12 +52,18 @@ def progress_bar(total: int, initial: int, enabled: bool) -> Any:
     if not enabled:
         return _Lines(False)
     # disable=None: no bar where it cannot redraw in place (a log file); the lines still show
-    return tqdm(total=total, initial=initial, unit="batch", desc="ng-ransac", leave=False,
+    return tqdm(total=total, initial=initial, unit="batch", desc=desc, leave=False,
                 disable=None, mininterval=0.5)
 
 
-def write_learning_curve(history: list[dict[str, Any]], path: Path) -> Path:
-    """Loss per epoch (training, held-out) beside the held-out figures; a PNG."""
+def write_learning_curve(history: list[dict[str, Any]], path: Path,
+                         figures: tuple[tuple[str, str], ...] = FIGURES,
+                         loss_label: str = "masked BCE (inliers weighted)") -> Path:
+    """Loss per epoch (training, held-out) beside the held-out ``figures``; a PNG.
+
+    ``figures`` are (key, label) pairs of each epoch's row; shares (the default) are drawn on
+    [0, 1], anything else on an axis of its own range.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -65,21 +71,22 @@ def write_learning_curve(history: list[dict[str, Any]], path: Path) -> Path:
     from matplotlib.ticker import MaxNLocator
 
     epochs = [row["epoch"] for row in history]
-    figure, (losses, figures) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    figure, (losses, panel) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     losses.plot(epochs, [row["train_loss"] for row in history], marker="o", label="training")
     losses.plot(epochs, [_nan(row["held_out_loss"]) for row in history], marker="o",
                 label="held-out")
     losses.set_xlabel("epoch")
-    losses.set_ylabel("masked BCE (inliers weighted)")
+    losses.set_ylabel(loss_label)
     losses.set_title("loss")
     losses.legend()
-    for key, label in FIGURES:
-        figures.plot(epochs, [_nan(row[key]) for row in history], marker="o", label=label)
-    figures.set_xlabel("epoch")
-    figures.set_ylim(0, 1.02)
-    figures.set_title("held-out layouts")
-    figures.legend(loc="lower right")
-    for axes in (losses, figures):
+    for key, label in figures:
+        panel.plot(epochs, [_nan(row[key]) for row in history], marker="o", label=label)
+    panel.set_xlabel("epoch")
+    if figures == FIGURES:
+        panel.set_ylim(0, 1.02)
+    panel.set_title("held-out layouts")
+    panel.legend(loc="lower right" if figures == FIGURES else "upper right")
+    for axes in (losses, panel):
         axes.grid(True, alpha=0.3)
         axes.xaxis.set_major_locator(MaxNLocator(integer=True))
     image = io.BytesIO()
@@ -100,19 +107,19 @@ def write_card(path: Path, info: dict[str, Any], weights: Path, figure: Path) ->
              "Scores each measurement of a frame with the logit of its being an inlier; the "
              "ng-ransac localizer tries triplets in that order.", "",
              "## Data", "",
-             *_bullets(data, ("train", "held_out")),
+             *bullets(data, ("train", "held_out")),
              *[f"- {name}: {data[key]['frames']} frames, {data[key]['measurements']} "
-               f"measurements, inlier share {_show(data[key]['inlier_share'])}"
+               f"measurements, inlier share {show(data[key]['inlier_share'])}"
                for key, name in (("train", "training set"), ("held_out", "held-out set"))],
-             "", "## Seeds and hyperparameters", "", *_bullets(settings, ()), "",
+             "", "## Seeds and hyperparameters", "", *bullets(settings, ()), "",
              "## Training", "",
              f"- {len(info['history'])} epochs in {info['seconds']:.1f} s "
              f"(torch {info['torch_version']}, {settings['threads']} thread(s))", "",
              "| epoch | train loss | held-out loss | "
              + " | ".join(label for _, label in FIGURES) + " |",
              "|---:|---:|---:|" + "---:|" * len(FIGURES),
-             *[f"| {row['epoch']} | {_show(row['train_loss'])} | {_show(row['held_out_loss'])} "
-               f"| " + " | ".join(_show(row[key]) for key, _ in FIGURES) + " |"
+             *[f"| {row['epoch']} | {show(row['train_loss'])} | {show(row['held_out_loss'])} "
+               f"| " + " | ".join(show(row[key]) for key, _ in FIGURES) + " |"
                for row in info["history"]],
              "", f"![learning curve]({figure.name})", "",
              "## Files", "",
@@ -122,7 +129,7 @@ def write_card(path: Path, info: dict[str, Any], weights: Path, figure: Path) ->
     return write_file(path, "\n".join(lines))
 
 
-def _bullets(values: dict[str, Any], skip: tuple[str, ...]) -> list[str]:
+def bullets(values: dict[str, Any], skip: tuple[str, ...]) -> list[str]:
     """One ``- key: value`` line per entry (lists of seeds shortened to first … last)."""
     lines = []
     for key, value in values.items():
@@ -135,5 +142,6 @@ def _bullets(values: dict[str, Any], skip: tuple[str, ...]) -> list[str]:
     return lines
 
 
-def _show(value: float | None) -> str:
+def show(value: float | None) -> str:
+    """A figure with four decimals, or ``n/a``."""
     return "n/a" if value is None else f"{value:.4f}"

@@ -46,22 +46,30 @@ FIELDS = {"format": int, "model": str, "azgym_version": str, "architecture": dic
 """Every field of a manifest and its JSON type."""
 ZIP_MAGIC = b"PK\x03\x04"
 """The first bytes of a zip archive (its first member's header)."""
+ARCHITECTURES = ("deepsets-context-1", "deepsets-regression-1")
+"""The kinds of architecture this azgym serves (:func:`array_shapes`)."""
 
 
 def array_shapes(architecture: dict[str, Any]) -> dict[str, tuple[int, ...]]:
     """The arrays an architecture consists of, and their shapes: the one rule for both.
 
-    ``deepsets-context-1`` (:mod:`azgym.learn.network`): ``W1`` (inputs, hidden), ``b1``
-    (hidden,), ``W2`` (3 hidden, hidden) acting on ``[h1, max h1, mean h1]``, ``b2`` (hidden,),
-    ``w3`` (hidden,), ``b3`` (1,).
+    ``deepsets-context-1`` (the inlier scorer, :mod:`azgym.learn.network`): ``W1`` (inputs,
+    hidden), ``b1`` (hidden,), ``W2`` (3 hidden, hidden) acting on ``[h1, max h1, mean h1]``,
+    ``b2`` (hidden,), ``w3`` (hidden,), ``b3`` (1,).
+
+    ``deepsets-regression-1`` (the pose regressor, :mod:`azgym.learn.regression`): the same
+    six arrays (``w3``, ``b3`` give the trust logits), then the head: ``W4`` (3 hidden, hidden)
+    acting on the pooled ``[max h2, mean h2, trusted mean h2]``, ``b4`` (hidden,), ``W5``
+    (hidden, hidden), ``b5`` (hidden,), ``W6`` (hidden, 4), ``b6`` (4,).
 
     Raises:
         ModelFileError: Another kind of architecture, or sizes that are not whole numbers in
             [1, 1024].
     """
-    if architecture.get("kind") != "deepsets-context-1":
-        raise ModelFileError(f"architecture kind {architecture.get('kind')!r} is not one this "
-                             "azgym knows (deepsets-context-1)")
+    kind = architecture.get("kind")
+    if kind not in ARCHITECTURES:
+        raise ModelFileError(f"architecture kind {kind!r} is not one this azgym knows "
+                             f"({', '.join(ARCHITECTURES)})")
     sizes = {}
     for key in ("inputs", "hidden"):
         value = architecture.get(key)
@@ -70,8 +78,12 @@ def array_shapes(architecture: dict[str, Any]) -> dict[str, tuple[int, ...]]:
                                  f"got {value!r}")
         sizes[key] = value
     inputs, hidden = sizes["inputs"], sizes["hidden"]
-    return {"W1": (inputs, hidden), "b1": (hidden,), "W2": (3 * hidden, hidden),
-            "b2": (hidden,), "w3": (hidden,), "b3": (1,)}
+    shapes = {"W1": (inputs, hidden), "b1": (hidden,), "W2": (3 * hidden, hidden),
+              "b2": (hidden,), "w3": (hidden,), "b3": (1,)}
+    if kind == "deepsets-regression-1":
+        shapes.update({"W4": (3 * hidden, hidden), "b4": (hidden,), "W5": (hidden, hidden),
+                       "b5": (hidden,), "W6": (hidden, 4), "b6": (4,)})
+    return shapes
 
 
 def save_weights(path: Path | str, model: str, arrays: dict[str, np.ndarray],

@@ -58,6 +58,7 @@ _BUILTIN: dict[str, str] = {
     "lsq": "azgym.localize.lsq:LeastSquares",
     "loo": "azgym.localize.loo:LeaveOneOut",
     "ng-ransac": "azgym.localize.ng_ransac:NgRansac",
+    "learned": "azgym.localize.learned:Learned",
 }
 _BUILTIN_TRACKERS: dict[str, str] = {
     "dead-reckoning": "azgym.track.dead_reckoning:DeadReckoning",

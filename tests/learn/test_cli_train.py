@@ -1,5 +1,5 @@
-"""``azgym train localizer``: arguments refused by name (exit 2) before any work, a clear answer
-without torch or for a model not trainable yet, and a run that writes the model's files."""
+"""``azgym train localizer``: arguments refused by name (exit 2) before any work, each model's
+defaults, a clear answer without torch, and a run that writes the model's files."""
 
 from __future__ import annotations
 
@@ -17,8 +17,33 @@ def test_the_command_parses_to_its_handler_with_its_defaults():
     assert args.handler is cli_train._train_localizer
     assert {key: getattr(args, key) for key in ("model", "out", "layouts", "frames_per_layout",
                                                "epochs", "seed", "hidden", "threads")} == {
-        "model": "ng-ransac", "out": "runs/a", "layouts": 64, "frames_per_layout": 100,
-        "epochs": 20, "seed": 0, "hidden": 16, "threads": 1}
+        "model": "ng-ransac", "out": "runs/a", "layouts": None, "frames_per_layout": 100,
+        "epochs": None, "seed": 0, "hidden": None, "threads": 1}  # None: the model's default
+
+
+@pytest.mark.parametrize("model", ["ng-ransac", "learned"])
+def test_each_model_trains_with_its_own_defaults_unless_told(model, monkeypatch, tmp_path):
+    pytest.importorskip("torch", reason="training needs pip install torch==2.13.0")
+    calls = []
+
+    class Result:
+        history, weights, card, figure = [], "w", "c", "f"
+
+    def train(out, **settings):
+        calls.append(settings)
+        return Result()
+
+    from azgym.learn import train as ng_ransac_training
+    from azgym.learn import train_regression
+
+    monkeypatch.setattr(ng_ransac_training, "train_ng_ransac", train)
+    monkeypatch.setattr(train_regression, "train_learned", train)
+    base = ["train", "localizer", "--model", model, "--out", str(tmp_path)]
+    assert cli.main(base) == 0
+    assert cli.main([*base, "--layouts", "3", "--epochs", "2", "--hidden", "4"]) == 0
+    assert calls == [{"frames": 100, "seed": 0, "threads": 1, **cli_train.DEFAULTS[model]},
+                     {"frames": 100, "seed": 0, "threads": 1, "layouts": 3, "epochs": 2,
+                      "hidden": 4}]
 
 
 @pytest.mark.parametrize(("argv", "message"), [
@@ -38,13 +63,6 @@ def test_bad_arguments_exit_2_naming_the_argument(argv, message, capsys, tmp_pat
     assert stopped.value.code == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "out").exists()  # refused before any work
-
-
-def test_the_learned_model_is_announced_as_not_available_yet(capsys, tmp_path):
-    code = cli.main(["train", "localizer", "--model", "learned", "--out", str(tmp_path / "o")])
-    assert code == 2
-    assert ("azgym: error: --model learned: not available yet; trainable models: ng-ransac"
-            in capsys.readouterr().err)
 
 
 def test_without_torch_the_command_says_how_to_install_it(capsys, tmp_path, monkeypatch):
