@@ -11,7 +11,7 @@ azgym scenarios
 azgym generate --seed N [--out FILE.toml] [--size X Y]
 azgym localizers
 azgym check SPEC
-azgym train localizer --model ng-ransac --out DIR [--layouts N] [--frames-per-layout N]
+azgym train localizer --model ng-ransac|learned --out DIR [--layouts N] [--frames-per-layout N]
                       [--epochs N] [--seed S] [--hidden H] [--threads N]
 """
 

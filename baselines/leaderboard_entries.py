@@ -1,7 +1,7 @@
 """Reference leaderboard entries: built-in localizers on every suite, trackers on the routes.
 
-Every built-in localizer runs on every suite, and every built-in tracker on the suites of driven
-routes (dev split, full size).
+The default built-in localizers and the learned ones run on every suite, and every built-in
+tracker on the suites of driven routes (dev split, full size).
 
     python baselines/leaderboard_entries.py [--workers 2] [--suite NAME ...]
 
@@ -24,6 +24,8 @@ from azgym.bench.table import ranked_table
 from azgym.localize.registry import list_trackers
 
 ROOT = Path(__file__).resolve().parent.parent
+LEARNED = ("ng-ransac", "learned")
+"""The learned localizers: not among ``azgym bench``'s defaults, but on the board."""
 
 
 def main() -> None:
@@ -34,8 +36,8 @@ def main() -> None:
     entries = ROOT / "leaderboard" / "entries"
     for name in args.suite or list(SUITES):
         suite = SUITES[name]
-        contenders = default_contenders() + ([contender(spec) for spec in list_trackers()]
-                                             if suite.routes else [])
+        contenders = default_contenders() + [contender(spec) for spec in LEARNED] + (
+            [contender(spec) for spec in list_trackers()] if suite.routes else [])
         result = run_benchmark(suite, contenders, workers=args.workers,
                                progress=lambda line: print(line, flush=True))
         out = ROOT / "results" / f"bench-{name}"

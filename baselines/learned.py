@@ -2,8 +2,9 @@
 
     python baselines/learned.py [--suite stress --suite warehouse-static ...] [--out FILE]
 
-1. **On the suites** (dev split, full size): every frame goes to ransac and to ng-ransac in
-   turn, each call timed, so both runtimes come from the same run and the same machine state.
+1. **On the suites** (dev split, full size): every frame goes to ransac, ng-ransac, learned
+   and learned's pure regression (``learned:refine_rounds=0``) in turn, each call timed, so the
+   runtimes come from the same run and the same machine state.
    Per localizer: frames answered, right (within 1 m) and wrong (further off) answers, p75 of the
    answered frames' errors, the median number of triplets solved and scored (ransac's
    ``n_triplets``; ng-ransac's ``n_hypotheses``: its features' consensus triplets and its guided
@@ -37,7 +38,7 @@ from azgym.learn.network import InlierScorer  # noqa: E402
 from azgym.localize.ng_ransac import SHIPPED_WEIGHTS  # noqa: E402
 from azgym.site import load_scenario  # noqa: E402
 
-CONTENDERS = ("ransac", "ng-ransac")
+CONTENDERS = ("ransac", "ng-ransac", "learned", "learned:refine_rounds=0")
 DEFAULT_SUITES = ("stress", "warehouse-static", "paper")
 GENERALIZATION_SEED = 99
 

@@ -11,7 +11,7 @@ and the measurement features of :mod:`azgym.learn.features`) and answers
 2. a trust logit per measurement (trained on the inlier labels).
 
 The heading is not regressed: with the position known it has a closed form, the circular mean
-of β_i − α_i over the measurements (the φ' of eq. 29, :func:`azgym.localize.lsq._heading_sum`),
+of β_i − α_i over the measurements (the φ' of eq. 29, :func:`azgym.localize.lsq.heading_sum`),
 taken over those the network trusts (trust logit ≥ 0; all of them if none). Its variance is the
 position's seen from the trusted beacons (σ²_pos / d_i², averaged) plus the spread of β_i − α_i
 (−2 ln R, R their mean resultant length).
@@ -67,7 +67,7 @@ from azgym.localize.base import (
     Problem,
     gather,
 )
-from azgym.localize.lsq import _heading_sum
+from azgym.localize.lsq import heading_sum
 from azgym.localize.refinement import refine_with_covariance
 
 MODEL_NAME = "learned"
@@ -124,7 +124,7 @@ def solve_regressed(floats, ints, features, params, hidden, settings, out, cov, 
 def _closed_form_heading(floats, use, x, y, var_position):
     """(cos φ, sin φ, var φ) at (x, y) from the measurements in ``use`` (module docstring)."""
     bx, by = floats[ROW_BX], floats[ROW_BY]
-    hx, hy = _heading_sum(bx, by, floats[ROW_COS_AZ], floats[ROW_SIN_AZ], use, x, y)
+    hx, hy = heading_sum(bx, by, floats[ROW_COS_AZ], floats[ROW_SIN_AZ], use, x, y)
     norm = math.hypot(hx, hy)
     count, seen = 0, 0.0
     for u in range(bx.size):

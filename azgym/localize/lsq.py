@@ -44,7 +44,7 @@ def _pool_circles(bx, by, ca, sa, beacon_index, use, ox, oy, scale, ata, atb):
 
 
 @jit(inline="always")
-def _heading_sum(bx, by, ca, sa, use, x, y):
+def heading_sum(bx, by, ca, sa, use, x, y):
     """Σ over ``use`` of the unit vectors along β_i − α_i seen from (x, y): (h_x, h_y).
 
     Its direction is the circular mean of β_i − α_i, the heading of eq. 19-20 pooled over every
@@ -104,7 +104,7 @@ def algebraic_start(bx, by, ca, sa, beacon_index, use, out):
         return False
     x = sol[0] * scale + ox
     y = sol[1] * scale + oy
-    hx, hy = _heading_sum(bx, by, ca, sa, use, x, y)
+    hx, hy = heading_sum(bx, by, ca, sa, use, x, y)
     hn = math.sqrt(hx * hx + hy * hy)
     if not (hn > 0.0 and math.isfinite(x) and math.isfinite(y)):
         return False

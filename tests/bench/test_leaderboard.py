@@ -384,7 +384,8 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
 def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(tmp_path):
     root = L.Path(__file__).parents[2] / "leaderboard"
     entries = L.load_entries(root / "entries")
-    builtins = {"ransac", "ransac-weighted", "loo", "lsq", "triplet", "mex-coarse"}
+    builtins = {"ransac", "ransac-weighted", "loo", "lsq", "triplet", "mex-coarse", "ng-ransac",
+                "learned"}
     trackers = set(list_trackers())
     for name, suite in L.SUITES.items():
         expected = builtins | trackers if suite.routes else builtins
