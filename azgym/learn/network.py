@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from azgym.core import FloatArray
-from azgym.errors import InvalidInputError, ModelFileError
+from azgym.errors import InvalidInputError
 from azgym.jit import jit
 
 ARCHITECTURE = "deepsets-context-1"
@@ -127,21 +127,13 @@ class InlierScorer:
     """
 
     def __init__(self, arrays: dict[str, np.ndarray], manifest: dict[str, Any]) -> None:
-        from azgym.learn.weights import array_shapes
+        from azgym.learn.weights import served
 
-        architecture = manifest["architecture"]
-        if architecture.get("kind") != ARCHITECTURE:
-            raise ModelFileError(f"architecture kind {architecture.get('kind')!r}: the inlier "
-                                 f"scorer computes {ARCHITECTURE!r}")
-        for name, shape in array_shapes(architecture).items():
-            if np.shape(arrays[name]) != shape:
-                raise ModelFileError(f"array {name!r} has shape {np.shape(arrays[name])}, the "
-                                     f"architecture needs {shape}")
+        architecture, self.params = served(arrays, manifest, ARCHITECTURE, "inlier scorer",
+                                           ORDER)
         self.inputs: int = architecture["inputs"]
         self.hidden: int = architecture["hidden"]
         self.manifest = manifest
-        self.params = pack(arrays)
-        self.params.flags.writeable = False
 
     @classmethod
     def load(cls, path: Path | str, *, model: str = "ng-ransac",

@@ -203,23 +203,15 @@ class PoseRegressor:
     """
 
     def __init__(self, arrays: dict[str, np.ndarray], manifest: dict[str, Any]) -> None:
-        from azgym.learn.weights import array_shapes
+        from azgym.learn.weights import served
 
-        architecture = manifest["architecture"]
-        if architecture.get("kind") != ARCHITECTURE:
-            raise ModelFileError(f"architecture kind {architecture.get('kind')!r}: the pose "
-                                 f"regressor computes {ARCHITECTURE!r}")
+        architecture, self.params = served(arrays, manifest, ARCHITECTURE, "pose regressor",
+                                           ORDER)
         if architecture.get("inputs") != N_TOKENS:
             raise ModelFileError(f"architecture inputs {architecture.get('inputs')!r}: the "
                                  f"pose regressor's tokens have {N_TOKENS} columns")
-        for name, shape in array_shapes(architecture).items():
-            if np.shape(arrays[name]) != shape:
-                raise ModelFileError(f"array {name!r} has shape {np.shape(arrays[name])}, the "
-                                     f"architecture needs {shape}")
         self.hidden: int = architecture["hidden"]
         self.manifest = manifest
-        self.params = pack(arrays)
-        self.params.flags.writeable = False
 
     @classmethod
     def load(cls, path: Path | str, *, model: str = "learned",

@@ -145,12 +145,7 @@ def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = 64,
     from azgym.learn.features import FEATURE_LAYOUT
 
     config = TrainConfig(epochs=epochs, seed=seed, hidden=hidden, threads=threads)
-    whole_number("frames", frames)
-    seeds = layout_seeds(layouts)
-    out = prepare_folder(Path(out_dir))
-    started = time.perf_counter()
-    train, held_out, info = build_data(seeds, frames, seed)
-    info["draw_seconds"] = round(time.perf_counter() - started, 1)
+    out, train, held_out, info = prepared_data(out_dir, layouts, frames, seed)
     result = fit(train, held_out, out, config, feature_layout=FEATURE_LAYOUT, data_info=info,
                  progress=progress)
     uncalibrated = hashlib.sha256(result.weights.read_bytes()).hexdigest()
@@ -159,6 +154,22 @@ def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = 64,
     card = result.card.read_text(encoding="utf-8").replace(uncalibrated, calibrated)
     write_file(result.card, card + "\n" + card_section(calibration))
     return result
+
+
+def prepared_data(out_dir: Path | str, layouts: int | Sequence[int], frames: int, seed: int
+                  ) -> tuple[Path, Any, Any, dict[str, Any]]:
+    """The output folder, made writable, and the frames drawn, once every argument is checked.
+
+    Returns the folder, the training frames, the held-out ones and what the model card says of
+    them (``draw_seconds`` included).
+    """
+    whole_number("frames", frames)
+    seeds = layout_seeds(layouts)
+    out = prepare_folder(Path(out_dir))
+    started = time.perf_counter()
+    train, held_out, info = build_data(seeds, frames, seed)
+    info["draw_seconds"] = round(time.perf_counter() - started, 1)
+    return out, train, held_out, info
 
 
 def fit(train: Any, held_out: Any, out_dir: Path, config: TrainConfig, *,

@@ -42,9 +42,8 @@ from azgym.learn.train import (
     EVAL_BATCH,
     TrainResult,
     auc,
-    build_data,
     finite,
-    layout_seeds,
+    prepared_data,
     resume,
     save_checkpoint,
 )
@@ -134,12 +133,8 @@ def train_learned(out_dir: Path | str, *, layouts: int | Sequence[int] = 1000,
     from azgym.learn.regression_report import write_regression_card
 
     config = RegressionConfig(epochs=epochs, seed=seed, hidden=hidden, threads=threads)
-    whole_number("frames", frames)
-    seeds = layout_seeds(layouts)
-    out = prepare_folder(Path(out_dir))
-    started = time.perf_counter()
-    train, held_out, info = build_data(seeds, frames, seed)
-    info["draw_seconds"] = round(time.perf_counter() - started, 1)
+    out, train, held_out, info = prepared_data(out_dir, layouts, frames, seed)
+    seeds = info["train_layouts"]
     result = fit_regression(train, held_out, out, config, feature_layout=FEATURE_LAYOUT,
                             data_info=info, progress=progress)
     write_regression_card(result, seeds, frames, seed)

@@ -86,6 +86,37 @@ def array_shapes(architecture: dict[str, Any]) -> dict[str, tuple[int, ...]]:
     return shapes
 
 
+def served(arrays: dict[str, np.ndarray], manifest: dict[str, Any], kind: str, what: str,
+           order: tuple[str, ...]) -> tuple[dict[str, Any], np.ndarray]:
+    """A network's architecture and weights, once the model file holds that network.
+
+    Args:
+        arrays: The weight arrays (:func:`load_weights`).
+        manifest: The model file's manifest.
+        kind: The architecture the serving network computes.
+        what: The network's name, for the messages.
+        order: The arrays' order in the packed vector the compiled forward pass reads.
+
+    Returns:
+        The architecture, and the weights flattened into one read-only float64 vector.
+
+    Raises:
+        ModelFileError: Another kind of architecture, or an array of another shape.
+    """
+    architecture = manifest["architecture"]
+    if architecture.get("kind") != kind:
+        raise ModelFileError(f"architecture kind {architecture.get('kind')!r}: the {what} "
+                             f"computes {kind!r}")
+    for name, shape in array_shapes(architecture).items():
+        if np.shape(arrays[name]) != shape:
+            raise ModelFileError(f"array {name!r} has shape {np.shape(arrays[name])}, the "
+                                 f"architecture needs {shape}")
+    params = np.concatenate([np.asarray(arrays[name], dtype=np.float64).ravel()
+                             for name in order])
+    params.flags.writeable = False
+    return architecture, params
+
+
 def save_weights(path: Path | str, model: str, arrays: dict[str, np.ndarray],
                  manifest: dict[str, Any]) -> Path:
     """Write a model file, atomically; it is checked as :func:`load_weights` checks it.
