@@ -22,7 +22,7 @@ import azgym
 from azgym import BeaconMap, InvalidInputError, Measurements
 from azgym.localize.base import MAX_MEASUREMENTS
 
-BUILTINS = ["ransac", "loo", "lsq", "triplet", "mex"]
+BUILTINS = ["ransac", "loo", "lsq", "triplet", "mex", "ng-ransac", "learned"]
 PARAMS = {"mex": {"coarse_step": 0.1}}  # as the benchmark runs it
 ROOM = beacon_map([(3.0, -1.5), (3.0, 1.5), (1.2, 3.0), (-1.6, 3.0), (-3.0, 1.0), (-3.0, -2.0),
                    (-1.0, -3.0), (2.0, -3.0)], first_id=10)

@@ -28,6 +28,7 @@ from azgym import BeaconMap, Estimate
 from azgym.localize.loo import LeaveOneOut
 from azgym.localize.lsq import LeastSquares
 from azgym.localize.mex import Mex
+from azgym.localize.ng_ransac import NgRansac
 from azgym.localize.ransac import Ransac
 from azgym.localize.triplet import Triplet
 
@@ -47,7 +48,11 @@ MEX_QUADRATIC_STEPS = 8
 LOCALIZERS = {
     "ransac": Ransac(), "ransac-weighted": Ransac(weighted=True), "loo": LeaveOneOut(),
     "lsq": LeastSquares(), "lsq-weighted": LeastSquares(weighted=True), "triplet": Triplet(),
+    "ng-ransac": NgRansac(),
 }
+"""Every built-in whose answers are exact on noise-free data. ``learned`` is not among them: it
+answers its regression wherever the refinement cannot run (its covariance then says how far to
+trust it), so an ``ok`` answer of a degenerate scene may be decimetres off."""
 
 
 def circumcircle(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, float] | None:
