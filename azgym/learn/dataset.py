@@ -41,7 +41,12 @@ from azgym.bench.suites.warehouse import fault_levels
 from azgym.core import BeaconMap, BoolArray, IntArray, Measurements, Pose
 from azgym.errors import InvalidInputError, ScenarioError
 from azgym.files import write_file
-from azgym.learn.features import FEATURE_LAYOUT, N_FEATURES, measurement_features
+from azgym.learn.features import (
+    FEATURE_LAYOUT,
+    N_FEATURES,
+    first_quality_column,
+    measurement_features,
+)
 from azgym.localize.base import FLOAT_ROWS, MIN_MEASUREMENTS, Problem
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import DIRECT, PARTIAL
@@ -308,8 +313,7 @@ def observed_frame(observation: Observation, beacons: BeaconMap, pose: Pose, lev
     if problem.n_distinct < MIN_MEASUREMENTS:
         return None
     source = order[problem.source]
-    first = np.zeros(problem.size) if quality is None else (
-        quality if quality.ndim == 1 else quality[:, 0])[problem.source]
+    first = first_quality_column(quality, problem.n_measurements)[0][problem.source]
     return Frame(problem, first, measurement_features(problem, quality),
                  observation.truth.label[source], injected[source], pose, level, outliers)
 

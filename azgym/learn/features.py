@@ -100,21 +100,30 @@ def measurement_features(problem: Problem, quality: FloatArray | None) -> FloatA
         InvalidInputError: ``quality`` has another number of rows than the frame has
             measurements, or more than two dimensions.
     """
-    if quality is None:
-        column, has_quality = np.zeros(problem.n_measurements), False
-    else:
+    if quality is not None:
         quality = np.asarray(quality, dtype=np.float64)
         if quality.ndim not in (1, 2) or quality.shape[0] != problem.n_measurements:
             raise InvalidInputError(
                 f"quality must have shape ({problem.n_measurements},) or "
                 f"({problem.n_measurements}, Q), got {quality.shape}")
-        column = np.ascontiguousarray(quality if quality.ndim == 1 else quality[:, 0])
-        has_quality = True
+    column, has_quality = first_quality_column(quality, problem.n_measurements)
     out = np.empty((problem.size, N_FEATURES))
     # Contiguous arrays (no copy when they are already): one compiled signature serves all.
     frame_features(np.ascontiguousarray(problem.floats), np.ascontiguousarray(problem.ints),
                    problem.n_distinct, column, has_quality, out)
     return out
+
+
+def first_quality_column(quality: FloatArray | None, count: int) -> tuple[FloatArray, bool]:
+    """The first quality column of ``count`` measurements, and whether there is one.
+
+    The column is the contiguous float64 array the features' kernel reads; without quality it is
+    zeros, and False says so.
+    """
+    if quality is None:
+        return np.zeros(count), False
+    return np.ascontiguousarray(quality if quality.ndim == 1 else quality[:, 0],
+                                dtype=np.float64), True
 
 
 @jit

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.errors import ModelFileError
+from azgym.errors import InvalidInputError, ModelFileError
 
 __all__ = ["FORMAT", "ModelFileError", "array_shapes", "load_weights", "save_weights"]
 
@@ -84,6 +84,22 @@ def array_shapes(architecture: dict[str, Any]) -> dict[str, tuple[int, ...]]:
         shapes.update({"W4": (3 * hidden, hidden), "b4": (hidden,), "W5": (hidden, hidden),
                        "b5": (hidden,), "W6": (hidden, 4), "b6": (4,)})
     return shapes
+
+
+def model_path(owner: str, weights: Any, shipped: Path) -> Path:
+    """The weight file a localizer's ``weights`` hyperparameter names.
+
+    ``weights`` is a path, or None for the file shipped with azgym (``shipped``).
+
+    Raises:
+        InvalidInputError: ``weights`` is neither a path nor None.
+    """
+    if weights is None:
+        return shipped
+    if not isinstance(weights, str | Path):
+        raise InvalidInputError(f"{owner}.weights must be a path to a weight file or None, "
+                                f"got {weights!r}")
+    return Path(weights)
 
 
 def served(arrays: dict[str, np.ndarray], manifest: dict[str, Any], kind: str, what: str,

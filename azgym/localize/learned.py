@@ -47,12 +47,17 @@ from pathlib import Path
 import numpy as np
 
 from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
-from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
-from azgym.learn.features import FEATURE_LAYOUT, N_FEATURES, frame_features, measurement_features
+from azgym.learn.features import (
+    FEATURE_LAYOUT,
+    N_FEATURES,
+    first_quality_column,
+    frame_features,
+    measurement_features,
+)
 from azgym.learn.regression import N_TOKENS, OUTPUTS, PoseRegressor, frame_tokens, regress
-from azgym.learn.weights import load_weights
+from azgym.learn.weights import load_weights, model_path
 from azgym.localize import _kernels as K
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
@@ -246,16 +251,13 @@ class Learned(Localizer):
                     high_open=True)
         check_range(name, "max_iter", self.max_iter, low=1, integer=True)
         check_flag(name, "coverage", self.coverage)
-        if self.weights is not None and not isinstance(self.weights, str | Path):
-            raise InvalidInputError(f"{name}.weights must be a path to a weight file or None, "
-                                    f"got {self.weights!r}")
         self._load_model()
         self._settings = settings_array(self.refine_rounds, self.gate, self.min_trust,
                                         self.delta_alpha_d, bool(self.coverage), self.max_iter)
 
     def _load_model(self) -> None:
         """Load the weights (once per path)."""
-        path = Path(self.weights) if self.weights is not None else SHIPPED_WEIGHTS
+        path = model_path(type(self).__name__, self.weights, SHIPPED_WEIGHTS)
         if getattr(self, "_loaded_from", None) == path:
             return
         arrays, manifest = load_weights(path, MODEL_NAME, feature_layout=FEATURE_LAYOUT)
@@ -263,13 +265,11 @@ class Learned(Localizer):
         self._loaded_from = path
 
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
-        quality = measurements.quality
-        column = np.zeros(len(measurements)) if quality is None else \
-            np.ascontiguousarray(quality if quality.ndim == 1 else quality[:, 0])
+        column, has_quality = first_quality_column(measurements.quality, len(measurements))
         out, cov = np.empty(OUT_SIZE), np.empty((3, 3))
         inliers = np.zeros(len(measurements), dtype=np.bool_)
         distinct, rounds = _learned_frame(
-            measurements.ids, measurements.azimuth, column, quality is not None,
+            measurements.ids, measurements.azimuth, column, has_quality,
             *beacons.lookup_tables(), self._regressor.params, self._regressor.hidden,
             self._settings, out, cov, inliers)
         if distinct < MIN_MEASUREMENTS:

@@ -37,11 +37,12 @@ from azgym.learn.features import (
     CONSENSUS_CANDIDATES,
     FEATURE_LAYOUT,
     N_FEATURES,
+    first_quality_column,
     frame_features,
     measurement_features,
 )
 from azgym.learn.network import InlierScorer, inlier_logits
-from azgym.learn.weights import load_weights
+from azgym.learn.weights import load_weights, model_path
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
     ROW_BEACON_INDEX,
@@ -264,9 +265,6 @@ class NgRansac(Localizer):
         check_flag(name, "weighted", self.weighted)
         if self.min_support_weight is not None:
             check_range(name, "min_support_weight", self.min_support_weight, low=0.0)
-        if self.weights is not None and not isinstance(self.weights, str | Path):
-            raise InvalidInputError(f"{name}.weights must be a path to a weight file or None, "
-                                    f"got {self.weights!r}")
         self._load_model()
         self._settings = settings_array(self.delta_alpha_d, bool(self.coverage),
                                         self.degeneracy_tol, bool(self.weighted), self.max_iter)
@@ -275,7 +273,7 @@ class NgRansac(Localizer):
 
     def _load_model(self) -> None:
         """Load the weights (once per path): the scorer, its feature layout, its calibration."""
-        path = Path(self.weights) if self.weights is not None else SHIPPED_WEIGHTS
+        path = model_path(type(self).__name__, self.weights, SHIPPED_WEIGHTS)
         if getattr(self, "_loaded_from", None) == path:
             return
         arrays, manifest = load_weights(path, MODEL_NAME, feature_layout=FEATURE_LAYOUT)
@@ -295,10 +293,7 @@ class NgRansac(Localizer):
         return self._scorer.logits(measurement_features(problem, quality))
 
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
-        quality = measurements.quality
-        has_quality = quality is not None
-        column = np.zeros(len(measurements)) if quality is None else \
-            np.ascontiguousarray(quality if quality.ndim == 1 else quality[:, 0])
+        column, has_quality = first_quality_column(measurements.quality, len(measurements))
         out = np.empty(OUT_SIZE)
         mask = np.zeros(len(measurements), dtype=np.bool_)
         cov = np.empty((3, 3))
