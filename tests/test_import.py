@@ -33,3 +33,14 @@ def test_public_names_resolve_lazily_and_unknown_ones_fail_cleanly():
     assert "has no attribute 'nope'" in subprocess.run(
         [sys.executable, "-c", "import azgym; azgym.nope"], capture_output=True,
         text=True).stderr
+
+
+def test_the_learned_localizers_are_made_and_run_without_torch():
+    loaded = run(
+        "import sys, azgym\n"
+        "beacons = azgym.load_scenario('paper-room').beacons\n"
+        "frame = azgym.Measurements(beacons.ids[:5], [0.1, 1.0, 2.0, -1.0, -2.5])\n"
+        "for name in ('ng-ransac', 'learned'):\n"
+        "    azgym.make_localizer(name).localize(frame, beacons)\n"
+        "print(sorted(m for m in ('torch', 'tqdm', 'matplotlib') if m in sys.modules))")
+    assert loaded == "[]"
