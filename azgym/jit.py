@@ -30,10 +30,9 @@ PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
     "core.py", "errors.py", "hyperparameters.py", "jit.py", "learn/features.py",
     "learn/network.py", "learn/regression.py", "learn/weights.py", "localize/learned.py",
-    "localize/ng_ransac.py",
-    "localize/_angles.py",
-    "localize/_circles.py",
-    "localize/_kernels.py", "localize/_levenberg_marquardt.py", "localize/_ransac_search.py",
+    "localize/ng_ransac.py", "localize/_angles.py", "localize/_circles.py",
+    "localize/_kernels.py", "localize/_levenberg_marquardt.py", "localize/_ng_search.py",
+    "localize/_ransac_search.py",
     "localize/base.py", "localize/loo.py", "localize/lsq.py", "localize/mex.py",
     "localize/ransac.py", "localize/refinement.py", "localize/triplet.py",
     "sensing/geometry/detections.py", "sensing/geometry/direct.py", "sensing/geometry/frame.py",

@@ -20,8 +20,9 @@ from azgym.learn.dataset import FrameBatch
 from azgym.learn.network import InlierScorer
 from azgym.learn.weights import load_weights, save_weights
 from azgym.localize import _kernels as K
+from azgym.localize._ng_search import guided_settings, ng_ransac_search
 from azgym.localize.base import INT_ROWS, ROW_BEACON_INDEX, ROW_SOURCE
-from azgym.localize.ng_ransac import MODEL_NAME, guided_search, search_array, support_weight
+from azgym.localize.ng_ransac import MODEL_NAME
 from azgym.localize.ransac import OUT_SIZE, OUT_SUPPORT, settings_array
 
 RIGHT_M = 1.0
@@ -37,9 +38,11 @@ class GuidedRuns:
     Attributes:
         answered: The search found a pose with at least three supporters, (N,).
         error: That pose's position error [m] (inf where none), (N,).
-        support_weight: Its supporters' summed inlier probability (0 where none), (N,).
-        hypotheses: Triplets the search tried (the features' consensus triplets not counted),
-            (N,).
+        support_weight: Its supporters' summed inlier probability (0 where none; inf where the
+            consensus settled the frame without the network, so the answer test does not
+            apply), (N,).
+        hypotheses: Triplets the guided search tried (the features' consensus triplets not
+            counted; 0 where the consensus settled the frame), (N,).
     """
 
     answered: np.ndarray
@@ -49,8 +52,12 @@ class GuidedRuns:
 
 
 def guided_runs(batch: FrameBatch, scorer: InlierScorer) -> GuidedRuns:
-    """ng-ransac's search (its default settings) on every frame, before its answer test."""
-    settings, search = settings_array(), search_array()
+    """ng-ransac's search (its default settings) on every frame, before its answer test.
+
+    The frames come from the geometry sensor, which always reports quality: its first column is
+    the batch's ``quality``.
+    """
+    settings = guided_settings(settings_array())
     count = batch.pose.shape[0]
     answered = np.zeros(count, dtype=bool)
     error = np.full(count, np.inf)
@@ -64,16 +71,16 @@ def guided_runs(batch: FrameBatch, scorer: InlierScorer) -> GuidedRuns:
         ints[ROW_SOURCE] = np.arange(size)
         ints[ROW_BEACON_INDEX] = batch.beacon_index[n, :size]
         distinct = int(np.unique(ints[ROW_BEACON_INDEX]).size)
-        logits = scorer.logits(batch.features[n, :size].astype(np.float64))
         mask = np.zeros(size, dtype=np.bool_)
-        hypotheses[n] = guided_search(floats, ints, logits, distinct, search, settings, out,
-                                      mask, cov)
+        hypotheses[n], tested = ng_ransac_search(
+            floats, ints, distinct, np.ascontiguousarray(batch.quality[n, :size]), True,
+            scorer.params, scorer.hidden, settings, out, mask, cov)
         if out[OUT_SUPPORT] < 3 or not np.isfinite(out[K.POSE_X]):
             continue
         answered[n] = True
         error[n] = float(np.hypot(out[K.POSE_X] - batch.pose[n, 0],
                                   out[K.POSE_Y] - batch.pose[n, 1]))
-        weight[n] = support_weight(logits, ints, mask)
+        weight[n] = np.inf if np.isnan(tested) else tested
     return GuidedRuns(answered, error, weight, hypotheses)
 
 
@@ -81,14 +88,19 @@ def choose_threshold(runs: GuidedRuns,
                      max_right_lost: float = DEFAULT_RIGHT_LOST) -> dict[str, Any]:
     """The largest support threshold losing at most ``max_right_lost`` of the right answers.
 
-    Returns the threshold and what it does on these frames: right and wrong answers kept, out of
-    those the search gave.
+    The share is of every right answer, those of a confident consensus too: the test never sees
+    them (their weight is inf), so the answers it gives up all come from the frames the network
+    decided. Returns the threshold and what it does on these frames: right and wrong answers
+    kept, out of those the search gave.
     """
     right = runs.answered & (runs.error <= RIGHT_M)
     wrong = runs.answered & (runs.error > RIGHT_M)
+    tested = np.isfinite(runs.support_weight)
     weights = np.sort(runs.support_weight[right])
     allowed = int(np.floor(max_right_lost * weights.size))
-    threshold = float(weights[allowed]) if weights.size else 0.0
+    tested_right = int((right & tested).sum())  # the finite weights lead the sorted ones
+    # Never above the heaviest tested right answer: a finite threshold that keeps it.
+    threshold = float(weights[min(allowed, tested_right - 1)]) if tested_right else 0.0
     kept = runs.support_weight >= threshold
     return {
         "min_support_weight": threshold,
@@ -96,6 +108,7 @@ def choose_threshold(runs: GuidedRuns,
         "frames": int(runs.answered.size),
         "right_before": int(right.sum()), "wrong_before": int(wrong.sum()),
         "right_kept": int((right & kept).sum()), "wrong_kept": int((wrong & kept).sum()),
+        "untested": int((runs.answered & ~tested).sum()),
     }
 
 
@@ -126,6 +139,8 @@ def card_section(calibration: dict[str, Any]) -> str:
         "(within 1 m) on the held-out frames",
         f"- held-out frames: {calibration['frames']}; the guided search alone answered "
         f"{calibration['right_before']} right and {calibration['wrong_before']} wrong; with the "
-        f"test {calibration['right_kept']} right and {calibration['wrong_kept']} wrong",
+        f"test {calibration['right_kept']} right and {calibration['wrong_kept']} wrong; "
+        f"{calibration['untested']} answers came from a confident consensus, which the test "
+        "does not see",
         f"- median triplets tried by the search (beyond the features' consensus): "
         f"{calibration['search_hypotheses_median']:.0f}", ""])

@@ -84,6 +84,8 @@ CONSENSUS_CANDIDATES = 6
 """Measurements the consensus pose is built from: all their triplets, C(6, 3) = 20 at most."""
 CONSENSUS_TOLERANCE = math.radians(1.0)
 """τ: an azimuth within this of the consensus pose's prediction supports it [rad]."""
+INSERTION_SORT_MAX = 24
+"""Most measurements :func:`_stable_order` sorts by insertion (fewer temporaries than a merge)."""
 CONSENSUS_DEGENERACY = 1e-4
 """Triplets whose normalised determinant is below this are not solved (see ``solve_triplet``)."""
 
@@ -122,8 +124,10 @@ def first_quality_column(quality: FloatArray | None, count: int) -> tuple[FloatA
     """
     if quality is None:
         return np.zeros(count), False
-    return np.ascontiguousarray(quality if quality.ndim == 1 else quality[:, 0],
-                                dtype=np.float64), True
+    column = quality if quality.ndim == 1 else quality[:, 0]  # of (M, 1): already contiguous
+    if column.dtype != np.float64 or not column.flags.c_contiguous:
+        column = np.ascontiguousarray(column, dtype=np.float64)
+    return column, True
 
 
 @jit
@@ -133,14 +137,44 @@ def frame_features(floats, ints, n_distinct, quality, has_quality, out):
     ``quality`` is the first quality column of all M measurements (read through the source
     row); ``has_quality`` False ignores it.
     """
+    q, support, pose = consensus_of(floats, ints, quality, has_quality)
+    fill_features(floats, ints, n_distinct, q, has_quality, support, pose, out)
+
+
+@jit
+def consensus_of(floats, ints, quality, has_quality):
+    """The frame's consensus pose, the one step of the features that solves triplets.
+
+    Returns (q, support, pose): the usable measurements' quality (K,) (zeros without quality),
+    the number of measurements within τ of the pose (0: none found) and the pose
+    (x, y, h_x, h_y), (h_x, h_y) a positive multiple of (cos φ, sin φ). ``ng-ransac`` scores
+    that pose first, instead of solving its triplet again.
+    """
     k = floats.shape[1]
     q = np.empty(k)
     for u in range(k):
         q[u] = quality[ints[ROW_SOURCE, u]] if has_quality else 0.0
+    support, pose = _consensus(floats, ints[ROW_BEACON_INDEX], q, has_quality)
+    return q, support, pose
+
+
+@jit
+def fill_features(floats, ints, n_distinct, q, has_quality, support, pose, out):
+    """Fill ``out`` (K, N_FEATURES) from the frame and its consensus (:func:`consensus_of`)."""
+    k = floats.shape[1]
     _quality_features(q, ints[ROW_BEACON_INDEX], has_quality, out)
+    bx, by = floats[ROW_BX], floats[ROW_BY]
+    ca, sa = floats[ROW_COS_AZ], floats[ROW_SIN_AZ]
+    scale_residual = 1.0 / math.log1p(math.pi / CONSENSUS_TOLERANCE)
     for u in range(k):
         out[u, BEACONS_IN_VIEW] = min(n_distinct / BEACONS_FULL_VIEW, 1.0)
-    _consensus(floats, ints[ROW_BEACON_INDEX], q, has_quality, out)
+        out[u, CONSENSUS_SUPPORT] = support / k
+        if support == 0:
+            out[u, CONSENSUS_RESIDUAL] = 0.5
+            continue
+        cross, dot = _turn(bx[u] - pose[0], by[u] - pose[1], pose[2], pose[3], ca[u], sa[u])
+        residual = abs(math.atan2(cross, dot))
+        out[u, CONSENSUS_RESIDUAL] = math.log1p(residual / CONSENSUS_TOLERANCE) * scale_residual
 
 
 @jit(inline="always")
@@ -181,8 +215,7 @@ def _candidates(azimuth, beacon, q, has_quality):
     spread evenly over the frame's azimuth order, which gives triplets wide angles.
     """
     k = azimuth.size
-    order = np.argsort(-q, kind="mergesort") if has_quality else np.argsort(
-        azimuth, kind="mergesort")
+    order = _stable_order(q, True) if has_quality else _stable_order(azimuth, False)
     chosen = np.empty(CONSENSUS_CANDIDATES, dtype=np.int64)
     count = 0
     steps = k if has_quality or k <= CONSENSUS_CANDIDATES else CONSENSUS_CANDIDATES
@@ -201,8 +234,28 @@ def _candidates(azimuth, beacon, q, has_quality):
 
 
 @jit(inline="always")
-def _consensus(floats, beacon, q, has_quality, out):
-    """``consensus_residual`` and ``consensus_support`` from the best supported triplet pose."""
+def _stable_order(values, descending):
+    """``np.argsort(±values, kind="mergesort")``, the stable order (descending: of −values).
+
+    By insertion on a frame's few measurements (no temporary arrays), by merge sort on more.
+    """
+    k = values.size
+    if k > INSERTION_SORT_MAX:
+        return np.argsort(-values if descending else values, kind="mergesort")
+    order = np.empty(k, dtype=np.int64)
+    for u in range(k):
+        v = values[u]
+        t = u
+        while t > 0 and (values[order[t - 1]] < v if descending else values[order[t - 1]] > v):
+            order[t] = order[t - 1]
+            t -= 1
+        order[t] = u
+    return order
+
+
+@jit(inline="always")
+def _consensus(floats, beacon, q, has_quality):
+    """The best supported triplet pose among the candidates: (support, pose)."""
     k = floats.shape[1]
     bx, by = floats[ROW_BX], floats[ROW_BY]
     ca, sa = floats[ROW_COS_AZ], floats[ROW_SIN_AZ]
@@ -216,6 +269,8 @@ def _consensus(floats, beacon, q, has_quality, out):
         for i in range(n):
             for j in range(i + 1, n):
                 for m in range(j + 1, n):
+                    if best == k:  # every measurement supports it: no later triplet can win
+                        return best, pose
                     ok, x, y, hx, hy, _ = solve_triplet(rows, ox, oy, scale, cbx, cby, cca, csa,
                                                         i, j, m, CONSENSUS_DEGENERACY)
                     if not ok:
@@ -227,15 +282,7 @@ def _consensus(floats, beacon, q, has_quality, out):
                     if support > best:
                         best = support
                         pose[0], pose[1], pose[2], pose[3] = x, y, hx, hy
-    scale_residual = 1.0 / math.log1p(math.pi / CONSENSUS_TOLERANCE)
-    for u in range(k):
-        out[u, CONSENSUS_SUPPORT] = best / k
-        if best == 0:
-            out[u, CONSENSUS_RESIDUAL] = 0.5
-            continue
-        cross, dot = _turn(bx[u] - pose[0], by[u] - pose[1], pose[2], pose[3], ca[u], sa[u])
-        residual = abs(math.atan2(cross, dot))
-        out[u, CONSENSUS_RESIDUAL] = math.log1p(residual / CONSENSUS_TOLERANCE) * scale_residual
+    return best, pose
 
 
 @jit(inline="always")
@@ -248,3 +295,4 @@ def _turn(dx, dy, hx, hy, ca, sa):
     px = dx * hx + dy * hy  # the beacon's direction in the camera frame (rotated by −φ)
     py = dy * hx - dx * hy
     return px * sa - py * ca, px * ca + py * sa
+

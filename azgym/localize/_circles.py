@@ -5,7 +5,8 @@ Two beacons seen under the angle θ_ij = α_i − α_j put the camera on a circl
 equation in (x, y, q = x² + y²), :func:`pair_table` computes it for every pair of a frame's
 measurements once, and :func:`solve_triplet` intersects three of them (eq. 7-18) and adds the
 heading (eq. 19-20). :func:`distinct_beacons` is the rule that a triplet must see three different
-beacons. ransac, the triplet localizer and lsq's algebraic start all build on these.
+beacons, and :func:`write_ascending` the order a triplet's indices are kept in. ransac, the
+triplet localizer and lsq's algebraic start all build on these.
 """
 
 from __future__ import annotations
@@ -86,6 +87,20 @@ def distinct_beacons(a, b, c):
     triplet with them is not solved.
     """
     return a != b and b != c and a != c
+
+
+@jit(inline="always")
+def write_ascending(i, j, k, row):
+    """Write the triplet (i, j, k) into ``row`` in ascending order, as triplet lists keep it."""
+    if i > j:
+        i, j = j, i
+    if j > k:
+        j, k = k, j
+    if i > j:
+        i, j = j, i
+    row[0] = i
+    row[1] = j
+    row[2] = k
 
 
 @jit(inline="always")

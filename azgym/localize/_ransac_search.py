@@ -5,9 +5,9 @@
 within the tolerance Δα_i = 2 (Δα_d + Δα_c,i) at that pose (eq. 21-26), and their mean squared
 error (eq. 27), and keeps the best (step 5). The tolerance test is :func:`_inside_tolerance`
 (no sqrt or atan), with :func:`_is_inlier` as its exact form; :func:`_score_all` scores every
-candidate at once in a vectorised loop. Only :func:`search` is called from outside, by the
-compiled entry points in ``ransac.py``, which hold the settings and output slots and go on to
-step 6, the refinement.
+candidate at once in a vectorised loop. Only :func:`search` and :func:`score_pose` (steps 4-5 for a
+pose found elsewhere) are called from outside, by the compiled entry points in ``ransac.py``,
+which hold the settings and output slots and go on to step 6, the refinement.
 """
 
 from __future__ import annotations
@@ -242,3 +242,31 @@ def search(bx, by, ca, sa, width, beacon_index, triplets, delta_d, coverage, deg
     if best_ns > 0:
         _mark_supporters(bx, by, ca, sa, width, tan_d, delta_d, coverage, best_pose, best_mask)
     return best_ns, best_e, n_valid
+
+
+@jit
+def score_pose(bx, by, ca, sa, width, delta_d, coverage, pose, mask):
+    """Steps 4-5 for one candidate pose found elsewhere (not from ``triplets``).
+
+    ``pose`` holds (x, y, h_x, h_y) in the ``K.POSE_*`` slots, (h_x, h_y) any positive multiple
+    of (cos φ, sin φ). Its supporters (eq. 21-26) go into ``mask`` and its heading is normalised,
+    as :func:`search` leaves a winner. Returns (NS, E), E the supporters' mean ε² (eq. 27; inf
+    without supporters).
+    """
+    tan_d = math.tan(delta_d)
+    x = pose[K.POSE_X]
+    y = pose[K.POSE_Y]
+    ch = pose[K.POSE_COS]
+    sh = pose[K.POSE_SIN]
+    n_support = 0
+    total = 0.0
+    for m in range(bx.size):
+        inlier, eps = _is_inlier(bx, by, ca, sa, width, m, x, y, ch, sh, tan_d, delta_d, coverage)
+        mask[m] = inlier
+        if inlier:
+            n_support += 1
+            total += eps * eps
+    norm = math.hypot(ch, sh)
+    pose[K.POSE_COS] = ch / norm
+    pose[K.POSE_SIN] = sh / norm
+    return n_support, total / n_support if n_support else np.inf

@@ -19,7 +19,7 @@ from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Mea
 from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
 from azgym.localize import _kernels as K
-from azgym.localize._ransac_search import search
+from azgym.localize._ransac_search import score_pose, search
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
     ROW_BEACON_INDEX,
@@ -106,34 +106,65 @@ def _random_triplets(n: int, count: int, rng: np.random.Generator) -> IntArray:
 
 @jit
 def solve_from_triplets(floats, ints, triplets, settings, out, mask, cov):
-    """Steps 1-6 in one compiled call on a Problem's packed arrays (steps 1-5: ``search``).
+    """Steps 1-6 in one compiled call on a Problem's packed arrays.
 
     ``settings`` holds the hyperparameters in the ``SETTING_*`` slots. ``out`` (length OUT_SIZE)
     gets the refinement's output (see ``_levenberg_marquardt.refine``), then NS, E and the number
     of valid triplets (``OUT_*`` slots); ``mask`` (length M, all False on entry) the supporters,
     by original position; ``cov`` the covariance.
     """
+    pose = np.empty(K.POSE_SIZE)
+    support = np.zeros(floats.shape[1], dtype=np.bool_)
+    n_support, mean_sq, n_valid = score_triplets(floats, ints, triplets, settings, pose, support)
+    refine_winner(floats, ints, settings, pose, support, n_support, mean_sq, n_valid, out, mask,
+                  cov)
+
+
+@jit
+def score_triplets(floats, ints, triplets, settings, pose, support):
+    """Steps 1-5 (``search``): the winning triplet's pose and supporters; returns (NS, E, valid).
+
+    ``pose`` (``K.POSE_*`` slots) and ``support`` (length K, all False on entry) receive the
+    winner's; a caller may look at NS before paying for the refinement.
+    """
     delta_d = settings[SETTING_DELTA_D]
     coverage = settings[SETTING_COVERAGE] != 0.0
-    degeneracy_tol = settings[SETTING_DEGENERACY_TOL]
-    weighted = settings[SETTING_WEIGHTED] != 0.0
-    max_iter = int(settings[SETTING_MAX_ITER])
-    bx = floats[ROW_BX]
-    by = floats[ROW_BY]
-    ca = floats[ROW_COS_AZ]
-    sa = floats[ROW_SIN_AZ]
-    width = floats[ROW_WIDTH]
-    pose = np.empty(K.POSE_SIZE)
-    support = np.zeros(bx.size, dtype=np.bool_)
-    n_support, mean_sq, n_valid = search(bx, by, ca, sa, width, ints[ROW_BEACON_INDEX], triplets,
-                                         delta_d, coverage, degeneracy_tol, pose, support)
+    return search(floats[ROW_BX], floats[ROW_BY], floats[ROW_COS_AZ], floats[ROW_SIN_AZ],
+                  floats[ROW_WIDTH], ints[ROW_BEACON_INDEX], triplets, delta_d, coverage,
+                  settings[SETTING_DEGENERACY_TOL], pose, support)
+
+
+@jit
+def score_candidate(floats, settings, pose, support):
+    """Steps 4-5 (:func:`score_pose`) for one candidate pose found elsewhere; returns (NS, E).
+
+    ``pose`` (``K.POSE_*`` slots) gets its heading normalised and ``support`` (length K, all
+    False on entry) its supporters, ready for :func:`refine_winner`.
+    """
+    return score_pose(floats[ROW_BX], floats[ROW_BY], floats[ROW_COS_AZ], floats[ROW_SIN_AZ],
+                      floats[ROW_WIDTH], settings[SETTING_DELTA_D],
+                      settings[SETTING_COVERAGE] != 0.0, pose, support)
+
+
+@jit
+def refine_winner(floats, ints, settings, pose, support, n_support, mean_sq, n_valid, out, mask,
+                  cov):
+    """Step 6 on a winner of :func:`score_triplets` or :func:`score_candidate`.
+
+    ``out``, ``mask`` and ``cov`` are those of :func:`solve_from_triplets`; a winner of fewer
+    than MIN_MEASUREMENTS supporters is not refined (``out`` then holds only NS, E and the
+    valid count).
+    """
     out[OUT_SUPPORT] = n_support
     out[OUT_TRIPLET_MEAN_SQ] = mean_sq
     out[OUT_VALID_TRIPLETS] = n_valid
     if n_support >= MIN_MEASUREMENTS:
-        refine_with_covariance(bx, by, ca, sa, width, support, weighted, delta_d, coverage, pose,
-                               max_iter, out, cov)
-        for m in range(bx.size):
+        refine_with_covariance(floats[ROW_BX], floats[ROW_BY], floats[ROW_COS_AZ],
+                               floats[ROW_SIN_AZ], floats[ROW_WIDTH], support,
+                               settings[SETTING_WEIGHTED] != 0.0, settings[SETTING_DELTA_D],
+                               settings[SETTING_COVERAGE] != 0.0, pose,
+                               int(settings[SETTING_MAX_ITER]), out, cov)
+        for m in range(support.size):
             mask[ints[ROW_SOURCE, m]] = support[m]
 
 

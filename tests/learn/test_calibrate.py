@@ -29,3 +29,21 @@ def test_the_threshold_gives_up_at_most_the_share_of_right_answers_asked():
 
 def test_no_right_answer_gives_a_threshold_of_zero():
     assert choose_threshold(runs([1.0], [3.0]))["min_support_weight"] == pytest.approx(0.0)
+
+
+def test_answers_the_consensus_settled_are_kept_and_count_in_the_share():
+    # Right answers 1..10 tested, plus 30 the confident consensus settled (inf: never tested).
+    # 5 % of all 40 right answers may go, and the two given up are the tested lightest.
+    weights = [*range(1, 11), *[np.inf] * 30, 2.5]
+    errors = [0.01] * 40 + [5.0]
+    result = choose_threshold(runs(weights, errors), max_right_lost=0.05)
+    assert result["min_support_weight"] == 3.0
+    assert (result["right_before"], result["right_kept"], result["untested"]) == (40, 38, 30)
+    assert result["wrong_kept"] == 0
+
+
+def test_a_share_beyond_the_tested_answers_keeps_the_heaviest_tested_one():
+    weights = [1.0, 2.0, *[np.inf] * 38]
+    result = choose_threshold(runs(weights, [0.01] * 40), max_right_lost=0.5)
+    assert result["min_support_weight"] == 2.0
+    assert choose_threshold(runs([np.inf] * 3, [0.01] * 3))["min_support_weight"] == 0.0

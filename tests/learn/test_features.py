@@ -14,6 +14,7 @@ from azgym.learn.features import (
     CONSENSUS_TOLERANCE,
     FEATURE_NAMES,
     N_FEATURES,
+    _stable_order,
     measurement_features,
 )
 from azgym.localize.base import Problem
@@ -137,3 +138,14 @@ def test_quality_of_another_length_is_refused():
         measurement_features(problem, np.ones(4))
     with pytest.raises(InvalidInputError, match=r"got \(5, 1, 1\)"):
         measurement_features(problem, np.ones((5, 1, 1)))
+
+
+@pytest.mark.parametrize("size", [1, 2, 5, 12, 24, 25, 40])
+def test_the_candidates_order_is_numpys_stable_sort(size):
+    # The features a model was trained on depend on this order: ties (equal qualities, as
+    # quantised sensors give) must keep their index order, as merge sort keeps it.
+    rng = np.random.default_rng(size)
+    for _ in range(50):
+        values = rng.integers(0, 4, size).astype(float)
+        assert np.array_equal(_stable_order(values, True), np.argsort(-values, kind="mergesort"))
+        assert np.array_equal(_stable_order(values, False), np.argsort(values, kind="mergesort"))

@@ -14,15 +14,10 @@ import azgym
 from azgym import InvalidInputError, Measurements
 from azgym.learn.weights import load_weights
 from azgym.localize import _kernels as K
+from azgym.localize._ng_search import guided_search, guided_settings, guided_triplets
 from azgym.localize.base import Problem
-from azgym.localize.ng_ransac import (
-    SHIPPED_WEIGHTS,
-    NgRansac,
-    guided_search,
-    guided_triplets,
-    search_array,
-)
-from azgym.localize.ransac import OUT_SIZE, settings_array
+from azgym.localize.ng_ransac import SHIPPED_WEIGHTS, NgRansac
+from azgym.localize.ransac import OUT_SIZE, score_candidate, score_triplets, settings_array
 
 
 def log_sigmoid(z):
@@ -66,13 +61,31 @@ def test_a_clean_frame_is_solved_within_the_budget(shipped):
     frame = ideal_frame(*pose, beacons)
     estimate = shipped.localize(Measurements(frame.ids, frame.azimuth, np.ones(8)), beacons)
     assert estimate.ok and math.dist(estimate.pose[:2], pose[:2]) < 1e-6
-    assert estimate.diagnostics["n_hypotheses"] <= 30
+    # Every measurement agrees with the features' consensus pose: it settles the frame, scored
+    # once more with the paper's tolerance, and the network is not consulted.
+    assert estimate.diagnostics["n_hypotheses"] == math.comb(6, 3)
+    assert estimate.diagnostics["guided"] is False
+    assert "support_weight" not in estimate.diagnostics
+
+
+def test_a_consensus_short_of_confident_hands_the_frame_to_the_network(shipped):
+    beacons = beacon_map([(0, 0), (10, 0), (10, 10), (0, 10), (5, 12), (12, 5)])
+    pose = (4.0, 3.0, 0.3)
+    frame = ideal_frame(*pose, beacons)
+    azimuth = frame.azimuth.copy()
+    azimuth[[0, 1, 2]] += [0.4, -0.5, 0.3]  # half the frame off: 3 supporters, 4 needed
+    estimate = shipped.localize(Measurements(frame.ids, azimuth, np.ones(6)), beacons)
+    assert estimate.diagnostics["guided"] is True
+    assert estimate.diagnostics["n_hypotheses"] > math.comb(6, 3)
 
 
 def test_a_support_threshold_no_answer_can_reach_refuses_with_the_reason():
-    beacons = beacon_map([(0, 0), (10, 0), (10, 10), (0, 10)])
+    beacons = beacon_map([(0, 0), (10, 0), (10, 10), (0, 10), (5, 12)])
     frame = ideal_frame(4.0, 3.0, 0.3, beacons)
-    estimate = azgym.make_localizer("ng-ransac", min_support_weight=5.0).localize(frame, beacons)
+    azimuth = frame.azimuth.copy()
+    azimuth[[0, 1]] += [0.5, -0.4]  # 3 supporters of 4 needed: the network decides, and tests
+    localizer = azgym.make_localizer("ng-ransac", min_support_weight=5.0)
+    estimate = localizer.localize(Measurements(frame.ids, azimuth), beacons)
     assert not estimate.ok
     assert "under min_support_weight 5.00" in estimate.reason
 
@@ -102,7 +115,7 @@ def search_on(frame, beacons, logits):
     problem = Problem.from_frame(frame, beacons)
     out, mask, cov = np.empty(OUT_SIZE), np.zeros(len(frame), dtype=bool), np.empty((3, 3))
     tried = guided_search(problem.floats, problem.ints, np.asarray(logits, dtype=float),
-                          problem.n_distinct, search_array(), settings_array(), out, mask, cov)
+                          problem.n_distinct, guided_settings(settings_array()), out, mask, cov)
     return tried, out, mask
 
 
@@ -128,3 +141,25 @@ def test_the_second_pass_draws_from_at_least_the_first_pass_measurements():
     with pytest.raises(InvalidInputError, match="fallback_ranked must be 0 .* or at least "
                                                 "max_ranked=8, got 6"):
         NgRansac(fallback_ranked=6)
+
+
+def test_a_pose_found_elsewhere_is_scored_as_the_triplet_search_scores_its_own():
+    # ng-ransac scores the features' consensus pose with ransac's tolerance instead of solving
+    # its triplet again: the supporters and NS must be the triplet search's, for any positive
+    # scale of the heading vector (the consensus keeps it unnormalised).
+    beacons = beacon_map([(0, 0), (10, 0), (10, 10), (0, 10), (5, 12), (12, 5), (-2, 6)])
+    frame = ideal_frame(4.0, 3.0, 0.3, beacons)
+    azimuth = frame.azimuth + np.r_[0.0, 0.0, 0.0, 0.003, 0.2, -0.3, 0.002]
+    problem = Problem.from_frame(Measurements(frame.ids, azimuth), beacons)
+    settings = settings_array()
+    pose, support = np.empty(K.POSE_SIZE), np.zeros(problem.size, dtype=bool)
+    n_support, mean_sq, _ = score_triplets(problem.floats, problem.ints,
+                                           np.array([[0, 1, 2]]), settings, pose, support)
+    assert support.tolist() == [True] * 4 + [False, False, True] and n_support == 5
+    elsewhere = pose.copy()
+    elsewhere[[K.POSE_COS, K.POSE_SIN]] *= 3.7
+    again = np.zeros(problem.size, dtype=bool)
+    assert score_candidate(problem.floats, settings, elsewhere, again) == \
+        pytest.approx((n_support, mean_sq), rel=1e-9)
+    assert again.tolist() == support.tolist()
+    assert elsewhere == pytest.approx(pose, rel=1e-12)  # the heading normalised again
