@@ -40,7 +40,12 @@ from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
-from azgym.learn.features import CONSENSUS_CANDIDATES, FEATURE_LAYOUT, measurement_features
+from azgym.learn.features import (
+    CONSENSUS_CANDIDATES,
+    FEATURE_LAYOUT,
+    first_quality_column,
+    measurement_features,
+)
 from azgym.learn.network import InlierScorer
 from azgym.learn.weights import load_weights, model_path
 from azgym.localize._ng_search import (
@@ -183,16 +188,13 @@ class NgRansac(Localizer):
         return self._scorer.logits(measurement_features(problem, quality))
 
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
-        quality = measurements.quality
-        if quality is None:
-            quality = NO_QUALITY
-        elif quality.ndim == 2:
-            quality = np.ascontiguousarray(quality[:, 0])  # of (M, 1): already contiguous
+        column, has_quality = first_quality_column(measurements.quality, len(measurements))
         out = np.empty(OUT_SIZE)
         mask = np.zeros(len(measurements), dtype=np.bool_)
         cov = np.empty((3, 3))
         distinct, tried, weight = _ng_ransac_frame(
-            measurements.ids, measurements.azimuth, quality, *beacons.lookup_tables(),
+            measurements.ids, measurements.azimuth, column if has_quality else NO_QUALITY,
+            *beacons.lookup_tables(),
             self._scorer.params, self._scorer.hidden, self._settings, out, mask, cov)
         if distinct < MIN_MEASUREMENTS:
             return super()._localize_frame(measurements, beacons)  # the standard refusal
