@@ -18,7 +18,7 @@ import numpy as np
 
 import azgym  # noqa: F401  (registers the environments)
 
-TARGETS = {"azgym/Localize-WarehouseSmall-v1": 20_000, "azgym/Navigate-WarehouseSmall-v1": 5_000}
+TARGETS = {"azgym/Localize-WarehouseSmall-v1": 20_000, "azgym/Navigate-WarehouseSmall-v2": 5_000}
 
 
 def steps_per_second(env_id: str, action, seconds: float, rounds: int, **kwargs) -> float:
@@ -47,8 +47,8 @@ def main() -> None:
     reference = steps_per_second("CartPole-v1", 0, args.seconds, args.rounds)
     rows = [
         ("azgym/Localize-WarehouseSmall-v1", np.zeros(3, np.float32), {}),
-        ("azgym/Navigate-WarehouseSmall-v1", np.array([0.5, 0.1], np.float32), {}),
-        ("azgym/Navigate-WarehouseSmall-v1", np.array([0.5, 0.1], np.float32),
+        ("azgym/Navigate-WarehouseSmall-v2", np.array([0.5, 0.1], np.float32), {}),
+        ("azgym/Navigate-WarehouseSmall-v2", np.array([0.5, 0.1], np.float32),
          {"localizer": "truth"}),
     ]
     print(f"{'environment':<48} {'steps/s':>9} {'target':>8} {'CartPole ratio':>15}")

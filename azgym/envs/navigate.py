@@ -10,15 +10,19 @@ import numpy as np
 from gymnasium import spaces
 
 from azgym.arguments import positive_number, whole_number
-from azgym.core import estimated_pose, wrap_scalar
+from azgym.core import estimated_pose, pose_error, wrap_scalar
 from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
+from azgym.nav.guidance import SUPPORT_SCALE, Guidance
+from azgym.nav.planner import planner_for
+from azgym.nav.pose_keeper import PoseKeeper
+from azgym.nav.spots import MIN_GOAL_DISTANCE, spots_of
 from azgym.sensing.catalog import make_sensor
-from azgym.sensing.geometry import occluders as G
 from azgym.sensing.protocol import Observation
 from azgym.site import Scenario, load_scenario
 from azgym.site.elements import occluder_table
+from azgym.world.forklift import ForkliftSpec
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
 
@@ -27,28 +31,31 @@ PHYSICS_DT = 0.02
 CONTROL_STEPS = 5
 """Physics steps per control period: the navigator acts and the camera looks every 0.1 s."""
 
-DISCRETE_CONTROLS = np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.6, 1.0], [0.6, -1.0]],
-                             dtype=np.float32)
-"""(throttle, steer) of the discrete actions: coast, forward, back, forward-left, forward-right."""
-
-MIN_GOAL_DISTANCE = 5.0
-"""A goal spot is at least this far from the start [m]."""
-GOAL_SCALE = 20.0
-"""Goal offsets in the observation are divided by this [m]."""
-
+DISCRETE_THROTTLES = (1.0, 0.0, -1.0)
+"""Throttle of the discrete actions: accelerate, hold the speed, brake (or reverse)."""
+DISCRETE_STEERS = (0.0, 0.35, -0.35, 1.0, -1.0)
+"""Steering of the discrete actions, as shares of full lock: straight, gentle and full turns."""
+DISCRETE_CONTROLS = np.array([(throttle, steer) for throttle in DISCRETE_THROTTLES
+                              for steer in DISCRETE_STEERS], dtype=np.float32)
+"""(throttle, steer) of each discrete action: every throttle with every steering, 15 in all."""
 
 
 class NavigateEnv(gym.Env):
-    """Navigation: drive the forklift to a pick or drop spot, seeing only the estimated pose.
+    """Navigation: drive the forklift along a planned path to a spot, seeing the estimated pose.
 
     ## Description
 
     The forklift starts at one of the scenario's spots (its routes' waypoints: aisle ends and
-    crossings) and must reach another. It does not know where it is: every control period (10 Hz)
-    its camera takes a frame, with all the warehouse's faults, and a localizer — ``ransac`` by
-    default, any registered name or object, or ``"truth"`` as an oracle — estimates the pose. The
-    goal is given in the frame of that estimate. When the localizer fails (``ok=False``) the
-    observation says so and gives no goal, rather than inventing a pose.
+    crossings) and must reach another, the way an AGV is driven: a global planner on the known
+    map (:mod:`azgym.nav.planner`: racks and walls inflated by the forklift's half-width and a
+    margin, cheapest paths keeping to the middle of the aisles) gives the path, and the agent is
+    the local controller. It does not know where it is: every control period (10 Hz) its camera
+    takes a frame, with all the warehouse's faults, and a localizer — ``ransac`` by default, any
+    registered name or object, or ``"truth"`` as an oracle — estimates the pose. The path is
+    followed from that estimate and shown in its frame (:mod:`azgym.nav.guidance`). Between
+    answers (``ok=False``), the navigator dead-reckons from the drive's speed and steering, and
+    it rejects answers that jump implausibly (:mod:`azgym.nav.pose_keeper`); the observation
+    says how old its pose is.
 
     With ``sensor="image"`` the localizer reads the fisheye image path
     (:mod:`azgym.sensing.image.sensor`): beacons rendered, detected from pixels and identified
@@ -69,22 +76,28 @@ class NavigateEnv(gym.Env):
 
     ``Box(-1, 1, (2,), float32)``: throttle (share of the maximum acceleration, negative to
     brake or reverse) and steering (share of full lock, positive left). With ``discrete=True``
-    (the ``NavigateDiscrete`` ids): ``Discrete(5)`` — coast, forward, back, forward-left,
-    forward-right. A NaN, a wrong shape or an out-of-range action raises
+    (the ``NavigateDiscrete`` ids): ``Discrete(15)``, every throttle of
+    :data:`DISCRETE_THROTTLES` (accelerate, hold, brake) with every steering of
+    :data:`DISCRETE_STEERS` (straight, gentle and full turns each way), ``DISCRETE_CONTROLS``
+    in order. A NaN, a wrong shape or an out-of-range action raises
     :class:`azgym.InvalidInputError`.
 
     ## Observation Space
 
-    ``Box(-1, 1, (5 + n_rays,), float32)``: ``[localized, goal_forward, goal_left, speed, steer,
-    ranges...]`` — whether the localizer answered; the goal in the estimated body frame divided
-    by 20 m (clipped, zero when not localized); speed and steering as shares of their limits; and
-    ``n_rays`` range readings around the body, divided by ``ray_range``.
+    ``Box(-1, 1, (12 + n_rays,), float32)``, named in order by
+    ``azgym.nav.guidance.fields(n_rays)``: the localizer's health (answered this step; seconds
+    since the last pose; how many measurements agree with it), the planned path's points 1.5, 3
+    and 5 m ahead in the estimated body frame and its remaining length, speed and steering as
+    shares of their limits, and ``n_rays`` range readings around the body
+    (:mod:`azgym.nav.guidance`).
 
     ## Rewards
 
     Named terms, each weighted by the argument of the same name and reported in
-    ``info["rewards"]``: ``progress`` (metres closer to the goal, by the true pose), ``collision``
-    (−1 in a step that begins a contact), ``time`` (−1 per step) and ``success`` (+1 on arrival).
+    ``info["rewards"]``: ``progress`` (the fall of the planner's cost to go at the true pose, in
+    metres: shaping by a potential, which leaves the best policy unchanged; Ng, Harada & Russell
+    1999), ``collision`` (−1 in a step that begins a contact), ``time`` (−1 per step) and
+    ``success`` (+1 on arrival).
 
     ## Starting State
 
@@ -95,11 +108,15 @@ class NavigateEnv(gym.Env):
     ## Episode End
 
     Terminated when the true position is within ``goal_radius`` of the goal; truncated after
-    ``max_steps`` steps.
+    ``max_steps`` steps. ``info`` carries what navigation is scored on: ``path_length`` (the
+    planned path's length from the start, SPL's shortest path), ``travelled`` (the true path so
+    far), ``contacts``, ``position_error`` (of this step's answer, None without one; gated or
+    not), ``answered``, ``localized`` (answered and through the jump gate) and ``rejected``
+    (answers the jump gate has refused so far, :mod:`azgym.nav.pose_keeper`).
 
     ## Arguments
 
-    ``gym.make("azgym/Navigate-WarehouseSmall-v1", scenario=..., localizer="ransac",
+    ``gym.make("azgym/Navigate-WarehouseSmall-v2", scenario=..., localizer="ransac",
     discrete=False, max_steps=600, progress=1.0, collision=1.0, time=0.01, success=10.0,
     goal_radius=1.0, n_rays=8, ray_range=10.0, sensor="geometry", ids="oracle",
     camera_rate_hz=None, render_mode=None)``. With ``render_mode`` and ``sensor="image"`` the
@@ -115,11 +132,16 @@ class NavigateEnv(gym.Env):
       whatever the sensor; every heading is wrapped by one rule, which leaves in-range angles
       untouched (poses move in their last bits); ``env.unwrapped.camera`` and
       ``last_observation`` replace ``image_sensor`` and ``image_frame``.
+    * v2: the planner in the loop. The observation shows the planned path ahead and the
+      localizer's health instead of the straight-line goal (12 + n_rays entries, was 5 + n_rays),
+      the last pose stands when the localizer fails, progress is measured along the planned path,
+      and the discrete actions are 15 (were 5: coast, forward, back, forward-left,
+      forward-right). Localize ids stay at v1.
 
     ## Example
 
     >>> import gymnasium as gym, azgym
-    >>> env = gym.make("azgym/Navigate-WarehouseSmall-v1", localizer="ransac")
+    >>> env = gym.make("azgym/Navigate-WarehouseSmall-v2", localizer="ransac")
     >>> observation, info = env.reset(seed=0)
     >>> observation, reward, terminated, truncated, info = env.step(env.action_space.sample())
     """
@@ -146,11 +168,7 @@ class NavigateEnv(gym.Env):
     ) -> None:
         self.scenario = load_scenario(scenario)
         check_camera_rate(camera_rate_hz)
-        if not self.scenario.routes:
-            raise InvalidInputError(
-                f"scenario {self.scenario.name!r} has no routes, whose waypoints are the "
-                "navigation spots; add [[routes]] to it"
-            )
+        self.spots = spots_of(self.scenario)
         check_render_mode(render_mode, self.metadata["render_modes"])
         self.weights = reward_weights(progress=progress, collision=collision, time=time,
                                       success=success)
@@ -173,15 +191,17 @@ class NavigateEnv(gym.Env):
         self._sway = CameraSway(self.scenario, 1.0 / self.camera_rate_hz)
         self.last_observation: Observation | None = None
         self._frames = 0
-        self._segments = occluder_table(self.scenario.racks, self.scenario.walls)
-        self._rays = np.empty(self.n_rays)
-        self.spots = _spots(self.scenario)
+        self.planner = planner_for(self.scenario, self.spots)
+        self._guidance = Guidance(self.planner, occluder_table(self.scenario.racks,
+                                                               self.scenario.walls),
+                                  self.n_rays, self.ray_range)
         self.action_space = (spaces.Discrete(len(DISCRETE_CONTROLS)) if self.discrete else
                              spaces.Box(-1.0, 1.0, (2,), np.float32))
-        self.observation_space = spaces.Box(-1.0, 1.0, (5 + self.n_rays,), np.float32)
+        self.observation_space = spaces.Box(-1.0, 1.0, (self._guidance.size,), np.float32)
         self._world: World | None = None
+        self._goal_index = 0
         self._goal = np.zeros(2)
-        self._estimate: tuple[float, float, float] | None = None
+        self._pose = PoseKeeper(ForkliftSpec())
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
@@ -196,10 +216,16 @@ class NavigateEnv(gym.Env):
         self._sway.reset()
         self.camera.reset(self.np_random)
         self.last_observation = None
+        self._goal_index = int(goal)
         self._goal = self.spots[goal].astype(np.float64)
         self._steps = 0
-        self._distance = self._true_distance()
-        self._estimate = None
+        self._potential = self._cost_to_go()
+        self._guidance.start(self._goal_index, *self.spots[start])
+        self._path_length = float(self._guidance.path_length)
+        self._travelled = 0.0
+        self._pose.reset()
+        self._localized = False
+        self._answer = None
         self._frames = 1  # frame 0 is taken now, at the start
         self._look([self._camera_pose()])
         observation = self._observe()
@@ -214,20 +240,25 @@ class NavigateEnv(gym.Env):
         contacts_before = len(world.contacts)
         frames = self._due_frames(world.steps)
         states = [self._camera_pose()]  # the camera pose i physics steps into the period
+        x, y, _ = world.forklift.pose
         for _ in range(CONTROL_STEPS):
             world.step(throttle, steer)
+            self._pose.coast(world.forklift.speed, world.forklift.steer, PHYSICS_DT)
             states.append(self._camera_pose())
-        self._look([_interpolate(states[i], states[i + 1], fraction) for i, fraction in frames])
+            previous_x, previous_y = x, y
+            x, y, _ = world.forklift.pose
+            self._travelled += math.hypot(x - previous_x, y - previous_y)
         self._steps += 1
-        distance = self._true_distance()
-        arrived = distance < self.goal_radius
+        self._look([_interpolate(states[i], states[i + 1], fraction) for i, fraction in frames])
+        potential = self._cost_to_go()
+        arrived = math.hypot(self._goal[0] - x, self._goal[1] - y) < self.goal_radius
         rewards = {
-            "progress": self.weights["progress"] * (self._distance - distance),
+            "progress": self.weights["progress"] * (self._potential - potential),
             "collision": -self.weights["collision"] * (len(world.contacts) > contacts_before),
             "time": -self.weights["time"],
             "success": self.weights["success"] * arrived,
         }
-        self._distance = distance
+        self._potential = potential
         observation = self._observe()
         info = self._info()
         info["rewards"] = rewards
@@ -259,9 +290,10 @@ class NavigateEnv(gym.Env):
             )
         return float(controls[0]), float(controls[1])
 
-    def _true_distance(self) -> float:
+    def _cost_to_go(self) -> float:
+        """The planner's cost to go from the true pose: the potential of the progress reward."""
         x, y, _ = self._world.forklift.pose
-        return math.hypot(self._goal[0] - x, self._goal[1] - y)
+        return self.planner.cost_to_go(self._goal_index, x, y)
 
     def _camera_pose(self) -> tuple[float, float, float]:
         forklift = self._world.forklift
@@ -293,49 +325,53 @@ class NavigateEnv(gym.Env):
         The sway steps through every frame, and the camera observes every one (a sensor may keep
         state between frames, as the blinking ids' tracker does).
         """
-        if not poses:
-            return  # no frame this period: the previous estimate stands
+        if not poses:  # no frame this period: the pose is dead-reckoned on
+            self._answer, self._localized = None, False
+            return
         for pose in poses:
             tilt = self._sway.step(pose[0], pose[1], self.np_random)
             self.last_observation = self.camera.observe(pose, self.np_random, tilt)
         if self.localizer is None:
-            self._estimate = pose
+            self._answer, support = pose, SUPPORT_SCALE
         else:
             estimate = self.localizer.localize(self.last_observation.measurements,
                                                self.scenario.beacons)
-            self._estimate = estimated_pose(estimate)
+            self._answer = estimated_pose(estimate)
+            support = int(np.count_nonzero(estimate.inliers)) if self._answer else 0
+        self._localized = self._pose.offer(self._answer, support)
 
     def _observe(self) -> np.ndarray:
         forklift = self._world.forklift
-        x, y, heading = forklift.pose
-        G.ray_ranges(x, y, heading, self._segments, self.n_rays, self.ray_range, self._rays)
         spec = forklift.spec
-        observation = np.zeros(5 + self.n_rays, dtype=np.float32)
-        if self._estimate is not None:
-            ex, ey, eh = self._estimate
-            dx, dy = self._goal[0] - ex, self._goal[1] - ey
-            c, s = math.cos(eh), math.sin(eh)
-            observation[0] = 1.0
-            observation[1] = max(-1.0, min(1.0, (c * dx + s * dy) / GOAL_SCALE))
-            observation[2] = max(-1.0, min(1.0, (-s * dx + c * dy) / GOAL_SCALE))
-        observation[3] = max(-1.0, min(1.0, forklift.speed / spec.max_speed))
-        observation[4] = max(-1.0, min(1.0, forklift.steer / spec.max_steer))
-        observation[5:] = self._rays / self.ray_range
-        return observation
+        body = None
+        if self._pose.pose is not None:  # the body's centre, behind the camera
+            x, y, heading = self._pose.pose
+            forward, left = spec.camera_offset
+            c, s = math.cos(heading), math.sin(heading)
+            body = (x - forward * c + left * s, y - forward * s - left * c, heading)
+        return self._guidance.observe(
+            body, self._pose.age, self._pose.support, self._localized,
+            forklift.speed / spec.max_speed, forklift.steer / spec.max_steer, forklift.pose)
 
     def _info(self) -> dict[str, Any]:
         x, y, heading = self._world.forklift.pose
-        return {"true_pose": (x, y, heading), "estimate": self._estimate,
-                "localized": self._estimate is not None, "goal": tuple(self._goal),
-                "distance": self._distance, "contacts": len(self._world.contacts)}
+        answer = self._answer
+        error = pose_error(answer, self._camera_pose())[0] if answer else None
+        return {"true_pose": (x, y, heading), "estimate": self._pose.pose,
+                "answered": answer is not None, "localized": self._localized,
+                "rejected": self._pose.rejected, "position_error": error,
+                "goal": tuple(self._goal), "distance": math.hypot(self._goal[0] - x,
+                                                                  self._goal[1] - y),
+                "path_length": self._path_length, "travelled": self._travelled,
+                "contacts": len(self._world.contacts)}
 
     def true_pose(self) -> tuple[float, float, float]:
         """The camera's true pose."""
         return self._camera_pose()
 
     def last_estimate(self) -> tuple[float, float, float] | None:
-        """The localizer's last estimate (None when it failed)."""
-        return self._estimate
+        """The camera pose the navigator believes (None before the first answer)."""
+        return self._pose.pose
 
     def render(self) -> np.ndarray | None:
         """Draw the top-down view, and the camera's last frame beside it with the image sensor.
@@ -358,18 +394,3 @@ def _interpolate(a: tuple[float, float, float], b: tuple[float, float, float],
     turn = wrap_scalar(b[2] - a[2])
     return (a[0] + fraction * (b[0] - a[0]), a[1] + fraction * (b[1] - a[1]),
             wrap_scalar(a[2] + fraction * turn))
-
-
-def _spots(scenario: Scenario) -> np.ndarray:
-    """The pick and drop spots: every route's waypoints, once each, shape (S, 2) [m].
-
-    Raises:
-        InvalidInputError: No two spots are ``MIN_GOAL_DISTANCE`` apart: no episode can start.
-    """
-    spots = np.unique(np.concatenate([route.waypoints for route in scenario.routes]), axis=0)
-    spread = np.hypot(*(spots[:, None, :] - spots[None, :, :]).transpose(2, 0, 1))
-    if spread.max() < MIN_GOAL_DISTANCE:
-        raise InvalidInputError(
-            f"scenario {scenario.name!r}: no two spots (route waypoints) are "
-            f"{MIN_GOAL_DISTANCE} m apart, so no start and goal can be drawn")
-    return spots

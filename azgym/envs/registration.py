@@ -1,9 +1,9 @@
 """Register an environment id for every shipped scenario (``azgym.ENV_IDS``), when it is needed.
 
 Each scenario file in ``envs/`` gives ``azgym/Localize-<Scenario>-v1`` and, when it has routes
-(whose waypoints are the pick and drop spots), ``azgym/Navigate-<Scenario>-v1`` and
-``azgym/NavigateDiscrete-<Scenario>-v1``. ``gym.make(id, scenario="path/to/my.toml")`` runs an
-id's environment on a user's file instead.
+(whose waypoints are the pick and drop spots), ``azgym/Navigate-<Scenario>-v2`` and
+``azgym/NavigateDiscrete-<Scenario>-v2`` (each task's version is in :data:`VERSIONS`).
+``gym.make(id, scenario="path/to/my.toml")`` runs an id's environment on a user's file instead.
 
 Registering needs Gymnasium and reads the scenario files, so it is not done when azgym is
 imported: it is done as soon as Gymnasium is imported (whether before or after azgym), or when
@@ -21,8 +21,8 @@ from types import ModuleType
 from typing import Any
 
 NAMESPACE = "azgym"
-VERSION = 1
-"""The version of every id; bumped whenever the environments' episodes or interface change."""
+VERSIONS = {"Localize": 1, "Navigate": 2, "NavigateDiscrete": 2}
+"""The version of each task's ids; bumped whenever its episodes or interface change."""
 
 
 def camel_case(name: str) -> str:
@@ -45,7 +45,7 @@ def register_environments() -> tuple[str, ...]:
                         ("NavigateDiscrete", "azgym.envs.navigate:NavigateEnv",
                          {"discrete": True})]
         for task, entry_point, extra in entries:
-            env_id = f"{NAMESPACE}/{task}-{camel_case(name)}-v{VERSION}"
+            env_id = f"{NAMESPACE}/{task}-{camel_case(name)}-v{VERSIONS[task]}"
             if env_id not in gym.registry:
                 gym.register(id=env_id, entry_point=entry_point,
                              kwargs={"scenario": name, **extra}, max_episode_steps=None)

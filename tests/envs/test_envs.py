@@ -15,6 +15,8 @@ from gymnasium.utils.env_checker import check_env
 
 import azgym
 from azgym import InvalidInputError, UnknownNameError
+from azgym.nav.guidance import AHEAD_SCALE, REMAINING_SCALE
+from azgym.nav.guidance import fields as fields_of
 from azgym.sensing import labels
 
 ALL_IDS = azgym.ENV_IDS
@@ -26,9 +28,9 @@ def test_every_scenario_is_registered():
     names = [azgym.envs.registration.camel_case(n) for n in azgym.list_scenarios()]
     for name in names:
         assert f"azgym/Localize-{name}-v1" in ALL_IDS
-    assert "azgym/Navigate-WarehouseSmall-v1" in ALL_IDS
-    assert "azgym/NavigateDiscrete-WarehouseSmall-v1" in ALL_IDS
-    assert "azgym/Navigate-PaperRoom-v1" not in ALL_IDS  # no routes, no spots to drive to
+    assert "azgym/Navigate-WarehouseSmall-v2" in ALL_IDS
+    assert "azgym/NavigateDiscrete-WarehouseSmall-v2" in ALL_IDS
+    assert "azgym/Navigate-PaperRoom-v2" not in ALL_IDS  # no routes, no spots to drive to
 
 
 @pytest.mark.parametrize("env_id", ALL_IDS)
@@ -65,8 +67,8 @@ def same(a, b):
 
 @pytest.mark.parametrize("env_id", ["azgym/Localize-WarehouseSmall-v1",
                                     "azgym/Localize-PaperRoom-v1",
-                                    "azgym/Navigate-WarehouseSmall-v1",
-                                    "azgym/NavigateDiscrete-WarehousePaper-v1"])
+                                    "azgym/Navigate-WarehouseSmall-v2",
+                                    "azgym/NavigateDiscrete-WarehousePaper-v2"])
 def test_same_seed_same_rollout_and_different_seeds_differ(env_id):
     first = rollout(env_id, seed=3)
     again = rollout(env_id, seed=3)
@@ -76,7 +78,7 @@ def test_same_seed_same_rollout_and_different_seeds_differ(env_id):
 
 
 @pytest.mark.parametrize("env_id", ["azgym/Localize-WarehouseSmall-v1",
-                                    "azgym/Navigate-WarehouseSmall-v1"])
+                                    "azgym/Navigate-WarehouseSmall-v2"])
 def test_environments_pickle(env_id):
     env = gym.make(env_id)
     env.reset(seed=1)
@@ -88,10 +90,10 @@ def test_environments_pickle(env_id):
 
 
 def test_async_vector_environments_run():
-    envs = gym.make_vec("azgym/Navigate-WarehouseSmall-v1", num_envs=4,
+    envs = gym.make_vec("azgym/Navigate-WarehouseSmall-v2", num_envs=4,
                         vectorization_mode="async")
     observations, _ = envs.reset(seed=0)
-    assert observations.shape == (4, 13)
+    assert observations.shape == (4, 20)
     for _ in range(3):
         observations, rewards, *_ = envs.step(envs.action_space.sample())
     assert rewards.shape == (4,)
@@ -131,23 +133,38 @@ def test_navigation_reports_a_failed_localizer_instead_of_a_pose():
         def localize(self, measurements, beacons):
             return azgym.Estimate.failure("blind", len(measurements))
 
-    env = gym.make("azgym/Navigate-WarehouseSmall-v1", localizer=NeverLocalizes())
+    env = gym.make("azgym/Navigate-WarehouseSmall-v2", localizer=NeverLocalizes())
     observation, info = env.reset(seed=0)
-    assert observation[0] == 0.0 and observation[1] == 0.0 and observation[2] == 0.0
-    assert info["estimate"] is None and not info["localized"]
-    truth = gym.make("azgym/Navigate-WarehouseSmall-v1", localizer="truth")
-    observation, info = truth.reset(seed=0)
-    assert observation[0] == 1.0 and info["localized"]
-    x, y, heading = info["true_pose"]
-    gx, gy = info["goal"]
-    # The goal in the (exact) camera frame, over 20 m; the camera sits 0.3 m ahead of the centre.
-    cx, cy = x + 0.3 * math.cos(heading), y + 0.3 * math.sin(heading)
-    forward = (math.cos(heading) * (gx - cx) + math.sin(heading) * (gy - cy)) / 20.0
-    assert observation[1] == pytest.approx(np.clip(forward, -1, 1), abs=1e-5)
+    fields = fields_of(env.unwrapped.n_rays)
+    assert observation[fields.index("localized")] == 0.0
+    assert observation[fields.index("fix_age")] == 1.0
+    assert not observation[fields.index("ahead_forward_1"):fields.index("remaining") + 1].any()
+    assert info["estimate"] is None and not info["localized"] and info["position_error"] is None
+
+
+def test_the_path_ahead_is_shown_in_the_body_frame_of_the_pose():
+    env = gym.make("azgym/Navigate-WarehouseSmall-v2", localizer="truth")
+    observation, info = env.reset(seed=0)
+    fields = fields_of(env.unwrapped.n_rays)
+    assert observation[fields.index("localized")] == 1.0
+    assert observation[fields.index("fix_age")] == 0.0
+    x, y, heading = info["true_pose"]  # the body's centre: truth is exact
+    path = env.unwrapped._guidance.path
+    along = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))))
+    for k, arc in enumerate((1.5, 3.0, 5.0), start=1):
+        forward = AHEAD_SCALE * observation[fields.index(f"ahead_forward_{k}")]
+        left = AHEAD_SCALE * observation[fields.index(f"ahead_left_{k}")]
+        point = (x + forward * math.cos(heading) - left * math.sin(heading),
+                 y + forward * math.sin(heading) + left * math.cos(heading))
+        # The point lies on the planned path, `arc` metres along it from the start spot.
+        expected = [np.interp(arc, along, path[:, 0]), np.interp(arc, along, path[:, 1])]
+        assert point == pytest.approx(expected, abs=1e-4)
+    assert observation[fields.index("remaining")] == pytest.approx(
+        info["path_length"] / REMAINING_SCALE, abs=1e-6)
 
 
 def test_reaching_the_goal_terminates_with_success():
-    env = gym.make("azgym/Navigate-WarehouseSmall-v1", localizer="truth", goal_radius=100.0)
+    env = gym.make("azgym/Navigate-WarehouseSmall-v2", localizer="truth", goal_radius=100.0)
     env.reset(seed=0)
     _, reward, terminated, truncated, info = env.step(np.zeros(2, dtype=np.float32))
     assert terminated and not truncated
@@ -161,9 +178,9 @@ def test_reaching_the_goal_terminates_with_success():
         ("azgym/Localize-WarehouseSmall-v1", np.zeros(2), "of shape (3,), got shape (2,)"),
         ("azgym/Localize-WarehouseSmall-v1", np.array([0.0, 2.0, 0.0]),
          "is outside the action space"),
-        ("azgym/Navigate-WarehouseSmall-v1", np.array([0.5, 1.5]), "within [-1, 1]"),
-        ("azgym/Navigate-WarehouseSmall-v1", np.zeros(3), "of shape (2,), got shape (3,)"),
-        ("azgym/NavigateDiscrete-WarehouseSmall-v1", 7, "an integer in [0, 5)"),
+        ("azgym/Navigate-WarehouseSmall-v2", np.array([0.5, 1.5]), "within [-1, 1]"),
+        ("azgym/Navigate-WarehouseSmall-v2", np.zeros(3), "of shape (2,), got shape (3,)"),
+        ("azgym/NavigateDiscrete-WarehouseSmall-v2", 17, "an integer in [0, 15)"),
     ],
 )
 def test_bad_actions_are_refused_clearly(env_id, action, message):
@@ -178,13 +195,13 @@ def test_bad_arguments_are_refused_clearly(tmp_path):
     with pytest.raises(UnknownNameError, match=re.escape("Did you mean 'warehouse-small'?")):
         gym.make("azgym/Localize-WarehouseSmall-v1", scenario="warehouse-smal")
     with pytest.raises(UnknownNameError, match=re.escape("Did you mean 'ransac'?")):
-        gym.make("azgym/Navigate-WarehouseSmall-v1", localizer="ransak")
+        gym.make("azgym/Navigate-WarehouseSmall-v2", localizer="ransak")
     with pytest.raises(UnknownNameError, match=re.escape("Did you mean 'aisle-loop'?")):
         gym.make("azgym/Localize-WarehouseSmall-v1", route="aisle-lop")
     with pytest.raises(InvalidInputError, match="render_mode must be one of"):
         gym.make("azgym/Localize-WarehouseSmall-v1", render_mode="ascii")
     with pytest.raises(InvalidInputError, match=re.escape("collision weight must be a number")):
-        gym.make("azgym/Navigate-WarehouseSmall-v1", collision=-1.0)
+        gym.make("azgym/Navigate-WarehouseSmall-v2", collision=-1.0)
 
 
 def test_a_users_scenario_file_runs_under_any_id(tmp_path):
@@ -197,7 +214,7 @@ def test_a_users_scenario_file_runs_under_any_id(tmp_path):
 
 
 def test_rgb_array_rendering_and_a_clear_error_for_human_without_a_display(monkeypatch):
-    env = gym.make("azgym/Navigate-WarehouseSmall-v1", render_mode="rgb_array")
+    env = gym.make("azgym/Navigate-WarehouseSmall-v2", render_mode="rgb_array")
     env.reset(seed=0)
     image = env.render()
     assert image.dtype == np.uint8 and image.ndim == 3 and image.shape[2] == 3
@@ -205,7 +222,7 @@ def test_rgb_array_rendering_and_a_clear_error_for_human_without_a_display(monke
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     with pytest.raises(azgym.AzgymError, match="needs a display"):
-        gym.make("azgym/Navigate-WarehouseSmall-v1", render_mode="human")
+        gym.make("azgym/Navigate-WarehouseSmall-v2", render_mode="human")
 
 
 def test_evaluate_runs_a_localizer_as_the_agent():
@@ -217,12 +234,12 @@ def test_evaluate_runs_a_localizer_as_the_agent():
     assert ransac["median_cm"] < 5.0
     assert lsq["mean_cm"] > 3 * ransac["mean_cm"]
     with pytest.raises(InvalidInputError, match="needs a Localize environment"):
-        azgym.evaluate(gym.make("azgym/Navigate-WarehouseSmall-v1"), "ransac")
+        azgym.evaluate(gym.make("azgym/Navigate-WarehouseSmall-v2"), "ransac")
 
 
 def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy", reason='needs pip install "azgym[video]"')
-    env = gym.make("azgym/Navigate-WarehouseSmall-v1", render_mode="rgb_array", max_steps=20)
+    env = gym.make("azgym/Navigate-WarehouseSmall-v2", render_mode="rgb_array", max_steps=20)
     folder = tmp_path / "videos"
     env = gym.wrappers.RecordVideo(env, str(folder), episode_trigger=lambda _: True,
                                    disable_logger=True)
@@ -300,7 +317,7 @@ def test_image_options_are_checked():
         gym.make("azgym/Localize-WarehouseSmall-v1", camera_rate_hz=0.0)
 
 
-LOCALIZE, NAVIGATE = "azgym/Localize-WarehouseSmall-v1", "azgym/Navigate-WarehouseSmall-v1"
+LOCALIZE, NAVIGATE = "azgym/Localize-WarehouseSmall-v1", "azgym/Navigate-WarehouseSmall-v2"
 
 
 @pytest.mark.parametrize(("env_id", "options", "message"), [
@@ -319,11 +336,11 @@ def test_bad_environment_arguments_are_refused_when_made(env_id, options, messag
         gym.make(env_id, **options)
 
 
-@pytest.mark.parametrize("action", [math.nan, None, math.inf, 2.5, "1", -1, 5])
+@pytest.mark.parametrize("action", [math.nan, None, math.inf, 2.5, "1", -1, 15])
 def test_a_discrete_action_must_be_a_whole_number_in_range(action):
-    env = gym.make("azgym/NavigateDiscrete-WarehouseSmall-v1")
+    env = gym.make("azgym/NavigateDiscrete-WarehouseSmall-v2")
     env.reset(seed=0)
-    with pytest.raises(InvalidInputError, match=re.escape("action must be an integer in [0, 5)")):
+    with pytest.raises(InvalidInputError, match=re.escape("action must be an integer in [0, 15)")):
         env.step(action)
 
 
@@ -336,4 +353,4 @@ def test_a_site_whose_spots_are_all_close_is_refused_for_navigation(tmp_path):
     close = tmp_path / "close.toml"
     close.write_text(text[:start] + routes + (text[end:] if end > 0 else ""))
     with pytest.raises(InvalidInputError, match="no two spots .* are 5.0 m apart"):
-        gym.make("azgym/Navigate-WarehouseSmall-v1", scenario=str(close))
+        gym.make("azgym/Navigate-WarehouseSmall-v2", scenario=str(close))

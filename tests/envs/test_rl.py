@@ -26,7 +26,7 @@ def test_stable_baselines3_check_env_passes_without_warnings(env_id):
 @pytest.mark.slow
 def test_ppo_trains_on_a_navigation_environment():
     torch.set_num_threads(1)  # one core: the other is busy (docs/performance.md)
-    env = gym.make("azgym/Navigate-WarehouseSmall-v1", max_steps=200)
+    env = gym.make("azgym/Navigate-WarehouseSmall-v2", max_steps=200)
     model = sb3.PPO("MlpPolicy", env, n_steps=512, batch_size=128, n_epochs=2, seed=0,
                     verbose=0, device="cpu")
     model.learn(total_timesteps=2048)

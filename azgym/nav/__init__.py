@@ -1,0 +1,1 @@
+"""Navigation: the planner on the known map, the scripted driver, training and scoring."""

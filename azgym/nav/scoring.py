@@ -1,0 +1,83 @@
+"""Driving a navigation environment with a policy, and the scores of the drive.
+
+A navigator is scored as embodied agents are (Anderson et al. 2018, "On Evaluation of Embodied
+Navigation Agents"): success rate, and SPL, success weighted by path length,
+S · l / max(p, l) for the shortest path's length l (the planner's path from the start) and the
+path p driven. azgym adds what a warehouse cares about: collisions per episode (contacts begun
+with racks and walls), time to the goal (of the successful episodes), and the localization error
+along the way (every step the localizer answered), which ties a localizer to where it gets the
+forklift.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, Protocol
+
+import gymnasium as gym
+import numpy as np
+
+from azgym.envs.navigate import CONTROL_STEPS, PHYSICS_DT, NavigateEnv
+from azgym.errors import InvalidInputError
+
+
+class Policy(Protocol):
+    """What drives: ``act(observation)`` gives an action; ``reset()`` starts an episode."""
+
+    def act(self, observation: np.ndarray) -> Any:
+        """The action for one observation."""
+
+    def reset(self) -> None:
+        """Start an episode (forget the last one)."""
+
+
+def drive(env: gym.Env, policy: Policy, episodes: int, seed: int,
+          progress: Callable[[int], None] | None = None) -> dict[str, Any]:
+    """Drive ``episodes`` episodes (seeds seed, seed + 1, ...) and score them.
+
+    Returns:
+        ``episodes`` (one dict per episode: success, spl, collisions, time, path_length,
+        travelled, answered, errors) and the summary of :func:`summarize`.
+    """
+    inner = env.unwrapped
+    if not isinstance(inner, NavigateEnv):
+        raise InvalidInputError(
+            f"a navigator drives a Navigate environment, got {type(inner).__name__}")
+    period = CONTROL_STEPS * PHYSICS_DT
+    records = []
+    for episode in range(episodes):
+        observation, info = env.reset(seed=seed + episode)
+        policy.reset()
+        errors, steps, done, terminated = [], 0, False, False
+        while not done:
+            observation, _, terminated, truncated, info = env.step(policy.act(observation))
+            steps += 1
+            error = info["position_error"]
+            errors.append(math.nan if error is None else error)
+            done = terminated or truncated
+        length, travelled = info["path_length"], info["travelled"]
+        records.append({
+            "success": bool(terminated), "collisions": int(info["contacts"]),
+            "spl": float(terminated) * length / max(travelled, length),
+            "time": steps * period, "path_length": length, "travelled": travelled,
+            "errors": np.array(errors)})
+        if progress is not None:
+            progress(episode + 1)
+    return {"episodes": records, **summarize(records)}
+
+
+def summarize(records: list[dict[str, Any]]) -> dict[str, float]:
+    """Success rate, SPL, collisions per episode, time to goal and localization error."""
+    errors = np.concatenate([record["errors"] for record in records])
+    answered = errors[np.isfinite(errors)]
+    successes = [record["time"] for record in records if record["success"]]
+    return {
+        "success": float(np.mean([record["success"] for record in records])),
+        "spl": float(np.mean([record["spl"] for record in records])),
+        "collisions": float(np.mean([record["collisions"] for record in records])),
+        "time_to_goal": float(np.mean(successes)) if successes else math.nan,
+        "answered": float(answered.size / errors.size) if errors.size else math.nan,
+        "error_median_cm": float(100 * np.median(answered)) if answered.size else math.nan,
+        "error_p95_cm": float(100 * np.percentile(answered, 95)) if answered.size else math.nan,
+    }
