@@ -34,7 +34,7 @@ KERNEL_MODULES = (
     "localize/_kernels.py", "localize/_levenberg_marquardt.py", "localize/_ng_search.py",
     "localize/_ransac_search.py",
     "localize/base.py", "localize/loo.py", "localize/lsq.py", "localize/mex.py",
-    "localize/ransac.py", "localize/refinement.py", "localize/triplet.py",
+    "localize/ransac.py", "localize/refinement.py", "localize/triplet.py", "nav/_descent.py",
     "sensing/geometry/detections.py", "sensing/geometry/direct.py", "sensing/geometry/frame.py",
     "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py",
     "sensing/geometry/ordering.py", "sensing/identities.py",

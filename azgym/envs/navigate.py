@@ -14,10 +14,11 @@ from azgym.core import estimated_pose, pose_error, wrap_scalar
 from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
+from azgym.nav.controls import DISCRETE_CONTROLS, controls
 from azgym.nav.guidance import SUPPORT_SCALE, Guidance
 from azgym.nav.planner import planner_for
 from azgym.nav.pose_keeper import PoseKeeper
-from azgym.nav.spots import MIN_GOAL_DISTANCE, spots_of
+from azgym.nav.spots import HEADING_SPREAD, MIN_GOAL_DISTANCE, aisle_headings, spots_of
 from azgym.sensing.catalog import make_sensor
 from azgym.sensing.protocol import Observation
 from azgym.site import Scenario, load_scenario
@@ -30,15 +31,6 @@ PHYSICS_DT = 0.02
 """The world's physics step [s]."""
 CONTROL_STEPS = 5
 """Physics steps per control period: the navigator acts and the camera looks every 0.1 s."""
-
-DISCRETE_THROTTLES = (1.0, 0.0, -1.0)
-"""Throttle of the discrete actions: accelerate, hold the speed, brake (or reverse)."""
-DISCRETE_STEERS = (0.0, 0.35, -0.35, 1.0, -1.0)
-"""Steering of the discrete actions, as shares of full lock: straight, gentle and full turns."""
-DISCRETE_CONTROLS = np.array([(throttle, steer) for throttle in DISCRETE_THROTTLES
-                              for steer in DISCRETE_STEERS], dtype=np.float32)
-"""(throttle, steer) of each discrete action: every throttle with every steering, 15 in all."""
-
 
 class NavigateEnv(gym.Env):
     """Navigation: drive the forklift along a planned path to a spot, seeing the estimated pose.
@@ -76,10 +68,9 @@ class NavigateEnv(gym.Env):
 
     ``Box(-1, 1, (2,), float32)``: throttle (share of the maximum acceleration, negative to
     brake or reverse) and steering (share of full lock, positive left). With ``discrete=True``
-    (the ``NavigateDiscrete`` ids): ``Discrete(15)``, every throttle of
-    :data:`DISCRETE_THROTTLES` (accelerate, hold, brake) with every steering of
-    :data:`DISCRETE_STEERS` (straight, gentle and full turns each way), ``DISCRETE_CONTROLS``
-    in order. A NaN, a wrong shape or an out-of-range action raises
+    (the ``NavigateDiscrete`` ids): ``Discrete(15)``, every throttle (accelerate, hold, brake)
+    with every steering (straight, gentle and full turns each way), in the order of
+    ``azgym.nav.controls.DISCRETE_CONTROLS``. A NaN, a wrong shape or an out-of-range action raises
     :class:`azgym.InvalidInputError`.
 
     ## Observation Space
@@ -102,8 +93,9 @@ class NavigateEnv(gym.Env):
     ## Starting State
 
     Start and goal are two different spots at least 5 m apart, drawn by the environment's
-    generator; the heading is uniform. The sensor's noise and the camera's sway come from the
-    same generator; the image sensor's tracks are reset with the episode.
+    generator; the forklift stands along one of the aisles that meet at its spot, either way,
+    within 15° (``azgym.nav.spots.aisle_headings``). The sensor's noise and the camera's sway
+    come from the same generator; the image sensor's tracks are reset with the episode.
 
     ## Episode End
 
@@ -134,7 +126,8 @@ class NavigateEnv(gym.Env):
       ``last_observation`` replace ``image_sensor`` and ``image_frame``.
     * v2: the planner in the loop. The observation shows the planned path ahead and the
       localizer's health instead of the straight-line goal (12 + n_rays entries, was 5 + n_rays),
-      the last pose stands when the localizer fails, progress is measured along the planned path,
+      the navigator dead-reckons between poses and gates jumps, progress is measured along the
+      planned path, the forklift starts along an aisle (its heading was uniform),
       and the discrete actions are 15 (were 5: coast, forward, back, forward-left,
       forward-right). Localize ids stay at v1.
 
@@ -169,6 +162,7 @@ class NavigateEnv(gym.Env):
         self.scenario = load_scenario(scenario)
         check_camera_rate(camera_rate_hz)
         self.spots = spots_of(self.scenario)
+        self._headings = aisle_headings(self.scenario, self.spots)
         check_render_mode(render_mode, self.metadata["render_modes"])
         self.weights = reward_weights(progress=progress, collision=collision, time=time,
                                       success=success)
@@ -211,7 +205,9 @@ class NavigateEnv(gym.Env):
             start, goal = self.np_random.choice(len(self.spots), size=2, replace=False)
             if np.hypot(*(self.spots[goal] - self.spots[start])) >= MIN_GOAL_DISTANCE:
                 break
-        heading = float(self.np_random.uniform(-math.pi, math.pi))
+        headings = self._headings[start]
+        heading = wrap_scalar(float(headings[self.np_random.integers(len(headings))]
+                                    + self.np_random.uniform(-HEADING_SPREAD, HEADING_SPREAD)))
         self._world = World(self.scenario, (*self.spots[start], heading), dt=PHYSICS_DT)
         self._sway.reset()
         self.camera.reset(self.np_random)
@@ -235,7 +231,7 @@ class NavigateEnv(gym.Env):
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
         """Drive for one control period (0.1 s), taking camera frames on the way; localize."""
-        throttle, steer = self._controls(action)
+        throttle, steer = controls(action, self.discrete)
         world = self._world
         contacts_before = len(world.contacts)
         frames = self._due_frames(world.steps)
@@ -268,27 +264,6 @@ class NavigateEnv(gym.Env):
                 self._steps >= self.max_steps and not arrived, info)
 
     # -- helpers -------------------------------------------------------------------------------
-
-    def _controls(self, action: Any) -> tuple[float, float]:
-        if self.discrete:
-            value = np.asarray(action)
-            if not (value.shape == () and value.dtype.kind in "iuf" and np.isfinite(value)
-                    and value == np.floor(value) and 0 <= value < len(DISCRETE_CONTROLS)):
-                raise InvalidInputError(
-                    f"action must be an integer in [0, {len(DISCRETE_CONTROLS)}), got {action!r}"
-                )
-            throttle, steer = DISCRETE_CONTROLS[int(action)]
-            return float(throttle), float(steer)
-        controls = np.asarray(action, dtype=np.float64)
-        if controls.shape != (2,):
-            raise InvalidInputError(
-                f"action must be (throttle, steer) of shape (2,), got shape {controls.shape}"
-            )
-        if not np.isfinite(controls).all() or (np.abs(controls) > 1.0 + 1e-6).any():
-            raise InvalidInputError(
-                f"action must be finite and within [-1, 1], got {controls.tolist()}"
-            )
-        return float(controls[0]), float(controls[1])
 
     def _cost_to_go(self) -> float:
         """The planner's cost to go from the true pose: the potential of the progress reward."""

@@ -43,12 +43,16 @@ def move_allowed(free, row, column, move_row, move_column):
 
 
 @jit
-def descend(field, free, moves, row, column, resolution, max_length, rows, columns):
-    """Follow the field's steepest descent from (row, column) for at most ``max_length`` [m].
+def descend(field, weight, free, moves, row, column, resolution, max_length, rows, columns):
+    """Follow the cheapest path down the field from (row, column), at most ``max_length`` [m].
 
-    Writes the visited cells, the start first, into ``rows`` and ``columns`` and returns how
-    many there are and the path's length [m]. Stops at the goal (cost 0), after ``max_length``,
-    when no neighbour is cheaper (never, on a field from the search) or when the buffers fill.
+    Each step takes the move that minimizes the neighbour's cost to go plus the move's own
+    cost (its length times the mean clearance ``weight`` of its two cells): the search's
+    shortest-path tree. (The neighbour of least cost alone would favour long knight's moves and
+    zigzag down a straight aisle.) Writes the visited cells, the start first, into ``rows`` and
+    ``columns`` and returns how many there are and the path's length [m]. Stops at the goal
+    (cost 0), after ``max_length``, when no move lowers the cost (never, on a field from the
+    search) or when the buffers fill.
     """
     count = 0
     length = 0.0
@@ -63,8 +67,11 @@ def descend(field, free, moves, row, column, resolution, max_length, rows, colum
             to_column = column + moves[m, 1]
             if not move_allowed(free, row, column, moves[m, 0], moves[m, 1]):
                 continue
-            if field[to_row, to_column] < best:
-                best = field[to_row, to_column]
+            step = resolution * math.hypot(moves[m, 0], moves[m, 1]) * 0.5 * (
+                weight[row, column] + weight[to_row, to_column])
+            if field[to_row, to_column] < field[row, column] and (
+                    field[to_row, to_column] + step < best or best_move < 0):
+                best = field[to_row, to_column] + step
                 best_move = m
         if best_move < 0:
             break

@@ -49,6 +49,7 @@ class Planner:
         self.spots = np.asarray(spots, dtype=np.float64)
         free = self.grid.free
         self._free = free
+        self._weight = clearance_weight(self.grid.clearance)
         ny, nx = free.shape
         goal_cells = [self.snapped_cell(x, y) for x, y in self.spots]
         costs = dijkstra(_graph(self.grid), directed=False,
@@ -59,8 +60,8 @@ class Planner:
                            if not math.isfinite(self.fields[k, r, c])]
             if unreachable:
                 raise InvalidInputError(
-                    f"scenario {scenario.name!r}: spot {tuple(self.spots[k])} cannot be "
-                    f"reached from spot {tuple(self.spots[unreachable[0]])}: no path keeps "
+                    f"scenario {scenario.name!r}: spot {_spot(self.spots[k])} cannot be "
+                    f"reached from spot {_spot(self.spots[unreachable[0]])}: no path keeps "
                     f"{INFLATION:.2f} m from the racks and walls")
         self._rows = np.empty(8 * (ny + nx), dtype=np.int64)
         self._columns = np.empty_like(self._rows)
@@ -84,8 +85,8 @@ class Planner:
     def path(self, goal: int, x: float, y: float) -> FloatArray:
         """The whole path from (x, y) to spot ``goal``: the points it passes, shape (P, 2) [m]."""
         row, column = self.snapped_cell(x, y)
-        count, _ = descend(self.fields[goal], self._free, MOVES, row, column, RESOLUTION,
-                           math.inf, self._rows, self._columns)
+        count, _ = descend(self.fields[goal], self._weight, self._free, MOVES, row, column,
+                           RESOLUTION, math.inf, self._rows, self._columns)
         ox, oy = self.grid.origin
         cells = np.column_stack((ox + RESOLUTION * self._columns[:count],
                                  oy + RESOLUTION * self._rows[:count]))
@@ -96,6 +97,10 @@ class Planner:
         points = self.path(goal, x, y)
         along = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))))
         return points, along
+
+
+def _spot(point: FloatArray) -> str:
+    return f"({point[0]:g}, {point[1]:g})"
 
 
 def clearance_weight(clearance: FloatArray) -> FloatArray:
@@ -112,7 +117,7 @@ def _graph(grid: Grid) -> coo_matrix:
     """
     free = grid.free
     ny, nx = free.shape
-    weight = clearance_weight(grid.clearance)
+    weight = clearance_weight(grid.clearance)  # the same weights the descent uses
     index = np.arange(ny * nx).reshape(ny, nx)
     sources, targets, costs = [], [], []
     for move_row, move_column in MOVES[[0, 1, 4, 5, 8, 9, 10, 11]].tolist():

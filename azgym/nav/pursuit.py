@@ -6,9 +6,11 @@ point (x, y) in that axle's frame the arc's curvature is κ = 2y / (x² + y²), 
 model's steering angle δ = atan(κ L) for wheelbase L. Speed follows a target that falls in tight
 turns (lateral acceleration ≤ :data:`LATERAL_ACCEL`) and when the pose has been dead-reckoned
 for a while. A point behind the
-forklift (a start facing the wrong way) is turned towards by reversing with opposite lock, until
-it is ahead again: a three-point turn. A forklift held by a rack (pushing forward for a second
-without moving) backs off straight for a second.
+forklift (a start facing the wrong way) is turned towards in a three-point turn: reversing with
+opposite lock, then forward with full lock, switching whenever the range readings behind or
+ahead come within :data:`REAR_CLEARANCE` or :data:`FRONT_CLEARANCE` of the body, until the point
+is ahead again. A forklift held by a rack (pushing forward for a second without moving) backs off
+straight for a second.
 
 It reads only what a trained policy reads (:mod:`azgym.nav.guidance`), so the two are compared
 on equal terms.
@@ -20,7 +22,8 @@ import math
 
 import numpy as np
 
-from azgym.envs.navigate import CONTROL_STEPS, DISCRETE_CONTROLS, PHYSICS_DT
+from azgym.envs.navigate import CONTROL_STEPS, PHYSICS_DT
+from azgym.nav.controls import nearest_discrete
 from azgym.nav.guidance import AHEAD_SCALE, FIX_AGE_SCALE, fields
 from azgym.world.forklift import ForkliftSpec
 
@@ -38,6 +41,10 @@ TURN_BACK = math.radians(70.0)
 """A look-ahead point more than this off the heading starts a three-point turn."""
 TURN_DONE = math.radians(30.0)
 """...which ends once the point is within this of the heading."""
+REAR_CLEARANCE = 0.4
+"""Room left behind the body (along the rays behind it) before a reverse turns forward [m]."""
+FRONT_CLEARANCE = 0.4
+"""Room left ahead of the body before a forward turn reverses again [m]."""
 STUCK_AFTER = 10
 """Control steps pushing forward at under :data:`STUCK_SPEED` before backing off."""
 STUCK_SPEED = 0.3
@@ -46,7 +53,9 @@ speed state lags a held body by up to the tyres' slip, 0.2 m/s)."""
 BACK_OFF = 10
 """Control steps reversing straight to get free."""
 FIX_AGE, POINT, SPEED = (fields(0).index(name) for name in ("fix_age", "ahead_forward_2", "speed"))
-"""Where the pursuit's inputs are in the observation: it pursues the path's point 3 m ahead."""
+RANGES = len(fields(0))
+"""Where the pursuit's inputs are in the observation (it pursues the path's point 3 m ahead);
+the range readings come last, from ``RANGES`` on."""
 
 
 class PurePursuit:
@@ -57,14 +66,16 @@ class PurePursuit:
         spec: The forklift's dimensions and limits (the default forklift's).
     """
 
-    def __init__(self, discrete: bool = False, spec: ForkliftSpec | None = None) -> None:
+    def __init__(self, discrete: bool = False, spec: ForkliftSpec | None = None,
+                 ray_range: float = 10.0) -> None:
         self.discrete = discrete
         self.spec = spec or ForkliftSpec()
+        self.ray_range = ray_range
         self.reset()
 
     def reset(self) -> None:
         """Forget the manoeuvre in progress: a new episode."""
-        self.reversing = False
+        self.turning = ""  # "", "back" or "forward": the legs of a three-point turn
         self.pushing = 0
         self.backing_off = 0
 
@@ -84,13 +95,12 @@ class PurePursuit:
         if self.backing_off:
             self.backing_off -= 1
             return self._command(self._throttle_to(-REVERSE_SPEED, speed), 0.0)
-        if abs(bearing) > TURN_BACK:
-            self.reversing = True
-        elif abs(bearing) < TURN_DONE:
-            self.reversing = False
-        if self.reversing:  # reverse with opposite lock: the nose swings towards the point
-            return self._command(self._throttle_to(-REVERSE_SPEED, speed),
-                                 -math.copysign(1.0, y))
+        if self._turn(bearing, observation[RANGES:] * self.ray_range):
+            # Reversing with opposite lock or going forward with full lock: either way the
+            # nose swings towards the point.
+            direction = -1.0 if self.turning == "back" else 1.0
+            return self._command(self._throttle_to(direction * REVERSE_SPEED, speed),
+                                 direction * math.copysign(1.0, y))
         curvature = 2.0 * y / max(x * x + y * y, 1e-6)
         steer = math.atan(curvature * spec.wheelbase) / spec.max_steer
         target = min(CRUISE_SPEED, math.sqrt(LATERAL_ACCEL / max(abs(curvature), 1e-6)))
@@ -101,12 +111,34 @@ class PurePursuit:
             self.pushing, self.backing_off = 0, BACK_OFF
         return self._command(self._throttle_to(target, speed), steer)
 
+    def _turn(self, bearing: float, ranges: np.ndarray) -> bool:
+        """Update the three-point turn's leg; whether one is under way."""
+        n = ranges.size
+        half_length, half_width = 0.5 * self.spec.length, 0.5 * self.spec.width
+        # Distance from the centre to the body's outline along each ray, then the room left.
+        angles = 2.0 * np.pi * np.arange(n) / n
+        outline = np.minimum(half_length / np.maximum(np.abs(np.cos(angles)), 1e-9),
+                             half_width / np.maximum(np.abs(np.sin(angles)), 1e-9))
+        room = ranges - outline
+        diagonal = math.cos(math.pi / 4) - 1e-9  # the rays within 45° of straight back or ahead
+        behind, ahead = room[np.cos(angles) < -diagonal], room[np.cos(angles) > diagonal]
+        rear_blocked = behind.size > 0 and behind.min() < REAR_CLEARANCE
+        front_blocked = ahead.size > 0 and ahead.min() < FRONT_CLEARANCE
+        if abs(bearing) < TURN_DONE:
+            self.turning = ""
+        elif not self.turning and abs(bearing) > TURN_BACK:
+            self.turning = "forward" if rear_blocked else "back"
+        elif self.turning == "back" and rear_blocked:
+            self.turning = "forward"
+        elif self.turning == "forward" and front_blocked:
+            self.turning = "back"
+        return bool(self.turning)
+
     def _command(self, throttle: float, steer: float) -> np.ndarray | int:
         throttle = max(-1.0, min(1.0, throttle))
         steer = max(-1.0, min(1.0, steer))
         if self.discrete:
-            return int(np.argmin((DISCRETE_CONTROLS[:, 0] - throttle) ** 2
-                                 + (DISCRETE_CONTROLS[:, 1] - steer) ** 2))
+            return nearest_discrete(throttle, steer)
         return np.array([throttle, steer], dtype=np.float32)
 
     def _throttle_to(self, target: float, speed: float) -> float:

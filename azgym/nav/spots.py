@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from azgym.core import FloatArray
@@ -10,6 +12,8 @@ from azgym.site import Scenario
 
 MIN_GOAL_DISTANCE = 5.0
 """A goal spot is at least this far from the start, in a straight line [m]."""
+HEADING_SPREAD = math.radians(15.0)
+"""A start heading lies within this of an aisle's direction at the spot [rad]."""
 
 
 def spots_of(scenario: Scenario) -> FloatArray:
@@ -30,3 +34,20 @@ def spots_of(scenario: Scenario) -> FloatArray:
             f"scenario {scenario.name!r}: no two spots (route waypoints) are "
             f"{MIN_GOAL_DISTANCE} m apart, so no start and goal can be drawn")
     return spots
+
+
+def aisle_headings(scenario: Scenario, spots: FloatArray) -> list[FloatArray]:
+    """For each spot, the directions [rad] of the route legs that meet there, both ways.
+
+    A forklift at a pick or drop spot stands along the aisle it came by: these are the headings
+    an episode may start with (give or take :data:`HEADING_SPREAD`).
+    """
+    headings: list[list[float]] = [[] for _ in spots]
+    for route in scenario.routes:
+        points = np.asarray(route.waypoints, dtype=np.float64)
+        for a, b in zip(points[:-1], points[1:], strict=True):
+            direction = math.atan2(b[1] - a[1], b[0] - a[0])
+            for end in (a, b):
+                k = int(np.argmin(np.hypot(*(spots - end).T)))
+                headings[k] += [direction, direction - math.copysign(math.pi, direction)]
+    return [np.unique(np.round(h, 12)) for h in headings]
