@@ -13,6 +13,8 @@ azgym localizers
 azgym check SPEC
 azgym train localizer --model ng-ransac|learned --out DIR [--layouts N] [--frames-per-layout N]
                       [--epochs N] [--seed S] [--hidden H] [--threads N]
+azgym evaluate navigator POLICY [--env ID] [--localizer L ...] [--episodes N] [--seed S]
+                         [--sensor geometry|image] [--ids oracle|blink] [--out DIR]
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.cli_evaluate import add_evaluate
 from azgym.cli_studies import add_reproduce, add_study
 from azgym.cli_train import add_train
 from azgym.errors import AzgymError
@@ -204,6 +207,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_reproduce(commands)
     add_study(commands)
     add_train(commands)
+    add_evaluate(commands)
     _add_listings(commands)
     return parser
 

@@ -1,0 +1,150 @@
+"""The command that scores a navigator: ``azgym evaluate navigator POLICY``.
+
+A policy (the scripted ``pure-pursuit`` or a stable-baselines3 zip) drives the same episodes of
+a Navigate environment once per localizer, and each localizer gets a row of the navigation
+scores of :mod:`azgym.nav.scoring`. Every argument is checked, every environment built and the
+policy loaded and matched against them before the first episode, so a typo, a missing extra or
+a policy trained for another observation costs nothing; :mod:`azgym.cli` adds the parser to the
+``azgym`` command.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from azgym.arguments import whole_number
+from azgym.errors import InvalidInputError, unknown_name
+
+DEFAULT_ENV = "azgym/Navigate-WarehouseSmall-v2"
+"""The environment driven unless ``--env`` names another."""
+DEFAULT_LOCALIZER = "ransac"
+"""The localizer used unless ``--localizer`` names others."""
+TEST_SEED = 1_000_000
+"""The default seed of the first episode (then + 1, ...): far above the small seeds that
+training scripts, examples and tests use, so a policy is scored on episodes it has not been
+tuned on, and the same ones on every run."""
+COLUMNS = (("success %", 1), ("SPL", 3), ("collisions/ep", 2), ("time to goal s", 1),
+           ("answered %", 1), ("error median cm", 1), ("error p95 cm", 1), ("runtime s", 1))
+"""The table's columns after the localizer's, each with its decimals."""
+
+
+def _navigate_id(env_id: str) -> str:
+    """``env_id`` if it is a registered Navigate id; a named error otherwise."""
+    from azgym.envs.registration import NAMESPACE, register_environments
+
+    ids = register_environments()
+    navigators = [name for name in ids if name.startswith(f"{NAMESPACE}/Navigate")]
+    if env_id not in ids:
+        raise unknown_name("environment id", env_id, navigators)
+    if env_id not in navigators:
+        raise InvalidInputError(f"--env {env_id!r} is not a navigation environment; a navigator "
+                                f"drives one of: {', '.join(navigators)}")
+    return env_id
+
+
+def _evaluate_navigator(args: argparse.Namespace) -> int:
+    import gymnasium as gym
+
+    from azgym.files import prepare_folder, write_file
+    from azgym.nav.policy_file import load_policy
+    from azgym.nav.scoring import drive
+
+    episodes = whole_number("--episodes", args.episodes, 1)
+    seed = whole_number("--seed", args.seed, 0)
+    env_id = _navigate_id(args.env)
+    out = prepare_folder(Path(args.out)) if args.out else None
+    localizers = list(dict.fromkeys(args.localizer or [DEFAULT_LOCALIZER]))
+    envs = {name: gym.make(env_id, localizer=name, sensor=args.sensor, ids=args.ids)
+            for name in localizers}  # every localizer named and built before any episode
+    policy = load_policy(args.policy, envs[localizers[0]])
+    rows = []
+    for name, env in envs.items():
+        started = time.perf_counter()
+        result = drive(env, policy, episodes, seed, progress=_progress(name, episodes))
+        rows.append({"localizer": name, "runtime_s": time.perf_counter() - started, **result})
+        env.close()
+    print(_table(rows))
+    if out is not None:
+        report = {"policy": str(args.policy), "env": env_id, "sensor": args.sensor,
+                  "ids": args.ids, "episodes": episodes, "seed": seed,
+                  "results": [_row_record(row) for row in rows]}
+        path = write_file(out / "navigation.json", json.dumps(report, indent=1) + "\n")
+        print(f"wrote {path}")
+    return 0
+
+
+def _progress(localizer: str, episodes: int):
+    """A progress callback: the episode count redrawn in place on a terminal, else nothing."""
+    def show(done: int) -> None:
+        if sys.stdout.isatty():
+            end = "\n" if done == episodes else ""
+            print(f"\r{localizer}: {done}/{episodes} episodes", end=end, flush=True)
+    return show
+
+
+def _table(rows: list[dict[str, Any]]) -> str:
+    """The scores of each localizer, one row each, in the order they were named."""
+    first = max(len("localizer"), *(len(row["localizer"]) for row in rows))
+    widths = [max(len(title), 7) for title, _ in COLUMNS]
+    lines = ["localizer".ljust(first) + "".join(f"  {title:>{width}}" for (title, _), width
+                                             in zip(COLUMNS, widths, strict=True))]
+    for row in rows:
+        values = (100 * row["success"], row["spl"], row["collisions"], row["time_to_goal"],
+                  100 * row["answered"], row["error_median_cm"], row["error_p95_cm"],
+                  row["runtime_s"])
+        lines.append(row["localizer"].ljust(first) + "".join(
+            f"  {value:>{width}.{decimals}f}" for (_, decimals), width, value
+            in zip(COLUMNS, widths, values, strict=True)))
+    return "\n".join(lines)
+
+
+def _row_record(row: dict[str, Any]) -> dict[str, Any]:
+    """A localizer's row for ``navigation.json``: its summary, then each episode's figures.
+
+    An episode's localization errors are summarized (answered share, median and 95th
+    percentile in cm) by the rule of the whole row, :func:`azgym.nav.scoring.summarize`.
+    """
+    from azgym.nav.scoring import summarize
+
+    episodes = []
+    for record in row["episodes"]:
+        errors = summarize([record])
+        episodes.append({**{key: value for key, value in record.items() if key != "errors"},
+                         **{key: errors[key] for key in ("answered", "error_median_cm",
+                                                         "error_p95_cm")}})
+    return {**{key: value for key, value in row.items() if key != "episodes"},
+            "episodes": episodes}
+
+
+def add_evaluate(commands: argparse._SubParsersAction) -> None:
+    """``azgym evaluate navigator``: score a driving policy with one localizer or several."""
+    evaluate = commands.add_parser("evaluate", help="score a navigation policy")
+    targets = evaluate.add_subparsers(dest="target", required=True)
+    navigator = targets.add_parser(
+        "navigator", help="drive a Navigate environment with a policy, once per localizer; "
+                          "print success, SPL, collisions, time and localization error")
+    navigator.add_argument("policy", metavar="POLICY",
+                           help="'pure-pursuit' (the scripted baseline) or a stable-baselines3 "
+                                ".zip (PPO, A2C, SAC, TD3, DDPG, DQN; extra: rl). A zip is "
+                                "unpickled, which runs code: load only files you trust")
+    navigator.add_argument("--env", default=DEFAULT_ENV, metavar="ID",
+                           help="a Navigate or NavigateDiscrete environment id")
+    navigator.add_argument("--localizer", action="append", default=[], metavar="L",
+                           help="a localizer name or spec, or 'truth'; repeatable, one row each "
+                                f"(default: {DEFAULT_LOCALIZER})")
+    navigator.add_argument("--episodes", type=int, default=100, metavar="N",
+                           help="episodes per localizer")
+    navigator.add_argument("--seed", type=int, default=TEST_SEED, metavar="S",
+                           help="seed of the first episode (then S + 1, ...); the default is "
+                                f"a fixed test seed, {TEST_SEED}, away from training seeds")
+    navigator.add_argument("--sensor", choices=("geometry", "image"), default="geometry",
+                           help="the camera: exact geometry or the fisheye image path")
+    navigator.add_argument("--ids", choices=("oracle", "blink"), default="oracle",
+                           help="how the image sensor identifies beacons")
+    navigator.add_argument("--out", metavar="DIR", help="folder to write navigation.json in")
+    navigator.set_defaults(handler=_evaluate_navigator)
