@@ -10,6 +10,7 @@ scores and the policy file's SHA-256.
 from __future__ import annotations
 
 import hashlib
+import math
 import platform
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -75,12 +76,13 @@ def write_card(request: Request, path: Path, *, wall_time: float,
     settings = {"n_envs": request.n_envs, "policy": request.policy,
                 "policy_kwargs": request.policy_kwargs, "env_kwargs": request.env_kwargs,
                 **request.algo_kwargs}
-    scores = [("success rate", f"{score['success']:.1%}"), ("SPL", f"{score['spl']:.3f}"),
-              ("collisions per episode", f"{score['collisions']:.2f}"),
-              ("time to goal [s]", f"{score['time_to_goal']:.1f}"),
-              ("localizer answered", f"{score['answered']:.1%}"),
-              ("localization error median / p95 [cm]",
-               f"{score['error_median_cm']:.1f} / {score['error_p95_cm']:.1f}")]
+    scores = [("success rate", _shown(score["success"], ".1%")),
+              ("SPL", _shown(score["spl"], ".3f")),
+              ("collisions per episode", _shown(score["collisions"], ".2f")),
+              ("time to goal [s]", _shown(score["time_to_goal"], ".1f")),
+              ("localizer answered", _shown(score["answered"], ".1%")),
+              ("localization error median / p95 [cm]", _shown(score["error_median_cm"], ".1f")
+               + " / " + _shown(score["error_p95_cm"], ".1f"))]
     lines = [
         f"# {request.algo} navigator on {request.env_id}: model card", "",
         f"A stable-baselines3 {request.algo.upper()} policy driving the forklift along the "
@@ -107,3 +109,8 @@ def write_card(request: Request, path: Path, *, wall_time: float,
         ""]
     return write_file(path, "\n".join(lines))
 
+
+
+def _shown(value: float, spec: str) -> str:
+    """A figure as the card shows it; "—" where there is none (no episode reached the goal)."""
+    return "—" if math.isnan(value) else format(value, spec)

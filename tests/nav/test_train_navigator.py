@@ -223,6 +223,20 @@ def test_a_tiny_run_writes_a_policy_that_loads_and_drives(tmp_path):
 
 
 @pytest.mark.slow
+def test_sac_trains_on_the_continuous_id_and_its_policy_loads(tmp_path):
+    needs_rl()
+    result = train.train_navigator(SMALL, "sac", 300, tmp_path, eval_episodes=1, eval_every=300,
+                                   score_episodes=1, verbose=False,
+                                   overrides={"learning_starts": 100, "buffer_size": 1000})
+    assert "buffer_size: 1000" in result.card.read_text()
+    if result.score["success"] == 0.0:  # a figure the card cannot show is a dash, not "nan"
+        assert "| time to goal [s] | — |" in result.card.read_text()
+    navigator = train.load_navigator(result.policy, "sac")
+    env = gym.make(SMALL)
+    assert env.action_space.contains(navigator.act(env.reset(seed=2)[0]))
+
+
+@pytest.mark.slow
 def test_one_seed_gives_identical_parameters_and_another_seed_others(tmp_path):
     needs_rl()
     import torch
