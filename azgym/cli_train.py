@@ -1,8 +1,8 @@
-"""The command that trains learned localizers: ``azgym train localizer``.
+"""The commands that train: ``azgym train localizer`` and ``azgym train navigator``.
 
 Every argument is checked, torch is looked for and the output folder is made writable before
-any frame is drawn, so a typo or a missing extra costs nothing; :mod:`azgym.cli` adds the
-parser to the ``azgym`` command.
+any frame is drawn or any step is trained, so a typo or a missing extra costs nothing;
+:mod:`azgym.cli` adds the parser to the ``azgym`` command.
 """
 
 from __future__ import annotations
@@ -62,10 +62,54 @@ def _train_localizer(args: argparse.Namespace) -> int:
     return 0
 
 
+def _train_navigator(args: argparse.Namespace) -> int:
+    from azgym.nav.train import prepare, run
+
+    request = prepare(args.env, args.algo, args.steps, Path(args.out), seed=args.seed,
+                      localizer=args.localizer, n_envs=args.envs, threads=args.threads)
+    result = run(request)
+    print("wrote " + ", ".join(map(str, (result.policy, result.card, result.curve,
+                                          result.evaluations))))
+    return 0
+
+
 def add_train(commands: argparse._SubParsersAction) -> None:
-    """``azgym train localizer``: train a learned localizer on generated warehouses."""
-    train = commands.add_parser("train", help="train a learned localizer (extra: train)")
+    """``azgym train localizer`` and ``azgym train navigator``."""
+    train = commands.add_parser("train", help="train a learned localizer (extra: train) or a "
+                                              "navigator (extra: rl)")
     targets = train.add_subparsers(dest="target", required=True)
+    _add_localizer(targets)
+    _add_navigator(targets)
+
+
+def _add_navigator(targets: argparse._SubParsersAction) -> None:
+    """``azgym train navigator``: a stable-baselines3 policy on a Navigate environment."""
+    navigator = targets.add_parser(
+        "navigator", help="train a stable-baselines3 policy on a Navigate environment; write "
+                          "the policy, evaluations, learning curve and model card")
+    navigator.add_argument("--env", required=True, metavar="ID",
+                           help="a Navigate id, e.g. azgym/Navigate-WarehouseSmall-v2")
+    navigator.add_argument("--algo", required=True, choices=("ppo", "sac"),
+                           help="ppo, or sac (continuous actions: not the NavigateDiscrete ids)")
+    navigator.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    navigator.add_argument("--steps", type=_whole(1), metavar="N",
+                           help="environment steps (default: n_timesteps of the id's entry in "
+                                "azgym/nav/hyperparams.yml)")
+    navigator.add_argument("--seed", type=_whole(0), default=0, metavar="S",
+                           help="seed of the training environments and the algorithm "
+                                "(default: 0)")
+    navigator.add_argument("--localizer", metavar="L",
+                           help="the environment's localizer: a name, a spec or truth "
+                                "(default: the entry's, ransac)")
+    navigator.add_argument("--envs", type=_whole(1), metavar="N",
+                           help="environments stepped together (default: the entry's)")
+    navigator.add_argument("--threads", type=_whole(1), default=1, metavar="N",
+                           help="torch's CPU threads")
+    navigator.set_defaults(handler=_train_navigator)
+
+
+def _add_localizer(targets: argparse._SubParsersAction) -> None:
+    """``azgym train localizer``: train a learned localizer on generated warehouses."""
     localizer = targets.add_parser(
         "localizer", help="train on frames of generated warehouses; write the weight file, "
                           "learning curve and model card")
