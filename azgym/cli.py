@@ -13,6 +13,8 @@ azgym localizers
 azgym check SPEC
 azgym train localizer --model ng-ransac|learned --out DIR [--layouts N] [--frames-per-layout N]
                       [--epochs N] [--seed S] [--hidden H] [--threads N]
+azgym train navigator --env ID --algo ppo|sac --out DIR [--steps N] [--seed S] [--localizer L]
+                      [--envs N] [--threads N]
 azgym evaluate navigator POLICY [--env ID] [--localizer L ...] [--episodes N] [--seed S]
                          [--sensor geometry|image] [--ids oracle|blink] [--out DIR]
 """

@@ -32,6 +32,7 @@ import numpy as np
 from azgym.arguments import whole_number
 from azgym.errors import DependencyNotInstalled, InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
+from azgym.nav.scoring import Policy
 
 ALGORITHMS = ("ppo", "sac")
 """The algorithms ``--algo`` names (stable-baselines3's PPO and SAC)."""
@@ -274,33 +275,12 @@ class EpisodeEnds(gym.Wrapper):
         return observation, reward, terminated, truncated, info
 
 
-class Navigator:
-    """A trained stable-baselines3 model as a :class:`azgym.nav.scoring.Policy`."""
-
-    def __init__(self, model: Any) -> None:
-        self.model = model
-
-    def act(self, observation: np.ndarray) -> Any:
-        """The model's deterministic action."""
-        return self.model.predict(observation, deterministic=True)[0]
-
-    def reset(self) -> None:
-        """Nothing to forget: the policy has no memory."""
-
-
-def load_navigator(path: Path | str, algo: str = "ppo") -> Navigator:
-    """Load a ``policy.zip`` written by :func:`train_navigator` as a policy that drives."""
-    if algo not in ALGORITHMS:
-        raise unknown_name("algorithm", algo, ALGORITHMS)
-    require_rl()
-    return Navigator(_algorithm(algo).load(Path(path), device="cpu"))
-
-
 def run(request: Request, verbose: bool = True) -> TrainingResult:
     """Train what ``request`` says (checked by :func:`prepare`); write the output files."""
     import torch
     from stable_baselines3.common.env_util import make_vec_env
 
+    from azgym.nav.policy_file import SB3Policy
     from azgym.nav.train_card import write_card, write_learning_curve
 
     torch.set_num_threads(request.threads)
@@ -316,7 +296,7 @@ def run(request: Request, verbose: bool = True) -> TrainingResult:
     buffer = io.BytesIO()
     model.save(buffer)
     policy = write_file(request.out / "policy.zip", buffer.getvalue())
-    score = _score(request, Navigator(model))
+    score = _score(request, SB3Policy(model))
     evaluations = request.out / "evaluations.npz"
     curve = write_learning_curve(evaluations, request.out / "learning-curve.png",
                                  f"{request.algo} on {request.env_id}")
@@ -370,7 +350,7 @@ def _can_draw_a_bar() -> bool:
     return all(importlib.util.find_spec(name) is not None for name in ("tqdm", "rich"))
 
 
-def _score(request: Request, navigator: Navigator) -> dict[str, float]:
+def _score(request: Request, navigator: Policy) -> dict[str, float]:
     """The final policy's navigation scores on the evaluation seeds."""
     from azgym.nav.scoring import drive
 

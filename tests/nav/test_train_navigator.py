@@ -14,6 +14,7 @@ import pytest
 from azgym import cli, cli_train
 from azgym.errors import AzgymError, DependencyNotInstalled
 from azgym.nav import train, train_card
+from azgym.nav.policy_file import load_policy
 
 SMALL = "azgym/Navigate-WarehouseSmall-v2"
 TINY = {"n_envs": 2, "eval_episodes": 2, "eval_every": 1024, "score_episodes": 2,
@@ -216,8 +217,8 @@ def test_a_tiny_run_writes_a_policy_that_loads_and_drives(tmp_path):
     assert "overrides={'n_steps': 256}" in card and "n_steps: 256" in card
     assert train_card.REPRODUCIBILITY in card
     assert f"| success rate | {result.score['success']:.1%} |" in card
-    navigator = train.load_navigator(result.policy, "ppo")
     env = gym.make(SMALL, max_steps=20)
+    navigator = load_policy(result.policy, env)
     assert env.action_space.contains(navigator.act(env.reset(seed=1)[0]))
     assert 0.0 <= drive(env, navigator, episodes=1, seed=5)["spl"] <= 1.0
 
@@ -231,8 +232,8 @@ def test_sac_trains_on_the_continuous_id_and_its_policy_loads(tmp_path):
     assert "buffer_size: 1000" in result.card.read_text()
     if result.score["success"] == 0.0:  # a figure the card cannot show is a dash, not "nan"
         assert "| time to goal [s] | — |" in result.card.read_text()
-    navigator = train.load_navigator(result.policy, "sac")
     env = gym.make(SMALL)
+    navigator = load_policy(result.policy, env)
     assert env.action_space.contains(navigator.act(env.reset(seed=2)[0]))
 
 
@@ -244,7 +245,7 @@ def test_one_seed_gives_identical_parameters_and_another_seed_others(tmp_path):
     def parameters(seed, folder):
         result = train.train_navigator(SMALL, "ppo", 1024, tmp_path / folder, seed=seed,
                                        **{**TINY, "eval_every": 1024})
-        return train.load_navigator(result.policy).model.policy.state_dict()
+        return load_policy(result.policy, gym.make(SMALL)).model.policy.state_dict()
 
     first, again, other = parameters(0, "a"), parameters(0, "b"), parameters(1, "c")
     assert all(torch.equal(first[key], again[key]) for key in first)
