@@ -318,14 +318,8 @@ class NavigateEnv(gym.Env):
     def _observe(self) -> np.ndarray:
         forklift = self._world.forklift
         spec = forklift.spec
-        body = None
-        if self._pose.pose is not None:  # the body's centre, behind the camera
-            x, y, heading = self._pose.pose
-            forward, left = spec.camera_offset
-            c, s = math.cos(heading), math.sin(heading)
-            body = (x - forward * c + left * s, y - forward * s - left * c, heading)
         return self._guidance.observe(
-            body, self._pose.age, self._pose.support, self._localized,
+            self._pose.body_pose(), self._pose.age, self._pose.support, self._localized,
             forklift.speed / spec.max_speed, forklift.steer / spec.max_steer, forklift.pose)
 
     def _info(self) -> dict[str, Any]:

@@ -75,7 +75,7 @@ def load_policy(path_or_name: str | Path, env: gym.Env) -> Policy:
         return PurePursuit(discrete=isinstance(env.action_space, gym.spaces.Discrete))
     path = Path(path_or_name)
     algorithm = _algorithm_of(path)
-    _require_rl()
+    require_rl()
     model = _load_model(path, algorithm)
     for kind in ("observation", "action"):
         saved, wanted = getattr(model, f"{kind}_space"), getattr(env, f"{kind}_space")
@@ -125,13 +125,20 @@ def _data_entry(path: Path) -> dict[str, Any]:
     return data
 
 
-def _require_rl() -> None:
-    """Raise :class:`DependencyNotInstalled` unless torch and stable-baselines3 can be imported."""
-    for module in ("torch", "stable_baselines3"):
+def require_rl(also: tuple[tuple[str, str], ...] = ()) -> None:
+    """Raise :class:`DependencyNotInstalled` unless torch, stable-baselines3 and ``also`` import.
+
+    ``also`` lists further (module, package name) pairs of the ``rl`` extra that a caller needs
+    (training also draws and reads hyperparameter files). torch comes first: its CPU wheel must
+    be installed before the extra.
+    """
+    if importlib.util.find_spec("torch") is None:
+        raise DependencyNotInstalled('torch is not installed: pip install torch==2.13.0 first '
+                                     '(the CPU wheel), then pip install "azgym[rl]"')
+    for module, name in (("stable_baselines3", "stable-baselines3"), *also):
         if importlib.util.find_spec(module) is None:
-            raise DependencyNotInstalled(
-                f"{module} is not installed, and a stable-baselines3 policy needs it: "
-                'pip install torch==2.13.0 first (the CPU wheel), then pip install "azgym[rl]"')
+            raise DependencyNotInstalled(f'{name} is not installed: pip install "azgym[rl]" '
+                                         '(after pip install torch==2.13.0, the CPU wheel)')
 
 
 def _load_model(path: Path, algorithm: str) -> Any:

@@ -48,6 +48,15 @@ class PoseKeeper:
         self.support = 0
         self.rejected = 0
 
+    def body_pose(self) -> Pose | None:
+        """The pose of the body's centre, behind the camera (None before the first answer)."""
+        if self.pose is None:
+            return None
+        x, y, heading = self.pose
+        forward, left = self.spec.camera_offset
+        c, s = math.cos(heading), math.sin(heading)
+        return (x - forward * c + left * s, y - forward * s - left * c, heading)
+
     def coast(self, speed: float, steer: float, dt: float) -> None:
         """Move the pose by the drive's speed [m/s] and steering angle [rad] for ``dt`` [s]."""
         self.age += dt

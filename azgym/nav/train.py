@@ -30,8 +30,9 @@ import gymnasium as gym
 import numpy as np
 
 from azgym.arguments import whole_number
-from azgym.errors import DependencyNotInstalled, InvalidInputError, unknown_name
+from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
+from azgym.nav import policy_file
 from azgym.nav.scoring import Policy
 
 ALGORITHMS = ("ppo", "sac")
@@ -90,15 +91,8 @@ class TrainingResult:
 
 
 def require_rl() -> None:
-    """Raise :class:`DependencyNotInstalled` unless the ``rl`` extra can be imported."""
-    if importlib.util.find_spec("torch") is None:
-        raise DependencyNotInstalled('torch is not installed: pip install torch==2.13.0 first '
-                                     '(the CPU wheel), then pip install "azgym[rl]"')
-    for module, name in (("stable_baselines3", "stable-baselines3"), ("yaml", "PyYAML"),
-                         ("matplotlib", "matplotlib")):
-        if importlib.util.find_spec(module) is None:
-            raise DependencyNotInstalled(f'{name} is not installed: pip install "azgym[rl]" '
-                                         '(after pip install torch==2.13.0, the CPU wheel)')
+    """Raise :class:`DependencyNotInstalled` unless what training needs can be imported."""
+    policy_file.require_rl(also=(("yaml", "PyYAML"), ("matplotlib", "matplotlib")))
 
 
 def navigation_spec(env_id: str) -> gym.envs.registration.EnvSpec:
@@ -280,7 +274,6 @@ def run(request: Request, verbose: bool = True) -> TrainingResult:
     import torch
     from stable_baselines3.common.env_util import make_vec_env
 
-    from azgym.nav.policy_file import SB3Policy
     from azgym.nav.train_card import write_card, write_learning_curve
 
     torch.set_num_threads(request.threads)
@@ -296,7 +289,7 @@ def run(request: Request, verbose: bool = True) -> TrainingResult:
     buffer = io.BytesIO()
     model.save(buffer)
     policy = write_file(request.out / "policy.zip", buffer.getvalue())
-    score = _score(request, SB3Policy(model))
+    score = _score(request, policy_file.SB3Policy(model))
     evaluations = request.out / "evaluations.npz"
     curve = write_learning_curve(evaluations, request.out / "learning-curve.png",
                                  f"{request.algo} on {request.env_id}")
