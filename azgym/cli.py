@@ -1,7 +1,7 @@
 """azgym: benchmark azimuth-based indoor localizers, and reproduce the papers they come from.
 
 azgym bench [--suite S] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
-            [--workers N] [--time-limit SECONDS] [--quick] [--out DIR]
+            [--workers N] [--time-limit SECONDS] [--quick] [--out DIR] [--navigator NAME ...]
 azgym leaderboard submit|build|verify ...
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
 azgym reproduce plotter [--runs N] [--seed S] [--out DIR]
@@ -34,7 +34,7 @@ from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.cli_evaluate import add_evaluate
 from azgym.cli_studies import add_reproduce, add_study
 from azgym.cli_train import add_train
-from azgym.errors import AzgymError
+from azgym.errors import AzgymError, InvalidInputError
 
 if TYPE_CHECKING:
     from azgym.bench.contenders import Contender
@@ -45,13 +45,26 @@ DEFAULT_SUITE = "warehouse-static"
 
 def _bench(args: argparse.Namespace) -> int:
     from azgym.bench.runner import default_workers, run_benchmark
-    from azgym.bench.suites import get_suite
+    from azgym.bench.suites import SUITES
     from azgym.bench.table import ranked_table, tracking_table
+    from azgym.errors import unknown_name
     from azgym.files import prepare_folder
+    from azgym.nav.suites import NAVIGATION_SUITES
 
+    if args.suite in NAVIGATION_SUITES:
+        from azgym.cli_navigation import bench_navigation
+
+        return bench_navigation(args, _progress_printer())
+    if args.navigator:
+        raise InvalidInputError(f"--navigator is for the navigation suites "
+                                f"({', '.join(NAVIGATION_SUITES)})")
+    if args.suite is not None and args.suite not in SUITES:
+        raise unknown_name("suite", args.suite, [*SUITES, *NAVIGATION_SUITES])
     # With no suite named, the default suite runs in its quick size: the README's main job.
     quick = args.quick or args.suite is None
-    suite = get_suite(args.suite or DEFAULT_SUITE)
+    suite = SUITES[args.suite or DEFAULT_SUITE]
+    if args.time_limit is None:
+        args.time_limit = DEFAULT_TIME_LIMIT
     contenders = _contenders(args.localizer, args.with_builtins, args.time_limit)
     workers = args.workers or default_workers()
     prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
@@ -94,6 +107,7 @@ def _contenders(specs: Sequence[str], with_builtins: bool,
 
 def _leaderboard(args: argparse.Namespace) -> int:
     from azgym.bench import board, leaderboard
+    from azgym.nav.board import is_navigation_file, verify_navigation
 
     if args.action == "submit":
         path = leaderboard.submit(Path(args.results), args.localizer, Path(args.entries),
@@ -101,20 +115,43 @@ def _leaderboard(args: argparse.Namespace) -> int:
                                   link=args.link, overwrite=args.overwrite)
         print(f"wrote {path}")
     elif args.action == "build":
-        for path in board.build(Path(args.entries), Path(args.out)):
+        for path in board.build(Path(args.entries), Path(args.out),
+                                _navigation_dir(args.navigation, Path(args.entries))):
             print(f"wrote {path}")
+    elif is_navigation_file(Path(args.entry)):
+        print(f"{args.entry}: rerunning its navigators and localizers (azgym's own)", flush=True)
+        differences = verify_navigation(Path(args.entry), workers=args.workers or 1)
+        return _verdict(args.entry, differences)
     else:
         spec = leaderboard.load_entry(Path(args.entry))["localizer"]["spec"]
         print(f"{args.entry}: rerunning its localizer {spec!r}, which is the submitter's code",
               flush=True)
         differences = leaderboard.verify(Path(args.entry), workers=args.workers or 1)
-        if differences:
-            for key, (claimed, fresh) in differences.items():
-                print(f"{key}: entry {claimed}, rerun {fresh}")
-            print(f"{args.entry}: NOT reproduced")
-            return 1
-        print(f"{args.entry}: reproduced (every accuracy figure within 1e-6)")
+        return _verdict(args.entry, differences)
     return 0
+
+
+def _verdict(entry: str, differences: dict[str, tuple[Any, Any]]) -> int:
+    """Print a rerun's differing figures, or that it reproduced; the command's exit status."""
+    if differences:
+        for key, (claimed, fresh) in differences.items():
+            print(f"{key}: entry {claimed}, rerun {fresh}")
+        print(f"{entry}: NOT reproduced")
+        return 1
+    print(f"{entry}: reproduced (every accuracy figure within 1e-6)")
+    return 0
+
+
+def _navigation_dir(named: str | None, entries: Path) -> Path | None:
+    """The navigation results folder: the one named (it must exist), else any beside entries."""
+    from azgym.bench.entry_files import LeaderboardError
+
+    if named is None:
+        beside = entries.parent / "navigation"
+        return beside if beside.is_dir() else None
+    if not Path(named).is_dir():
+        raise LeaderboardError(f"--navigation {named}: no such folder")
+    return Path(named)
 
 
 def _progress_printer():
@@ -230,7 +267,8 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     from azgym.bench.contenders import DEFAULT_SPECS
 
     bench = commands.add_parser("bench", help="score localizers on a benchmark suite")
-    bench.add_argument("--suite", help=f"suite name (default: {DEFAULT_SUITE}, quick)")
+    bench.add_argument("--suite", help=f"suite name (default: {DEFAULT_SUITE}, quick); the "
+                                       "closed-loop suites: navigation, navigation-image")
     bench.add_argument("--localizer", action="append", default=[], metavar="SPEC",
                        help="a localizer: NAME, package.module:Class or path/file.py:Class, "
                             "then optionally :NAME=VALUE,... hyperparameters (JSON scalars), "
@@ -243,10 +281,13 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     bench.add_argument("--split", choices=("dev", "test"), default="dev",
                        help="dev: the suite's fixed seed; test: a fresh seed, reported")
     bench.add_argument("--workers", type=int, default=0, help="processes (0: one per core)")
-    bench.add_argument("--time-limit", type=_seconds, default=DEFAULT_TIME_LIMIT,
-                       metavar="SECONDS",
+    bench.add_argument("--time-limit", type=_seconds, default=None, metavar="SECONDS",
                        help="time a localizer may take on one frame (or to be built); a frame "
-                            "over it is scored unavailable")
+                            f"over it is scored unavailable (default: {DEFAULT_TIME_LIMIT:g}; "
+                            "frame suites only)")
+    bench.add_argument("--navigator", action="append", default=[], metavar="NAME",
+                       help="navigation suites: who drives, 'pure-pursuit' or 'ppo' (the "
+                            "shipped policy); repeatable (default: both)")
     bench.add_argument("--quick", action="store_true", help="the suite's small version")
     bench.add_argument("--out", default="results/bench", help="output folder")
     bench.set_defaults(handler=_bench)
@@ -268,8 +309,12 @@ def _add_leaderboard(commands: argparse._SubParsersAction) -> None:
     build = actions.add_parser("build", help="write leaderboard/README.md and index.html")
     build.add_argument("--entries", default="leaderboard/entries")
     build.add_argument("--out", default="leaderboard")
+    build.add_argument("--navigation", metavar="DIR",
+                       help="navigation results files (default: navigation/ beside --entries, "
+                            "if there is one)")
     verify = actions.add_parser("verify", help="rerun an entry and compare its figures")
-    verify.add_argument("entry", help="path of the entry's .json")
+    verify.add_argument("entry", help="path of the entry's .json, or of a navigation results "
+                                      "file")
     verify.add_argument("--workers", type=int, default=1)
     board.set_defaults(handler=_leaderboard)
 

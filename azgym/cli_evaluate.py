@@ -15,7 +15,6 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import Any
 
 from azgym.arguments import whole_number
 from azgym.errors import InvalidInputError, unknown_name
@@ -28,9 +27,6 @@ TEST_SEED = 1_000_000
 """The default seed of the first episode (then + 1, ...): far above the small seeds that
 training scripts, examples and tests use, so a policy is scored on episodes it has not been
 tuned on, and the same ones on every run."""
-COLUMNS = (("success %", 1), ("SPL", 3), ("collisions/ep", 2), ("time to goal s", 1),
-           ("answered %", 1), ("error median cm", 1), ("error p95 cm", 1), ("runtime s", 1))
-"""The table's columns after the localizer's, each with its decimals."""
 
 
 def _navigate_id(env_id: str) -> str:
@@ -51,7 +47,9 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     import gymnasium as gym
 
     from azgym.files import prepare_folder, write_file
+    from azgym.nav.benchmark import episode_rows
     from azgym.nav.policy_file import load_policy
+    from azgym.nav.report import score_table
     from azgym.nav.scoring import drive
 
     episodes = whole_number("--episodes", args.episodes, 1)
@@ -66,13 +64,16 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     for name, env in envs.items():
         started = time.perf_counter()
         result = drive(env, policy, episodes, seed, progress=_progress(name, episodes))
-        rows.append({"localizer": name, "runtime_s": time.perf_counter() - started, **result})
+        rows.append({"localizer": name, "runtime_s": time.perf_counter() - started,
+                     "summary": {key: value for key, value in result.items()
+                                 if key != "episodes"},
+                     "episodes": episode_rows(result["episodes"], seed)})
         env.close()
-    print(_table(rows))
+    print(score_table(rows, ["localizer"]))
     if out is not None:
         report = {"policy": str(args.policy), "env": env_id, "sensor": args.sensor,
                   "ids": args.ids, "episodes": episodes, "seed": seed,
-                  "results": [_row_record(row) for row in rows]}
+                  "results": rows}
         path = write_file(out / "navigation.json", json.dumps(report, indent=1) + "\n")
         print(f"wrote {path}")
     return 0
@@ -85,40 +86,6 @@ def _progress(localizer: str, episodes: int):
             end = "\n" if done == episodes else ""
             print(f"\r{localizer}: {done}/{episodes} episodes", end=end, flush=True)
     return show
-
-
-def _table(rows: list[dict[str, Any]]) -> str:
-    """The scores of each localizer, one row each, in the order they were named."""
-    first = max(len("localizer"), *(len(row["localizer"]) for row in rows))
-    widths = [max(len(title), 7) for title, _ in COLUMNS]
-    lines = ["localizer".ljust(first) + "".join(f"  {title:>{width}}" for (title, _), width
-                                             in zip(COLUMNS, widths, strict=True))]
-    for row in rows:
-        values = (100 * row["success"], row["spl"], row["collisions"], row["time_to_goal"],
-                  100 * row["answered"], row["error_median_cm"], row["error_p95_cm"],
-                  row["runtime_s"])
-        lines.append(row["localizer"].ljust(first) + "".join(
-            f"  {value:>{width}.{decimals}f}" for (_, decimals), width, value
-            in zip(COLUMNS, widths, values, strict=True)))
-    return "\n".join(lines)
-
-
-def _row_record(row: dict[str, Any]) -> dict[str, Any]:
-    """A localizer's row for ``navigation.json``: its summary, then each episode's figures.
-
-    An episode's localization errors are summarized (answered share, median and 95th
-    percentile in cm) by the rule of the whole row, :func:`azgym.nav.scoring.summarize`.
-    """
-    from azgym.nav.scoring import summarize
-
-    episodes = []
-    for record in row["episodes"]:
-        errors = summarize([record])
-        episodes.append({**{key: value for key, value in record.items() if key != "errors"},
-                         **{key: errors[key] for key in ("answered", "error_median_cm",
-                                                         "error_p95_cm")}})
-    return {**{key: value for key, value in row.items() if key != "episodes"},
-            "episodes": episodes}
 
 
 def add_evaluate(commands: argparse._SubParsersAction) -> None:

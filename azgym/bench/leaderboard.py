@@ -257,10 +257,10 @@ def verify(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]]:
         raise LeaderboardError(f"{path}: the localizer could not run on any frame: "
                                f"{fresh['first_error']}")
     claimed = {key: value for key, value in entry["metrics"].items() if key != "runtime_us"}
-    return _differences(claimed, clean({key: fresh[key] for key in claimed}), "")
+    return differences(claimed, clean({key: fresh[key] for key in claimed}), "")
 
 
-def _differences(claimed: Any, fresh: Any, where: str) -> dict[str, tuple[Any, Any]]:
+def differences(claimed: Any, fresh: Any, where: str) -> dict[str, tuple[Any, Any]]:
     """Every figure that differs by more than 1e-6, by its path.
 
     Paths name keys and list positions: ``by_cause/clean/p75_cm``, ``tracking/events/1/recovery_s``.
@@ -268,12 +268,12 @@ def _differences(claimed: Any, fresh: Any, where: str) -> dict[str, tuple[Any, A
     if isinstance(claimed, dict) and isinstance(fresh, dict):
         found: dict[str, tuple[Any, Any]] = {}
         for key in dict.fromkeys([*claimed, *fresh]):
-            found |= _differences(claimed.get(key), fresh.get(key), f"{where}{key}/")
+            found |= differences(claimed.get(key), fresh.get(key), f"{where}{key}/")
         return found
     if isinstance(claimed, list) and isinstance(fresh, list) and len(claimed) == len(fresh):
         found = {}
         for k, (a, b) in enumerate(zip(claimed, fresh, strict=True)):
-            found |= _differences(a, b, f"{where}{k}/")
+            found |= differences(a, b, f"{where}{k}/")
         return found
     if isinstance(claimed, (dict, list)) or isinstance(fresh, (dict, list)) or \
             not close(claimed, fresh, 1e-6):

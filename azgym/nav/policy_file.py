@@ -29,6 +29,12 @@ from azgym.nav.scoring import Policy
 
 PURE_PURSUIT = "pure-pursuit"
 """The name of the scripted baseline (:class:`azgym.nav.pursuit.PurePursuit`)."""
+SHIPPED_PPO = "ppo"
+"""The name of the shipped PPO navigators (``models/``), one per kind of actions; each has a
+model card beside it with the command that trained it."""
+MODELS = Path(__file__).with_name("models")
+SHIPPED_FILES = {False: "ppo-navigate-v2.zip", True: "ppo-navigate-discrete-v2.zip"}
+"""The shipped PPO file for continuous (False) and discrete (True) actions."""
 ALGORITHMS = {"stable_baselines3.sac.policies": "SAC",
               "stable_baselines3.td3.policies": "TD3",
               "stable_baselines3.dqn.policies": "DQN"}
@@ -61,9 +67,9 @@ def load_policy(path_or_name: str | Path, env: gym.Env) -> Policy:
     """The policy ``path_or_name`` names, checked against ``env`` before it drives.
 
     Args:
-        path_or_name: ``"pure-pursuit"`` (on the environment's kind of actions), or the path of
-            a stable-baselines3 zip (PPO, A2C, SAC, TD3, DDPG or DQN). The zip is unpickled:
-            load only files you trust.
+        path_or_name: ``"pure-pursuit"`` or ``"ppo"`` (the shipped policy; both on the
+            environment's kind of actions), or the path of a stable-baselines3 zip (PPO,
+            A2C, SAC, TD3, DDPG or DQN). The zip is unpickled: load only files you trust.
         env: The Navigate environment the policy will drive.
 
     Raises:
@@ -71,9 +77,11 @@ def load_policy(path_or_name: str | Path, env: gym.Env) -> Policy:
             observation or action spaces.
         DependencyNotInstalled: An SB3 file was given without torch or stable-baselines3.
     """
+    discrete = isinstance(env.action_space, gym.spaces.Discrete)
     if str(path_or_name) == PURE_PURSUIT:
-        return PurePursuit(discrete=isinstance(env.action_space, gym.spaces.Discrete))
-    path = Path(path_or_name)
+        return PurePursuit(discrete=discrete)
+    path = MODELS / SHIPPED_FILES[discrete] if str(path_or_name) == SHIPPED_PPO else Path(
+        path_or_name)
     algorithm = _algorithm_of(path)
     require_rl()
     model = _load_model(path, algorithm)
@@ -88,8 +96,8 @@ def load_policy(path_or_name: str | Path, env: gym.Env) -> Policy:
 def _algorithm_of(path: Path) -> str:
     """The SB3 algorithm that saved ``path``, read from its ``data`` entry without unpickling."""
     if not path.exists():
-        raise ModelFileError(f"{path}: no such file; give a stable-baselines3 .zip or "
-                             f"{PURE_PURSUIT!r}")
+        raise ModelFileError(f"{path}: no such file; give a stable-baselines3 .zip, "
+                             f"{PURE_PURSUIT!r} or {SHIPPED_PPO!r}")
     if not path.is_file():
         raise ModelFileError(f"{path}: is not a file; give a stable-baselines3 .zip")
     data = _data_entry(path)

@@ -67,13 +67,15 @@ def drive(env: gym.Env, policy: Policy, episodes: int, seed: int,
     return {"episodes": records, **summarize(records)}
 
 
-def summarize(records: list[dict[str, Any]]) -> dict[str, float]:
-    """Success rate, SPL, collisions per episode, time to goal and localization error."""
+def summarize(records: list[dict[str, Any]]) -> dict[str, Any]:
+    """Success rate (and its 95 % interval), SPL, collisions, time to goal, localization error."""
     errors = np.concatenate([record["errors"] for record in records])
     answered = errors[np.isfinite(errors)]
     successes = [record["time"] for record in records if record["success"]]
     return {
         "success": float(np.mean([record["success"] for record in records])),
+        "success_interval": wilson_interval(sum(record["success"] for record in records),
+                                            len(records)),
         "spl": float(np.mean([record["spl"] for record in records])),
         "collisions": float(np.mean([record["collisions"] for record in records])),
         "time_to_goal": float(np.mean(successes)) if successes else math.nan,
@@ -81,3 +83,18 @@ def summarize(records: list[dict[str, Any]]) -> dict[str, float]:
         "error_median_cm": float(100 * np.median(answered)) if answered.size else math.nan,
         "error_p95_cm": float(100 * np.percentile(answered, 95)) if answered.size else math.nan,
     }
+
+
+def wilson_interval(successes: int, trials: int, z: float = 1.959964) -> list[float]:
+    """The Wilson score interval of a success rate (95 % for the default ``z``).
+
+    Unlike the normal approximation it stays within [0, 1] and is not empty at 0 or 100 %
+    success (Wilson 1927; Brown, Cai & DasGupta 2001 recommend it for small samples).
+    """
+    if trials <= 0:
+        return [math.nan, math.nan]
+    rate = successes / trials
+    scale = 1.0 + z * z / trials
+    centre = (rate + z * z / (2 * trials)) / scale
+    half = z * math.sqrt(rate * (1.0 - rate) / trials + z * z / (4 * trials * trials)) / scale
+    return [max(0.0, centre - half), min(1.0, centre + half)]

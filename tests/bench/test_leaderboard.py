@@ -481,7 +481,7 @@ def test_verify_compares_the_track_figures(route_entry):
     assert L.verify(route_entry) == {}
     claimed = {"tracking": {"events": [{"event": "kidnap", "recovery_s": 0.1}]}}
     fresh = {"tracking": {"events": [{"event": "kidnap", "recovery_s": 2.8}]}}
-    assert L._differences(claimed, fresh, "") == {"tracking/events/0/recovery_s": (0.1, 2.8)}
+    assert L.differences(claimed, fresh, "") == {"tracking/events/0/recovery_s": (0.1, 2.8)}
 
 
 def board_tables(readme):

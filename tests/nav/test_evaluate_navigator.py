@@ -66,7 +66,7 @@ CONTINUOUS = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
 
 
 @pytest.mark.parametrize(("make", "message"), [
-    (lambda path: path, r"no such file; give a stable-baselines3 \.zip or 'pure-pursuit'"),
+    (lambda path: path, r"no such file; give a stable-baselines3 \.zip, 'pure-pursuit' or 'ppo'"),
     (lambda path: path.parent, "is not a file"),
     (lambda path: written(path, b""), "not a readable zip"),
     (lambda path: written(path, np.random.default_rng(0).bytes(4096)), "not a readable zip"),
@@ -190,7 +190,8 @@ def test_pure_pursuit_is_scored_through_the_command(tmp_path, capsys):
     assert (report["policy"], report["seed"], row["localizer"]) == ("pure-pursuit", 1_000_000,
                                                                      "truth")
     assert len(row["episodes"]) == 2 and "errors" not in row["episodes"][0]
-    assert row["error_median_cm"] == 0.0 and row["answered"] == 1.0
+    assert row["summary"]["error_median_cm"] == 0.0 and row["summary"]["answered"] == 1.0
+    assert [episode["seed"] for episode in row["episodes"]] == [1_000_000, 1_000_001]
 
 
 def test_a_ppo_model_trained_on_the_environment_loads_and_is_scored(tmp_path, capsys):

@@ -1,0 +1,177 @@
+"""Running a navigation suite: every navigator with every localizer on the suite's episodes.
+
+A contender is a (navigator, localizer) pair. Each drives the suite's episodes in an environment
+of its own (:func:`drive_contender`), so the figures do not depend on ``workers``: the
+contenders are only spread over worker processes. Everything is checked before the first
+episode — each localizer is built in its environment and each navigator loaded against it — so
+a typo or a missing extra costs nothing.
+
+Closed loop, the localizer runs in the process that simulates the world (its answers move the
+forklift every step), so it is not kept from the truth the way the frame suites' isolated
+workers keep it. Run only localizers you trust here; the published navigation board runs
+azgym's own.
+
+The result (:func:`run_navigation`) is what ``navigation.json`` holds: the run's identity,
+then per contender the summary of :func:`azgym.nav.scoring.summarize`, the wall time, and each
+episode's figures (:func:`episode_rows`), from which the board recomputes the summary
+(:mod:`azgym.nav.board`). A figure that does not exist (no answer, no success) is null.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import secrets
+import sys
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from datetime import UTC, datetime
+from typing import Any
+
+import gymnasium as gym
+
+from azgym._version import __version__
+from azgym.arguments import whole_number
+from azgym.bench.entries import clean
+from azgym.errors import InvalidInputError
+from azgym.nav.suites import NavigationSuite, get_navigation_suite
+
+RESULTS_FORMAT = 1
+"""The layout of ``navigation.json`` (``format``)."""
+KIND = "navigation"
+"""``kind`` of a navigation results file, which tells it from a frame suite's."""
+
+Contender = tuple[str, str]
+"""(navigator, localizer)."""
+
+
+def contenders_of(navigators: Sequence[str], localizers: Sequence[str]) -> list[Contender]:
+    """Every navigator with every localizer, each pair once, in the order named."""
+    pairs = [(navigator, localizer) for navigator in navigators for localizer in localizers]
+    if not pairs:
+        raise InvalidInputError("a navigation run needs at least one navigator and one "
+                                "localizer")
+    return list(dict.fromkeys(pairs))
+
+
+def make_env(suite: NavigationSuite, localizer: str) -> gym.Env:
+    """The suite's environment with ``localizer`` (a name, a spec or ``truth``)."""
+    import azgym.envs.registration  # noqa: F401 - registers the ids
+
+    return gym.make(suite.env_id, localizer=localizer, **suite.env_kwargs)
+
+
+def check_contenders(suite: NavigationSuite, contenders: Sequence[Contender]) -> None:
+    """Build every localizer and load every navigator against it: a named error now, not later."""
+    from azgym.nav.policy_file import load_policy
+
+    checked: set[str] = set()
+    for navigator, localizer in contenders:
+        env = make_env(suite, localizer)
+        if navigator not in checked:
+            load_policy(navigator, env)
+            checked.add(navigator)
+        env.close()
+
+
+def run_navigation(suite: NavigationSuite, contenders: Sequence[Contender], *, split: str = "dev",
+                   quick: bool = False, workers: int = 1,
+                   progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Drive every contender on the suite's episodes; the contents of ``navigation.json``.
+
+    Args:
+        suite: The navigation suite.
+        contenders: (navigator, localizer) pairs, checked with :func:`check_contenders`.
+        split: ``dev`` (the suite's seed) or ``test`` (a fresh seed, reported).
+        quick: Run the suite's small version.
+        workers: Contenders driven at a time, each in a process of its own.
+        progress: Called with a line as each contender finishes.
+    """
+    if split not in ("dev", "test"):
+        raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
+    workers = whole_number("workers", workers, minimum=1)
+    seed = suite.dev_seed if split == "dev" else secrets.randbits(31)
+    return {"kind": KIND, "format": RESULTS_FORMAT, "suite": suite.name,
+            "suite_version": suite.version, "split": split, "seed": seed, "quick": quick,
+            "episodes": suite.size(quick), "env": suite.env_id, "env_kwargs": suite.env_kwargs,
+            "azgym_version": __version__, "python": sys.version.split()[0],
+            "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
+            "contenders": clean(drive_all(suite, contenders, seed, suite.size(quick), workers,
+                                          progress))}
+
+
+def drive_all(suite: NavigationSuite, contenders: Sequence[Contender], seed: int, episodes: int,
+              workers: int, progress: Callable[[str], None] | None = None
+              ) -> list[dict[str, Any]]:
+    """Each contender's record (:func:`drive_contender`), in the order of ``contenders``."""
+    say = progress or (lambda _line: None)
+    tasks = [(suite.name, navigator, localizer, seed, episodes)
+             for navigator, localizer in contenders]
+    records = []
+    if workers == 1 or len(tasks) == 1:
+        for task in tasks:
+            records.append(drive_contender(*task))
+            say(_finished(records[-1]))
+        return records
+    # spawn: a worker starts clean (no forked torch or numba threads), imports what it needs.
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(min(workers, len(tasks)), mp_context=context) as pool:
+        for record in pool.map(drive_contender, *zip(*tasks, strict=True)):
+            records.append(record)
+            say(_finished(record))
+    return records
+
+
+def drive_contender(suite_name: str, navigator: str, localizer: str, seed: int,
+                    episodes: int) -> dict[str, Any]:
+    """One contender on episodes seed, seed + 1, ...: its summary, wall time and episodes."""
+    from azgym.nav.policy_file import load_policy
+    from azgym.nav.scoring import drive
+
+    suite = get_navigation_suite(suite_name)
+    env = make_env(suite, localizer)
+    policy = load_policy(navigator, env)
+    _one_thread()
+    started = time.perf_counter()
+    result = drive(env, policy, episodes, seed)
+    runtime = time.perf_counter() - started
+    env.close()
+    return {"navigator": navigator, "localizer": localizer,
+            "summary": {key: value for key, value in result.items() if key != "episodes"},
+            "runtime_s": runtime, "episodes": episode_rows(result["episodes"], seed)}
+
+
+def episode_rows(records: list[dict[str, Any]], seed: int) -> list[dict[str, Any]]:
+    """Each episode's figures, as results files keep them (the step errors summarized).
+
+    ``steps`` and ``answered_steps`` let the whole run's answered share be recomputed; an
+    episode's errors are summarized (median and 95th percentile, cm) by the rule of the run's,
+    :func:`azgym.nav.scoring.summarize`.
+    """
+    from azgym.nav.scoring import summarize
+
+    rows = []
+    for k, record in enumerate(records):
+        errors = record["errors"]
+        figures = summarize([record])
+        rows.append({"seed": seed + k, "success": record["success"], "spl": record["spl"],
+                     "collisions": record["collisions"], "time_s": record["time"],
+                     "path_length_m": record["path_length"],
+                     "travelled_m": record["travelled"], "steps": int(errors.size),
+                     "answered_steps": int(round(figures["answered"] * errors.size)),
+                     "error_median_cm": figures["error_median_cm"],
+                     "error_p95_cm": figures["error_p95_cm"]})
+    return rows
+
+
+def _finished(record: dict[str, Any]) -> str:
+    summary = record["summary"]
+    return (f"{record['navigator']} + {record['localizer']}: success "
+            f"{100 * summary['success']:.0f} %, SPL {summary['spl']:.2f} "
+            f"({record['runtime_s']:.0f} s)")
+
+
+def _one_thread() -> None:
+    """One torch thread per worker process (the workers are the parallelism), if torch is in."""
+    if "torch" in sys.modules:
+        sys.modules["torch"].set_num_threads(1)

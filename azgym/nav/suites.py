@@ -1,0 +1,77 @@
+"""The navigation suites: localizers scored by where they get the forklift, in closed loop.
+
+A frame suite (:mod:`azgym.bench.suites`) scores each estimate against the truth. A navigation
+suite scores what the estimates are for: a navigator drives a Navigate environment on the pose
+a localizer gives it, and the drive is scored (:mod:`azgym.nav.scoring`: success, SPL,
+collisions, time to goal, and the localization error along the way). Every answer moves the
+forklift, so the localizer's next frame depends on its last answer: no two localizers see the
+same frames, and the suite is defined by its episodes, not by frames drawn in advance.
+
+Episode k of a run is the environment's ``reset(seed=seed + k)``: the start and goal spots and
+every noise draw follow from it. The ``dev`` split uses the suite's fixed seed; the ``test``
+split a seed drawn at run time (and reported), as for the frame suites.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from azgym.errors import unknown_name
+
+NAVIGATORS = ("pure-pursuit", "ppo")
+"""The built-in navigators: the scripted baseline and the shipped PPO policy
+(:mod:`azgym.nav.policy_file`)."""
+
+
+@dataclass(frozen=True)
+class NavigationSuite:
+    """A named, versioned set of navigation episodes.
+
+    Attributes:
+        name: Identifier (``azgym bench --suite NAME``).
+        version: Bumped whenever its episodes or their scoring change.
+        description: One line for listings and reports.
+        dev_seed: The seed of the ``dev`` split's first episode.
+        env_id: The Navigate environment driven.
+        episodes: Episodes per contender.
+        quick_episodes: Episodes per contender in the suite's small version (``--quick``).
+        localizers: The localizers (and trackers) run when none is named.
+        env_kwargs: Further arguments of the environment (the camera model).
+    """
+
+    name: str
+    version: int
+    description: str
+    dev_seed: int
+    env_id: str
+    episodes: int
+    quick_episodes: int
+    localizers: tuple[str, ...]
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+
+    def size(self, quick: bool) -> int:
+        """Episodes per contender in the full or the small version."""
+        return self.quick_episodes if quick else self.episodes
+
+
+NAVIGATION_SUITES: dict[str, NavigationSuite] = {suite.name: suite for suite in (
+    NavigationSuite(
+        "navigation", 1, "closed loop in warehouse-small: a navigator drives spot to spot on "
+        "each localizer's pose; success, SPL, collisions, time to goal, error along the way",
+        2300, "azgym/Navigate-WarehouseSmall-v2", 100, 10,
+        ("truth", "ransac", "lsq", "mex-coarse", "loo", "lpkf", "gated-ekf", "ng-ransac",
+         "learned")),
+    NavigationSuite(
+        "navigation-image", 1, "the navigation suite through the fisheye image path: blobs "
+        "detected from pixels, ids decoded from blinking (30 Hz camera)",
+        2400, "azgym/Navigate-WarehouseSmall-v2", 30, 3, ("ransac", "lsq", "lpkf"),
+        {"sensor": "image", "ids": "blink"}),
+)}
+
+
+def get_navigation_suite(name: str) -> NavigationSuite:
+    """The navigation suite of that name ("Did you mean ...?" otherwise)."""
+    if name not in NAVIGATION_SUITES:
+        raise unknown_name("navigation suite", name, NAVIGATION_SUITES)
+    return NAVIGATION_SUITES[name]

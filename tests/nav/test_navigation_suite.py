@@ -1,0 +1,178 @@
+"""The navigation suites: ``azgym bench --suite navigation`` runs navigators × localizers in closed
+loop, the same figures whatever the workers; a results file is checked as an adversary's edit
+would be (each tampering refused by name), reruns reproduce it, and the board shows it."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import gymnasium as gym
+import pytest
+
+from azgym import cli
+from azgym.bench import board
+from azgym.bench.entry_files import LeaderboardError
+from azgym.nav.benchmark import drive_all
+from azgym.nav.board import load_navigation, verify_navigation
+from azgym.nav.scoring import wilson_interval
+from azgym.nav.suites import NAVIGATION_SUITES, get_navigation_suite
+
+SUITE = NAVIGATION_SUITES["navigation"]
+SHIPPED_ENTRIES = Path(__file__).parents[2] / "leaderboard" / "entries"
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """A quick dev run of pure pursuit with truth and ransac, through the command."""
+    out = tmp_path_factory.mktemp("nav")
+    assert cli.main(["bench", "--suite", "navigation", "--quick", "--navigator", "pure-pursuit",
+                     "--localizer", "truth", "--localizer", "ransac", "--workers", "1",
+                     "--out", str(out)]) == 0
+    return out / "navigation.json"
+
+
+def _edited(tmp_path, run, edit):
+    data = json.loads(run.read_text())
+    edit(data)
+    path = tmp_path / "navigation.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_a_quick_run_drives_each_contender_on_the_suites_episodes(run, capsys):
+    data = load_navigation(run)
+    assert (data["suite"], data["split"], data["seed"], data["episodes"]) == (
+        "navigation", "dev", SUITE.dev_seed, SUITE.quick_episodes)
+    truth, ransac = data["contenders"]
+    assert (truth["localizer"], ransac["localizer"]) == ("truth", "ransac")
+    assert [e["seed"] for e in truth["episodes"]] == list(range(2300, 2310))
+    assert truth["summary"]["success"] >= 0.9 and truth["summary"]["error_median_cm"] == 0.0
+    assert 0.5 < ransac["summary"]["answered"] < 1.0  # ransac abstains on some frames
+    # both drove the same start and goal spots, so the planned paths are the same length
+    assert [e["path_length_m"] for e in truth["episodes"]] == [
+        e["path_length_m"] for e in ransac["episodes"]]
+
+
+def test_workers_do_not_change_the_figures(run):
+    data = json.loads(run.read_text())
+    parallel = drive_all(SUITE, [("pure-pursuit", "truth"), ("pure-pursuit", "ransac")],
+                         data["seed"], data["episodes"], workers=2)
+    for claimed, fresh in zip(data["contenders"], parallel, strict=True):
+        assert claimed["episodes"] == fresh["episodes"]
+
+
+def test_a_rerun_reproduces_the_file_and_finds_an_edited_error_figure(run, tmp_path):
+    assert verify_navigation(run) == {}
+    path = _edited(tmp_path, run, lambda d: d["contenders"][1]["summary"].update(
+        error_p95_cm=1.0))  # not recomputable from the episodes: only a rerun finds it
+    assert verify_navigation(path) == {
+        "contenders/1/summary/error_p95_cm": (1.0, json.loads(run.read_text())[
+            "contenders"][1]["summary"]["error_p95_cm"])}
+
+
+def _set_success(data):
+    data["contenders"][0]["summary"]["success"] = 1.0
+    data["contenders"][0]["episodes"][0]["success"] = False
+    data["contenders"][0]["episodes"][0]["spl"] = 0.0
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda d: d.update(kind="frames"), "not a navigation results file"),
+    (lambda d: d.update(format=2), "format must be 1"),
+    (lambda d: d.update(suite="stress"), "'stress' is not a navigation suite"),
+    (lambda d: d.update(suite_version=0), "suite_version 0: navigation is at version 1"),
+    (lambda d: d.update(env_kwargs={"sensor": "image"}), "env and env_kwargs must be the suite"),
+    (lambda d: d.update(seed=5), "a dev run uses the suite's seed 2300"),
+    (lambda d: d.update(split="test"), "a dev run uses the suite's seed 2300"),
+    (lambda d: d.update(quick=False), "episodes must be 100"),
+    (lambda d: d.update(contenders=[]), "contenders must be a non-empty list"),
+    (lambda d: d["contenders"][0].update(navigator="mine.zip"),
+     "'mine.zip' is not a built-in navigator"),
+    (lambda d: d["contenders"][0].update(localizer="mine.py:Mine"),
+     "'mine.py:Mine' is not a built-in localizer"),
+    (lambda d: d["contenders"][0]["episodes"].pop(), "must be the suite's 10 episodes"),
+    (lambda d: d["contenders"][0]["episodes"].reverse(), "seeds 2300 to 2309 in order"),
+    (lambda d: d["contenders"][0]["summary"].update(spl=0.999), "summary/spl: the file says"),
+    (lambda d: d["contenders"][1]["summary"].update(success_interval=[0.9, 1.0]),
+     "summary/success_interval"),
+    (_set_success, "summary/success: the file says 1.0, its episodes give 0.9"),
+    (lambda d: d["contenders"][0]["episodes"][3].update(success=False),
+     "episodes/3/spl: a failed episode has SPL 0"),
+    (lambda d: d["contenders"][0]["episodes"][3].update(answered_steps=10**6),
+     "answered_steps: more than its steps"),
+    (lambda d: d["contenders"][0]["episodes"][3].update(collisions=-1),
+     "collisions: must be a whole number"),
+    (lambda d: d["contenders"][0]["episodes"][3].update(spl="1"), "spl: must be a number"),
+])
+def test_an_edited_file_is_refused_by_name(run, tmp_path, edit, message):
+    with pytest.raises(LeaderboardError, match=message):
+        load_navigation(_edited(tmp_path, run, edit))
+
+
+def test_a_file_with_nan_is_refused(run, tmp_path):
+    path = tmp_path / "navigation.json"
+    path.write_text(run.read_text().replace('"spl": 1.0', '"spl": NaN', 1))
+    with pytest.raises(LeaderboardError, match="NaN is not a JSON number"):
+        load_navigation(path)
+
+
+def test_the_board_shows_the_navigation_tables(run, tmp_path):
+    entries = tmp_path / "entries"
+    entries.mkdir()
+    navigation = tmp_path / "navigation"
+    navigation.mkdir()
+    (navigation / "navigation-dev-quick.json").write_text(run.read_text())
+    # a frame entry is needed for a board; borrow one of the shipped ones
+    for name in ("ransac-paper.json", "ransac-paper.frames.csv.gz"):
+        (entries / name).write_bytes((SHIPPED_ENTRIES / name).read_bytes())
+    readme, page = board.build(entries, tmp_path / "out", navigation)
+    text = readme.read_text()
+    assert "## navigation — closed loop" in text
+    assert "### dev split (seed 2300), quick size, 10 episodes per contender" in text
+    row = next(line for line in text.splitlines() if "| pure-pursuit | truth |" in line)
+    assert row.startswith("| 1 | pure-pursuit | truth | 100 [72, 100] |")
+    assert 'id="board-navigation-dev-2300-quick"' in page.read_text()
+
+
+def test_the_board_refuses_an_unsound_navigation_file(run, tmp_path):
+    navigation = tmp_path / "navigation"
+    navigation.mkdir()
+    data = json.loads(run.read_text())
+    data["contenders"][0]["localizer"] = "evil.py:Cheat"
+    (navigation / "x.json").write_text(json.dumps(data))
+    with pytest.raises(LeaderboardError, match="evil.py:Cheat"):
+        board.build(SHIPPED_ENTRIES, tmp_path / "out", navigation)
+
+
+def test_wilson_interval_matches_hand_worked_values():
+    # 10/10: centre (1 + z²/20) / (1 + z²/10), half z·sqrt(z²/400) / (1 + z²/10)
+    low, high = wilson_interval(10, 10)
+    assert high == pytest.approx(1.0) and low == pytest.approx(0.7225, abs=1e-4)
+    low, high = wilson_interval(5, 10)
+    assert (low, high) == (pytest.approx(0.2366, abs=1e-4), pytest.approx(0.7634, abs=1e-4))
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--suite", "navigation", "--time-limit", "3"], "--time-limit is for the frame suites"),
+    (["--suite", "stress", "--navigator", "ppo"], "--navigator is for the navigation suites"),
+    (["--suite", "navigatoin"], "Did you mean 'navigation'"),
+    (["--suite", "navigation", "--navigator", "nope.zip"], "nope.zip: no such file"),
+    (["--suite", "navigation", "--localizer", "nope"], "unknown localizer 'nope'"),
+])
+def test_bad_navigation_bench_arguments_are_refused_by_name(argv, message, tmp_path, capsys):
+    assert cli.main(["bench", *argv, "--out", str(tmp_path)]) == 2
+    assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("env_id", ["azgym/Navigate-WarehouseSmall-v2",
+                                    "azgym/NavigateDiscrete-WarehouseSmall-v2"])
+def test_the_shipped_ppo_drives_to_the_goal(env_id):
+    pytest.importorskip("stable_baselines3")
+    from azgym.nav.policy_file import load_policy
+    from azgym.nav.scoring import drive
+
+    env = gym.make(env_id, localizer="truth")
+    result = drive(env, load_policy("ppo", env), 10, get_navigation_suite("navigation").dev_seed)
+    assert result["success"] >= 0.9 and result["spl"] >= 0.8
+
