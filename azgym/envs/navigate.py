@@ -12,9 +12,9 @@ from gymnasium import spaces
 from azgym.arguments import positive_number, whole_number
 from azgym.core import estimated_pose, pose_error, wrap_scalar
 from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
-from azgym.errors import InvalidInputError
-from azgym.localize.registry import SupportsLocalize, make_localizer
+from azgym.localize.registry import SupportsLocalize
 from azgym.nav.controls import DISCRETE_CONTROLS, controls
+from azgym.nav.estimator import TrackerFeed, is_tracker, resolve_estimator
 from azgym.nav.guidance import SUPPORT_SCALE, Guidance
 from azgym.nav.planner import planner_for
 from azgym.nav.pose_keeper import PoseKeeper
@@ -23,6 +23,7 @@ from azgym.sensing.catalog import make_sensor
 from azgym.sensing.protocol import Observation
 from azgym.site import Scenario, load_scenario
 from azgym.site.elements import occluder_table
+from azgym.track.base import Tracker
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
@@ -42,12 +43,19 @@ class NavigateEnv(gym.Env):
     map (:mod:`azgym.nav.planner`: racks and walls inflated by the forklift's half-width and a
     margin, cheapest paths keeping to the middle of the aisles) gives the path, and the agent is
     the local controller. It does not know where it is: every control period (10 Hz) its camera
-    takes a frame, with all the warehouse's faults, and a localizer — ``ransac`` by default, any
-    registered name or object, or ``"truth"`` as an oracle — estimates the pose. The path is
-    followed from that estimate and shown in its frame (:mod:`azgym.nav.guidance`). Between
-    answers (``ok=False``), the navigator dead-reckons from the drive's speed and steering, and
-    it rejects answers that jump implausibly (:mod:`azgym.nav.pose_keeper`); the observation
-    says how old its pose is.
+    takes a frame, with all the warehouse's faults, and a localizer or tracker — ``ransac`` by
+    default, any registered name, spec or object, or ``"truth"`` as an oracle — estimates the
+    pose. The path is followed from that estimate and shown in its frame
+    (:mod:`azgym.nav.guidance`). Between answers (``ok=False``), the navigator dead-reckons from
+    the drive's speed and steering, and it rejects answers that jump implausibly
+    (:mod:`azgym.nav.pose_keeper`); the observation says how old its pose is.
+
+    A tracker (``tkf``, ``lpkf``, ``gated-ekf``, ``robust``, ``dead-reckoning`` or an object with
+    ``reset``, ``predict`` and ``update``) also hears the forklift's wheel odometry and IMU,
+    sampled after every physics step: on each frame it localizes it predicts with the samples up
+    to that frame's time, then updates (:mod:`azgym.nav.estimator`). It starts each episode
+    without the start pose; its sensors' noise and its seed come from the environment's
+    generator, drawn only for a tracker.
 
     With ``sensor="image"`` the localizer reads the fisheye image path
     (:mod:`azgym.sensing.image.sensor`): beacons rendered, detected from pixels and identified
@@ -111,8 +119,10 @@ class NavigateEnv(gym.Env):
     ``gym.make("azgym/Navigate-WarehouseSmall-v2", scenario=..., localizer="ransac",
     discrete=False, max_steps=600, progress=1.0, collision=1.0, time=0.01, success=10.0,
     goal_radius=1.0, n_rays=8, ray_range=10.0, sensor="geometry", ids="oracle",
-    camera_rate_hz=None, render_mode=None)``. With ``render_mode`` and ``sensor="image"`` the
-    render shows the camera's last frame beside the top-down view.
+    camera_rate_hz=None, render_mode=None)``. ``localizer`` is a localizer or tracker: a name or
+    spec (``azgym localizers`` lists them), an object, or ``"truth"``; a localizer wrapped as a
+    tracker (``azgym.make_tracker("ransac")``) runs as the localizer. With ``render_mode`` and
+    ``sensor="image"`` the render shows the camera's last frame beside the top-down view.
 
     ## Version History
 
@@ -144,7 +154,7 @@ class NavigateEnv(gym.Env):
     def __init__(
         self,
         scenario: str | Scenario = "warehouse-small",
-        localizer: str | SupportsLocalize = "ransac",
+        localizer: str | SupportsLocalize | Tracker = "ransac",
         discrete: bool = False,
         max_steps: int = 600,
         progress: float = 1.0,
@@ -167,11 +177,9 @@ class NavigateEnv(gym.Env):
         self.weights = reward_weights(progress=progress, collision=collision, time=time,
                                       success=success)
         self.localizer_name = localizer if isinstance(localizer, str) else type(localizer).__name__
-        self.localizer = None if localizer == "truth" else (
-            make_localizer(localizer) if isinstance(localizer, str) else localizer)
-        if self.localizer is not None and not isinstance(self.localizer, SupportsLocalize):
-            raise InvalidInputError(f"localizer must be a name, \"truth\" or an object with "
-                                    f"localize(measurements, beacons), got {localizer!r}")
+        self.localizer = resolve_estimator(localizer)
+        self._feed = (TrackerFeed(self.localizer, PHYSICS_DT) if is_tracker(self.localizer)
+                      else None)
         self.discrete = bool(discrete)
         self.max_steps = whole_number("max_steps", max_steps)
         self.goal_radius = positive_number("goal_radius", goal_radius, "m")
@@ -223,7 +231,9 @@ class NavigateEnv(gym.Env):
         self._localized = False
         self._answer = None
         self._frames = 1  # frame 0 is taken now, at the start
-        self._look([self._camera_pose()])
+        if self._feed is not None:
+            self._feed.reset(self._world, self.np_random)
+        self._look([(self._camera_pose(), 0.0)])
         observation = self._observe()
         if self.render_mode == "human":
             self.render()
@@ -239,13 +249,16 @@ class NavigateEnv(gym.Env):
         x, y, _ = world.forklift.pose
         for _ in range(CONTROL_STEPS):
             world.step(throttle, steer)
+            if self._feed is not None:
+                self._feed.step(world)
             self._pose.coast(world.forklift.speed, world.forklift.steer, PHYSICS_DT)
             states.append(self._camera_pose())
             previous_x, previous_y = x, y
             x, y, _ = world.forklift.pose
             self._travelled += math.hypot(x - previous_x, y - previous_y)
         self._steps += 1
-        self._look([_interpolate(states[i], states[i + 1], fraction) for i, fraction in frames])
+        self._look([(_interpolate(states[i], states[i + 1], fraction), time)
+                    for i, fraction, time in frames])
         potential = self._cost_to_go()
         arrived = math.hypot(self._goal[0] - x, self._goal[1] - y) < self.goal_radius
         rewards = {
@@ -274,13 +287,14 @@ class NavigateEnv(gym.Env):
         forklift = self._world.forklift
         return (*forklift.camera_position(), forklift.pose[2])
 
-    def _due_frames(self, start: int) -> list[tuple[int, float]]:
+    def _due_frames(self, start: int) -> list[tuple[int, float, float]]:
         """The frames due in the control period after physics step ``start``, in time order.
 
         Frame k (``_frames`` counts the frames taken) is due after k · ``_frame_steps``
         physics steps, snapped to a whole step when within rounding of one. Each is given as
-        (i, fraction): it lies ``fraction`` of the way, in (0, 1], from the state i steps into
-        the period to the state i + 1 steps in.
+        (i, fraction, time): it lies ``fraction`` of the way, in (0, 1], from the state i steps
+        into the period to the state i + 1 steps in, at ``time`` on the world's clock (a whole
+        step's time is the world's own, bit for bit).
         """
         frames = []
         while True:
@@ -291,26 +305,29 @@ class NavigateEnv(gym.Env):
             if offset > CONTROL_STEPS:
                 return frames
             i = math.ceil(offset) - 1
-            frames.append((i, offset - i))
+            frames.append((i, offset - i, due * PHYSICS_DT))
             self._frames += 1
 
-    def _look(self, poses: list[tuple[float, float, float]]) -> None:
-        """Take the frames at ``poses`` (in time order) and localize on the last one.
+    def _look(self, frames: list[tuple[tuple[float, float, float], float]]) -> None:
+        """Take the frames at (pose, time) (in time order) and localize on the last one.
 
         The sway steps through every frame, and the camera observes every one (a sensor may keep
-        state between frames, as the blinking ids' tracker does).
+        state between frames, as the blinking ids' tracker does). A tracker predicts up to the
+        last frame's time with the motion samples since its previous one, then updates.
         """
-        if not poses:  # no frame this period: the pose is dead-reckoned on
+        if not frames:  # no frame this period: the pose is dead-reckoned on
             self._answer, self._localized = None, False
             return
-        for pose in poses:
+        for pose, _ in frames:
             tilt = self._sway.step(pose[0], pose[1], self.np_random)
             self.last_observation = self.camera.observe(pose, self.np_random, tilt)
+        pose, time = frames[-1]
+        measurements, beacons = self.last_observation.measurements, self.scenario.beacons
         if self.localizer is None:
             self._answer, support = pose, SUPPORT_SCALE
         else:
-            estimate = self.localizer.localize(self.last_observation.measurements,
-                                               self.scenario.beacons)
+            estimate = (self.localizer.localize(measurements, beacons) if self._feed is None
+                        else self._feed.estimate(time, measurements, beacons))
             self._answer = estimated_pose(estimate)
             support = int(np.count_nonzero(estimate.inliers)) if self._answer else 0
         self._localized = self._pose.offer(self._answer, support)

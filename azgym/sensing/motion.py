@@ -11,6 +11,7 @@ orientation sensor (white noise). ``ImuModel.plotter()`` is the smartphone of Da
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 
@@ -138,10 +139,9 @@ class Odometer:
                            steer + model.steer_noise * noise[1]))
         self._next += period
 
-    def take(self) -> OdometrySamples:
-        """The samples since the last call."""
-        time, speed, steer = np.array(self._rows, dtype=np.float64).reshape(-1, 3).T
-        self._rows = []
+    def take(self, until: float = math.inf) -> OdometrySamples:
+        """The samples since the last call, up to time ``until`` [s] (later ones wait)."""
+        time, speed, steer = np.array(_taken(self._rows, until), dtype=np.float64).reshape(-1, 3).T
         return OdometrySamples(time=time.copy(), speed=speed.copy(), steer=steer.copy())
 
 
@@ -172,9 +172,21 @@ class Imu:
                            accel[1] + model.accel_noise * noise[3], measured_heading))
         self._next += period
 
-    def take(self) -> ImuSamples:
-        """The samples since the last call."""
-        time, yaw_rate, ax, ay, heading = np.array(self._rows, dtype=np.float64).reshape(-1, 5).T
-        self._rows = []
+    def take(self, until: float = math.inf) -> ImuSamples:
+        """The samples since the last call, up to time ``until`` [s] (later ones wait)."""
+        rows = _taken(self._rows, until)
+        time, yaw_rate, ax, ay, heading = np.array(rows, dtype=np.float64).reshape(-1, 5).T
         return ImuSamples(time=time.copy(), yaw_rate=yaw_rate.copy(),
                           accel=np.column_stack([ax, ay]), heading=heading.copy())
+
+
+def _taken(rows: list[tuple[float, ...]], until: float) -> list[tuple[float, ...]]:
+    """Remove and return the rows (in time order, time first) taken at or before ``until``.
+
+    A camera frame may fall between two physics steps (a 30 Hz camera, a 50 Hz physics): the
+    samples after it belong to the next frame.
+    """
+    count = bisect.bisect_right(rows, until, key=lambda row: row[0])
+    taken = rows[:count]
+    del rows[:count]
+    return taken

@@ -14,7 +14,6 @@ a damped mast that the bumps shake, so consecutive frames see nearly the same ti
 
 from __future__ import annotations
 
-import math
 import numbers
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -24,20 +23,13 @@ import numpy as np
 from azgym.core import Measurements, Pose
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.geometry.sensor import GeometrySensor
-from azgym.sensing.motion import (
-    Imu,
-    ImuModel,
-    ImuSamples,
-    Motion,
-    Odometer,
-    OdometryModel,
-    OdometrySamples,
-)
+from azgym.sensing.motion import ImuModel, ImuSamples, Motion, OdometryModel, OdometrySamples
 from azgym.sensing.protocol import DetectionTruth, Observation, Sensor
 from azgym.site import Scenario, load_scenario
 from azgym.site.elements import Route
 from azgym.world.driver import PurePursuit
 from azgym.world.forklift import ForkliftSpec
+from azgym.world.motion_sensors import MotionSensors
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
 
@@ -100,35 +92,6 @@ STOPPED_SPEED = 0.05
 """Below this speed [m/s] a forklift at the end of its route has stopped: the drive is over."""
 FRAME_TIME_TOLERANCE = 1e-9
 """A physics step ending this close before a frame's time [s] takes the frame (rounding)."""
-
-
-class _Motion:
-    """Wheel odometry and the IMU, sampled after every physics step of a drive."""
-
-    def __init__(self, odometry: OdometryModel, imu: ImuModel, odometry_rng: np.random.Generator,
-                 imu_rng: np.random.Generator, dt: float) -> None:
-        self._odometer = Odometer(odometry, odometry_rng)
-        self._imu = Imu(imu, imu_rng)
-        self._dt = dt
-        self._velocity = None
-
-    def step(self, world: World) -> None:
-        """Sample the step just taken (nothing before the first one)."""
-        forklift = world.forklift
-        velocity = forklift.body.velocity
-        if self._velocity is not None:
-            ax = (velocity.x - self._velocity.x) / self._dt
-            ay = (velocity.y - self._velocity.y) / self._dt
-            heading = forklift.body.angle
-            c, s = math.cos(heading), math.sin(heading)
-            self._odometer.update(world.time, forklift.speed, forklift.steer)
-            self._imu.update(world.time, forklift.body.angular_velocity,
-                             (c * ax + s * ay, -s * ax + c * ay), heading)
-        self._velocity = velocity
-
-    def take(self) -> tuple[OdometrySamples, ImuSamples]:
-        """The samples since the last call."""
-        return self._odometer.take(), self._imu.take()
 
 
 def checked_camera_rate(camera_rate_hz: float) -> float:
@@ -228,7 +191,8 @@ def simulate(
     camera_rng, odometry_rng, imu_rng, sway_rng = (
         np.random.default_rng(stream) for stream in streams[:4])
     sensor.reset(streams[4])
-    motion = _Motion(odometry or OdometryModel(), imu or ImuModel(), odometry_rng, imu_rng, dt)
+    motion = MotionSensors(odometry or OdometryModel(), imu or ImuModel(), odometry_rng, imu_rng,
+                           dt)
     sway = CameraSway(scenario, 1.0 / camera_rate_hz, spec)
     contacts_seen = 0
     for index, world in enumerate(_frames(scenario, chosen, camera_rate_hz, dt, spec, max_time,
