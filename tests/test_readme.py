@@ -72,7 +72,8 @@ def test_every_localizer_spec_the_readme_gives_builds(tmp_path, monkeypatch):
     (the README's own plug-in file in place, a placeholder ``path/to/`` file written there)."""
     text = README.read_text(encoding="utf-8")
     specs = {spec for spec in re.findall(r"(?:--localizer|azgym check) ([^\s`]+)", text)
-             if not spec.isupper()}  # not the SPEC of a usage line
+             if not spec.isupper()  # not the SPEC of a usage line
+             and spec != "truth"}  # the navigation environments' oracle, not a localizer
     specs |= {spec for spec in re.findall(r"`([\w./-]+:[\w:=.,-]+)`", text) if "=" in spec}
     monkeypatch.chdir(tmp_path)
     (tmp_path / "my_localizer.py").write_text(plugin_source())
@@ -128,3 +129,40 @@ def test_the_learned_section_trains_a_model_and_benches_it_beside_the_shipped_on
     printed = capsys.readouterr().out
     rows = {line.split()[1] for line in printed.splitlines() if re.match(r"^ *\d+ \S", line)}
     assert {"ng-ransac", "ng-ransac:weights=runs/ng-ransac/ng-ransac.npz", "ransac"} <= rows
+
+
+def test_the_navigator_section_scores_the_shipped_policy_trains_and_quotes_its_card(
+        tmp_path, monkeypatch, capsys):
+    """The commands run as written (training stopped at its checked request: a full run is the
+    model card's), and the figures quoted are the shipped policy's card's."""
+    pytest.importorskip("stable_baselines3", reason="needs the rl extra")
+    from azgym.nav import train
+    from azgym.nav.policy_file import MODELS, SHIPPED_FILES
+
+    section = README.read_text(encoding="utf-8").split("## Train a navigator", 1)[1]
+    section = section.split("\n## ", 1)[0]
+    assert len([line for line in section.splitlines() if line.strip()]) <= 10
+    shell = re.search(r"```bash\n(.*?)```", section, re.S).group(1)
+    commands = [shlex.split(line) for line in shell.splitlines()]
+    assert [c[1:3] for c in commands] == [["evaluate", "navigator"], ["train", "navigator"],
+                                          ["evaluate", "navigator"]]
+    monkeypatch.chdir(tmp_path)
+    short = ["--episodes", "2", "--seed", "2300"]
+    assert main([*commands[0][1:], *short]) == 0
+    rows = {line.split()[0]: float(line.split()[1])
+            for line in capsys.readouterr().out.splitlines()[1:] if line}
+    assert set(rows) == {"truth", "ransac", "lsq"} and rows["truth"] == 100.0
+    requests = []
+    monkeypatch.setattr(train, "run", lambda request: requests.append(request) or
+                        train.TrainingResult(*"pcue", wall_time=1.0, score={}))
+    assert main(commands[1][1:]) == 0
+    (request,) = requests
+    assert (request.steps, request.seed, request.n_envs, request.threads) == (1_000_000, 0, 4, 1)
+    trained = tmp_path / "runs" / "navigator" / "policy.zip"
+    trained.write_bytes((MODELS / SHIPPED_FILES[False]).read_bytes())
+    assert main([*commands[2][1:], *short]) == 0
+    card = (MODELS / SHIPPED_FILES[False]).with_suffix(".md").read_text(encoding="utf-8")
+    quoted = re.search(r"shipped PPO policy: ([\d.]+) %, ([\d.]+) % and ([\d.]+) % success",
+                       section).groups()
+    for localizer, success in zip(("truth", "ransac", "lsq"), quoted, strict=True):
+        assert f"| {localizer} | {success} % [" in card

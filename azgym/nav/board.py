@@ -30,10 +30,11 @@ from azgym.nav.benchmark import KIND, RESULTS_FORMAT, drive_all
 from azgym.nav.scoring import wilson_interval
 from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS
 
-RECOMPUTED = ("success", "success_interval", "spl", "collisions", "time_to_goal", "answered")
+RECOMPUTED = ("success", "success_interval", "spl", "collisions", "collided", "time_to_goal",
+              "answered")
 """The summary figures recomputed from a file's episodes when it is read."""
 HEADER = ["#", "navigator", "localizer", "success % [95 % CI]", "SPL", "collisions/ep",
-          "time to goal s", "answered %", "error median cm", "error p95 cm"]
+          "collided %", "time to goal s", "answered %", "error median cm", "error p95 cm"]
 """The columns of a navigation table."""
 
 
@@ -126,6 +127,7 @@ def recomputed_summary(episodes: list[dict[str, Any]], where: str) -> dict[str, 
         "success_interval": wilson_interval(sum(row["success"] for row in rows), len(rows)),
         "spl": sum(row["spl"] for row in rows) / len(rows),
         "collisions": sum(row["collisions"] for row in rows) / len(rows),
+        "collided": sum(row["collisions"] > 0 for row in rows) / len(rows),
         "time_to_goal": sum(successes) / len(successes) if successes else math.nan,
         "answered": sum(row["answered_steps"] for row in rows) / steps if steps else math.nan})
 
@@ -182,7 +184,8 @@ def table_rows(data: dict[str, Any]) -> list[list[str]]:
         low, high = s["success_interval"]
         rows.append([str(rank), contender["navigator"], contender["localizer"],
                      f"{100 * s['success']:.0f} [{100 * low:.0f}, {100 * high:.0f}]",
-                     f"{s['spl']:.3f}", f"{s['collisions']:.2f}", _fmt(s["time_to_goal"]),
+                     f"{s['spl']:.3f}", f"{s['collisions']:.2f}",
+                     f"{100 * s['collided']:.0f}", _fmt(s["time_to_goal"]),
                      f"{100 * s['answered']:.1f}", _fmt(s["error_median_cm"]),
                      _fmt(s["error_p95_cm"])])
     return rows

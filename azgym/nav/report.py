@@ -10,7 +10,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-COLUMNS = (("success %", 1), ("SPL", 3), ("collisions/ep", 2), ("time to goal s", 1),
+COLUMNS = (("success %", 1), ("SPL", 3), ("collisions/ep", 2), ("collided %", 1),
+           ("time to goal s", 1),
            ("answered %", 1), ("error median cm", 1), ("error p95 cm", 1), ("runtime s", 1))
 """The columns after the contender's names, each with its decimals."""
 
@@ -25,7 +26,7 @@ def score_table(rows: Sequence[dict[str, Any]], keys: Sequence[str]) -> str:
     for row in rows:
         summary = row["summary"]
         values = (100 * summary["success"], summary["spl"], summary["collisions"],
-                  summary["time_to_goal"], 100 * summary["answered"],
+                  100 * summary["collided"], summary["time_to_goal"], 100 * summary["answered"],
                   summary["error_median_cm"], summary["error_p95_cm"], row["runtime_s"])
         lines.append("  ".join(str(row[key]).ljust(width)
                                for key, width in zip(keys, firsts, strict=True))

@@ -4,7 +4,9 @@ A navigator is scored as embodied agents are (Anderson et al. 2018, "On Evaluati
 Navigation Agents"): success rate, and SPL, success weighted by path length,
 S · l / max(p, l) for the shortest path's length l (the planner's path from the start) and the
 path p driven. azgym adds what a warehouse cares about: collisions per episode (contacts begun
-with racks and walls), time to the goal (of the successful episodes), and the localization error
+with racks and walls) and the share of episodes with any (a forklift pinned against a rack
+begins contact after contact, so the mean alone is ruled by a few such episodes), time to the
+goal (of the successful episodes), and the localization error
 along the way (every step the localizer answered), which ties a localizer to where it gets the
 forklift.
 """
@@ -78,6 +80,7 @@ def summarize(records: list[dict[str, Any]]) -> dict[str, Any]:
                                             len(records)),
         "spl": float(np.mean([record["spl"] for record in records])),
         "collisions": float(np.mean([record["collisions"] for record in records])),
+        "collided": float(np.mean([record["collisions"] > 0 for record in records])),
         "time_to_goal": float(np.mean(successes)) if successes else math.nan,
         "answered": float(answered.size / errors.size) if errors.size else math.nan,
         "error_median_cm": float(100 * np.median(answered)) if answered.size else math.nan,

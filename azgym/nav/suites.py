@@ -36,7 +36,9 @@ class NavigationSuite:
         env_id: The Navigate environment driven.
         episodes: Episodes per contender.
         quick_episodes: Episodes per contender in the suite's small version (``--quick``).
-        localizers: The localizers (and trackers) run when none is named.
+        localizers: The localizers and trackers run when none is named. A tracker starts
+            without the start pose (the navigator must find itself), so ``dead-reckoning``,
+            which needs one, is not among them.
         env_kwargs: Further arguments of the environment (the camera model).
     """
 
@@ -60,12 +62,12 @@ NAVIGATION_SUITES: dict[str, NavigationSuite] = {suite.name: suite for suite in 
         "navigation", 1, "closed loop in warehouse-small: a navigator drives spot to spot on "
         "each localizer's pose; success, SPL, collisions, time to goal, error along the way",
         2300, "azgym/Navigate-WarehouseSmall-v2", 100, 10,
-        ("truth", "ransac", "lsq", "mex-coarse", "loo", "lpkf", "gated-ekf", "ng-ransac",
-         "learned")),
+        ("truth", "ransac", "lsq", "mex-coarse", "loo", "ng-ransac", "learned", "tkf", "lpkf",
+         "gated-ekf")),
     NavigationSuite(
         "navigation-image", 1, "the navigation suite through the fisheye image path: blobs "
         "detected from pixels, ids decoded from blinking (30 Hz camera)",
-        2400, "azgym/Navigate-WarehouseSmall-v2", 30, 3, ("ransac", "lsq", "lpkf"),
+        2400, "azgym/Navigate-WarehouseSmall-v2", 30, 3, ("ransac", "lsq", "gated-ekf"),
         {"sensor": "image", "ids": "blink"}),
 )}
 

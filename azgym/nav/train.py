@@ -178,13 +178,12 @@ def prepare(env_id: str, algo: str, steps: int | None, out: Path | str, *, seed:
 
 
 def _check_localizer(name: object) -> None:
-    """Build the localizer once ("truth" needs none), so a bad name fails before training."""
-    from azgym.localize.registry import make_localizer
+    """Build the localizer or tracker once ("truth" needs none): a bad name fails now."""
+    from azgym.nav.estimator import resolve_estimator
 
     if not isinstance(name, str):
         raise InvalidInputError(f"localizer must be a name or \"truth\", got {name!r}")
-    if name != "truth":
-        make_localizer(name)
+    resolve_estimator(name)
 
 
 def _checked_overrides(algo: str, overrides: dict[str, Any]) -> dict[str, Any]:

@@ -1,0 +1,55 @@
+"""The navigation section of the leaderboard: both navigators with every default localizer.
+
+For each navigation suite (``navigation``, ``navigation-image``), the scripted pure pursuit and
+the shipped PPO policy drive the suite's episodes on each of its default localizers and
+trackers, on the dev split and on a test split with a fresh seed (reported in the file).
+
+    python baselines/navigation_board.py [--workers 2] [--suite NAME ...] [--split dev|test ...]
+
+Writes ``leaderboard/navigation/<suite>-<split>.json``, then rebuilds ``leaderboard/README.md``
+and ``leaderboard/index.html``. ``azgym leaderboard verify leaderboard/navigation/FILE`` reruns
+a file's episodes and compares every figure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+from azgym.bench import board
+from azgym.nav.benchmark import check_contenders, contenders_of, run_navigation
+from azgym.nav.report import score_table
+from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--suite", action="append", choices=list(NAVIGATION_SUITES))
+    parser.add_argument("--split", action="append", choices=("dev", "test"))
+    args = parser.parse_args()
+    folder = ROOT / "leaderboard" / "navigation"
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in args.suite or NAVIGATION_SUITES:
+        suite = NAVIGATION_SUITES[name]
+        contenders = contenders_of(NAVIGATORS, suite.localizers)
+        check_contenders(suite, contenders)
+        for split in args.split or ("dev", "test"):
+            started = time.perf_counter()
+            result = run_navigation(suite, contenders, split=split, workers=args.workers,
+                                    progress=print)
+            path = folder / f"{name}-{split}.json"
+            path.write_text(json.dumps(result, indent=1) + "\n")
+            print(score_table(result["contenders"], ["navigator", "localizer"]))
+            print(f"{name} {split} (seed {result['seed']}): {time.perf_counter() - started:.0f} s;"
+                  f" wrote {path}\n", flush=True)
+    for path in board.build(ROOT / "leaderboard" / "entries", ROOT / "leaderboard", folder):
+        print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
