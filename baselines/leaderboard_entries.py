@@ -6,8 +6,9 @@ tracker on the suites of driven routes (dev split, full size).
     python baselines/leaderboard_entries.py [--workers 2] [--suite NAME ...]
 
 Writes ``leaderboard/entries/<localizer>-<suite>.json`` (and the per-frame results beside each),
-then rebuilds ``leaderboard/README.md`` and ``leaderboard/index.html``. The bench outputs
-(figures included) go to ``results/bench-<suite>/``.
+then rebuilds ``leaderboard/README.md`` and ``leaderboard/index.html`` (with the navigation
+section from ``leaderboard/navigation/``, which ``baselines/navigation_board.py`` writes). The
+bench outputs (figures included) go to ``results/bench-<suite>/``.
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ def main() -> None:
                                       link="",
                                       overwrite=True)
             print(f"wrote {path}")
-    for path in board.build(entries, ROOT / "leaderboard"):
+    for path in board.build(entries, ROOT / "leaderboard", ROOT / "leaderboard" / "navigation"):
         print(f"wrote {path}")
 
 

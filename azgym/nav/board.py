@@ -39,8 +39,14 @@ HEADER = ["#", "navigator", "localizer", "success % [95 % CI]", "SPL", "collisio
 
 
 def is_navigation_file(path: Path) -> bool:
-    """Whether ``path`` is a navigation results file (rather than a frame suite's entry)."""
-    data = read_json(path, "results file")
+    """Whether ``path`` is a navigation results file (rather than a frame suite's entry).
+
+    A file that cannot be read is not one: reading it as an entry then names the problem.
+    """
+    try:
+        data = read_json(path, "results file")
+    except LeaderboardError:
+        return False
     return isinstance(data, dict) and data.get("kind") == KIND
 
 

@@ -67,7 +67,7 @@ NAVIGATION_SUITES: dict[str, NavigationSuite] = {suite.name: suite for suite in 
     NavigationSuite(
         "navigation-image", 1, "the navigation suite through the fisheye image path: blobs "
         "detected from pixels, ids decoded from blinking (30 Hz camera)",
-        2400, "azgym/Navigate-WarehouseSmall-v2", 30, 3, ("ransac", "lsq", "gated-ekf"),
+        2400, "azgym/Navigate-WarehouseSmall-v2", 100, 5, ("ransac", "lsq", "gated-ekf"),
         {"sensor": "image", "ids": "blink"}),
 )}
 

@@ -24,6 +24,11 @@ from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import get_suite
 from azgym.cli import main
 from azgym.localize.registry import list_trackers
+from azgym.nav.benchmark import contenders_of
+from azgym.nav.board import load_navigation
+from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS
+
+NAVIGATION = L.Path(__file__).parents[2] / "leaderboard" / "navigation"
 
 
 @pytest.fixture(scope="module")
@@ -350,18 +355,20 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
     if chromium is None:
         pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run installs it)")
     page = L.Path(__file__).parents[2] / "leaderboard" / "index.html"
-    column = [c for c, _ in B.COLUMNS].index("p75 cm")
-    probe = f"""<script>
+    # a frame table sorts by its p75, a navigation table by its SPL
+    probe = """<script>
       var result = [];
-      document.querySelectorAll("table.board").forEach(function (table) {{
-        var header = table.tHead.rows[0].cells[{column}];
-        function p75() {{
+      document.querySelectorAll("table.board").forEach(function (table) {
+        var header = Array.prototype.find.call(table.tHead.rows[0].cells, function (cell) {
+          return cell.textContent === "p75 cm" || cell.textContent === "SPL"; });
+        var column = header.cellIndex;
+        function p75() {
           return Array.prototype.map.call(table.tBodies[0].rows,
-            function (row) {{ return row.cells[{column}].textContent; }}).join(";");
-        }}
+            function (row) { return row.cells[column].textContent; }).join(";");
+        }
         header.click(); var up = p75(); header.click(); var down = p75();
         result.push([table.id, up, down]);
-      }});
+      });
       document.body.setAttribute("data-result", JSON.stringify(result));
       document.body.setAttribute("data-errors", JSON.stringify(window.pageErrors));
     </script>"""
@@ -373,7 +380,11 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
     attributes = body_attributes(chromium, harness, tmp_path)
     assert json.loads(html.unescape(attributes["errors"])) == []
     tables = json.loads(html.unescape(attributes["result"]))
-    assert [table for table, _, _ in tables] == [f"board-{suite}" for suite in L.SUITES]
+    navigation = [f"board-{name}-{split}-{data['seed']}-full"
+                  for name in NAVIGATION_SUITES for split in ("dev", "test")
+                  for data in [json.loads((NAVIGATION / f"{name}-{split}.json").read_text())]]
+    assert [table for table, _, _ in tables] == [f"board-{suite}" for suite in L.SUITES
+                                                 ] + navigation
     for table, up, down in tables:
         values = [float(cell) for cell in up.split(";")]
         assert values == sorted(values), table
@@ -391,9 +402,20 @@ def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(t
         expected = builtins | trackers if suite.routes else builtins
         assert {e["name"].removesuffix(f"-{name}") for e in entries
                 if e["suite"] == name} == expected, name
-    readme, _ = B.build(root / "entries", tmp_path)
+    readme, _ = B.build(root / "entries", tmp_path, NAVIGATION)
     assert readme.read_text() == (root / "README.md").read_text(), \
         "leaderboard/README.md is stale: run python baselines/leaderboard_entries.py"
+
+
+def test_the_committed_navigation_files_are_sound_and_complete():
+    """Every navigation suite has a dev and a test file at full size, with both navigators on
+    each of the suite's default localizers."""
+    for name, suite in NAVIGATION_SUITES.items():
+        for split in ("dev", "test"):
+            data = load_navigation(NAVIGATION / f"{name}-{split}.json")
+            assert (data["split"], data["quick"]) == (split, False)
+            assert [(c["navigator"], c["localizer"]) for c in data["contenders"]] == \
+                contenders_of(NAVIGATORS, suite.localizers)
 
 
 # Tracks: a route suite's entry carries the figures of its tracks, checked like every other.
