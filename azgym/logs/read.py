@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import math
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +26,7 @@ from azgym.logs.manifest import MANIFEST, Manifest, read_manifest, read_map
 from azgym.logs.problems import LogError, Problems
 from azgym.logs.tables import Table, check_columns, find_table, floats, integers, read_table
 from azgym.sensing.labels import LABEL_NAMES
+from azgym.site.load import SCENARIO_PACKAGE
 
 TRUTH = ("x", "y", "heading")
 """The true camera pose's columns in ``frames.csv`` [m, m, rad]."""
@@ -93,14 +95,23 @@ class Log:
         return tuple(float(self.frames[key][k]) for key in TRUTH)  # type: ignore[return-value]
 
 
+def shipped_logs() -> dict[str, Path]:
+    """Name → folder of every log shipped with azgym (``envs/logs/``)."""
+    folder = Path(str(resources.files(SCENARIO_PACKAGE).joinpath("logs")))
+    return {path.name: path for path in sorted(folder.iterdir()) if (path / MANIFEST).is_file()} \
+        if folder.is_dir() else {}
+
+
 def read_log(folder: str | Path) -> Log:
-    """Read and check a log folder (docs/logs.md).
+    """Read and check a log folder (docs/logs.md), or a shipped log by name.
 
     Raises:
         LogError: Listing every problem found (up to a cap), each with its file, line and column.
         DependencyNotInstalled: A table is Parquet and pyarrow is missing.
     """
     folder = Path(folder)
+    if not folder.is_dir() and str(folder) in shipped_logs():
+        folder = shipped_logs()[str(folder)]
     if not folder.is_dir():
         raise LogError(str(folder), ["no such folder (a log is a folder with log.toml)"])
     problems = Problems(str(folder))
