@@ -163,8 +163,9 @@ def _checked(table: Table | None, name: str, problems: Problems, prefix: str = "
 def _increasing(table: Table, column: str, values: np.ndarray, problems: Problems) -> None:
     """Report each value not greater than the one before it (NaN: already reported)."""
     for k in np.flatnonzero(values[1:] <= values[:-1]) + 1:
-        table.report(problems, f"{values[k]!r} is not greater than the row before's "
-                               f"{values[k - 1]!r} (must increase strictly)", int(k), column)
+        table.report(problems, f"{values[k].item()!r} is not greater than the row before's "
+                               f"{values[k - 1].item()!r} (must increase strictly)", int(k),
+                     column)
 
 
 def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Columns | None:
@@ -175,7 +176,7 @@ def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Colu
     if not len(table):
         problems.add(table.file, "no frames: a log holds at least one")
     number, _ = integers(table, "frame", problems)
-    _increasing(table, "frame", number.astype(float), problems)
+    _increasing(table, "frame", number, problems)
     values: dict[str, object] = {"frame": number, "time": floats(table, "time", problems)}
     _increasing(table, "time", values["time"], problems)
     given = [key for key in TRUTH if table.has(key)]
@@ -227,7 +228,7 @@ def _detections(table: Table | None, frames: Columns | None, problems: Problems
     ids, _ = integers(table, "id", problems)
     azimuth = floats(table, "azimuth", problems)
     for k in np.flatnonzero(np.abs(azimuth) > math.pi):
-        table.report(problems, f"{azimuth[k]!r} is outside [-π, π] (radians, counter-clockwise "
+        table.report(problems, f"{float(azimuth[k])!r} is outside [-π, π] (radians, counter-clockwise "
                                "from the camera's x-axis; degrees?)", int(k), "azimuth")
     quality = np.column_stack([floats(table, name, problems) for name in quality_names]) \
         if quality_names else np.zeros((len(table), 0))
@@ -252,7 +253,7 @@ def _check_duplicates(table: Table, row: np.ndarray, ids: np.ndarray, azimuth: n
     for k in range(len(table)):
         key = (int(row[k]), int(ids[k]), float(azimuth[k]))
         if key in seen and not math.isnan(key[2]):
-            table.report(problems, f"the same detection (id {ids[k]}, azimuth {azimuth[k]!r}) "
+            table.report(problems, f"the same detection (id {ids[k]}, azimuth {key[2]!r}) "
                                    f"as {table.unit} {table.lines[seen[key]]}: a frame lists "
                                    "each detection once", k, "id")
         seen.setdefault(key, k)
