@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from azgym.files import prepare_folder, write_file
 from azgym.errors import InvalidInputError, unknown_name
+from azgym.files import prepare_folder, write_file
 from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, NAME
 from azgym.logs.read import QUALITY_PREFIX
 from azgym.sensing.geometry.sensor import GeometrySensor

@@ -228,8 +228,9 @@ def _detections(table: Table | None, frames: Columns | None, problems: Problems
     ids, _ = integers(table, "id", problems)
     azimuth = floats(table, "azimuth", problems)
     for k in np.flatnonzero(np.abs(azimuth) > math.pi):
-        table.report(problems, f"{float(azimuth[k])!r} is outside [-π, π] (radians, counter-clockwise "
-                               "from the camera's x-axis; degrees?)", int(k), "azimuth")
+        table.report(problems, f"{float(azimuth[k])!r} is outside [-π, π] (radians, "
+                               "counter-clockwise from the camera's x-axis; degrees?)", int(k),
+                     "azimuth")
     quality = np.column_stack([floats(table, name, problems) for name in quality_names]) \
         if quality_names else np.zeros((len(table), 0))
     label = np.full(len(table), -1, dtype=np.int64)
