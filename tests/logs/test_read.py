@@ -166,3 +166,43 @@ def test_a_parquet_table_needs_pyarrow(tmp_path):
     files["imu.parquet"] = b"PAR1"
     with pytest.raises(DependencyNotInstalled, match=r'azgym\[parquet\]'):
         read_log(write_log(tmp_path / "log", files))
+
+
+def test_parquet_tables_read_as_the_csv_ones(tmp_path, mini_log):
+    pytest.importorskip("pyarrow")
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
+
+    files = mini_files()
+    for name in ("frames", "detections", "odometry"):
+        del files[f"{name}.csv"]
+        table = pacsv.read_csv(mini_log / f"{name}.csv")
+        if name == "detections":  # ids as integers, azimuths as doubles
+            table = table.cast(pa.schema([("frame", pa.int64()), ("id", pa.int64()),
+                                          ("azimuth", pa.float64()),
+                                          ("quality_size", pa.float64())]))
+        pq.write_table(table, tmp_path / f"{name}.parquet")
+    folder = write_log(tmp_path / "log", files)
+    for name in ("frames", "detections", "odometry"):
+        (tmp_path / f"{name}.parquet").rename(folder / f"{name}.parquet")
+    from_parquet, from_csv = log_cases(read_log(folder)), log_cases(read_log(mini_log))
+    for a, b in zip(from_parquet, from_csv, strict=True):
+        assert a.pose == b.pose and a.time == b.time
+        assert np.array_equal(a.measurements.azimuth, b.measurements.azimuth)
+        assert np.array_equal(a.measurements.ids, b.measurements.ids)
+        assert np.array_equal(a.motion.odometry.time, b.motion.odometry.time)
+
+
+def test_a_bad_parquet_value_is_named_by_row(tmp_path):
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    files = mini_files()
+    del files["odometry.csv"]
+    folder = write_log(tmp_path / "log", files)
+    pq.write_table(pa.table({"time": [0.05, 0.01], "speed": [1.0, float("nan")],
+                             "steer": [0.0, 0.0]}), folder / "odometry.parquet")
+    with pytest.raises(LogError, match=r"odometry.parquet, row 2, column time: 0.01 is not "
+                                       r"greater"):
+        read_log(folder)
