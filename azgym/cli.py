@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.cli_evaluate import add_evaluate
+from azgym.cli_logs import add_logs
 from azgym.cli_studies import add_reproduce, add_study
 from azgym.cli_train import add_train
 from azgym.errors import AzgymError, InvalidInputError
@@ -51,6 +52,10 @@ def _bench(args: argparse.Namespace) -> int:
     from azgym.files import prepare_folder
     from azgym.nav.suites import NAVIGATION_SUITES
 
+    if args.data is not None:
+        from azgym.cli_logs import bench_data
+
+        return bench_data(args, _progress_printer())
     if args.suite in NAVIGATION_SUITES:
         from azgym.cli_navigation import bench_navigation
 
@@ -247,6 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_study(commands)
     add_train(commands)
     add_evaluate(commands)
+    add_logs(commands)
     _add_listings(commands)
     return parser
 
@@ -288,6 +294,8 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     bench.add_argument("--navigator", action="append", default=[], metavar="NAME",
                        help="navigation suites: who drives, 'pure-pursuit' or 'ppo' (the "
                             "shipped policy); repeatable (default: both)")
+    bench.add_argument("--data", metavar="DIR", help="score on a log of bearing data instead of "
+                                                     "a suite (docs/logs.md)")
     bench.add_argument("--quick", action="store_true", help="the suite's small version")
     bench.add_argument("--out", default="results/bench", help="output folder")
     bench.set_defaults(handler=_bench)

@@ -1,0 +1,119 @@
+"""``azgym import DIR``, ``azgym export route`` and ``azgym bench --data DIR``: logged data.
+
+``import`` checks a log folder (docs/logs.md) and prints what it holds, or every problem found
+with its file, line and column; ``export route`` writes a simulated route as a log; ``bench
+--data`` scores localizers and trackers on a log as on a suite.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from azgym.bench.runner import Progress
+    from azgym.logs.read import Log
+
+
+def add_logs(commands: argparse._SubParsersAction) -> None:
+    """Register ``azgym import`` and ``azgym export route``."""
+    check = commands.add_parser("import", help="check a log of bearing data (docs/logs.md) "
+                                               "and summarize it")
+    check.add_argument("folder", metavar="DIR", help="the log's folder (with log.toml)")
+    check.set_defaults(handler=_import)
+    export = commands.add_parser("export", help="write a simulated route as a log")
+    kinds = export.add_subparsers(dest="kind", required=True)
+    route = kinds.add_parser("route", help="drive a scenario's route and write it as a log")
+    route.add_argument("--scenario", required=True, help="a shipped scenario or a .toml file")
+    route.add_argument("--route", help="the route's name (default: the scenario's first)")
+    route.add_argument("--seed", type=int, default=0, help="the seed of every draw")
+    route.add_argument("--out", required=True, metavar="DIR", help="the log folder to write")
+    route.add_argument("--name", help="the dataset's name (default: "
+                                      "SCENARIO-ROUTE-sSEED-simulated)")
+    route.add_argument("--motion-rate", type=float, metavar="HZ",
+                       help="the odometry's and IMU's rate (default: 50)")
+    route.set_defaults(handler=_export)
+
+
+def _import(args: argparse.Namespace) -> int:
+    from azgym.logs import read_log
+
+    print(describe(read_log(args.folder)))
+    return 0
+
+
+def describe(log: Log) -> str:
+    """What a log holds, in a few lines: ``azgym import``'s summary."""
+    manifest, frames, detections = log.manifest, log.frames, log.detections
+    times, ids = frames["time"], detections["id"]
+    per_frame = np.bincount(detections["frame"], minlength=len(times))
+    known = log.beacons.index_of(ids) >= 0
+    sequences = list(dict.fromkeys(frames["sequence"]))
+    lines = [
+        f"{manifest.name}: {'SIMULATED' if manifest.simulated else 'real'} data, log format "
+        f"{manifest.format}; {manifest.description}",
+        f"  map: {log.map_name}, {len(log.beacons)} beacons",
+        f"  frames: {len(times)} over {times[-1] - times[0]:.3f} s, in {len(sequences)} "
+        f"sequence(s); {len(ids)} detections ({per_frame.mean():.2f} a frame; "
+        f"{int((per_frame == 0).sum())} frames without any)",
+        f"  ids not in the map: {int((~known & (ids >= 0)).sum())} detections; undecoded "
+        f"(negative ids): {int((ids < 0).sum())}",
+        f"  truth: {'x, y, heading on every frame' if log.has_truth else 'none (cannot score)'}"
+        f"{f' ({manifest.truth})' if manifest.truth and log.has_truth else ''}; labels: "
+        f"{'yes' if detections['labelled'] else 'no'}; quality: "
+        f"{', '.join(log.quality_names) or 'none'}",
+    ]
+    for name, columns in (("odometry", log.odometry), ("IMU", log.imu)):
+        if columns is None:
+            lines.append(f"  {name}: none")
+            continue
+        late = int((columns["time"] > times[-1]).sum())
+        lines.append(f"  {name}: {columns['time'].size} samples"
+                     f"{f', {late} after the last frame (unused)' if late else ''}")
+    lines.append(f"  sha256 of its files: {log.sha256}")
+    return "\n".join(lines)
+
+
+def _export(args: argparse.Namespace) -> int:
+    from azgym.logs import export_route
+
+    folder = export_route(args.scenario, args.route, args.seed, Path(args.out), name=args.name,
+                          motion_rate_hz=args.motion_rate)
+    print(f"wrote the log {folder} (simulated); check it with: azgym import {folder}")
+    return 0
+
+
+def bench_data(args: argparse.Namespace, progress: Progress) -> int:
+    """``azgym bench --data DIR``: every contender on a log's frames."""
+    from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+    from azgym.bench.runner import default_workers
+    from azgym.bench.table import ranked_table, tracking_table
+    from azgym.cli import _contenders
+    from azgym.errors import InvalidInputError
+    from azgym.files import prepare_folder
+    from azgym.logs import log_cases, read_log
+    from azgym.logs.bench import run_log_benchmark
+
+    if args.suite is not None or args.navigator or args.quick or args.split != "dev":
+        raise InvalidInputError("--data scores a log: it takes no --suite, --navigator, "
+                                "--quick or --split")
+    log = read_log(args.data)
+    log_cases(log)  # a log without truth stops here, before any localizer is built
+    time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
+    contenders = _contenders(args.localizer, args.with_builtins, time_limit)
+    prepare_folder(Path(args.out))
+    started = time.perf_counter()
+    result = run_log_benchmark(log, contenders, workers=args.workers or default_workers(),
+                               time_limit=time_limit, progress=progress)
+    # The figures' floor plans are a shipped scenario's: other maps get results files only.
+    written = result.write(Path(args.out), figures=log.shipped_map)
+    print()
+    print(ranked_table(result.summary))
+    if tracks := tracking_table(result.summary):
+        print(f"\n{tracks}")
+    print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
+    return 0

@@ -1,0 +1,59 @@
+"""Score localizers and trackers on a log, through the runner, as on a suite.
+
+A log is scored as a suite of one dataset, ``data:NAME``: its frames are the cases
+(:func:`~azgym.logs.cases.log_cases`), the runner scores every contender on them with the log's
+map, and the summary is the suite's (:func:`~azgym.bench.results.summarize`) with the dataset's
+identity beside it: its name, format, whether it is simulated, and the SHA-256 of its files
+(:func:`~azgym.logs.read.log_digest`), which names exactly which data the figures are of.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from azgym.bench.contenders import REFERENCE, Contender, default_contenders
+from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.results import BenchResult, summarize
+from azgym.bench.runner import Progress, run_contenders
+from azgym.bench.suites import Case, Suite
+from azgym.logs.cases import log_cases
+from azgym.logs.manifest import FORMAT_VERSION
+from azgym.logs.read import Log
+
+SPLIT = "data"
+"""The ``split`` of a log's results: a log has neither a dev nor a test split."""
+
+
+def data_suite(log: Log, cases: Sequence[Case]) -> Suite:
+    """The log as a suite named ``data:NAME`` (its cases fixed: seed and size mean nothing)."""
+    frozen = list(cases)
+    return Suite(f"data:{log.manifest.name}", FORMAT_VERSION, log.manifest.description, 0,
+                 lambda _seed, _quick: list(frozen),
+                 routes=log.odometry is not None or log.imu is not None)
+
+
+def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *,
+                      workers: int = 1, time_limit: float = DEFAULT_TIME_LIMIT,
+                      progress: Progress | None = None) -> BenchResult:
+    """Score every contender on the log's frames (``ransac`` added as the runtime reference).
+
+    Raises:
+        LogError: The log has no truth to score against.
+    """
+    cases = log_cases(log)
+    contenders = list(contenders or default_contenders())
+    if not any(c.is_reference for c in contenders):
+        contenders.append(Contender(REFERENCE, REFERENCE))
+    say = progress or (lambda _line: None)
+    say(f"data:{log.manifest.name} ({'simulated' if log.manifest.simulated else 'real'}, "
+        f"sha256 {log.sha256[:12]}…): {len(cases)} frames")
+    outcomes = run_contenders(cases, contenders, workers=workers,
+                              maps={log.map_name: log.beacons}, time_limit=time_limit,
+                              progress=progress)
+    reference = next(c.label for c in contenders if c.is_reference)
+    summary = summarize(data_suite(log, cases), SPLIT, 0, False, contenders, cases, outcomes,
+                        reference)
+    summary["dataset"] = {"name": log.manifest.name, "format": FORMAT_VERSION,
+                          "simulated": log.manifest.simulated, "sha256": log.sha256,
+                          "description": log.manifest.description}
+    return BenchResult(summary, cases, outcomes)

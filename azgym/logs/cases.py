@@ -1,0 +1,102 @@
+"""A log as the benchmark's cases: each frame's measurements, truth, motion and sequence.
+
+Each frame becomes a :class:`~azgym.bench.suites.Case` as a driven route's frame does
+(:func:`~azgym.bench.suites.base.route_cases`): its group and sequence are the frame's sequence
+(a tracker is reset at the start of each), the first frame of a sequence carries its true pose
+as the known start, and with odometry or IMU samples each frame's ``motion`` holds the samples
+timed after the previous frame and up to its own time (the first frame: every sample up to its
+time). Its cause is the worst of its detections' labels, or ``"unlabelled"`` without labels (a
+real camera's detections have none), which no cause breakdown lists.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from azgym.bench.suites import Case
+from azgym.bench.suites.base import frame_cause
+from azgym.core import Measurements
+from azgym.logs.problems import LogError
+from azgym.logs.read import Columns, Log
+from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
+
+UNLABELLED = "unlabelled"
+"""The cause of a frame whose detections carry no labels."""
+
+
+def frame_measurements(log: Log) -> list[Measurements]:
+    """Each frame's detections, in the log's order; one quality column is a 1-D quality."""
+    detections = log.detections
+    bounds = np.searchsorted(detections["frame"], np.arange(len(log.frames["frame"]) + 1))
+    quality = detections["quality"]
+    found = []
+    for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
+        rows = quality[start:stop]
+        found.append(Measurements(detections["id"][start:stop], detections["azimuth"][start:stop],
+                                  None if rows.shape[1] == 0 else
+                                  rows[:, 0] if rows.shape[1] == 1 else rows))
+    return found
+
+
+def log_cases(log: Log) -> list[Case]:
+    """The log's frames as cases, in order (module docstring).
+
+    Raises:
+        LogError: The log has no truth: its frames can be localized, not scored.
+    """
+    if not log.has_truth:
+        raise LogError(str(log.folder), [
+            "frames.csv: no truth (columns x, y, heading): a log without the true poses can be "
+            "read and localized (azgym.logs.read_log, frame_measurements), but not scored"])
+    frames = log.frames
+    times = frames["time"]
+    motions = _motions(log, times)
+    labels = log.detections["label"]
+    bounds = np.searchsorted(log.detections["frame"], np.arange(len(times) + 1))
+    cases = []
+    for k, measurements in enumerate(frame_measurements(log)):
+        sequence = frames["sequence"][k]
+        first = k == 0 or frames["sequence"][k - 1] != sequence
+        frame_labels = labels[bounds[k]:bounds[k + 1]]
+        cause = frame_cause(frame_labels) if log.detections["labelled"] else UNLABELLED
+        pose = log.pose(k)
+        cases.append(Case(log.map_name, measurements, pose, cause, sequence, sequence=sequence,
+                          motion=motions[k], initial=pose if first else None,
+                          time=float(times[k]), event=frames["event"][k]))
+    return cases
+
+
+def _motions(log: Log, times: np.ndarray) -> list[Motion | None]:
+    """Each frame's motion samples: after the previous frame's time, up to its own."""
+    if log.odometry is None and log.imu is None:
+        return [None] * len(times)
+    odometry, imu = log.odometry, log.imu
+    odometry_time = np.zeros(0) if odometry is None else odometry["time"]
+    imu_time = np.zeros(0) if imu is None else imu["time"]
+    odometry_ends = np.searchsorted(odometry_time, times, side="right")
+    imu_ends = np.searchsorted(imu_time, times, side="right")
+    motions: list[Motion | None] = []
+    for k, time in enumerate(times):
+        o = slice(odometry_ends[k - 1] if k else 0, odometry_ends[k])
+        i = slice(imu_ends[k - 1] if k else 0, imu_ends[k])
+        motions.append(Motion(float(time), _odometry(odometry, o), _imu(imu, i)))
+    return motions
+
+
+def _odometry(columns: Columns | None, rows: slice) -> OdometrySamples:
+    """Odometry samples of some rows (none without odometry)."""
+    if columns is None:
+        empty = np.zeros(0)
+        return OdometrySamples(empty, empty.copy(), empty.copy())
+    return OdometrySamples(*(columns[key][rows].copy() for key in ("time", "speed", "steer")))
+
+
+def _imu(columns: Columns | None, rows: slice) -> ImuSamples:
+    """IMU samples of some rows (heading NaN without a heading column; none without an IMU)."""
+    if columns is None:
+        return ImuSamples(np.zeros(0), np.zeros(0), np.zeros((0, 2)), np.zeros(0))
+    time = columns["time"][rows].copy()
+    heading = columns.values.get("heading")
+    return ImuSamples(time, columns["yaw_rate"][rows].copy(),
+                      np.column_stack([columns["ax"][rows], columns["ay"][rows]]),
+                      np.full(time.size, np.nan) if heading is None else heading[rows].copy())

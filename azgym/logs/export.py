@@ -1,0 +1,142 @@
+"""Write a simulated route as a log: the round trip that pins the log format to the simulator.
+
+:func:`export_route` drives a route (:func:`azgym.world.drive.simulate`) and writes every frame
+in azgym's log format with its truth, the detections' labels, and the odometry and IMU samples.
+Floats are written by ``repr``, which reads back to the same float, so that ``azgym bench
+--data`` on the log scores exactly the frames that scoring the route directly would.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import math
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from azgym.errors import InvalidInputError, unknown_name
+from azgym.files import prepare_folder, write_file
+from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, NAME
+from azgym.logs.read import QUALITY_PREFIX
+from azgym.sensing.geometry.sensor import GeometrySensor
+from azgym.sensing.labels import LABEL_NAMES
+from azgym.sensing.motion import ImuModel, OdometryModel
+from azgym.site import list_scenarios, load_scenario
+from azgym.site.elements import Route
+from azgym.site.scenario import Scenario
+from azgym.site.toml_writer import to_toml
+from azgym.world.drive import Frame, simulate
+
+
+def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Path, *,
+                 name: str | None = None, motion_rate_hz: float | None = None) -> Path:
+    """Drive ``route`` of ``scenario`` with ``seed`` and write it as a log folder ``out``.
+
+    Args:
+        scenario: A shipped scenario's name, a scenario file, or a scenario loaded from one.
+        route: The route's name (default: the scenario's first).
+        seed: The seed of every draw (as for ``simulate``).
+        out: The folder to write (created if needed).
+        name: The dataset's name (default: ``SCENARIO-ROUTE-sSEED-simulated``).
+        motion_rate_hz: The odometry's and IMU's rate [Hz] (default: their models', 50 Hz).
+
+    Returns:
+        The folder written.
+    """
+    scenario = load_scenario(scenario)
+    chosen = _route(scenario, route)
+    name = name or f"{scenario.name}-{chosen.name}-s{seed}-simulated"
+    if not NAME.fullmatch(name):
+        raise InvalidInputError(f"name: {name!r} must be letters, digits, '.', '_' or '-'")
+    odometry, imu = OdometryModel(), ImuModel()
+    if motion_rate_hz is not None:
+        odometry = dataclasses.replace(odometry, rate_hz=float(motion_rate_hz))
+        imu = dataclasses.replace(imu, rate_hz=float(motion_rate_hz))
+    sensor = GeometrySensor(scenario)
+    frames = list(simulate(scenario, chosen, seed, sensor=sensor, odometry=odometry, imu=imu))
+    prepare_folder(out)
+    manifest = {
+        "format": FORMAT_VERSION, "name": name,
+        "description": _description(scenario, chosen, seed), "simulated": True,
+        "sequence": f"{scenario.name}/{chosen.name}",
+        "camera": {"rate_hz": float(sensor.frame_rate_hz),
+                   "description": "azgym's geometry sensor (simulated)"},
+        "map": {"scenario": _map(scenario, out)},
+        "truth": {"source": "simulation: the camera's true pose"}}
+    write_file(out / MANIFEST, to_toml(manifest, "An azgym log (docs/logs.md): SIMULATED."))
+    write_file(out / "frames.csv", _csv(["frame", "time", "x", "y", "heading"],
+                                        ([f.index, f.time, *f.pose] for f in frames)))
+    write_file(out / "detections.csv", _detections(frames, sensor.quality_names))
+    write_file(out / "odometry.csv", _csv(["time", "speed", "steer"], (
+        row for f in frames for row in zip(f.odometry.time, f.odometry.speed, f.odometry.steer,
+                                           strict=True))))
+    write_file(out / "imu.csv", _imu(frames))
+    return out
+
+
+def _route(scenario: Scenario, route: str | None) -> Route:
+    """The route named (or the first), its name checked."""
+    names = {r.name: r for r in scenario.routes}
+    if route is None and scenario.routes:
+        return scenario.routes[0]
+    if route not in names:
+        raise unknown_name("route", str(route), names)
+    return names[route]
+
+
+def _description(scenario: Scenario, route: Route, seed: int) -> str:
+    return (f"SIMULATED, not a real camera's: route {route.name} of {scenario.name} driven by "
+            f"azgym (azgym export route, seed {seed})")
+
+
+def _map(scenario: Scenario, out: Path) -> str:
+    """The manifest's map: a shipped scenario by name, a user's file copied beside the log."""
+    if scenario.source is None and scenario.name in list_scenarios():
+        return scenario.name
+    if scenario.source is None:
+        raise InvalidInputError(f"scenario {scenario.name!r} is neither shipped nor read from a "
+                                "file; export needs one of them for the log's map")
+    write_file(out / "scenario.toml", scenario.source.read_bytes())
+    return "scenario.toml"
+
+
+def _cell(value: object) -> str:
+    """A cell: a float by repr (it reads back exactly), NaN as empty, anything else as text."""
+    if isinstance(value, (float, np.floating)):
+        return "" if math.isnan(value) else repr(float(value))
+    return str(value)
+
+
+def _csv(header: list[str], rows: Iterable[Iterable[object]]) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(header)
+    writer.writerows([_cell(value) for value in row] for row in rows)
+    return buffer.getvalue()
+
+
+def _detections(frames: list[Frame], quality_names: tuple[str, ...]) -> str:
+    """detections.csv: each frame's detections in the sensor's order, with their labels."""
+    header = ["frame", "id", "azimuth", *(QUALITY_PREFIX + n for n in quality_names), "label"]
+    rows = []
+    for frame in frames:
+        m = frame.measurements
+        quality = np.zeros((len(m), 0)) if m.quality is None else m.quality.reshape(len(m), -1)
+        for k in range(len(m)):
+            rows.append([frame.index, int(m.ids[k]), float(m.azimuth[k]),
+                         *(float(q) for q in quality[k]), LABEL_NAMES[int(frame.truth.label[k])]])
+    return _csv(header, rows)
+
+
+def _imu(frames: list[Frame]) -> str:
+    """imu.csv; the heading column only when some sample has one."""
+    samples = [f.imu for f in frames]
+    with_heading = any(np.isfinite(s.heading).any() for s in samples)
+    header = ["time", "yaw_rate", "ax", "ay", *(["heading"] if with_heading else [])]
+    return _csv(header, (
+        [s.time[k], s.yaw_rate[k], s.accel[k, 0], s.accel[k, 1],
+         *([s.heading[k]] if with_heading else [])]
+        for s in samples for k in range(s.time.size)))

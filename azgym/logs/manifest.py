@@ -1,0 +1,195 @@
+"""A log's manifest (``log.toml``) and its beacon map: what the log is, and where its map is.
+
+The manifest says which format the log is in (:data:`FORMAT_VERSION`), names and describes the
+dataset, says whether it is simulated, describes the camera and where the truth came from, and
+names the map: a shipped scenario, a scenario file in the log's folder, or ``beacons.csv``.
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from azgym.core import BeaconMap
+from azgym.errors import AzgymError
+from azgym.logs.problems import Problems
+from azgym.logs.tables import check_columns, floats, integers, read_table
+
+FORMAT_VERSION = 1
+"""The log format this azgym writes and reads (``format`` in ``log.toml``)."""
+MANIFEST = "log.toml"
+MAX_MANIFEST_BYTES = 64 * 1024
+"""The largest manifest read [bytes]."""
+NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+"""A dataset's name: letters, digits, '.', '_' and '-', at most 64."""
+_KEYS = {"": {"format", "name", "description", "simulated", "sequence", "camera", "map",
+              "truth"},
+         "camera": {"rate_hz", "description"}, "map": {"scenario", "beacons"},
+         "truth": {"source"}}
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """What ``log.toml`` says.
+
+    Attributes:
+        format: The log format's version.
+        name: The dataset's name.
+        description: One line about it.
+        simulated: Whether its frames were simulated (not a real camera's).
+        sequence: The name of its frames' sequence where ``frames.csv`` has no ``sequence``
+            column (default: the dataset's name).
+        camera: The camera, in words.
+        camera_rate_hz: The camera's nominal frame rate [Hz], if given.
+        scenario: The map as a shipped scenario's name or a ``.toml`` file in the folder.
+        beacons: The map as a table file name in the folder (``beacons.csv``).
+        truth: Where the true poses came from, in words.
+    """
+
+    format: int
+    name: str
+    description: str
+    simulated: bool
+    sequence: str
+    camera: str = ""
+    camera_rate_hz: float | None = None
+    scenario: str | None = None
+    beacons: str | None = None
+    truth: str = ""
+
+
+def read_manifest(folder: Path, problems: Problems) -> Manifest | None:
+    """The manifest, or None (with the problems recorded) when it is unusable."""
+    path = folder / MANIFEST
+    if not path.is_file():
+        problems.add(MANIFEST, "missing: a log folder holds log.toml (docs/logs.md)")
+        return None
+    raw = path.open("rb").read(MAX_MANIFEST_BYTES + 1)
+    if len(raw) > MAX_MANIFEST_BYTES:
+        problems.add(MANIFEST, f"too large: a manifest has at most {MAX_MANIFEST_BYTES} bytes")
+        return None
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        problems.add(MANIFEST, f"not UTF-8 text: byte 0x{raw[exc.start]:02x} at offset "
+                               f"{exc.start}")
+        return None
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:
+        problems.add(MANIFEST, f"not valid TOML: {exc}")
+        return None
+    return _fields(data, problems)
+
+
+def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
+    """The manifest's fields, each checked."""
+    if data.get("format") != FORMAT_VERSION or isinstance(data.get("format"), bool):
+        problems.add(MANIFEST, f"format: this azgym reads log format {FORMAT_VERSION}, the log "
+                               f"says {data.get('format', '(nothing)')!r}")
+        return None
+    for table, keys in _KEYS.items():
+        section = data if not table else data.get(table, {})
+        if not isinstance(section, dict):
+            problems.add(MANIFEST, f"{table}: must be a table ([{table}])")
+            continue
+        for key in sorted(set(section) - keys):
+            problems.add(MANIFEST, f"{f'{table}.' if table else ''}{key}: unknown field "
+                                   f"(known: {', '.join(sorted(keys))})")
+    camera, where, truth = (data.get(k) if isinstance(data.get(k), dict) else {}
+                            for k in ("camera", "map", "truth"))
+    name = _text(data, "name", problems, required=True)
+    if name and not NAME.fullmatch(name):
+        problems.add(MANIFEST, f"name: {name!r} must be letters, digits, '.', '_' or '-' "
+                               "(at most 64, starting with a letter or digit)")
+    simulated = data.get("simulated")
+    if not isinstance(simulated, bool):
+        problems.add(MANIFEST, "simulated: must be true or false (is the data from a real "
+                               "camera?)")
+    rate = camera.get("rate_hz")
+    if rate is not None and (isinstance(rate, bool) or not isinstance(rate, (int, float))
+                             or not 0 < rate < 1e4):
+        problems.add(MANIFEST, f"camera.rate_hz: must be a number of frames per second > 0, "
+                               f"got {rate!r}")
+    maps = [key for key in ("scenario", "beacons") if key in where]
+    if len(maps) != 1:
+        problems.add(MANIFEST, "map: give exactly one of map.scenario (a shipped scenario or a "
+                               ".toml file in the log's folder) and map.beacons (beacons.csv)")
+    return Manifest(
+        format=FORMAT_VERSION, name=name, description=_text(data, "description", problems, True),
+        simulated=bool(simulated), sequence=_text(data, "sequence", problems) or name,
+        camera=_text(camera, "description", problems, where="camera."),
+        camera_rate_hz=float(rate) if isinstance(rate, (int, float)) else None,
+        scenario=_text(where, "scenario", problems, where="map.") or None,
+        beacons=_text(where, "beacons", problems, where="map.") or None,
+        truth=_text(truth, "source", problems, where="truth."))
+
+
+def _text(data: dict[str, Any], key: str, problems: Problems, required: bool = False,
+          where: str = "") -> str:
+    """A text field ("" when absent and not required)."""
+    value = data.get(key)
+    if value is None and not required:
+        return ""
+    if not isinstance(value, str) or (required and not value.strip()):
+        problems.add(MANIFEST, f"{where}{key}: must be text"
+                               f"{', and is required' if required else ''}")
+        return ""
+    return value
+
+
+def read_map(folder: Path, manifest: Manifest, problems: Problems
+             ) -> tuple[str, BeaconMap | None, bool]:
+    """The map's name (the cases' ``scenario``), its beacons, and whether it is a shipped scenario.
+
+    A shipped scenario keeps its name (the figures draw its floor plan); any other map is
+    named after the dataset.
+    """
+    from azgym.site import list_scenarios, load_scenario
+
+    if manifest.scenario is not None:
+        shipped = manifest.scenario in list_scenarios()
+        target = manifest.scenario if shipped else _inside(folder, manifest.scenario, problems)
+        if target is None:
+            return manifest.name, None, False
+        try:
+            beacons = load_scenario(target).beacons
+        except AzgymError as exc:
+            problems.add(MANIFEST, f"map.scenario: {exc}")
+            return manifest.name, None, False
+        return (manifest.scenario if shipped else manifest.name), beacons, shipped
+    if manifest.beacons is None:
+        return manifest.name, None, False
+    path = _inside(folder, manifest.beacons, problems)
+    return manifest.name, None if path is None else _beacon_table(path, problems), False
+
+
+def _inside(folder: Path, name: str, problems: Problems) -> Path | None:
+    """A file named in the manifest: a plain file name in the log's folder."""
+    path = folder / name
+    if Path(name).name != name or not path.is_file():
+        problems.add(MANIFEST, f"map: {name!r} is not a file in the log's folder (give a file "
+                               f"name in it, or a shipped scenario's name)")
+        return None
+    return path
+
+
+def _beacon_table(path: Path, problems: Problems) -> BeaconMap | None:
+    """``beacons.csv``: id, x, y and optionally z (default 0) and width (default 0.03) [m]."""
+    before = problems.total
+    table = read_table(path, problems)
+    if table is None or not check_columns(table, ("id", "x", "y"), ("z", "width"), problems):
+        return None
+    ids, _ = integers(table, "id", problems)
+    columns = [floats(table, key, problems) if table.has(key) else np.full(len(table), fill)
+               for key, fill in (("x", 0.0), ("y", 0.0), ("z", 0.0), ("width", 0.03))]
+    if problems.total > before:
+        return None
+    try:
+        return BeaconMap(ids, np.column_stack(columns[:3]), columns[3])
+    except AzgymError as exc:
+        problems.add(table.file, str(exc))
+        return None

@@ -1,0 +1,274 @@
+"""Read a log folder, checking every file, and hold it as frames of measurements with their truth.
+
+:func:`read_log` checks the whole log before refusing it (:class:`~azgym.logs.problems.LogError`
+lists every problem with its file, line and column). The rules (docs/logs.md): frames numbered
+and timed strictly increasing (one clock for the whole log); each detection in a listed frame,
+the detections in frame order; azimuths in [−π, π]; the truth pose given in full (x, y and
+heading on every frame) or not at all; motion samples strictly increasing in time. Ids missing
+from the map are kept (a localizer ignores them), and so is the same id twice in a frame at
+different azimuths (a mirror image carries its beacon's id); the very same detection twice is
+refused as a logging bug.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from azgym.core import BeaconMap, Pose
+from azgym.logs.manifest import MANIFEST, Manifest, read_manifest, read_map
+from azgym.logs.problems import LogError, Problems
+from azgym.logs.tables import Table, check_columns, find_table, floats, integers, read_table
+from azgym.sensing.labels import LABEL_NAMES
+from azgym.site.load import SCENARIO_PACKAGE
+
+TRUTH = ("x", "y", "heading")
+"""The true camera pose's columns in ``frames.csv`` [m, m, rad]."""
+EVENTS = ("", "kidnap", "outage")
+"""What the ``event`` column of ``frames.csv`` may say (azgym.bench.suites.Case.event)."""
+QUALITY_PREFIX = "quality_"
+"""A ``detections.csv`` column named ``quality_NAME`` is a quality column."""
+_TABLES = {
+    "frames": (("frame", "time"), (*TRUTH, "sequence", "event")),
+    "detections": (("frame", "id", "azimuth"), ("label",)),
+    "odometry": (("time", "speed", "steer"), ()),
+    "imu": (("time", "yaw_rate", "ax", "ay"), ("heading",)),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Columns:
+    """A checked table's columns, by name (float64 or int64 arrays, or text lists)."""
+
+    values: dict[str, object]
+
+    def __getitem__(self, key: str) -> Any:
+        return self.values[key]
+
+
+@dataclass(frozen=True, eq=False)
+class Log:
+    """A checked log: the manifest, the map, every frame's data and the motion samples.
+
+    Attributes:
+        folder: Where it was read from.
+        manifest: Its ``log.toml``.
+        map_name: The cases' ``scenario``: a shipped scenario's name, or the dataset's.
+        beacons: The beacon map.
+        shipped_map: Whether the map is a shipped scenario (the figures draw its floor plan).
+        frames: ``frames.csv``'s columns: frame, time, x/y/heading (if given), sequence, event.
+        detections: ``detections.csv``'s: frame (its row in ``frames``), id, azimuth,
+            quality (D, Q), label (−1 without labels) and labelled (whether it has labels).
+        quality_names: The quality columns' names, without the prefix.
+        odometry: ``odometry.csv``'s columns, or None.
+        imu: ``imu.csv``'s columns (heading NaN where empty), or None.
+        sha256: The digest of the files read (:func:`log_digest`).
+    """
+
+    folder: Path
+    manifest: Manifest
+    map_name: str
+    beacons: BeaconMap
+    shipped_map: bool
+    frames: Columns
+    detections: Columns
+    quality_names: tuple[str, ...]
+    odometry: Columns | None
+    imu: Columns | None
+    sha256: str
+
+    @property
+    def has_truth(self) -> bool:
+        """Whether every frame has its true pose."""
+        return "x" in self.frames.values
+
+    def pose(self, k: int) -> Pose | None:
+        """The true pose of frame row ``k``, or None without truth."""
+        if not self.has_truth:
+            return None
+        return tuple(float(self.frames[key][k]) for key in TRUTH)  # type: ignore[return-value]
+
+
+def shipped_logs() -> dict[str, Path]:
+    """Name → folder of every log shipped with azgym (``envs/logs/``)."""
+    folder = Path(str(resources.files(SCENARIO_PACKAGE).joinpath("logs")))
+    return {path.name: path for path in sorted(folder.iterdir()) if (path / MANIFEST).is_file()} \
+        if folder.is_dir() else {}
+
+
+def read_log(folder: str | Path) -> Log:
+    """Read and check a log folder (docs/logs.md), or a shipped log by name.
+
+    Raises:
+        LogError: Listing every problem found (up to a cap), each with its file, line and column.
+        DependencyNotInstalled: A table is Parquet and pyarrow is missing.
+    """
+    folder = Path(folder)
+    if not folder.is_dir() and str(folder) in shipped_logs():
+        folder = shipped_logs()[str(folder)]
+    if not folder.is_dir():
+        raise LogError(str(folder), ["no such folder (a log is a folder with log.toml)"])
+    problems = Problems(str(folder))
+    manifest = read_manifest(folder, problems)
+    problems.check()
+    assert manifest is not None
+    map_name, beacons, shipped = read_map(folder, manifest, problems)
+    used = [folder / MANIFEST] + _map_files(folder, manifest)
+    tables: dict[str, Table | None] = {}
+    for name in _TABLES:
+        path = find_table(folder, name, problems)
+        if path is None and name in ("frames", "detections"):
+            problems.add(f"{name}.csv", "missing (docs/logs.md)")
+        tables[name] = None if path is None else read_table(path, problems)
+        used += [] if path is None else [path]
+    frames = _frames(tables["frames"], manifest, problems)
+    detections, quality = _detections(tables["detections"], frames, problems)
+    motion = {name: _samples(tables[name], problems) for name in ("odometry", "imu")}
+    problems.check()
+    assert beacons is not None and frames is not None and detections is not None
+    return Log(folder, manifest, map_name, beacons, shipped, frames, detections, quality,
+               motion["odometry"], motion["imu"], log_digest(used))
+
+
+def _map_files(folder: Path, manifest: Manifest) -> list[Path]:
+    """The map's file in the folder, if the map is one."""
+    name = manifest.beacons or manifest.scenario or ""
+    path = folder / Path(name).name
+    return [path] if name and path.is_file() else []
+
+
+def log_digest(paths: list[Path]) -> str:
+    """SHA-256 of a log's files: each file's name and bytes, in order of name.
+
+    The dataset's identity: the same name and digest are the same frames, truth and map.
+    """
+    digest = hashlib.sha256()
+    for path in sorted(paths, key=lambda p: p.name):
+        data = path.read_bytes()
+        digest.update(f"{path.name}\0{len(data)}\0".encode() + data)
+    return digest.hexdigest()
+
+
+def _checked(table: Table | None, name: str, problems: Problems, prefix: str = "") -> bool:
+    required, optional = _TABLES[name]
+    return table is not None and check_columns(table, required, optional, problems, prefix)
+
+
+def _increasing(table: Table, column: str, values: np.ndarray, problems: Problems) -> None:
+    """Report each value not greater than the one before it (NaN: already reported)."""
+    for k in np.flatnonzero(values[1:] <= values[:-1]) + 1:
+        table.report(problems, f"{values[k].item()!r} is not greater than the row before's "
+                               f"{values[k - 1].item()!r} (must increase strictly)", int(k),
+                     column)
+
+
+def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Columns | None:
+    """``frames.csv``: numbers and times increasing, the truth whole or absent."""
+    if not _checked(table, "frames", problems):
+        return None
+    assert table is not None
+    if not len(table):
+        problems.add(table.file, "no frames: a log holds at least one")
+    number, _ = integers(table, "frame", problems)
+    _increasing(table, "frame", number, problems)
+    values: dict[str, object] = {"frame": number, "time": floats(table, "time", problems)}
+    _increasing(table, "time", values["time"], problems)
+    given = [key for key in TRUTH if table.has(key)]
+    if given and len(given) < len(TRUTH):
+        missing = ", ".join(key for key in TRUTH if key not in given)
+        problems.add(table.file, f"truth partly present: columns {', '.join(given)} without "
+                                 f"{missing} (give x, y and heading, or none of them)")
+    elif given:
+        values |= {key: floats(table, key, problems) for key in TRUTH}
+    sequence = table.cells("sequence") if table.has("sequence") else \
+        [manifest.sequence] * len(table)
+    _check_sequences(table, sequence, problems)
+    event = table.cells("event") if table.has("event") else [""] * len(table)
+    for k, text in enumerate(event):
+        if text not in EVENTS:
+            table.report(problems, f"{text!r} is no event (known: kidnap, outage, or empty)", k,
+                         "event")
+    return Columns(values | {"sequence": sequence, "event": event})
+
+
+def _check_sequences(table: Table, sequence: list[str], problems: Problems) -> None:
+    """Each sequence named, and its frames together (a sequence cannot come back)."""
+    ended: set[str] = set()
+    for k, name in enumerate(sequence):
+        if not name.strip():
+            table.report(problems, "empty: each frame names its sequence", k, "sequence")
+        elif k and name != sequence[k - 1]:
+            ended.add(sequence[k - 1])
+            if name in ended:
+                table.report(problems, f"sequence {name!r} resumes after another; a sequence's "
+                                       "frames are consecutive", k, "sequence")
+
+
+def _detections(table: Table | None, frames: Columns | None, problems: Problems
+                ) -> tuple[Columns | None, tuple[str, ...]]:
+    """``detections.csv``: each in a listed frame, in frame order, azimuths in [−π, π]."""
+    if not _checked(table, "detections", problems, QUALITY_PREFIX):
+        return None, ()
+    assert table is not None
+    quality_names = tuple(c for c in table.header if c.startswith(QUALITY_PREFIX))
+    number, good = integers(table, "frame", problems)
+    row_of = {} if frames is None else {int(n): k for k, n in enumerate(frames["frame"])}
+    row = np.array([row_of.get(int(n), -1) for n in number], dtype=np.int64)
+    for k in np.flatnonzero(good & (row < 0)):
+        table.report(problems, f"frame {number[k]} is not in frames.csv", int(k), "frame")
+    for k in np.flatnonzero((row[1:] < row[:-1]) & (row[1:] >= 0)) + 1:
+        table.report(problems, f"frame {number[k]} after frame {number[k - 1]}: detections are "
+                               "listed in frame order", int(k), "frame")
+    ids, _ = integers(table, "id", problems)
+    azimuth = floats(table, "azimuth", problems)
+    for k in np.flatnonzero(np.abs(azimuth) > math.pi):
+        table.report(problems, f"{float(azimuth[k])!r} is outside [-π, π] (radians, "
+                               "counter-clockwise from the camera's x-axis; degrees?)", int(k),
+                     "azimuth")
+    quality = np.column_stack([floats(table, name, problems) for name in quality_names]) \
+        if quality_names else np.zeros((len(table), 0))
+    label = np.full(len(table), -1, dtype=np.int64)
+    if table.has("label"):
+        for k, text in enumerate(table.cells("label")):
+            if text not in LABEL_NAMES:
+                table.report(problems, f"{text!r} is no label (known: {', '.join(LABEL_NAMES)})",
+                             k, "label")
+            else:
+                label[k] = LABEL_NAMES.index(text)
+    _check_duplicates(table, row, ids, azimuth, problems)
+    names = tuple(name.removeprefix(QUALITY_PREFIX) for name in quality_names)
+    return Columns({"frame": row, "id": ids, "azimuth": azimuth, "quality": quality,
+                    "label": label, "labelled": table.has("label")}), names
+
+
+def _check_duplicates(table: Table, row: np.ndarray, ids: np.ndarray, azimuth: np.ndarray,
+                      problems: Problems) -> None:
+    """The very same detection (frame, id, azimuth) twice is a logging bug."""
+    seen: dict[tuple[int, int, float], int] = {}
+    for k in range(len(table)):
+        key = (int(row[k]), int(ids[k]), float(azimuth[k]))
+        if key in seen and not math.isnan(key[2]):
+            table.report(problems, f"the same detection (id {ids[k]}, azimuth {key[2]!r}) "
+                                   f"as {table.unit} {table.lines[seen[key]]}: a frame lists "
+                                   "each detection once", k, "id")
+        seen.setdefault(key, k)
+
+
+def _samples(table: Table | None, problems: Problems) -> Columns | None:
+    """``odometry.csv`` or ``imu.csv``: finite samples, strictly increasing in time."""
+    if table is None:
+        return None
+    name = Path(table.file).stem
+    if not _checked(table, name, problems):
+        return None
+    required, optional = _TABLES[name]
+    values = {key: floats(table, key, problems, empty_ok=key == "heading")
+              for key in required + optional if table.has(key)}
+    _increasing(table, "time", values["time"], problems)
+    return Columns(values)

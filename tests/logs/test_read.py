@@ -1,0 +1,208 @@
+"""Reading a log: the valid one as frames, and every malformed one refused with its own message."""
+
+from __future__ import annotations
+
+import importlib.util
+
+import numpy as np
+import pytest
+from logs.mini_log import mini_files, write_log
+
+from azgym.errors import DependencyNotInstalled
+from azgym.logs import LogError, log_cases, read_log
+from azgym.logs.cases import UNLABELLED, frame_measurements
+from azgym.logs.problems import MAX_PROBLEMS
+from azgym.logs.tables import MAX_TABLE_BYTES
+
+
+def test_a_valid_log_reads_as_frames_with_truth_and_motion(mini_log):
+    log = read_log(mini_log)
+    cases = log_cases(log)
+    assert [len(c.measurements) for c in cases] == [4, 6, 0]  # frame 2: no detection
+    assert cases[1].measurements.ids.tolist() == [1, 2, 3, 4, 99, -1]  # unknown ids are kept
+    assert cases[0].measurements.quality.shape == (4,)  # one quality column: 1-D
+    assert cases[1].pose == (5.1, 5.0, 0.1)
+    assert cases[0].initial == cases[0].pose and cases[1].initial is None
+    assert {c.sequence for c in cases} == {"mini"} and {c.cause for c in cases} == {UNLABELLED}
+    # Motion: the samples after the previous frame, up to the frame's time; 0.5 s is unused.
+    assert [c.motion.odometry.time.tolist() for c in cases] == [[], [0.05], [0.15]]
+    assert np.isnan(cases[1].motion.imu.heading[0]) and cases[2].motion.imu.heading[0] == 0.1
+    assert cases[2].motion.imu.accel.shape == (1, 2)
+    assert len(log.sha256) == 64
+
+
+def test_a_log_without_truth_is_read_but_not_scored(tmp_path):
+    files = mini_files()
+    files["frames.csv"] = "frame,time\n0,0.0\n1,0.1\n2,0.2\n"
+    log = read_log(write_log(tmp_path / "log", files))
+    assert [len(m) for m in frame_measurements(log)] == [4, 6, 0]
+    with pytest.raises(LogError, match="no truth .* not scored"):
+        log_cases(log)
+
+
+def _replace(name, old, new):
+    def change(files):
+        assert old in files[name], (name, old)
+        files[name] = files[name].replace(old, new, 1)
+    return change
+
+
+def _set(name, content):
+    def change(files):
+        files[name] = content
+    return change
+
+
+def _delete(name):
+    def change(files):
+        del files[name]
+    return change
+
+
+MALFORMED = {
+    "no manifest": (_delete("log.toml"), r"log.toml: missing"),
+    "unknown format": (_replace("log.toml", "format = 1", "format = 2"),
+                       r"log.toml: format: this azgym reads log format 1, the log says 2"),
+    "manifest typo": (_replace("log.toml", "simulated =", "simulatd = true\nsimulated ="),
+                      r"log.toml: simulatd: unknown field"),
+    "manifest not TOML": (_replace("log.toml", "name = ", "name = = "), r"not valid TOML"),
+    "no map": (_replace("log.toml", 'beacons = "beacons.csv"', ""), r"map: give exactly one"),
+    "no frames": (_delete("frames.csv"), r"frames.csv: missing"),
+    "bad number": (_replace("frames.csv", "1,0.1,", "1,abc,"),
+                   r"frames.csv, line 3, column time: 'abc' is not a number"),
+    "nan": (_replace("detections.csv", ",1.5\n", ",nan\n"),
+            r"detections.csv, line 2, column quality_size: 'nan' is not finite"),
+    "inf azimuth": (_replace("detections.csv", "1,99,0.5", "1,99,inf"),
+                    r"line 10, column azimuth: 'inf' is not finite"),
+    "azimuth in degrees": (_replace("detections.csv", "1,99,0.5", "1,99,45.0"),
+                           r"line 10, column azimuth: 45.0 is outside \[-π, π\]"),
+    "time not increasing": (_replace("frames.csv", "2,0.2", "2,0.05"),
+                            r"frames.csv, line 4, column time: 0.05 is not greater than"),
+    "frame numbers repeat": (_replace("frames.csv", "2,0.2", "1,0.2"),
+                             r"frames.csv, line 4, column frame: 1 is not greater"),
+    "unknown frame": (_replace("detections.csv", "1,99,", "7,99,"),
+                      r"line 10, column frame: frame 7 is not in frames.csv"),
+    "out of frame order": (_replace("detections.csv", "1,-1,", "0,-1,"),
+                           r"line 11, column frame: frame 0 after frame 1"),
+    "duplicate detection": (_replace("detections.csv", "1,-1,-0.5", "1,99,0.5"),
+                            r"line 11, column id: the same detection \(id 99, azimuth 0.5\) "
+                            r"as line 10"),
+    "id not whole": (_replace("detections.csv", "1,99,", "1,9.5,"),
+                     r"line 10, column id: '9.5' is not a whole number"),
+    "truth partly present": (_set("frames.csv", "frame,time,x,y\n0,0.0,5,5\n"),
+                             r"truth partly present: columns x, y without heading"),
+    "truth cell empty": (_replace("frames.csv", "1,0.1,5.1,5.0,0.1", "1,0.1,5.1,5.0,"),
+                         r"frames.csv, line 3, column heading: empty \(a number is required\)"),
+    "odometry out of order": (_replace("odometry.csv", "0.15,", "0.01,"),
+                              r"odometry.csv, line 3, column time: 0.01 is not greater"),
+    "imu column missing": (_replace("imu.csv", "time,yaw_rate,ax,ay", "time,yaw_rate,ax,ayy"),
+                           r"imu.csv: no column 'ay'"),
+    "unknown column": (_replace("detections.csv", "quality_size", "size"),
+                       r"detections.csv: unknown column 'size'"),
+    "short row": (_replace("frames.csv", "1,0.1,5.1,5.0,0.1", "1,0.1,5.1"),
+                  r"frames.csv, line 3: 3 cells, the header names 5 columns"),
+    "unknown label": (lambda f: f.update({"detections.csv": f["detections.csv"].replace(
+        "quality_size", "quality_size,label").replace("\n", ",direct\n").replace(
+        "label,direct", "label").replace("1,-1,-0.5,1.0,direct", "1,-1,-0.5,1.0,lamp")}),
+                      r"column label: 'lamp' is no label"),
+    "sequence resumes": (_set("frames.csv", "frame,time,x,y,heading,sequence\n0,0.0,5,5,0,a\n"
+                              "1,0.1,5,5,0,b\n2,0.2,5,5,0,a\n"),
+                         r"line 4, column sequence: sequence 'a' resumes after another"),
+    "duplicate beacon id": (_replace("beacons.csv", "2,10.0", "1,10.0"),
+                            r"beacons.csv: BeaconMap.ids must be unique; duplicated: \[1\]"),
+    "not UTF-8": (lambda f: f.update({"frames.csv": f["frames.csv"].encode() + b"3,0.3,\xe9\n"}),
+                  r"frames.csv: not UTF-8 text: byte 0xe9"),
+    "NUL byte": (lambda f: f.update({"odometry.csv": "time,speed,steer\n0.05,1\x00,0\n"}),
+                 r"odometry.csv, line 2, column speed: '1\\x00' is not a number"),
+    "both CSV and Parquet": (lambda f: f.update({"imu.parquet": b"PAR1"}),
+                             r"imu.parquet: both imu.csv and imu.parquet exist"),
+}
+
+
+@pytest.mark.parametrize("case", MALFORMED, ids=list(MALFORMED))
+def test_each_malformed_log_is_refused_naming_its_problem(tmp_path, case):
+    change, message = MALFORMED[case]
+    files = mini_files()
+    change(files)
+    with pytest.raises(LogError, match=message):
+        read_log(write_log(tmp_path / "log", files))
+
+
+def test_every_problem_is_listed_not_only_the_first(tmp_path):
+    files = mini_files()
+    files["frames.csv"] = files["frames.csv"].replace("1,0.1,", "1,abc,")
+    files["odometry.csv"] = files["odometry.csv"].replace("0.15,", "0.01,")
+    with pytest.raises(LogError, match=r"2 problems") as caught:
+        read_log(write_log(tmp_path / "log", files))
+    assert [p.split(",")[0] for p in caught.value.problems] == ["frames.csv", "odometry.csv"]
+
+
+def test_problems_are_capped(tmp_path):
+    files = mini_files()
+    files["odometry.csv"] = "time,speed,steer\n" + "x,1,0\n" * (MAX_PROBLEMS + 10)
+    with pytest.raises(LogError, match=r"(?s)60 problems.*… and 10 more") as caught:
+        read_log(write_log(tmp_path / "log", files))
+    assert len(caught.value.problems) == MAX_PROBLEMS
+
+
+def test_a_huge_table_is_refused_before_it_is_read(tmp_path):
+    folder = write_log(tmp_path / "log", mini_files())
+    with (folder / "imu.csv").open("r+b") as file:
+        file.truncate(MAX_TABLE_BYTES + 1)  # sparse: nothing is written
+    with pytest.raises(LogError, match=r"imu.csv: too large: \d+ bytes"):
+        read_log(folder)
+
+
+def test_not_a_folder(tmp_path):
+    with pytest.raises(LogError, match="no such folder"):
+        read_log(tmp_path / "nowhere")
+
+
+def test_a_parquet_table_needs_pyarrow(tmp_path):
+    if importlib.util.find_spec("pyarrow") is not None:
+        pytest.skip("pyarrow is installed")
+    files = mini_files()
+    del files["imu.csv"]
+    files["imu.parquet"] = b"PAR1"
+    with pytest.raises(DependencyNotInstalled, match=r'azgym\[parquet\]'):
+        read_log(write_log(tmp_path / "log", files))
+
+
+def test_parquet_tables_read_as_the_csv_ones(tmp_path, mini_log):
+    pytest.importorskip("pyarrow")
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
+
+    files = mini_files()
+    for name in ("frames", "detections", "odometry"):
+        del files[f"{name}.csv"]
+        table = pacsv.read_csv(mini_log / f"{name}.csv")
+        if name == "detections":  # ids as integers, azimuths as doubles
+            table = table.cast(pa.schema([("frame", pa.int64()), ("id", pa.int64()),
+                                          ("azimuth", pa.float64()),
+                                          ("quality_size", pa.float64())]))
+        pq.write_table(table, tmp_path / f"{name}.parquet")
+    folder = write_log(tmp_path / "log", files)
+    for name in ("frames", "detections", "odometry"):
+        (tmp_path / f"{name}.parquet").rename(folder / f"{name}.parquet")
+    from_parquet, from_csv = log_cases(read_log(folder)), log_cases(read_log(mini_log))
+    for a, b in zip(from_parquet, from_csv, strict=True):
+        assert a.pose == b.pose and a.time == b.time
+        assert np.array_equal(a.measurements.azimuth, b.measurements.azimuth)
+        assert np.array_equal(a.measurements.ids, b.measurements.ids)
+        assert np.array_equal(a.motion.odometry.time, b.motion.odometry.time)
+
+
+def test_a_bad_parquet_value_is_named_by_row(tmp_path):
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    files = mini_files()
+    del files["odometry.csv"]
+    folder = write_log(tmp_path / "log", files)
+    pq.write_table(pa.table({"time": [0.05, 0.01], "speed": [1.0, float("nan")],
+                             "steer": [0.0, 0.0]}), folder / "odometry.parquet")
+    with pytest.raises(LogError, match=r"odometry.parquet, row 2, column time: 0.01 is not "
+                                       r"greater"):
+        read_log(folder)
