@@ -166,3 +166,14 @@ def test_the_navigator_section_scores_the_shipped_policy_trains_and_quotes_its_c
                        section).groups()
     for localizer, success in zip(("truth", "ransac", "lsq"), quoted, strict=True):
         assert f"| {localizer} | {success} % [" in card
+
+
+def test_the_logged_data_section_scores_the_shipped_log(tmp_path, monkeypatch, capsys):
+    section = README.read_text(encoding="utf-8").split("## Logged data", 1)[1]
+    section = section.split("\n## ", 1)[0]
+    command = re.search(r"`(azgym bench --data [^`]*)`", section).group(1)
+    monkeypatch.chdir(tmp_path)
+    argv = shlex.split(command)[1:]
+    assert main([*argv, "--localizer", "ransac", "--workers", "1", "--out", "out"]) == 0
+    assert re.search(r"^ *1 ransac ", capsys.readouterr().out, re.M)
+    assert (tmp_path / "out" / "results.json").is_file()
