@@ -83,20 +83,26 @@ def summary(scenario: Scenario, prediction: Prediction,
 
 
 def agreement(sigma: FloatArray, checked: MonteCarlo) -> dict[str, Any]:
-    """How the Monte Carlo RMS compares with the prediction, over cells where both are finite."""
+    """How the Monte Carlo RMS compares with the prediction.
+
+    The ratios are over the cells where both are finite; ``rms`` holds the RMS's floor figures
+    as :func:`~azgym.layout.objective.floor_figures` computes the prediction's (a cell without a
+    fix counting as the penalty), so that the two p95 compare.
+    """
     both = np.isfinite(sigma) & np.isfinite(checked.rms)
     ratio = checked.rms[both] / sigma[both]
     std_ratio = checked.std[both] / sigma[both]
+    rms = np.where(np.isnan(checked.rms), np.inf, checked.rms)
     return {"localizer": checked.localizer, "frames": checked.frames,
+            "rms": floor_figures(rms),
             "cells_compared": int(both.sum()),
-            "rms_median_m": float(np.median(checked.rms[both])) if both.any() else None,
-            "rms_p95_m": float(np.percentile(checked.rms[both], 95)) if both.any() else None,
             "ratio_median": float(np.median(ratio)) if both.any() else None,
             "share_within_10pct": float(np.mean(np.abs(ratio - 1) <= AGREEMENT))
             if both.any() else None,
             "std_share_within_10pct": float(np.mean(np.abs(std_ratio - 1) <= AGREEMENT))
             if both.any() else None,
-            "failed_share": float(np.nanmean(checked.failed))}
+            "failed_share": float(np.mean(checked.failed[np.isfinite(sigma)]))
+            if np.isfinite(sigma).any() else None}
 
 
 def write_analysis(folder: Path, scenario: Scenario, prediction: Prediction,

@@ -63,7 +63,7 @@ def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localiz
         localizer: A localizer spec (``ransac``, ``ransac:weighted=true``, ...).
         frames: Frames per cell, >= 1.
         seed: Seed of every draw.
-        progress: Called with (cells done, cells) now and then.
+        progress: Called with (cells done, cells) after every tenth of the cells.
     """
     from azgym.localize.registry import make_localizer
 
@@ -72,7 +72,7 @@ def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localiz
     for p, (x, y) in enumerate(points):
         rng = np.random.default_rng([seed, p])
         figures[:, p] = _cell(scenario, built, float(x), float(y), seen[p], frames, rng)
-        if progress is not None and (p + 1) % 100 == 0:
+        if progress is not None and (p + 1) * 10 // len(points) > p * 10 // len(points):
             progress(p + 1, len(points))
     rms, std, bias, failed = figures
     return MonteCarlo(localizer, frames, rms, std, bias, failed)

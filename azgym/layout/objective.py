@@ -37,13 +37,20 @@ def objective(sigma: FloatArray) -> FloatArray:
     return np.percentile(values, PERCENTILE, axis=-1) + 1e-4 * values.mean(axis=-1)
 
 
-def floor_figures(sigma: FloatArray, visible: FloatArray) -> dict[str, Any]:
-    """Median, p95 and mean of the capped σ [m]; cells under three beacons; undetermined cells."""
+def floor_figures(sigma: FloatArray, visible: FloatArray | None = None) -> dict[str, Any]:
+    """Median, p95 and mean of the capped σ [m], undetermined cells, cells under three beacons.
+
+    Args:
+        sigma: σ per cell [m] (inf: no fix), shape (P,).
+        visible: Beacons seen per cell, shape (P,); the count under three is left out without.
+    """
     values = capped(sigma)
-    return {"cells": int(sigma.size),
-            "sigma_median_m": float(np.median(values)),
-            "sigma_p95_m": float(np.percentile(values, PERCENTILE)),
-            "sigma_mean_m": float(values.mean()),
-            "cells_under_3_beacons": int(np.count_nonzero(visible < 3)),
-            "cells_undetermined": int(np.count_nonzero(~np.isfinite(sigma))),
-            "cells_at_penalty": int(np.count_nonzero(sigma >= PENALTY_SIGMA))}
+    figures = {"cells": int(sigma.size),
+               "sigma_median_m": float(np.median(values)),
+               "sigma_p95_m": float(np.percentile(values, PERCENTILE)),
+               "sigma_mean_m": float(values.mean()),
+               "cells_undetermined": int(np.count_nonzero(~np.isfinite(sigma))),
+               "cells_at_penalty": int(np.count_nonzero(sigma >= PENALTY_SIGMA))}
+    if visible is not None:
+        figures["cells_under_3_beacons"] = int(np.count_nonzero(visible < 3))
+    return figures
