@@ -18,20 +18,19 @@ MAX_TOTAL_FRAMES = 10_000_000
 
 
 def _prepared(args: argparse.Namespace) -> tuple[Any, Any, Path]:
-    """The scenario, its floor grid and the output folder, each checked."""
-    from azgym.files import prepare_folder
+    """The scenario, its floor grid and the output folder (made only when it is used)."""
     from azgym.layout.floor import floor_grid
     from azgym.site import load_scenario
 
     scenario = load_scenario(args.scenario)
     floor = floor_grid(scenario, args.step)
-    out = Path(args.out or f"results/layout/{scenario.name}")
-    return scenario, floor, prepare_folder(out)
+    return scenario, floor, Path(args.out or f"results/layout/{scenario.name}")
 
 
 def _analyze(args: argparse.Namespace) -> int:
     from azgym.arguments import whole_number
     from azgym.errors import InvalidInputError
+    from azgym.files import prepare_folder
     from azgym.layout.analysis import analyze, summary, write_analysis
     from azgym.localize.registry import make_localizer
 
@@ -43,6 +42,7 @@ def _analyze(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"frames {frames} at {cells} cells makes {cells * frames} "
                                 f"Monte Carlo frames, more than {MAX_TOTAL_FRAMES}; use fewer "
                                 "frames or a larger step")
+    prepare_folder(out)  # the last check: every other argument is good
     print(f"{scenario.name}: {cells} cells of {floor.step:g} m, {len(scenario.beacons)} beacons"
           + (f"; Monte Carlo: {frames} frames per cell through {args.localizer}" if frames
              else ""), flush=True)
@@ -83,6 +83,7 @@ def _print_summary(result: dict[str, Any]) -> None:
 
 
 def _optimize(args: argparse.Namespace) -> int:
+    from azgym.files import prepare_folder
     from azgym.layout.candidates import candidate_places
     from azgym.layout.objective import floor_figures
     from azgym.layout.optimize import check_add, place_beacons
@@ -92,6 +93,7 @@ def _optimize(args: argparse.Namespace) -> int:
     candidates = candidate_places(scenario, args.spacing)
     add = check_add(args.add, candidates)
     source_data(scenario)  # a scenario without a file to add to stops here
+    prepare_folder(out)  # the last check: every other argument is good
     print(f"{scenario.name}: {int(floor.free.sum())} cells of {floor.step:g} m; placing {add} "
           f"beacons on {len(candidates)} candidate places", flush=True)
     started = time.perf_counter()

@@ -80,9 +80,7 @@ def _panel(figure: Any, axes: Any, floor: Floor, grid: FloatArray, title: str, l
 def _sigma_cmap() -> Any:
     import matplotlib
 
-    cmap = matplotlib.colormaps["viridis"].copy()
-    cmap.set_over("black")
-    return cmap
+    return matplotlib.colormaps["viridis"].with_extremes(over="black")
 
 
 def analysis_figure(scenario: Scenario, floor: Floor, sigma: FloatArray, visible: FloatArray,
