@@ -40,6 +40,9 @@ def objective(sigma: FloatArray) -> FloatArray:
 def floor_figures(sigma: FloatArray, visible: FloatArray | None = None) -> dict[str, Any]:
     """Median, p95 and mean of the capped σ [m], undetermined cells, cells under three beacons.
 
+    ``sigma_p95_with_fix_m`` is the p95 over the cells with a fix better than the penalty only
+    (None if there is none): how good the covered floor is, whatever the coverage.
+
     Args:
         sigma: σ per cell [m] (inf: no fix), shape (P,).
         visible: Beacons seen per cell, shape (P,); the count under three is left out without.
@@ -51,6 +54,9 @@ def floor_figures(sigma: FloatArray, visible: FloatArray | None = None) -> dict[
                "sigma_mean_m": float(values.mean()),
                "cells_undetermined": int(np.count_nonzero(~np.isfinite(sigma))),
                "cells_at_penalty": int(np.count_nonzero(sigma >= PENALTY_SIGMA))}
+    fixed = sigma[sigma < PENALTY_SIGMA]
+    figures["sigma_p95_with_fix_m"] = float(np.percentile(fixed, PERCENTILE)) \
+        if fixed.size else None
     if visible is not None:
         figures["cells_under_3_beacons"] = int(np.count_nonzero(visible < 3))
     return figures
