@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.cli_evaluate import add_evaluate
+from azgym.cli_layout import add_layout
 from azgym.cli_logs import add_logs
 from azgym.cli_studies import add_reproduce, add_study
 from azgym.cli_train import add_train
@@ -253,6 +254,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_train(commands)
     add_evaluate(commands)
     add_logs(commands)
+    add_layout(commands)
     _add_listings(commands)
     return parser
 

@@ -1,0 +1,122 @@
+"""``azgym layout analyze``: the predicted σ, the beacons seen and a Monte Carlo check, per cell.
+
+The prediction (:mod:`azgym.layout.information`) is computed for every cell at once; the Monte
+Carlo check (:mod:`azgym.layout.monte_carlo`) runs frames through a localizer, cell by cell. Both
+see the same beacons from each cell (:mod:`azgym.layout.visibility`).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from azgym.core import BoolArray, FloatArray
+from azgym.files import write_file
+from azgym.layout.floor import Floor
+from azgym.layout.information import contributions, position_sigma
+from azgym.layout.monte_carlo import MonteCarlo, monte_carlo
+from azgym.layout.objective import PENALTY_SIGMA, floor_figures
+from azgym.layout.visibility import visible_beacons
+from azgym.site import Scenario
+
+AGREEMENT = 0.10
+"""A cell's Monte Carlo RMS agrees with the prediction within this relative difference."""
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """The predicted accuracy of a layout over the floor's cells.
+
+    Attributes:
+        floor: The grid.
+        seen: Which beacon each cell sees, shape (P, B).
+        sigma: Predicted σ_pos = sqrt(C_xx + C_yy) [m], inf where undetermined, shape (P,).
+    """
+
+    floor: Floor
+    seen: BoolArray
+    sigma: FloatArray
+
+    @property
+    def visible(self) -> FloatArray:
+        """Beacons seen from each cell, shape (P,)."""
+        return self.seen.sum(axis=1)
+
+
+def predict(scenario: Scenario, floor: Floor) -> Prediction:
+    """The prediction for the scenario's own beacons (their mapped places)."""
+    points = floor.points
+    beacons = scenario.beacons
+    seen = visible_beacons(scenario, points, beacons.xyz, beacons.width)
+    information = contributions(points, beacons.xy, beacons.width, scenario.error_model,
+                                seen).sum(axis=1)
+    return Prediction(floor, seen, position_sigma(information, seen.sum(axis=1)))
+
+
+def analyze(scenario: Scenario, floor: Floor, localizer: str, frames: int, seed: int = 0,
+            progress: Callable[[int, int], None] | None = None
+            ) -> tuple[Prediction, MonteCarlo | None]:
+    """The prediction, and with ``frames`` > 0 the Monte Carlo check of ``localizer``."""
+    prediction = predict(scenario, floor)
+    if frames <= 0:
+        return prediction, None
+    checked = monte_carlo(scenario, floor.points, prediction.seen, localizer, frames, seed,
+                          progress)
+    return prediction, checked
+
+
+def summary(scenario: Scenario, prediction: Prediction,
+            checked: MonteCarlo | None) -> dict[str, Any]:
+    """The figures of an analysis (the command's printout and ``layout.json``)."""
+    result: dict[str, Any] = {"scenario": scenario.name, "step_m": prediction.floor.step,
+                              "beacons": len(scenario.beacons), "penalty_sigma_m": PENALTY_SIGMA,
+                              "predicted": floor_figures(prediction.sigma, prediction.visible)}
+    if checked is not None:
+        result["monte_carlo"] = agreement(prediction.sigma, checked)
+    return result
+
+
+def agreement(sigma: FloatArray, checked: MonteCarlo) -> dict[str, Any]:
+    """How the Monte Carlo RMS compares with the prediction.
+
+    The ratios are over the cells where both are finite; ``rms`` holds the RMS's floor figures
+    as :func:`~azgym.layout.objective.floor_figures` computes the prediction's (a cell without a
+    fix counting as the penalty), so that the two p95 compare.
+    """
+    both = np.isfinite(sigma) & np.isfinite(checked.rms)
+    ratio = checked.rms[both] / sigma[both]
+    std_ratio = checked.std[both] / sigma[both]
+    rms = np.where(np.isnan(checked.rms), np.inf, checked.rms)
+    return {"localizer": checked.localizer, "frames": checked.frames,
+            "rms": floor_figures(rms),
+            "cells_compared": int(both.sum()),
+            "ratio_median": float(np.median(ratio)) if both.any() else None,
+            "share_within_10pct": float(np.mean(np.abs(ratio - 1) <= AGREEMENT))
+            if both.any() else None,
+            "std_share_within_10pct": float(np.mean(np.abs(std_ratio - 1) <= AGREEMENT))
+            if both.any() else None,
+            "failed_share": float(np.mean(checked.failed[np.isfinite(sigma)]))
+            if np.isfinite(sigma).any() else None}
+
+
+def write_analysis(folder: Path, scenario: Scenario, prediction: Prediction,
+                   checked: MonteCarlo | None) -> list[Path]:
+    """``layout.json`` (the summary) and ``layout.npz`` (the grids) in ``folder``."""
+    floor = prediction.floor
+    grids: dict[str, Any] = {"xs": floor.xs, "ys": floor.ys, "free": floor.free,
+                             "sigma": floor.to_grid(prediction.sigma),
+                             "visible": floor.to_grid(prediction.visible.astype(float))}
+    if checked is not None:
+        for name in ("rms", "std", "bias", "failed"):
+            grids[f"mc_{name}"] = floor.to_grid(getattr(checked, name))
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **grids)
+    text = json.dumps(summary(scenario, prediction, checked), indent=2) + "\n"
+    return [write_file(folder / "layout.json", text),
+            write_file(folder / "layout.npz", buffer.getvalue())]

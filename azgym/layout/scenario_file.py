@@ -1,0 +1,74 @@
+"""The optimized layout as a scenario file: the source file's data, the new beacons appended.
+
+The scenario's own TOML data is read again (from its file, or from the shipped ``envs/``), the
+new beacons are appended as ``[[beacons]]`` tables with fresh ids (after the largest in use), the
+name becomes the new file's stem, and the data is written through the scenario writer
+(:mod:`azgym.site.toml_writer`) after the parser has accepted it, then loaded back and compared:
+the file written is a valid scenario holding exactly that data. Comments of the source file are
+not carried over (TOML readers drop them); the writer's header says where the file came from.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from azgym.core import FloatArray
+from azgym.errors import ScenarioError
+from azgym.files import write_file
+from azgym.site import Scenario, load_scenario, parse_scenario
+from azgym.site.load import SCENARIO_PACKAGE
+from azgym.site.toml_writer import to_toml
+
+
+def source_data(scenario: Scenario) -> dict[str, Any]:
+    """The TOML data the scenario was loaded from (its file, or the shipped one of its name).
+
+    Raises:
+        ScenarioError: The scenario was not loaded from a file (built in memory).
+    """
+    if scenario.source is not None:
+        raw = Path(scenario.source).read_bytes()
+    else:
+        shipped = resources.files(SCENARIO_PACKAGE) / f"{scenario.name}.toml"
+        if not shipped.is_file():
+            raise ScenarioError(f"{scenario.name}: not loaded from a scenario file, so there is "
+                                "no file to add beacons to")
+        raw = shipped.read_bytes()
+    return tomllib.loads(raw.decode("utf-8"))
+
+
+def with_new_beacons(scenario: Scenario, xyz: FloatArray, width: float,
+                     name: str) -> dict[str, Any]:
+    """The scenario's data with beacons at ``xyz`` (fresh ids) added and named ``name``.
+
+    Raises:
+        ScenarioError: The result is not a valid scenario (the parser's message).
+    """
+    data = source_data(scenario)
+    first = int(scenario.beacons.ids.max()) + 1
+    added = [{"id": first + k, "xyz": [float(v) for v in place], "width": float(width)}
+             for k, place in enumerate(xyz)]
+    data["name"] = name
+    data["description"] = (f"{data['description']}; {len(added)} beacons added by azgym layout "
+                           "optimize")
+    data["beacons"] = [*data["beacons"], *added]
+    parse_scenario(data, f"{name} (optimized layout)")
+    return data
+
+
+def write_scenario(path: Path, data: dict[str, Any], comment: str) -> Scenario:
+    """Write ``data`` to ``path`` (a ``.toml`` file) and load it back.
+
+    Raises:
+        ScenarioError: The file does not read back as ``data`` (a bug in the writer).
+    """
+    write_file(path, to_toml(data, comment))
+    loaded = load_scenario(path)
+    with path.open("rb") as stream:
+        if tomllib.load(stream) != data:
+            raise ScenarioError(f"{path}: the file written does not read back as the layout's "
+                                "data")
+    return loaded
