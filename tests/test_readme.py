@@ -177,3 +177,15 @@ def test_the_logged_data_section_scores_the_shipped_log(tmp_path, monkeypatch, c
     assert main([*argv, "--localizer", "ransac", "--workers", "1", "--out", "out"]) == 0
     assert re.search(r"^ *1 ransac ", capsys.readouterr().out, re.M)
     assert (tmp_path / "out" / "results.json").is_file()
+
+
+def test_the_layout_section_analyzes_and_optimizes(tmp_path, monkeypatch):
+    section = README.read_text(encoding="utf-8").split("## Plan a beacon layout", 1)[1]
+    shell = re.search(r"```bash\n(.*?)```", section.split("\n## ", 1)[0], re.S).group(1)
+    commands = [shlex.split(line.split("#")[0]) for line in shell.splitlines()]
+    assert [c[1:3] for c in commands] == [["layout", "analyze"], ["layout", "optimize"]]
+    monkeypatch.chdir(tmp_path)
+    coarse = ["--step", "2", "--no-figures"]  # the commands as written, on a coarse grid
+    assert main([*commands[0][1:], *coarse, "--frames", "5"]) == 0
+    assert main([*commands[1][1:], *coarse]) == 0
+    assert list(tmp_path.glob("results/layout/**/*.toml"))
