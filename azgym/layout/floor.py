@@ -18,7 +18,7 @@ from azgym.arguments import positive_number
 from azgym.core import BoolArray, FloatArray
 from azgym.errors import InvalidInputError, ScenarioError
 from azgym.site import Scenario
-from azgym.site.sampling import RACK_CLEARANCE, WALL_CLEARANCE
+from azgym.site.sampling import RACK_CLEARANCE, WALL_CLEARANCE, clear_of_racks
 
 DEFAULT_STEP = 0.5
 """Default spacing of the grid [m]: finer than an aisle (2.8-4 m), coarse enough to be quick."""
@@ -77,9 +77,7 @@ def floor_grid(scenario: Scenario, step: float = DEFAULT_STEP) -> Floor:
     xs = _centred(x_min + WALL_CLEARANCE, span_x, nx, step)
     ys = _centred(y_min + WALL_CLEARANCE, span_y, ny, step)
     gx, gy = np.meshgrid(xs, ys)
-    free = np.ones(gx.shape, dtype=bool)
-    for rack in scenario.racks:
-        free &= ~rack.contains(gx, gy, margin=-RACK_CLEARANCE)
+    free = clear_of_racks(scenario, gx, gy)
     if not free.any():
         raise ScenarioError(f"{scenario.name}: no cell of a {step:g} m grid is on the floor "
                             f"({WALL_CLEARANCE} m inside the walls and {RACK_CLEARANCE} m clear "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -33,8 +34,20 @@ def random_free_pose(scenario: Scenario, rng: np.random.Generator) -> Pose:
     high = (x_max - WALL_CLEARANCE, y_max - WALL_CLEARANCE)
     for _ in range(MAX_TRIES):
         x, y = rng.uniform(low, high)
-        if not any(rack.contains(x, y, margin=-RACK_CLEARANCE) for rack in scenario.racks):
+        if clear_of_racks(scenario, x, y):
             return float(x), float(y), float(rng.uniform(-math.pi, math.pi))
     raise ScenarioError(
         f"{scenario.name}: no free floor for a camera pose: {MAX_TRIES} random points in the "
         f"room were all within {WALL_CLEARANCE} m of a wall or {RACK_CLEARANCE} m of a rack")
+
+
+def clear_of_racks(scenario: Scenario, x: Any, y: Any) -> Any:
+    """Whether (x, y) is ``RACK_CLEARANCE`` clear of every rack: where a camera can stand.
+
+    The one rule for random poses and the layout planner's floor: a bool for one point, an array
+    for arrays of points.
+    """
+    clear = np.ones(np.shape(x), dtype=bool)
+    for rack in scenario.racks:
+        clear &= np.logical_not(rack.contains(x, y, margin=-RACK_CLEARANCE))
+    return clear if clear.ndim else bool(clear)
