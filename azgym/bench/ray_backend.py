@@ -140,6 +140,8 @@ def ray_session(address: str | None, workers: int) -> Iterator[int]:
     require("ray", "ray")
     import ray
 
+    if address not in (None, "auto", "local"):
+        _probe(address)
     started = not ray.is_initialized()
     if started:
         _connect(ray, address, workers)
@@ -158,8 +160,6 @@ def _connect(ray: Any, address: str | None, workers: int) -> None:
         ray.init(num_cpus=workers or default_workers(), include_dashboard=False,
                  logging_level=logging.ERROR)
         return
-    if address not in ("auto", "local"):
-        _probe(address)
     try:
         ray.init(address=address, logging_level=logging.ERROR)
     except Exception as exc:  # noqa: BLE001 - Ray's many errors become one of ours

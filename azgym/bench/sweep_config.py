@@ -183,7 +183,7 @@ def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict
             time_limit: float) -> list[GridPoint]:
     """Each grid point as a contender, built once (a bad name or value is named here)."""
     from azgym.bench.contenders import contender
-    from azgym.localize.registry import build, is_builtin, spec_label
+    from azgym.localize.registry import build, spec_label
 
     points: list[GridPoint] = []
     seen: dict[str, str] = {}
@@ -194,7 +194,7 @@ def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict
             try:
                 base = contender(table["name"])
                 candidate = contender(spec_label(base.spec, {**base.params, **params}))
-                if is_builtin(candidate.spec):
+                if ":" not in candidate.spec:  # a name: azgym's, or an installed package's
                     build(candidate.spec, **candidate.params)
                 else:  # a plug-in is built where it will run, in a worker, within the limit
                     check_buildable(candidate, time_limit)

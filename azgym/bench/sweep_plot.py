@@ -13,6 +13,7 @@ from azgym.bench.plots import _save
 
 if TYPE_CHECKING:
     from azgym.bench.sweep import SweepResult
+    from azgym.bench.sweep_config import GridPoint
 
 LABELS = {"p75_cm": "p75 position error [cm]", "median_cm": "median position error [cm]",
           "mean_cm": "mean position error [cm]", "p95_cm": "p95 position error [cm]",
@@ -51,9 +52,18 @@ def write_sweep_figure(result: SweepResult, path: Path) -> Path:
                 axes.errorbar(x, y, yerr=[low, high], fmt="o", capsize=3, label=f"seed {seed}")
             else:
                 axes.plot(x, y, "o", label=f"seed {seed}")
-        axes.set_xticks(range(len(labels)), labels, rotation=60, ha="right", fontsize=7)
+        axes.set_xticks(range(len(labels)), [_tick(p) for p in config.points], rotation=60,
+                        ha="right", fontsize=7)
+        if config.metric.endswith("_cm"):
+            axes.set_yscale("log")
         axes.set_title(suite, fontsize=10)
         axes.grid(axis="y", alpha=0.3)
     panels[0][0].set_ylabel(LABELS[config.metric])
     panels[0][-1].legend(fontsize=7)
     return _save(figure, path, plt)
+
+
+def _tick(point: GridPoint) -> str:
+    """A grid point as the axis names it: the localizer and the values the grid varies."""
+    varied = ",".join(f"{key}={value}" for key, value in point.varied.items())
+    return f"{point.target} {varied}".strip()
