@@ -35,6 +35,7 @@ from azgym.cli_evaluate import add_evaluate
 from azgym.cli_layout import add_layout
 from azgym.cli_logs import add_logs
 from azgym.cli_studies import add_reproduce, add_study
+from azgym.cli_sweep import add_sweep
 from azgym.cli_train import add_train
 from azgym.errors import AzgymError, InvalidInputError
 
@@ -72,11 +73,12 @@ def _bench(args: argparse.Namespace) -> int:
     if args.time_limit is None:
         args.time_limit = DEFAULT_TIME_LIMIT
     contenders = _contenders(args.localizer, args.with_builtins, args.time_limit)
-    workers = args.workers or default_workers()
+    workers = args.workers or (0 if args.backend == "ray" else default_workers())
     prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
     started = time.perf_counter()
     result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
-                           time_limit=args.time_limit, progress=_progress_printer())
+                           time_limit=args.time_limit, progress=_progress_printer(),
+                           backend=args.backend, address=args.address)
     written = result.write(Path(args.out))
     print()
     print(ranked_table(result.summary))
@@ -255,6 +257,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_evaluate(commands)
     add_logs(commands)
     add_layout(commands)
+    add_sweep(commands)
     _add_listings(commands)
     return parser
 
@@ -293,6 +296,12 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
                        help="time a localizer may take on one frame (or to be built); a frame "
                             f"over it is scored unavailable (default: {DEFAULT_TIME_LIMIT:g}; "
                             "frame suites only)")
+    bench.add_argument("--backend", choices=("local", "ray"), default="local",
+                       help="local: worker processes here; ray: Ray actors (pip install "
+                            "\"azgym[ray]\"), on --address or a local instance (frame suites)")
+    bench.add_argument("--address", metavar="ADDR",
+                       help="--backend ray: a Ray cluster's head, HOST:PORT (see `ray start "
+                            "--head`), ray://HOST:PORT or auto (default: a local instance)")
     bench.add_argument("--navigator", action="append", default=[], metavar="NAME",
                        help="navigation suites: who drives, 'pure-pursuit' or 'ppo' (the "
                             "shipped policy); repeatable (default: both)")

@@ -10,11 +10,13 @@ and reported beside ``ransac``'s median from the same run, so runs on different 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import secrets
 import time
 from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -26,13 +28,17 @@ from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import Case, Suite
 from azgym.bench.wire import pack, pack_map
 from azgym.core import BeaconMap, pose_error
-from azgym.errors import InvalidInputError
+from azgym.errors import InvalidInputError, unknown_name
 from azgym.jit import localizers_compiled
 from azgym.site import load_scenario
 
 BATCHES_PER_WORKER = 4
 """Frames go to the workers in this many batches per worker: few round trips, and a slow batch
 does not leave the other workers idle for long."""
+
+BACKENDS = ("local", "ray")
+"""Where the contenders run: worker processes forked here, or Ray actors on a cluster
+(:mod:`azgym.bench.ray_backend`, imported only when asked for)."""
 
 Progress = Callable[[str], None]
 """Called with text as a run advances; text starting with a carriage return redraws the line."""
@@ -51,6 +57,8 @@ def run_contenders(
     maps: Mapping[str, BeaconMap] | None = None,
     time_limit: float = DEFAULT_TIME_LIMIT,
     progress: Progress | None = None,
+    backend: str = "local",
+    address: str | None = None,
 ) -> dict[str, Outcome]:
     """Score every contender on every case; the outcomes are in the order of ``cases``.
 
@@ -64,10 +72,12 @@ def run_contenders(
         maps: Beacon map of each scenario named by the cases (default: the shipped scenarios').
         time_limit: Seconds a localizer may take on one frame (or to be built).
         progress: Called with text as the run advances.
+        backend: "local" (worker processes) or "ray" (actors on the Ray cluster at
+            ``address``, else on a local instance; there ``workers=0`` means one per CPU).
+        address: The Ray cluster's address (``backend="ray"`` only).
     """
-    workers = whole_number("workers", workers, minimum=1)
+    Run, session = _backend(backend, address, workers)
     time_limit = positive_number("time_limit", time_limit, "s")
-    start_fork_server()
     cases = list(cases)
     say = progress or (lambda _line: None)
     if maps is None:
@@ -75,16 +85,33 @@ def run_contenders(
     frames = [pack(case.scenario, case.measurements, case.sequence, case.initial, case.motion)
               for case in cases]
     sent_maps = {name: pack_map(beacons) for name, beacons in maps.items()}
-    batches = batch_bounds(cases, max(1, math.ceil(len(cases) / (BATCHES_PER_WORKER * workers))))
     outcomes: dict[str, Outcome] = {}
-    for contender in contenders:
-        begun = time.perf_counter()
-        run = IsolatedRun(contender.spec, contender.params, frames, sent_maps, workers=workers,
-                          time_limit=time_limit, batches=batches)
-        answers = run.run(_progress_bar(contender.label, len(cases), say))
-        outcomes[contender.label] = _score(answers, cases)
-        say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
+    with session as workers:
+        size = max(1, math.ceil(len(cases) / (BATCHES_PER_WORKER * workers)))
+        batches = batch_bounds(cases, size)
+        for contender in contenders:
+            begun = time.perf_counter()
+            run = Run(contender.spec, contender.params, frames, sent_maps, workers=workers,
+                      time_limit=time_limit, batches=batches)
+            answers = run.run(_progress_bar(contender.label, len(cases), say))
+            outcomes[contender.label] = _score(answers, cases)
+            say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
     return outcomes
+
+
+def _backend(backend: str, address: str | None, workers: int) -> tuple[Any, Any]:
+    """The run class of a backend, and the session it runs in (which yields the workers)."""
+    if backend not in BACKENDS:
+        raise unknown_name("backend", backend, BACKENDS)
+    if backend == "local":
+        if address is not None:
+            raise InvalidInputError("address is for backend 'ray' (a Ray cluster's address)")
+        workers = whole_number("workers", workers, minimum=1)
+        start_fork_server()
+        return IsolatedRun, contextlib.nullcontext(workers)
+    from azgym.bench.ray_backend import RayRun, ray_session
+
+    return RayRun, ray_session(address, whole_number("workers", workers, minimum=0))
 
 
 def batch_bounds(cases: Sequence[Case], size: int) -> list[tuple[int, int]]:
@@ -140,6 +167,8 @@ def run_benchmark(
     seed: int | None = None,
     time_limit: float = DEFAULT_TIME_LIMIT,
     progress: Progress | None = None,
+    backend: str = "local",
+    address: str | None = None,
 ) -> BenchResult:
     """Score every contender on the suite's cases.
 
@@ -153,6 +182,8 @@ def run_benchmark(
         seed: Draw the cases from this seed instead (to rerun a reported test split).
         time_limit: Seconds a localizer may take on one frame (or to be built).
         progress: Called with text as the run advances.
+        backend: "local" or "ray" (:func:`run_contenders`).
+        address: The Ray cluster's address (``backend="ray"`` only).
     """
     if split not in ("dev", "test"):
         raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
@@ -166,7 +197,8 @@ def run_benchmark(
     if first_run:
         say("compiling azgym's kernels: the first run on an installation takes about 10 s "
             "longer; they are cached for the next runs")
-    start_fork_server()  # its warm-up overlaps the drawing of the cases
+    if backend == "local":
+        start_fork_server()  # its warm-up overlaps the drawing of the cases
     started = time.perf_counter()
     cases = suite.build(seed, quick)
     say(f"{suite.name} v{suite.version} ({split}, seed {seed}): {len(cases)} frames drawn in "
@@ -175,7 +207,7 @@ def run_benchmark(
         # The fork server compiles ransac meanwhile (contenders.warm_up).
         warm_up(c for c in default_contenders() if c.spec != REFERENCE)
     outcomes = run_contenders(cases, contenders, workers=workers, time_limit=time_limit,
-                              progress=progress)
+                              progress=progress, backend=backend, address=address)
     reference = next(c.label for c in contenders if c.is_reference)
     summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference)
     return BenchResult(summary, cases, outcomes)

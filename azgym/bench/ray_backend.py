@@ -1,0 +1,367 @@
+"""The runner's Ray backend: each contender's batches of frames run as Ray actors.
+
+The same run as :mod:`azgym.bench.isolation`, with Ray actors in place of forked worker
+processes. Each contender gets up to ``workers`` actors at a time, each a process of its own on
+some node, killed when the contender is done (never reused by another contender). An actor gets
+the packed beacon maps once and then batches of packed frames (:mod:`azgym.bench.wire`): the
+measurements only; the true poses never leave the runner, which scores the answers. An actor
+streams one answer per frame back as soon as it has it (a Ray generator), so the runner times
+each call from its own clock:
+
+- a localizer that raises costs its frame, scored with the exception, as in a worker process
+  (each frame is answered by the workers' own rule, :func:`azgym.bench.worker._answer_batch`);
+- a frame that takes longer than the time limit costs that frame: the actor is killed
+  (``ray.kill``), a fresh one takes over the rest of the batch; so does an actor that dies
+  (a segfault, ``os._exit``, a node lost), and after ``GIVE_UP_AFTER`` losses in a row the
+  contender's other frames are not run.
+
+What differs from the process pool is in docs/scaling.md: an actor starts as a fresh
+interpreter (about a second, not milliseconds); a plug-in runs inside a Ray worker, with the
+cluster's API within reach; runtimes are measured on whichever node ran the frame.
+
+Ray is imported here only, and this module only when ``backend="ray"`` is asked for.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import socket
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+from azgym.bench import worker
+from azgym.bench.isolation import GIVE_UP_AFTER, STARTUP_LIMIT, Answers, Report
+from azgym.bench.wire import MapData, Packed, unpack, unpack_map
+from azgym.errors import AzgymError, InvalidInputError, require
+
+CONNECT_TIMEOUT = 5.0
+"""Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
+retrying for minutes)."""
+
+
+class RayWorker:
+    """The contender's side on a Ray node: one localizer (or tracker) in an actor of its own."""
+
+    def __init__(self) -> None:
+        self.tracker: Any = None
+        self.maps: dict[str, Any] = {}
+        self.warm = True
+        self.sequence: str | None = None
+
+    def build(self, spec: str, params: dict[str, Any], maps: Mapping[str, MapData],
+              folder: str) -> Iterator[tuple[Any, ...]]:
+        """Build the contender, saying how far it got.
+
+        Yields ("building",), ("warming",) for a built-in, then ("ready",) or ("unbuildable",
+        why). Relative paths mean what they meant in ``folder``, the runner's working folder,
+        when this node has it.
+        """
+        yield ("building",)
+        if os.path.isdir(folder):
+            os.chdir(folder)
+        self.maps = {name: unpack_map(data) for name, data in maps.items()}
+        from azgym.localize.registry import is_builtin
+        from azgym.track.base import FrameByFrame, make_tracker
+
+        try:
+            self.tracker = make_tracker(spec, **params)
+        except BaseException as exc:  # noqa: BLE001 - reported, the runner scores every frame
+            yield ("unbuildable", str(exc) if isinstance(exc, AzgymError)
+                   else worker._describe(exc))
+            return
+        self.warm = not isinstance(self.tracker, FrameByFrame)
+        if not self.warm and is_builtin(spec):  # azgym's own code compiles as long as it takes
+            yield ("warming",)
+            with contextlib.suppress(BaseException):
+                worker.warm_up_localizer(self.tracker.localizer)
+            self.warm = True
+        yield ("ready",)
+
+    def answer(self, batch: Sequence[Packed]) -> Iterator[tuple[Any, ...]]:
+        """Answer a batch, streaming one answer per frame.
+
+        Yields ("warmed",) after a plug-in's untimed first call, then ("answer", [x, y,
+        heading, state, micros], error) for each frame in order.
+        """
+        frames = [unpack(packed) for packed in batch]
+        if not self.warm and frames:
+            worker._call_untimed(self.tracker.localizer, frames[0].measurements,
+                                 self.maps[frames[0].scenario])
+            self.warm = True
+            yield ("warmed",)
+        for frame in frames:
+            answer = [np.nan] * worker.ANSWER_SIZE
+            said = _Said()
+            self.sequence = worker._answer_batch(said, [worker.IDLE, 0], answer, self.tracker,
+                                                 [frame], self.maps, self.sequence)
+            yield ("answer", answer, said.error)
+
+
+@dataclass
+class _Said:
+    """Stands in for the worker's pipe: keeps the error a frame raised."""
+
+    error: str = ""
+
+    def send(self, message: tuple[Any, ...]) -> None:
+        self.error = message[2]
+
+
+@cache
+def _actor_class() -> Any:
+    """:class:`RayWorker` as a Ray actor: one CPU, never restarted or retried.
+
+    A lost frame is the runner's to score, not Ray's to run again.
+    """
+    import ray
+
+    return ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RayWorker)
+
+
+@contextlib.contextmanager
+def ray_session(address: str | None, workers: int) -> Iterator[int]:
+    """Ray, ready to run: the cluster at ``address``, else a local instance.
+
+    A local instance has ``workers`` CPUs (one per core when 0). Yields how many actors run at
+    once (``workers``, else the cluster's CPUs). Ray already initialized is used as it is; an
+    instance started here is shut down.
+
+    Raises:
+        DependencyNotInstalled: Ray is not installed.
+        InvalidInputError: Nothing answers at ``address``, or it is not a Ray cluster.
+    """
+    require("ray", "ray")
+    import ray
+
+    if address not in (None, "auto", "local"):
+        _probe(address)
+    started = not ray.is_initialized()
+    if started:
+        _connect(ray, address, workers)
+    try:
+        yield workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def _connect(ray: Any, address: str | None, workers: int) -> None:
+    """``ray.init`` on the cluster at ``address`` (checked to answer first), else locally."""
+    if address is None:
+        from azgym.bench.runner import default_workers
+
+        ray.init(num_cpus=workers or default_workers(), include_dashboard=False,
+                 logging_level=logging.ERROR)
+        return
+    try:
+        ray.init(address=address, logging_level=logging.ERROR)
+    except Exception as exc:  # noqa: BLE001 - Ray's many errors become one of ours
+        raise InvalidInputError(f"--address {address}: cannot join a Ray cluster there "
+                                f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
+
+
+def _probe(address: str) -> None:
+    """Refuse, within ``CONNECT_TIMEOUT``, an address where nothing is listening."""
+    bare = address.removeprefix("ray://")
+    host, _, port = bare.rpartition(":")
+    if not host or not port.isdigit():
+        raise InvalidInputError(f"--address {address}: must be HOST:PORT (a head node's, e.g. "
+                                "127.0.0.1:6379), ray://HOST:PORT or auto")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT).close()
+    except OSError as exc:
+        raise InvalidInputError(
+            f"--address {address}: no Ray cluster answers there within {CONNECT_TIMEOUT:g} s "
+            f"({exc.strerror or exc}); start one with `ray start --head` and pass the address "
+            "it prints") from None
+
+
+@dataclass
+class _Slot:
+    """One actor, what it is streaming back, and by when its next item is due."""
+
+    actor: Any
+    stream: Any
+    deadline: float
+    phase: str = "starting"
+    batch: tuple[int, int] | None = None
+    done: int = 0
+
+
+class RayRun:
+    """One contender on a run's frames, in up to ``workers`` Ray actors at a time.
+
+    The same arguments and answers as :class:`~azgym.bench.isolation.IsolatedRun`.
+    """
+
+    def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[Packed],
+                 maps: Mapping[str, MapData], *, workers: int, time_limit: float,
+                 batches: Sequence[tuple[int, int]]) -> None:
+        import ray
+
+        self.ray = ray
+        self.spec, self.params, self.frames = spec, params, frames
+        self.maps = ray.put(dict(maps))
+        self.workers, self.time_limit = workers, time_limit
+        self.answers = Answers.unanswered(len(frames))
+        self.queue = list(batches)
+        self.slots: list[_Slot] = []
+        self.lost_in_a_row = 0
+        self.finished = 0
+        self.unbuildable = ""
+
+    def run(self, report: Report) -> Answers:
+        """Run every frame; ``report`` hears how many are finished as they finish."""
+        try:
+            while self.queue or any(s.stream is not None for s in self.slots):
+                self._fill()
+                self._wait()
+                report(self.finished)
+        finally:
+            for slot in self.slots:
+                self.ray.kill(slot.actor, no_restart=True)
+        return self.answers
+
+    def _fill(self) -> None:
+        """Give each idle actor a batch, starting actors up to the limit."""
+        while self.queue and not self.unbuildable:
+            idle = [s for s in self.slots if s.phase == "idle"]
+            if idle:
+                self._send(idle[0], self.queue.pop(0))
+            elif len(self.slots) < self.workers:
+                actor = _actor_class().remote()
+                stream = actor.build.remote(self.spec, self.params, self.maps, os.getcwd())
+                self.slots.append(_Slot(actor, stream, time.monotonic() + STARTUP_LIMIT,
+                                        batch=self.queue.pop(0)))
+            else:
+                return
+        if self.unbuildable:
+            for start, stop in self.queue:
+                self._skip(start, stop, self.unbuildable)
+            self.queue.clear()
+
+    def _send(self, slot: _Slot, batch: tuple[int, int]) -> None:
+        slot.batch, slot.done, slot.phase = batch, 0, "answering"
+        slot.stream = slot.actor.answer.remote(list(self.frames[batch[0]:batch[1]]))
+        slot.deadline = time.monotonic() + self.time_limit
+
+    def _wait(self) -> None:
+        """Wait for an item, a death or a deadline, and deal with whatever happened."""
+        busy = [s for s in self.slots if s.stream is not None]
+        if not busy:
+            return
+        soonest = min(s.deadline for s in busy) - time.monotonic()
+        self.ray.wait([s.stream for s in busy], num_returns=1,
+                      timeout=min(max(soonest, 0.001), 0.5))
+        for slot in busy:
+            self._drain(slot)
+            if slot.stream is not None and time.monotonic() > slot.deadline:
+                self._lose(slot, self._overrun_reason(slot))
+
+    def _drain(self, slot: _Slot) -> None:
+        """Read every item the actor has streamed back so far."""
+        while slot.stream is not None and self.ray.wait([slot.stream], timeout=0)[0]:
+            try:
+                item = self.ray.get(next(slot.stream))
+            except StopIteration:
+                self._end_of_stream(slot)
+                return
+            except self.ray.exceptions.RayError as exc:
+                self._lose(slot, _death(exc))
+                return
+            self._take(slot, item)
+
+    def _take(self, slot: _Slot, item: tuple[Any, ...]) -> None:
+        """One item from an actor: a phase of its build, or a frame's answer."""
+        now = time.monotonic()
+        if item[0] == "unbuildable":
+            self.unbuildable = f"cannot build {self.spec!r}: {item[1]}"
+            self._retire(slot, self.unbuildable)
+            return
+        if item[0] in ("building", "warming"):
+            slot.phase = item[0]
+            limit = self.time_limit if item[0] == "building" else STARTUP_LIMIT
+            slot.deadline = now + limit
+        elif item[0] == "ready":
+            assert slot.batch is not None
+            self._send(slot, slot.batch)
+        elif item[0] == "warmed":
+            slot.deadline = now + self.time_limit
+        elif item[0] == "answer":
+            assert slot.batch is not None
+            self._record(slot.batch[0] + slot.done, item[1], item[2])
+            slot.done += 1
+            slot.deadline = now + self.time_limit
+
+    def _end_of_stream(self, slot: _Slot) -> None:
+        """A batch was answered: the actor is idle."""
+        if slot.phase == "answering":
+            self.lost_in_a_row = 0
+        slot.batch, slot.stream, slot.phase = None, None, "idle"
+
+    def _record(self, k: int, answer: list[float], error: str) -> None:
+        state = answer[worker.ANSWER_STATE]
+        if state == worker.POSED:
+            self.answers.posed[k] = True
+            self.answers.pose[k] = answer[worker.ANSWER_X:worker.ANSWER_HEADING + 1]
+        if state in (worker.POSED, worker.NO_POSE):
+            self.answers.micros[k] = answer[worker.ANSWER_MICROS]
+        self.answers.errors[k] = error
+        self.finished += 1
+
+    def _overrun_reason(self, slot: _Slot) -> str:
+        if slot.phase == "building":
+            return f"building the localizer took longer than the {self.time_limit:g} s limit"
+        if slot.phase == "warming":
+            return f"compiling the built-in took longer than {STARTUP_LIMIT:g} s"
+        if slot.phase == "starting":
+            return f"the Ray actor did not start within {STARTUP_LIMIT:g} s"
+        return f"timed out: took longer than the {self.time_limit:g} s limit"
+
+    def _lose(self, slot: _Slot, reason: str) -> None:
+        """The actor overran or died: score its current frame, requeue the rest, replace it."""
+        if slot.phase != "answering":
+            if slot.phase == "building":
+                self.unbuildable = reason
+            self._retire(slot, reason)
+            return
+        assert slot.batch is not None
+        self._retire(slot, "")
+        start, stop = slot.batch[0] + slot.done, slot.batch[1]
+        self.answers.errors[start] = reason
+        self.finished += 1
+        self.lost_in_a_row += 1
+        if self.lost_in_a_row >= GIVE_UP_AFTER:
+            note = f"not run: {GIVE_UP_AFTER} frames in a row were lost (last: {reason})"
+            for first, last in [(start + 1, stop), *self.queue]:
+                self._skip(first, last, note)
+            self.queue.clear()
+        elif stop > start + 1:
+            self.queue.insert(0, (start + 1, stop))
+
+    def _retire(self, slot: _Slot, reason: str) -> None:
+        """Kill the actor; with a reason, its batch will not run and is scored unavailable."""
+        self.ray.kill(slot.actor, no_restart=True)
+        self.slots.remove(slot)
+        slot.stream = None
+        if reason and slot.batch is not None:
+            self._skip(slot.batch[0] + slot.done, slot.batch[1], reason)
+
+    def _skip(self, start: int, stop: int, reason: str) -> None:
+        """Score frames that will not run as unavailable, with the reason."""
+        for k in range(start, stop):
+            self.answers.errors[k] = self.answers.errors[k] or reason
+        self.finished += max(stop - start, 0)
+
+
+def _death(exc: Exception) -> str:
+    """Why an actor is gone, in words (Ray's last line says how it ended)."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    return f"the localizer's process died ({lines[-1] if lines else type(exc).__name__})"

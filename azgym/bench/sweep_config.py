@@ -1,0 +1,208 @@
+"""A sweep's configuration: localizers x hyperparameter grids x suites x seeds, from a TOML file.
+
+Every field is checked before anything runs, and a problem is named by the file and the field
+(``sweep.toml: localizer[0].grid.max_iter: ...``). The format (docs/scaling.md)::
+
+    suites = ["warehouse-static"]   # frame suites, at least one
+    seeds = [7, 8]                  # draws of each suite (default: each suite's dev seed)
+    quick = true                    # the suites' small versions (default: false)
+    time_limit = 10.0               # seconds a localizer may take on one frame
+    metric = "p75_cm"               # the figure's headline metric (default: p75_cm)
+
+    [[localizer]]
+    name = "ransac"                 # a name, preset or plug-in spec, as --localizer takes it
+    params = { weighted = true }    # fixed hyperparameters (optional)
+    grid = { max_iter = [5, 20] }   # each combination of these values is one grid point
+
+A localizer without ``grid`` is one point. Grid points are numbered in the file's order: each
+localizer in turn, its grid's combinations with the last key varying fastest.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from azgym.bench.contenders import Contender, check_buildable
+from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.errors import AzgymError, InvalidInputError, unknown_name
+
+MAX_RUNS = 1000
+"""At most this many grid points x suites x seeds in one sweep: a grid larger than that is
+more likely a typo (a list of 100 values) than a plan, and would take hours."""
+METRICS = ("p75_cm", "median_cm", "mean_cm", "p95_cm", "rmse_cm", "availability",
+           "failure_rate")
+"""The headline metrics a sweep's figure can show (from each run's overall figures)."""
+KEYS = {"suites", "seeds", "quick", "time_limit", "metric", "localizer"}
+LOCALIZER_KEYS = {"name", "params", "grid"}
+
+
+@dataclass(frozen=True)
+class GridPoint:
+    """One localizer with one combination of hyperparameters.
+
+    Attributes:
+        contender: What the runner runs (its label is the canonical spec).
+        target: The localizer's name or spec, without hyperparameters.
+        varied: The grid's hyperparameters at this point (the fixed ones are in the label).
+    """
+
+    contender: Contender
+    target: str
+    varied: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """A checked sweep: who runs, on what, and how it is shown."""
+
+    points: list[GridPoint]
+    suites: list[str]
+    seeds: list[int] | None
+    quick: bool
+    time_limit: float
+    metric: str
+
+    @property
+    def runs(self) -> int:
+        """How many (grid point, suite, seed) runs the sweep holds."""
+        return len(self.points) * len(self.suites) * len(self.seeds or [0])
+
+
+class _Fields:
+    """Named checks of a config's fields: each error says the file and the field."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def error(self, field: str, problem: str) -> InvalidInputError:
+        return InvalidInputError(f"{self.source}: {field}: {problem}")
+
+    def keys(self, field: str, table: dict[str, Any], known: set[str]) -> None:
+        for key in table:
+            if key not in known:
+                raise self.error(field or key, str(unknown_name("key", key, known)))
+
+    def names(self, field: str, value: Any, known: list[str]) -> list[str]:
+        items = self.nonempty_list(field, value)
+        for k, item in enumerate(items):
+            if item not in known:
+                raise self.error(f"{field}[{k}]", str(unknown_name(field[:-1], str(item), known)))
+        return items
+
+    def nonempty_list(self, field: str, value: Any) -> list[Any]:
+        if not isinstance(value, list) or not value:
+            raise self.error(field, f"must be a non-empty list, got {value!r}")
+        if len({repr(v) for v in value}) < len(value):
+            raise self.error(field, f"lists a value twice: {value!r}")
+        return value
+
+    def seeds(self, value: Any) -> list[int] | None:
+        if value is None:
+            return None
+        for k, seed in enumerate(self.nonempty_list("seeds", value)):
+            if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**31:
+                raise self.error(f"seeds[{k}]", f"must be a whole number in [0, 2**31), "
+                                                f"got {seed!r}")
+        return value
+
+
+def load_sweep(path: Path) -> SweepConfig:
+    """Read and check a sweep's TOML file; every grid point is built once, as a run would.
+
+    Raises:
+        InvalidInputError: The file, or one of its fields, named with the problem.
+    """
+    source = str(path)
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InvalidInputError(f"{source}: cannot read the sweep file ({exc.strerror})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InvalidInputError(f"{source}: not a TOML file ({exc})") from None
+    return parse_sweep(data, source)
+
+
+def parse_sweep(data: dict[str, Any], source: str = "sweep") -> SweepConfig:
+    """Check a sweep's fields (as read from TOML); see :func:`load_sweep`."""
+    from azgym.bench.suites import SUITES
+
+    fields = _Fields(source)
+    fields.keys("", data, KEYS)
+    suites = fields.names("suites", data.get("suites"), list(SUITES))
+    seeds = fields.seeds(data.get("seeds"))
+    quick = data.get("quick", False)
+    if not isinstance(quick, bool):
+        raise fields.error("quick", f"must be true or false, got {quick!r}")
+    time_limit = data.get("time_limit", DEFAULT_TIME_LIMIT)
+    if isinstance(time_limit, bool) or not isinstance(time_limit, int | float) \
+            or not (math.isfinite(time_limit) and time_limit > 0):
+        raise fields.error("time_limit", f"must be a number of seconds > 0, got {time_limit!r}")
+    metric = data.get("metric", METRICS[0])
+    if metric not in METRICS:
+        raise fields.error("metric", str(unknown_name("metric", str(metric), METRICS)))
+    tables = data.get("localizer")
+    if not isinstance(tables, list) or not tables:
+        raise fields.error("localizer", "at least one [[localizer]] table is needed")
+    grids = [_grid(fields, f"localizer[{k}]", table) for k, table in enumerate(tables)]
+    runs = sum(len(g) for g in grids) * len(suites) * len(seeds or [0])
+    if runs > MAX_RUNS:
+        raise fields.error("localizer", f"the sweep holds {runs} runs (grid points x suites x "
+                                        f"seeds), more than the cap of {MAX_RUNS}")
+    points = _points(fields, tables, grids, float(time_limit))
+    return SweepConfig(points, suites, seeds, quick, float(time_limit), metric)
+
+
+def _grid(fields: _Fields, field: str, table: Any) -> list[dict[str, Any]]:
+    """A localizer table's grid: every combination of its values (one point without a grid)."""
+    if not isinstance(table, dict):
+        raise fields.error(field, "must be a table ([[localizer]])")
+    fields.keys(field, table, LOCALIZER_KEYS)
+    if not isinstance(table.get("name"), str) or not table["name"]:
+        raise fields.error(f"{field}.name", "a localizer's name or spec is needed")
+    if not isinstance(table.get("params", {}), dict):
+        raise fields.error(f"{field}.params", "must be a table of hyperparameters")
+    grid = table.get("grid", {"": [None]})
+    if not isinstance(grid, dict) or not grid:
+        raise fields.error(f"{field}.grid", "is empty: give each hyperparameter a list of "
+                                            "values, or leave grid out to run the defaults")
+    for key, values in grid.items():
+        fields.nonempty_list(f"{field}.grid.{key}", values)
+        if key in table.get("params", {}):
+            raise fields.error(f"{field}.grid.{key}", "is also fixed in params")
+    keys = [key for key in grid if key]
+    return [dict(zip(keys, combo, strict=True))
+            for combo in itertools.product(*(grid[key] for key in keys))]
+
+
+def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict[str, Any]]],
+            time_limit: float) -> list[GridPoint]:
+    """Each grid point as a contender, built once (a bad name or value is named here)."""
+    from azgym.bench.contenders import contender
+    from azgym.localize.registry import build, spec_label
+
+    points: list[GridPoint] = []
+    seen: dict[str, str] = {}
+    for k, (table, grid) in enumerate(zip(tables, grids, strict=True)):
+        field = f"localizer[{k}]"
+        for varied in grid:
+            params = {**table.get("params", {}), **varied}
+            try:
+                base = contender(table["name"])
+                candidate = contender(spec_label(base.spec, {**base.params, **params}))
+                if ":" not in candidate.spec:  # a name: azgym's, or an installed package's
+                    build(candidate.spec, **candidate.params)
+                else:  # a plug-in is built where it will run, in a worker, within the limit
+                    check_buildable(candidate, time_limit)
+            except AzgymError as exc:
+                raise fields.error(field, str(exc)) from None
+            if candidate.label in seen:
+                raise fields.error(field, f"grid point {candidate.label!r} is already in the "
+                                          f"sweep ({seen[candidate.label]})")
+            seen[candidate.label] = field
+            points.append(GridPoint(candidate, base.spec, varied))
+    return points

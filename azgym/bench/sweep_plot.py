@@ -1,0 +1,69 @@
+"""A sweep's figure: the headline metric of every grid point, a panel per suite, a dot per seed.
+
+The p75 position error carries its 95 % bootstrap interval from each run, drawn as a bar; the
+other metrics are drawn as dots only.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from azgym.bench.plots import _save
+
+if TYPE_CHECKING:
+    from azgym.bench.sweep import SweepResult
+    from azgym.bench.sweep_config import GridPoint
+
+LABELS = {"p75_cm": "p75 position error [cm]", "median_cm": "median position error [cm]",
+          "mean_cm": "mean position error [cm]", "p95_cm": "p95 position error [cm]",
+          "rmse_cm": "RMS position error [cm]", "availability": "availability",
+          "failure_rate": "failure rate"}
+
+
+def write_sweep_figure(result: SweepResult, path: Path) -> Path:
+    """sweep.png: the config's metric per grid point (x), one panel per suite (needs matplotlib).
+
+    Raises:
+        ImportError: matplotlib is not installed.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    config, columns = result.config, result.columns
+    at = {name: k for k, name in enumerate(columns)}
+    labels = [p.contender.label for p in config.points]
+    figure, panels = plt.subplots(1, len(config.suites), squeeze=False, sharey=True,
+                                  figsize=(max(5.0, 0.5 * len(labels) + 2) * len(config.suites),
+                                           4.2), constrained_layout=True)
+    seeds = list(dict.fromkeys(row[at["seed"]] for row in result.rows))
+    for axes, suite in zip(panels[0], config.suites, strict=True):
+        for j, seed in enumerate(seeds):
+            rows = [r for r in result.rows if r[at["suite"]] == suite and r[at["seed"]] == seed]
+            if not rows:
+                continue
+            x = [labels.index(r[at["label"]]) + 0.1 * (j - (len(seeds) - 1) / 2) for r in rows]
+            y = [r[at[config.metric]] for r in rows]
+            if config.metric == "p75_cm":
+                low = [v - r[at["p75_cm_lo"]] for v, r in zip(y, rows, strict=True)]
+                high = [r[at["p75_cm_hi"]] - v for v, r in zip(y, rows, strict=True)]
+                axes.errorbar(x, y, yerr=[low, high], fmt="o", capsize=3, label=f"seed {seed}")
+            else:
+                axes.plot(x, y, "o", label=f"seed {seed}")
+        axes.set_xticks(range(len(labels)), [_tick(p) for p in config.points], rotation=60,
+                        ha="right", fontsize=7)
+        if config.metric.endswith("_cm"):
+            axes.set_yscale("log")
+        axes.set_title(suite, fontsize=10)
+        axes.grid(axis="y", alpha=0.3)
+    panels[0][0].set_ylabel(LABELS[config.metric])
+    panels[0][-1].legend(fontsize=7)
+    return _save(figure, path, plt)
+
+
+def _tick(point: GridPoint) -> str:
+    """A grid point as the axis names it: the localizer and the values the grid varies."""
+    varied = ",".join(f"{key}={value}" for key, value in point.varied.items())
+    return f"{point.target} {varied}".strip()

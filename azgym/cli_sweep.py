@@ -1,0 +1,53 @@
+"""``azgym sweep CONFIG``: localizers x hyperparameter grids x suites x seeds, one table.
+
+The config is a TOML file (:mod:`azgym.bench.sweep_config`, docs/scaling.md), checked field by
+field before anything runs; the runs go through the benchmark's runner, on worker processes here
+or on Ray (``--backend ray [--address ADDR]``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+
+def add_sweep(commands: argparse._SubParsersAction) -> None:
+    """``azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR]``."""
+    sweep = commands.add_parser("sweep", help="run a parameter sweep from a TOML file")
+    sweep.add_argument("config", metavar="CONFIG", help="the sweep's TOML file (docs/scaling.md)")
+    sweep.add_argument("--backend", choices=("local", "ray"), default="local",
+                       help="local: worker processes here; ray: Ray actors (pip install "
+                            "\"azgym[ray]\"), on --address or a local instance")
+    sweep.add_argument("--address", metavar="ADDR",
+                       help="--backend ray: a Ray cluster's head, HOST:PORT, ray://HOST:PORT or "
+                            "auto (default: a local instance)")
+    sweep.add_argument("--workers", type=int, default=0,
+                       help="workers per localizer at a time (0: one per core, or per CPU of "
+                            "the Ray cluster)")
+    sweep.add_argument("--out", default="results/sweep", help="output folder")
+    sweep.set_defaults(handler=_sweep)
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from azgym.bench.runner import default_workers
+    from azgym.bench.sweep import run_sweep
+    from azgym.bench.sweep_config import load_sweep
+    from azgym.cli import _progress_printer
+    from azgym.errors import InvalidInputError
+    from azgym.files import prepare_folder
+
+    if args.address is not None and args.backend != "ray":
+        raise InvalidInputError("--address is for --backend ray")
+    config = load_sweep(Path(args.config))
+    prepare_folder(Path(args.out))  # before the runs: a bad --out must not waste them
+    print(f"{args.config}: {len(config.points)} grid points, {config.runs} runs", flush=True)
+    workers = args.workers or (0 if args.backend == "ray" else default_workers())
+    started = time.perf_counter()
+    result = run_sweep(config, backend=args.backend, address=args.address, workers=workers,
+                       progress=_progress_printer())
+    written = result.write(Path(args.out))
+    print()
+    print(result.text())
+    print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
+    return 0

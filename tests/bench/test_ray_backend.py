@@ -1,0 +1,146 @@
+"""--backend ray: the same figures as one local worker, the same isolation where Ray allows it."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from azgym.bench.contenders import Contender, contender
+from azgym.bench.runner import run_benchmark, run_contenders
+from azgym.bench.suites import get_suite
+from azgym.bench.sweep import run_sweep
+from azgym.bench.sweep_config import parse_sweep
+from azgym.cli import main
+from azgym.errors import DependencyNotInstalled
+
+ray = pytest.importorskip("ray", reason="ray is not installed (pip install \"azgym[ray]\")")
+
+PLUGINS = Path(__file__).parents[1] / "hostile" / "plugins"
+ACCURACY = ("all", "ci95", "by_cause", "by_group", "tracking", "crashes", "first_error")
+
+
+@pytest.fixture(scope="module")
+def local_ray():
+    """A local Ray instance of two CPUs for this module, stopped at its end."""
+    ray.init(num_cpus=2, include_dashboard=False)
+    try:
+        yield
+    finally:
+        ray.shutdown()
+
+
+def plugin(stem: str) -> Contender:
+    path = PLUGINS / f"{stem}.py"
+    name = re.search(r"^class (\w+)", path.read_text(), re.MULTILINE).group(1)
+    return Contender(stem, f"{path}:{name}")
+
+
+def same_outcome(a, b) -> bool:
+    return (np.array_equal(a.ok, b.ok) and a.errors == b.errors
+            and np.array_equal(a.position, b.position, equal_nan=True)
+            and np.array_equal(a.heading, b.heading, equal_nan=True)
+            and np.array_equal(a.estimate, b.estimate, equal_nan=True))
+
+
+def test_ray_gives_the_figures_of_one_local_worker_on_the_default_suite(local_ray):
+    suite = get_suite("warehouse-static")
+    contenders = [contender("ransac"), contender("lsq"), contender("mex-coarse")]
+    alone = run_benchmark(suite, contenders, quick=True, workers=1)
+    spread = run_benchmark(suite, contenders, quick=True, workers=2, backend="ray")
+    for label in alone.outcomes:
+        assert same_outcome(alone.outcomes[label], spread.outcomes[label]), label
+        mine, theirs = alone.summary["localizers"][label], spread.summary["localizers"][label]
+        assert {k: mine[k] for k in ACCURACY} == {k: theirs[k] for k in ACCURACY}
+        assert np.isfinite(spread.outcomes[label].micros).all()  # every call timed, remotely
+    assert alone.summary["cases_sha256"] == spread.summary["cases_sha256"]
+
+
+@pytest.mark.slow
+def test_ray_keeps_a_route_whole_for_a_tracker(local_ray):
+    cases = get_suite("warehouse-routes").build(11, True)[:60]
+    tracker = [contender("gated-ekf")]
+    alone = run_contenders(cases, tracker, workers=1)["gated-ekf"]
+    spread = run_contenders(cases, tracker, workers=2, backend="ray")["gated-ekf"]
+    assert same_outcome(alone, spread)
+
+
+def test_a_raising_and_a_hanging_plugin_cost_their_frames_under_ray_as_in_the_pool(local_ray):
+    cases = get_suite("warehouse-static").build(7, True)[:8]
+    contenders = [plugin("exiter"), plugin("hoarder"), plugin("sleeper")]
+    pool = run_contenders(cases, contenders, workers=1, time_limit=1.0)
+    begun = time.monotonic()
+    remote = run_contenders(cases, contenders, workers=1, time_limit=1.0, backend="ray")
+    assert time.monotonic() - begun < 30  # the sleeper does not hang the run
+    assert remote["exiter"].errors == ["SystemExit: 3"] * len(cases)
+    assert remote["hoarder"].errors == ["MemoryError: asked for 1 TB"] * len(cases)
+    sleeper = remote["sleeper"].errors
+    assert sleeper[:3] == ["timed out: took longer than the 1 s limit"] * 3
+    assert all(e.startswith("not run: 3 frames in a row were lost") for e in sleeper[3:])
+    for label in pool:
+        assert same_outcome(pool[label], remote[label]), label
+
+
+@pytest.mark.slow
+def test_a_localizer_that_kills_its_process_costs_its_frames_only(local_ray):
+    cases = get_suite("warehouse-static").build(7, True)[:10]
+    outcomes = run_contenders(cases, [plugin("crasher"), contender("ransac")], workers=2,
+                              time_limit=5.0, backend="ray")
+    alone = run_contenders(cases, [contender("ransac")], workers=1)["ransac"]
+    assert same_outcome(outcomes["ransac"], alone)
+    crasher = outcomes["crasher"]
+    died = [e for e in crasher.errors if e.startswith("the localizer's process died")]
+    assert died and not crasher.ok[[bool(e) for e in crasher.errors]].any()
+    assert np.array_equal(crasher.position[crasher.ok], alone.position[crasher.ok])
+
+
+@pytest.mark.slow
+def test_a_sweep_gives_the_same_table_on_ray_as_locally(local_ray):
+    config = parse_sweep({"suites": ["warehouse-static"], "quick": True, "seeds": [7, 8],
+                          "localizer": [{"name": "ransac", "grid": {"weighted": [False, True]}},
+                                        {"name": "lsq"}]})
+    here = run_sweep(config, workers=1)
+    there = run_sweep(config, backend="ray", workers=2)
+    assert here.csv() == there.csv()
+    assert len(here.rows) == 6 and here.rows[0][:4] == ["warehouse-static", 7, "ransac", False]
+
+
+@pytest.mark.parametrize(("address", "problem"), [
+    ("127.0.0.1:1", "no Ray cluster answers there within 5 s"),
+    ("nonsense", "must be HOST:PORT"),
+])
+def test_bench_refuses_a_bad_address_by_name(address, problem, tmp_path, capsys):
+    begun = time.monotonic()
+    code = main(["bench", "--backend", "ray", "--address", address, "--localizer", "lsq",
+                 "--workers", "1", "--out", str(tmp_path)])
+    assert code == 2
+    assert f"azgym: error: --address {address}: {problem}" in capsys.readouterr().err
+    assert time.monotonic() - begun < 60
+
+
+def test_address_is_refused_without_the_ray_backend():
+    cases = get_suite("warehouse-static").build(7, True)[:2]
+    with pytest.raises(ValueError, match="address is for backend 'ray'"):
+        run_contenders(cases, [contender("lsq")], address="127.0.0.1:6379")
+
+
+def test_a_missing_ray_names_the_extra_to_install(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)
+    cases = get_suite("warehouse-static").build(7, True)[:2]
+    with pytest.raises(DependencyNotInstalled, match=r'pip install "azgym\[ray\]"'):
+        run_contenders(cases, [contender("lsq")], backend="ray")
+
+
+def test_azgym_and_the_default_bench_never_import_ray():
+    code = ("import sys, azgym, azgym.cli, azgym.bench.runner, azgym.bench.sweep\n"
+            "from azgym.bench.runner import run_contenders\n"
+            "from azgym.bench.suites import get_suite\n"
+            "from azgym.bench.contenders import contender\n"
+            "run_contenders(get_suite('warehouse-static').build(7, True)[:2], [contender('lsq')])\n"
+            "assert 'ray' not in sys.modules, 'ray imported'\n")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=300)

@@ -1,0 +1,101 @@
+"""azgym sweep: a config checked field by field before anything runs; the same config, the same
+table."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+
+from azgym.bench.sweep import run_sweep
+from azgym.bench.sweep_config import MAX_RUNS, load_sweep, parse_sweep
+from azgym.cli import main
+from azgym.errors import InvalidInputError
+
+EXAMPLE = Path(__file__).parents[1] / "baselines" / "sweeps" / "ransac-iterations.toml"
+
+
+def config(**changes):
+    data = {"suites": ["warehouse-static"], "quick": True, "seeds": [7],
+            "localizer": [{"name": "ransac", "grid": {"weighted": [False, True]}},
+                          {"name": "lsq"}]}
+    data.update(changes)
+    return data
+
+
+@pytest.mark.parametrize(("changes", "message"), [
+    ({"localizer": [{"name": "ransack"}]},
+     r"sweep: localizer\[0\]: unknown localizer 'ransack'. Did you mean 'ransac'\?"),
+    ({"localizer": [{"name": "ransac", "grid": {"iterations": [5, 10]}}]},
+     r"sweep: localizer\[0\]: localizer 'ransac': unknown hyperparameter 'iterations'"),
+    ({"localizer": [{"name": "ransac", "grid": {"pr_hit": [0.9, 2.0]}}]},
+     r"sweep: localizer\[0\]: .*pr_hit"),
+    ({"localizer": [{"name": "ransac", "params": {"weighted": True},
+                     "grid": {"weighted": [True]}}]},
+     r"sweep: localizer\[0\].grid.weighted: is also fixed in params"),
+    ({"suites": ["warehouse-statc"]},
+     r"sweep: suites\[0\]: unknown suite 'warehouse-statc'. Did you mean 'warehouse-static'\?"),
+    ({"suites": []}, r"sweep: suites: must be a non-empty list, got \[\]"),
+    ({"localizer": [{"name": "ransac", "grid": {}}]}, r"sweep: localizer\[0\].grid: is empty"),
+    ({"localizer": [{"name": "ransac", "grid": {"max_iter": []}}]},
+     r"sweep: localizer\[0\].grid.max_iter: must be a non-empty list, got \[\]"),
+    ({"seeds": [7, -1]}, r"sweep: seeds\[1\]: must be a whole number in \[0, 2\*\*31\), got -1"),
+    ({"seeds": [True]}, r"sweep: seeds\[0\]: must be a whole number"),
+    ({"seeds": [7, 7]}, r"sweep: seeds: lists a value twice: \[7, 7\]"),
+    ({"seeds": []}, r"sweep: seeds: must be a non-empty list"),
+    ({"seed": [7]}, r"sweep: seed: unknown key 'seed'. Did you mean 'seeds'\?"),
+    ({"localizer": [{"name": "lsq", "grids": {}}]},
+     r"sweep: localizer\[0\]: unknown key 'grids'. Did you mean 'grid'\?"),
+    ({"localizer": []}, r"sweep: localizer: at least one \[\[localizer\]\] table is needed"),
+    ({"localizer": [{"name": "ransac", "grid": {"max_iter": list(range(1, 101)),
+                                                "pr_hit": [0.5, 0.9, 0.99, 0.999]}}],
+      "seeds": [1, 2, 3]},
+     rf"sweep: localizer: the sweep holds 1200 runs .* more than the cap of {MAX_RUNS}"),
+    ({"metric": "p76_cm"}, r"sweep: metric: unknown metric 'p76_cm'. Did you mean 'p75_cm'\?"),
+    ({"quick": "yes"}, r"sweep: quick: must be true or false, got 'yes'"),
+    ({"time_limit": 0}, r"sweep: time_limit: must be a number of seconds > 0, got 0"),
+    ({"localizer": [{"name": "lsq"}, {"name": "lsq"}]},
+     r"sweep: localizer\[1\]: grid point 'lsq' is already in the sweep \(localizer\[0\]\)"),
+])
+def test_every_field_of_a_sweep_is_checked_by_name(changes, message):
+    with pytest.raises(InvalidInputError, match=message):
+        parse_sweep(config(**changes))
+
+
+def test_a_file_that_is_not_toml_is_named(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("suites = [warehouse-static\n")
+    with pytest.raises(InvalidInputError, match=r"bad.toml: not a TOML file"):
+        load_sweep(path)
+
+
+def test_the_example_config_is_valid_and_its_points_are_canonical_specs():
+    sweep = load_sweep(EXAMPLE)
+    labels = [p.contender.label for p in sweep.points]
+    assert labels[0] == "ransac:max_exhaustive=1,pr_hit=0.5,weighted=false"
+    assert labels[-1] == "lsq" and len(labels) == 9 and sweep.runs == 18
+
+
+def test_a_small_sweep_gives_the_same_table_whatever_the_workers(tmp_path, capsys):
+    sweep = parse_sweep(config())
+    one = run_sweep(sweep, workers=1)
+    path = tmp_path / "sweep.toml"
+    path.write_text('suites = ["warehouse-static"]\nquick = true\nseeds = [7]\n'
+                    '[[localizer]]\nname = "ransac"\ngrid = { weighted = [false, true] }\n'
+                    '[[localizer]]\nname = "lsq"\n')
+    assert main(["sweep", str(path), "--workers", "2", "--out", str(tmp_path / "out")]) == 0
+    written = (tmp_path / "out" / "sweep.csv").read_bytes().decode()
+    assert written == one.csv()
+    rows = list(csv.DictReader(written.splitlines()))
+    assert [r["label"] for r in rows] == ["ransac:weighted=false", "ransac-weighted", "lsq"]
+    assert [r["weighted"] for r in rows] == ["false", "true", ""]
+    assert float(rows[0]["p75_cm"]) < float(rows[2]["p75_cm"])  # ransac beats lsq here
+    assert (tmp_path / "out" / "runtimes.csv").is_file()
+    assert (tmp_path / "out" / "sweep.png").stat().st_size > 0
+    assert "ransac-weighted" in capsys.readouterr().out
+
+
+def test_sweep_refuses_an_address_without_the_ray_backend(capsys):
+    assert main(["sweep", str(EXAMPLE), "--address", "127.0.0.1:6379"]) == 2
+    assert "--address is for --backend ray" in capsys.readouterr().err
