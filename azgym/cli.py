@@ -1,7 +1,13 @@
 """azgym: benchmark azimuth-based indoor localizers, and reproduce the papers they come from.
 
-azgym bench [--suite S] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
+azgym bench [--suite S | --data DIR] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
             [--workers N] [--time-limit SECONDS] [--quick] [--out DIR] [--navigator NAME ...]
+            [--backend local|ray] [--address ADDR]
+azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR]
+azgym import DIR
+azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [--motion-rate HZ]
+azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S] [--out DIR]
+azgym layout optimize SCENARIO --add N [--step M] [--spacing M] [--out DIR]
 azgym leaderboard submit|build|verify ...
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
 azgym reproduce plotter [--runs N] [--seed S] [--out DIR]

@@ -23,9 +23,10 @@ def bench_navigation(args: argparse.Namespace, progress) -> int:
     from azgym.nav.report import score_table
     from azgym.nav.suites import NAVIGATORS, get_navigation_suite
 
-    if args.time_limit is not None:
-        raise InvalidInputError("--time-limit is for the frame suites: a navigation suite runs "
-                                "each localizer in the loop that drives the forklift")
+    if args.time_limit is not None or args.backend != "local" or args.address is not None:
+        raise InvalidInputError("--time-limit, --backend and --address are for the frame "
+                                "suites: a navigation suite runs each localizer in the loop "
+                                "that drives the forklift, in local processes")
     suite = get_navigation_suite(args.suite)
     localizers = list(dict.fromkeys(args.localizer)) or list(suite.localizers)
     if args.localizer and args.with_builtins:

@@ -9,7 +9,7 @@ streams one answer per frame back as soon as it has it (a Ray generator), so the
 each call from its own clock:
 
 - a localizer that raises costs its frame, scored with the exception, as in a worker process
-  (each frame is answered by the workers' own rule, :func:`azgym.bench.worker._answer_batch`);
+  (each frame is answered by the workers' own rule, :func:`azgym.bench.worker.answer_batch`);
 - a frame that takes longer than the time limit costs that frame: the actor is killed
   (``ray.kill``), a fresh one takes over the rest of the batch; so does an actor that dies
   (a segfault, ``os._exit``, a node lost), and after ``GIVE_UP_AFTER`` losses in a row the
@@ -74,7 +74,7 @@ class RayWorker:
             self.tracker = make_tracker(spec, **params)
         except BaseException as exc:  # noqa: BLE001 - reported, the runner scores every frame
             yield ("unbuildable", str(exc) if isinstance(exc, AzgymError)
-                   else worker._describe(exc))
+                   else worker.describe(exc))
             return
         self.warm = not isinstance(self.tracker, FrameByFrame)
         if not self.warm and is_builtin(spec):  # azgym's own code compiles as long as it takes
@@ -92,15 +92,15 @@ class RayWorker:
         """
         frames = [unpack(packed) for packed in batch]
         if not self.warm and frames:
-            worker._call_untimed(self.tracker.localizer, frames[0].measurements,
-                                 self.maps[frames[0].scenario])
+            worker.call_untimed(self.tracker.localizer, frames[0].measurements,
+                                self.maps[frames[0].scenario])
             self.warm = True
             yield ("warmed",)
         for frame in frames:
             answer = [np.nan] * worker.ANSWER_SIZE
             said = _Said()
-            self.sequence = worker._answer_batch(said, [worker.IDLE, 0], answer, self.tracker,
-                                                 [frame], self.maps, self.sequence)
+            self.sequence = worker.answer_batch(said, [worker.IDLE, 0], answer, self.tracker,
+                                                [frame], self.maps, self.sequence)
             yield ("answer", answer, said.error)
 
 

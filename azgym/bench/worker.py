@@ -79,7 +79,7 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
     try:
         tracker = make_tracker(spec, **params)
     except BaseException as exc:  # noqa: BLE001 - reported, the parent scores every frame
-        why = str(exc) if isinstance(exc, AzgymError) else _describe(exc)
+        why = str(exc) if isinstance(exc, AzgymError) else describe(exc)
         conn.send(("unbuildable", why))
         return
     warm = not isinstance(tracker, FrameByFrame)  # a localizer's first call loads its code
@@ -98,16 +98,16 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
         if not warm and frames:  # run it once untimed
             _mark(progress, 0)
             first = frames[0]
-            _call_untimed(tracker.localizer, first.measurements, beacon_maps[first.scenario])
+            call_untimed(tracker.localizer, first.measurements, beacon_maps[first.scenario])
             warm = True
-        sequence = _answer_batch(conn, progress, answers, tracker, frames, beacon_maps, sequence)
+        sequence = answer_batch(conn, progress, answers, tracker, frames, beacon_maps, sequence)
         _mark(progress, IDLE)
         conn.send(("done",))
 
 
-def _answer_batch(conn: Any, progress: Any, answers: Any, tracker: Tracker,
-                  frames: Sequence[WorkerFrame], maps: Mapping[str, BeaconMap],
-                  sequence: str | None) -> str | None:
+def answer_batch(conn: Any, progress: Any, answers: Any, tracker: Tracker,
+                 frames: Sequence[WorkerFrame], maps: Mapping[str, BeaconMap],
+                 sequence: str | None) -> str | None:
     """Answer each frame, writing its answer (and sending its error) as soon as it is known.
 
     Returns the sequence the tracker is in at the end (the next batch may continue it).
@@ -128,7 +128,7 @@ def _answer_batch(conn: Any, progress: Any, answers: Any, tracker: Tracker,
             pose = estimated_pose(estimate)
         except BaseException as exc:  # noqa: BLE001 - SystemExit too: scored, never fatal
             answers[base + ANSWER_STATE] = RAISED
-            conn.send(("error", k, _describe(exc)))
+            conn.send(("error", k, describe(exc)))
             continue
         answers[base + ANSWER_MICROS] = micros
         if pose is not None:
@@ -138,7 +138,7 @@ def _answer_batch(conn: Any, progress: Any, answers: Any, tracker: Tracker,
     return sequence
 
 
-def _call_untimed(localizer: Any, measurements: Measurements, beacons: BeaconMap) -> None:
+def call_untimed(localizer: Any, measurements: Measurements, beacons: BeaconMap) -> None:
     """One call whose outcome does not count (its frame is localized again, timed)."""
     try:
         localizer.localize(measurements, beacons)
@@ -160,7 +160,7 @@ def _mark(progress: Any, phase: int) -> None:
     progress[0] = phase
 
 
-def _describe(exc: BaseException) -> str:
+def describe(exc: BaseException) -> str:
     """An exception as the results report it: its type and message."""
     return f"{type(exc).__name__}: {exc}"
 
