@@ -189,3 +189,12 @@ def test_the_layout_section_analyzes_and_optimizes(tmp_path, monkeypatch):
     assert main([*commands[0][1:], *coarse, "--frames", "5"]) == 0
     assert main([*commands[1][1:], *coarse]) == 0
     assert list(tmp_path.glob("results/layout/**/*.toml"))
+
+
+def test_the_sweep_the_readme_names_is_a_valid_config():
+    from azgym.bench.sweep_config import load_sweep
+
+    section = README.read_text(encoding="utf-8").split("## Beyond one machine", 1)[1]
+    path = re.search(r"`azgym sweep (\S+\.toml)`", section).group(1)
+    config = load_sweep(README.parent / path)
+    assert len(config.points) >= 2 and config.suites
