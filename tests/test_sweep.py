@@ -37,6 +37,11 @@ def config(**changes):
     ({"suites": ["warehouse-statc"]},
      r"sweep: suites\[0\]: unknown suite 'warehouse-statc'. Did you mean 'warehouse-static'\?"),
     ({"suites": []}, r"sweep: suites: must be a non-empty list, got \[\]"),
+    ({"suites": None}, r"sweep: suites: a sweep needs suites, scenarios or both"),
+    ({"scenarios": ["warehouse-lrage"]},
+     r"sweep: scenarios\[0\]: unknown scenario 'warehouse-lrage'.*Did you mean 'warehouse-large'"),
+    ({"scenarios": [3]}, r"sweep: scenarios\[0\]: must be a name or a \.toml file, got 3"),
+    ({"scenarios": ["missing.toml"]}, r"sweep: scenarios\[0\]: .*missing\.toml"),
     ({"localizer": [{"name": "ransac", "grid": {}}]}, r"sweep: localizer\[0\].grid: is empty"),
     ({"localizer": [{"name": "ransac", "grid": {"max_iter": []}}]},
      r"sweep: localizer\[0\].grid.max_iter: must be a non-empty list, got \[\]"),
@@ -99,3 +104,20 @@ def test_a_small_sweep_gives_the_same_table_whatever_the_workers(tmp_path, capsy
 def test_sweep_refuses_an_address_without_the_ray_backend(capsys):
     assert main(["sweep", str(EXAMPLE), "--address", "127.0.0.1:6379"]) == 2
     assert "--address is for --backend ray" in capsys.readouterr().err
+
+
+def test_a_scenario_axis_scores_random_poses_in_a_generated_warehouse(tmp_path):
+    """A scenario file beside the config (here a generated one, not shipped) is a suite of
+    random poses, its beacon map sent to the workers with the frames."""
+    assert main(["generate", "--seed", "3", "--out", str(tmp_path / "site.toml")]) == 0
+    path = tmp_path / "sweep.toml"
+    path.write_text('scenarios = ["site.toml", "warehouse-small"]\nquick = true\n'
+                    'seeds = [1]\n[[localizer]]\nname = "ransac"\n')
+    sweep = load_sweep(path)
+    assert [suite.name for suite in sweep.suites] == ["static:site",
+                                                      "static:warehouse-small"]
+    table = run_sweep(sweep, workers=1)
+    assert [(row[0], row[1]) for row in table.rows] == [("static:site", 1),
+                                                        ("static:warehouse-small", 1)]
+    n, availability = (table.columns.index(key) for key in ("n", "availability"))
+    assert all(row[n] == 40 and row[availability] > 0.5 for row in table.rows)

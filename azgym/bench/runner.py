@@ -169,6 +169,7 @@ def run_benchmark(
     progress: Progress | None = None,
     backend: str = "local",
     address: str | None = None,
+    maps: Mapping[str, BeaconMap] | None = None,
 ) -> BenchResult:
     """Score every contender on the suite's cases.
 
@@ -184,6 +185,7 @@ def run_benchmark(
         progress: Called with text as the run advances.
         backend: "local" or "ray" (:func:`run_contenders`).
         address: The Ray cluster's address (``backend="ray"`` only).
+        maps: Beacon map of each scenario the cases name (default: the shipped scenarios').
     """
     if split not in ("dev", "test"):
         raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
@@ -206,8 +208,9 @@ def run_benchmark(
     if first_run:
         # The fork server compiles ransac meanwhile (contenders.warm_up).
         warm_up(c for c in default_contenders() if c.spec != REFERENCE)
-    outcomes = run_contenders(cases, contenders, workers=workers, time_limit=time_limit,
-                              progress=progress, backend=backend, address=address)
+    outcomes = run_contenders(cases, contenders, workers=workers, maps=maps,
+                              time_limit=time_limit, progress=progress, backend=backend,
+                              address=address)
     reference = next(c.label for c in contenders if c.is_reference)
     summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference)
     return BenchResult(summary, cases, outcomes)

@@ -17,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 from azgym.bench.runner import Progress, run_benchmark
-from azgym.bench.suites import get_suite
 from azgym.bench.sweep_config import SweepConfig
 from azgym.files import prepare_folder, write_file
 
@@ -84,15 +83,15 @@ def run_sweep(config: SweepConfig, *, backend: str = "local", address: str | Non
     rows: list[list[Any]] = []
     runtimes: list[list[Any]] = []
     with session as slots:
-        for name in config.suites:
-            suite = get_suite(name)
+        for suite in config.suites:
+            name = suite.name
             for seed in config.seeds or [suite.dev_seed]:
                 say(f"{name}, seed {seed}: {len(config.points)} grid points")
                 result = run_benchmark(
                     suite, [p.contender for p in config.points], quick=config.quick,
                     split="dev" if seed == suite.dev_seed else "test", seed=seed,
                     workers=slots, time_limit=config.time_limit, progress=progress,
-                    backend=backend, address=address)
+                    backend=backend, address=address, maps=config.maps or None)
                 figures = result.summary["localizers"]
                 for point in config.points:
                     got = figures[point.contender.label]

@@ -3,7 +3,9 @@
 Every field is checked before anything runs, and a problem is named by the file and the field
 (``sweep.toml: localizer[0].grid.max_iter: ...``). The format (docs/scaling.md)::
 
-    suites = ["warehouse-static"]   # frame suites, at least one
+    suites = ["warehouse-static"]   # frame suites
+    scenarios = ["warehouse-large"] # and/or scenarios (names or .toml files beside this one):
+                                    # random poses in each, as shipped; at least one of the two
     seeds = [7, 8]                  # draws of each suite (default: each suite's dev seed)
     quick = true                    # the suites' small versions (default: false)
     time_limit = 10.0               # seconds a localizer may take on one frame
@@ -23,13 +25,17 @@ from __future__ import annotations
 import itertools
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from azgym.bench.contenders import Contender, check_buildable
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.suites import Suite
+from azgym.bench.suites.warehouse import scenario_suite
+from azgym.core import BeaconMap
 from azgym.errors import AzgymError, InvalidInputError, unknown_name
+from azgym.site import Scenario, load_scenario
 
 MAX_RUNS = 1000
 """At most this many grid points x suites x seeds in one sweep: a grid larger than that is
@@ -37,7 +43,7 @@ more likely a typo (a list of 100 values) than a plan, and would take hours."""
 METRICS = ("p75_cm", "median_cm", "mean_cm", "p95_cm", "rmse_cm", "availability",
            "failure_rate")
 """The headline metrics a sweep's figure can show (from each run's overall figures)."""
-KEYS = {"suites", "seeds", "quick", "time_limit", "metric", "localizer"}
+KEYS = {"suites", "scenarios", "seeds", "quick", "time_limit", "metric", "localizer"}
 LOCALIZER_KEYS = {"name", "params", "grid"}
 
 
@@ -61,11 +67,13 @@ class SweepConfig:
     """A checked sweep: who runs, on what, and how it is shown."""
 
     points: list[GridPoint]
-    suites: list[str]
+    suites: list[Suite]
     seeds: list[int] | None
     quick: bool
     time_limit: float
     metric: str
+    maps: dict[str, BeaconMap] = field(default_factory=dict)
+    """The beacon map of each scenario of the scenario axis."""
 
     @property
     def runs(self) -> int:
@@ -124,16 +132,25 @@ def load_sweep(path: Path) -> SweepConfig:
         raise InvalidInputError(f"{source}: cannot read the sweep file ({exc.strerror})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InvalidInputError(f"{source}: not a TOML file ({exc})") from None
-    return parse_sweep(data, source)
+    return parse_sweep(data, source, Path(path).parent)
 
 
-def parse_sweep(data: dict[str, Any], source: str = "sweep") -> SweepConfig:
-    """Check a sweep's fields (as read from TOML); see :func:`load_sweep`."""
+def parse_sweep(data: dict[str, Any], source: str = "sweep",
+                folder: Path | None = None) -> SweepConfig:
+    """Check a sweep's fields (as read from TOML); see :func:`load_sweep`.
+
+    ``folder`` is where scenario files are looked for (the config's own folder).
+    """
     from azgym.bench.suites import SUITES
 
     fields = _Fields(source)
     fields.keys("", data, KEYS)
-    suites = fields.names("suites", data.get("suites"), list(SUITES))
+    if data.get("suites") is None and data.get("scenarios") is None:
+        raise fields.error("suites", "a sweep needs suites, scenarios or both")
+    suites = [SUITES[name] for name in (
+        fields.names("suites", data["suites"], list(SUITES)) if "suites" in data else [])]
+    scenarios = _scenarios(fields, data.get("scenarios"), folder or Path.cwd())
+    suites += [scenario_suite(scenario) for scenario in scenarios]
     seeds = fields.seeds(data.get("seeds"))
     quick = data.get("quick", False)
     if not isinstance(quick, bool):
@@ -154,7 +171,26 @@ def parse_sweep(data: dict[str, Any], source: str = "sweep") -> SweepConfig:
         raise fields.error("localizer", f"the sweep holds {runs} runs (grid points x suites x "
                                         f"seeds), more than the cap of {MAX_RUNS}")
     points = _points(fields, tables, grids, float(time_limit))
-    return SweepConfig(points, suites, seeds, quick, float(time_limit), metric)
+    return SweepConfig(points, suites, seeds, quick, float(time_limit), metric,
+                       {scenario.name: scenario.beacons for scenario in scenarios})
+
+
+def _scenarios(fields: _Fields, value: Any, folder: Path) -> list[Scenario]:
+    """The scenarios of the scenario axis: shipped names, or files relative to ``folder``."""
+    if value is None:
+        return []
+    scenarios = []
+    for k, name in enumerate(fields.nonempty_list("scenarios", value)):
+        if not isinstance(name, str):
+            raise fields.error(f"scenarios[{k}]", f"must be a name or a .toml file, got {name!r}")
+        try:
+            scenarios.append(load_scenario(folder / name if name.endswith(".toml") else name))
+        except AzgymError as exc:
+            raise fields.error(f"scenarios[{k}]", str(exc)) from None
+    names = [scenario.name for scenario in scenarios]
+    if len(set(names)) < len(names):
+        raise fields.error("scenarios", f"two scenarios share a name: {names}")
+    return scenarios
 
 
 def _grid(fields: _Fields, field: str, table: Any) -> list[dict[str, Any]]:

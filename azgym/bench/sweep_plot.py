@@ -39,7 +39,7 @@ def write_sweep_figure(result: SweepResult, path: Path) -> Path:
                                   figsize=(max(5.0, 0.5 * len(labels) + 2) * len(config.suites),
                                            4.2), constrained_layout=True)
     seeds = list(dict.fromkeys(row[at["seed"]] for row in result.rows))
-    for axes, suite in zip(panels[0], config.suites, strict=True):
+    for axes, suite in zip(panels[0], [suite.name for suite in config.suites], strict=True):
         for j, seed in enumerate(seeds):
             rows = [r for r in result.rows if r[at["suite"]] == suite and r[at["seed"]] == seed]
             if not rows:

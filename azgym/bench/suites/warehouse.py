@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from azgym.bench.suites.base import Case, frame_cause, keep_every, route_cases
+from azgym.bench.suites.base import Case, Suite, frame_cause, keep_every, route_cases
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.site import Scenario, load_scenario
 from azgym.site.elements import Faults
@@ -72,3 +72,17 @@ def stress(seed: int, quick: bool) -> list[Case]:
     rng = np.random.default_rng(seed)
     heavy = fault_levels(load_scenario("warehouse-large"))["heavy"]
     return static_cases(heavy, 60 if quick else 600, rng, "warehouse-large, heavy")
+
+
+def scenario_suite(scenario: Scenario) -> Suite:
+    """Random poses in one scenario, as shipped (40 quick, 400 full): a sweep's scenario axis.
+
+    Named ``static:<scenario>``; its default seed is 0. It is not registered among the suites
+    (a leaderboard entry cannot name it): a sweep builds it from the file it was given.
+    """
+    def build(seed: int, quick: bool) -> list[Case]:
+        return static_cases(scenario, 40 if quick else 400, np.random.default_rng(seed),
+                            f"{scenario.name}, as shipped")
+
+    return Suite(f"static:{scenario.name}", 1, f"random poses in {scenario.name}, as shipped",
+                 0, build)
