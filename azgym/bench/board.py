@@ -175,8 +175,9 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
              f"Ranked by the 75th percentile of the position error (EvAAL's headline). Generated "
              f"by `azgym leaderboard build` from {len(loaded)} entries in `entries/`; every "
              "entry's figures are recomputed from its per-frame results when it is read, and "
-             "its frames are checked to be the suite's (or the log's). Runs of the dev split at full size are "
-             "the ranking; quick runs and the test split have tables of their own.", "",
+             "its frames are checked to be the suite's (or the log's). Runs of the dev split at "
+             "full size are the ranking; quick runs and the test split have tables of their "
+             "own; each dataset (a log) has one table.", "",
              TRACKS_NOTE, ""]
     sections: list[Section] = []
     for suite in SUITES:
