@@ -126,23 +126,32 @@ def _leaderboard(args: argparse.Namespace) -> int:
     if args.action == "submit":
         path = leaderboard.submit(Path(args.results), args.localizer, Path(args.entries),
                                   name=args.name, version=args.version, authors=args.authors,
-                                  link=args.link, overwrite=args.overwrite)
+                                  link=args.link, overwrite=args.overwrite,
+                                  datasets=_datasets(args))
         print(f"wrote {path}")
     elif args.action == "build":
         for path in board.build(Path(args.entries), Path(args.out),
-                                _navigation_dir(args.navigation, Path(args.entries))):
+                                _navigation_dir(args.navigation, Path(args.entries)),
+                                datasets=_datasets(args),
+                                skip_unavailable=args.skip_unavailable):
             print(f"wrote {path}")
     elif is_navigation_file(Path(args.entry)):
         print(f"{args.entry}: rerunning its navigators and localizers (azgym's own)", flush=True)
         differences = verify_navigation(Path(args.entry), workers=args.workers or 1)
         return _verdict(args.entry, differences)
     else:
-        spec = leaderboard.load_entry(Path(args.entry))["localizer"]["spec"]
+        spec = leaderboard.load_entry(Path(args.entry), _datasets(args))["localizer"]["spec"]
         print(f"{args.entry}: rerunning its localizer {spec!r}, which is the submitter's code",
               flush=True)
-        differences = leaderboard.verify(Path(args.entry), workers=args.workers or 1)
+        differences = leaderboard.verify(Path(args.entry), workers=args.workers or 1,
+                                         datasets=_datasets(args))
         return _verdict(args.entry, differences)
     return 0
+
+
+def _datasets(args: argparse.Namespace) -> Path | None:
+    """``--datasets DIR``: where dataset entries' logs are looked for (None: the default)."""
+    return None if args.datasets is None else Path(args.datasets)
 
 
 def _verdict(entry: str, differences: dict[str, tuple[Any, Any]]) -> int:
@@ -318,6 +327,10 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     bench.set_defaults(handler=_bench)
 
 
+DATASETS_HELP = ("where the logs of entries scored on a log are, as DIR/NAME/ (default: "
+                 "datasets/ beside the entries, if there is one; shipped logs are found by name)")
+
+
 def _add_leaderboard(commands: argparse._SubParsersAction) -> None:
     """``azgym leaderboard submit|build|verify``: make, publish and check entries."""
     board = commands.add_parser("leaderboard", help="submit, build or verify entries")
@@ -331,16 +344,22 @@ def _add_leaderboard(commands: argparse._SubParsersAction) -> None:
     submit.add_argument("--link", default="", help="paper or code")
     submit.add_argument("--entries", default="leaderboard/entries")
     submit.add_argument("--overwrite", action="store_true")
+    submit.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
     build = actions.add_parser("build", help="write leaderboard/README.md and index.html")
     build.add_argument("--entries", default="leaderboard/entries")
     build.add_argument("--out", default="leaderboard")
     build.add_argument("--navigation", metavar="DIR",
                        help="navigation results files (default: navigation/ beside --entries, "
                             "if there is one)")
+    build.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
+    build.add_argument("--skip-unavailable", action="store_true",
+                       help="leave entries whose dataset is not found off the board (listed "
+                            "as unchecked) instead of refusing to build")
     verify = actions.add_parser("verify", help="rerun an entry and compare its figures")
     verify.add_argument("entry", help="path of the entry's .json, or of a navigation results "
                                       "file")
     verify.add_argument("--workers", type=int, default=1)
+    verify.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
     board.set_defaults(handler=_leaderboard)
 
 

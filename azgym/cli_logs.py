@@ -96,7 +96,7 @@ def bench_data(args: argparse.Namespace, progress: Progress) -> int:
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
     from azgym.logs import log_cases, read_log
-    from azgym.logs.bench import run_log_benchmark
+    from azgym.logs.bench import run_log_benchmark, write_log_results
 
     if args.suite is not None or args.navigator or args.quick or args.split != "dev":
         raise InvalidInputError("--data scores a log: it takes no --suite, --navigator, "
@@ -109,8 +109,7 @@ def bench_data(args: argparse.Namespace, progress: Progress) -> int:
     started = time.perf_counter()
     result = run_log_benchmark(log, contenders, workers=args.workers or default_workers(),
                                time_limit=time_limit, progress=progress)
-    # The figures' floor plans are a shipped scenario's: other maps get results files only.
-    written = result.write(Path(args.out), figures=log.shipped_map)
+    written = write_log_results(result, log, Path(args.out))
     print()
     print(ranked_table(result.summary))
     if tracks := tracking_table(result.summary):

@@ -1,28 +1,34 @@
 """Reference leaderboard entries: built-in localizers on every suite, trackers on the routes.
 
 The default built-in localizers and the learned ones run on every suite, and every built-in
-tracker on the suites of driven routes (dev split, full size).
+tracker on the suites of driven routes (dev split, full size). ``--data NAME`` runs them on a
+log instead (a shipped log's name, or a folder ``leaderboard/datasets/NAME/``; the trackers
+too when it has odometry or IMU), and then only the suites named by ``--suite``.
 
-    python baselines/leaderboard_entries.py [--workers 2] [--suite NAME ...]
+    python baselines/leaderboard_entries.py [--workers 2] [--suite NAME ...] [--data NAME ...]
 
-Writes ``leaderboard/entries/<localizer>-<suite>.json`` (and the per-frame results beside each),
-then rebuilds ``leaderboard/README.md`` and ``leaderboard/index.html`` (with the navigation
-section from ``leaderboard/navigation/``, which ``baselines/navigation_board.py`` writes). The
-bench outputs (figures included) go to ``results/bench-<suite>/``.
+Writes ``leaderboard/entries/<localizer>-<suite>.json`` (``<localizer>-data-<dataset>.json`` for
+a log) and the per-frame results beside each, then (unless ``--no-board``) rebuilds
+``leaderboard/README.md`` and ``leaderboard/index.html`` (with the navigation section from
+``leaderboard/navigation/``, which ``baselines/navigation_board.py`` writes). The bench outputs
+(figures included) go to ``results/bench-<suite>/`` (``results/bench-data-<dataset>/``).
 """
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 import azgym
 from azgym.bench import board, leaderboard
-from azgym.bench.contenders import contender
+from azgym.bench.contenders import Contender, contender
 from azgym.bench.runner import default_contenders, run_benchmark
 from azgym.bench.suites import SUITES
 from azgym.bench.table import ranked_table
 from azgym.localize.registry import list_trackers
+from azgym.logs import read_log
+from azgym.logs.bench import run_log_benchmark, write_log_results
 
 ROOT = Path(__file__).resolve().parent.parent
 LEARNED = ("ng-ransac", "learned")
@@ -33,24 +39,47 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--suite", action="append", choices=sorted(SUITES))
+    parser.add_argument("--data", action="append", metavar="NAME",
+                        help="a log: a shipped log's name or a log folder")
+    parser.add_argument("--no-board", action="store_true",
+                        help="write the entries only (azgym leaderboard build writes the board)")
     args = parser.parse_args()
     entries = ROOT / "leaderboard" / "entries"
-    for name in args.suite or list(SUITES):
+    for name in args.suite or ([] if args.data else list(SUITES)):
         suite = SUITES[name]
-        contenders = default_contenders() + [contender(spec) for spec in LEARNED] + (
-            [contender(spec) for spec in list_trackers()] if suite.routes else [])
-        result = run_benchmark(suite, contenders, workers=args.workers,
+        result = run_benchmark(suite, _contenders(suite.routes), workers=args.workers,
                                progress=lambda line: print(line, flush=True))
         out = ROOT / "results" / f"bench-{name}"
         result.write(out)
-        print(ranked_table(result.summary), flush=True)
-        for label in result.summary["localizers"]:
-            path = leaderboard.submit(out, label, entries, name=f"{label}-{name}",
-                                      version=azgym.__version__, authors=["azgym developers"],
-                                      link="",
-                                      overwrite=True)
-            print(f"wrote {path}")
+        _submit(result.summary, out, entries, name)
+    for folder in args.data or []:
+        log = read_log(folder)
+        result = run_log_benchmark(log, _contenders(log.odometry is not None or
+                                                    log.imu is not None),
+                                   workers=args.workers,
+                                   progress=lambda line: print(line, flush=True))
+        out = ROOT / "results" / f"bench-data-{log.manifest.name}"
+        write_log_results(result, log, out)
+        _submit(result.summary, out, entries, f"data-{log.manifest.name}")
+    if args.no_board:
+        return
     for path in board.build(entries, ROOT / "leaderboard", ROOT / "leaderboard" / "navigation"):
+        print(f"wrote {path}")
+
+
+def _contenders(routes: bool) -> list[Contender]:
+    """The default built-in localizers, the learned ones, and the trackers on driven routes."""
+    return default_contenders() + [contender(spec) for spec in LEARNED] + (
+        [contender(spec) for spec in list_trackers()] if routes else [])
+
+
+def _submit(summary: dict[str, Any], out: Path, entries: Path, suffix: str) -> None:
+    """An entry ``<localizer>-<suffix>`` of every localizer of a run."""
+    print(ranked_table(summary), flush=True)
+    for label in summary["localizers"]:
+        path = leaderboard.submit(out, label, entries, name=f"{label}-{suffix}",
+                                  version=azgym.__version__, authors=["azgym developers"],
+                                  link="", overwrite=True)
         print(f"wrote {path}")
 
 

@@ -21,7 +21,7 @@ from urllib.parse import quote
 
 import numpy as np
 
-from azgym.bench.leaderboard import LeaderboardError, load_all
+from azgym.bench.leaderboard import DatasetUnavailable, LeaderboardError, load_available
 from azgym.bench.suites import SUITES, get_suite
 from azgym.bench.table import rank_key
 from azgym.bench.tracking import KIDNAP_WINDOW_S, RECOVERED_CM
@@ -49,6 +49,8 @@ KINDS = (("dev", False, "dev split, full size: the ranking"),
          ("test", False, "test split: each entry on frames drawn from its own seed, ranked apart"),
          ("test", True, "test split, quick size: ranked apart"))
 """The tables of a suite: runs of different splits or sizes are never ranked together."""
+DATA_TITLE = "the log's frames: the ranking"
+"""The title of a dataset's one table."""
 
 
 NAVIGATION_NOTE = (
@@ -140,29 +142,44 @@ def _header(entries: list[dict[str, Any]]) -> tuple[list[str], int]:
     return names[:TRACKS_AT] + extra + names[TRACKS_AT:], len(extra)
 
 
-def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None) -> list[Path]:
+def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
+          datasets: Path | None = None, skip_unavailable: bool = False) -> list[Path]:
     """Write the board: README.md (tables) and index.html (sortable, self-contained).
 
     Each suite has one table per split and size (:data:`KINDS`); only the dev split's full
-    size is the suite's ranking. The navigation suites' tables follow, from the results files
-    in ``navigation_dir`` (:mod:`azgym.nav.board`).
+    size is the suite's ranking. Each dataset (a log, ``data:NAME``) has one table, after the
+    suites'. The navigation suites' tables follow, from the results files in
+    ``navigation_dir`` (:mod:`azgym.nav.board`).
+
+    Args:
+        entries_dir: The entries.
+        out_dir: Where README.md and index.html go.
+        navigation_dir: The navigation results files (None: no navigation section).
+        datasets: Where dataset entries' logs are looked for before the shipped ones
+            (default: ``datasets/`` beside ``entries_dir``, if it exists).
+        skip_unavailable: Leave dataset entries whose log is not found off the board (listed
+            as unchecked) instead of refusing to build.
 
     Raises:
         LeaderboardError: The entries folder is missing or holds no entry (a typo must not
-            replace the board with an empty one), or an entry is not sound.
+            replace the board with an empty one), an entry is not sound, or (without
+            ``skip_unavailable``) a dataset entry's log is not found.
     """
     if not entries_dir.is_dir() or not any(entries_dir.glob("*.json")):
         raise LeaderboardError(f"{entries_dir}: no leaderboard entries there (*.json); the "
                                "board is left as it is")
-    loaded = load_all(entries_dir)
+    loaded, unavailable = load_available(entries_dir, datasets)
+    if unavailable and not skip_unavailable:
+        raise unavailable[0]
     lines = ["# azgym leaderboard", "",
              f"Ranked by the 75th percentile of the position error (EvAAL's headline). Generated "
              f"by `azgym leaderboard build` from {len(loaded)} entries in `entries/`; every "
              "entry's figures are recomputed from its per-frame results when it is read, and "
-             "its frames are checked to be the suite's. Runs of the dev split at full size are "
-             "the ranking; quick runs and the test split have tables of their own.", "",
+             "its frames are checked to be the suite's (or the log's). Runs of the dev split at "
+             "full size are the ranking; quick runs and the test split have tables of their "
+             "own; each dataset (a log) has one table.", "",
              TRACKS_NOTE, ""]
-    sections = []
+    sections: list[Section] = []
     for suite in SUITES:
         tables = [(split, quick, title, _ranked(loaded, suite, split, quick))
                   for split, quick, title in KINDS]
@@ -174,18 +191,54 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None) 
         for split, quick, title, ranked in tables:
             table_id = f"board-{suite}" if (split, quick) == ("dev", False) else \
                 f"board-{suite}-{split}-{'quick' if quick else 'full'}"
-            header, tracks = _header([entry for entry, _ in ranked])
-            rows = [_cells(rank, entry, tracks) for rank, (entry, _) in enumerate(ranked, 1)]
-            lines += [f"### {title}", "",
-                      *_markdown_table(header, rows, [e for e, _ in ranked]), ""]
-            sections.append((suite, description, title, table_id, header, rows,
-                             [web_link(entry["link"]) for entry, _ in ranked], _cdf_png(ranked)))
+            _add_table(lines, sections, (suite, description, title, table_id), ranked)
+    lines += _dataset_tables(loaded, sections) + _unchecked_note(unavailable)
     if navigation_dir is not None:
         lines += _navigation_section(navigation_dir, sections)
     prepare_folder(out_dir)
     readme = write_file(out_dir / "README.md", "\n".join(lines))
     page = write_file(out_dir / "index.html", _html(sections, len(loaded)))
     return [readme, page]
+
+
+def _add_table(lines: list[str], sections: list[Section], heading: tuple[str, str, str, str],
+               ranked: list[tuple[dict[str, Any], str]]) -> None:
+    """One ranked table's Markdown lines and page section (heading: suite, text, title, id)."""
+    suite, description, title, table_id = heading
+    header, tracks = _header([entry for entry, _ in ranked])
+    rows = [_cells(rank, entry, tracks) for rank, (entry, _) in enumerate(ranked, 1)]
+    lines += [f"### {title}", "", *_markdown_table(header, rows, [e for e, _ in ranked]), ""]
+    sections.append((suite, description, title, table_id, header, rows,
+                     [web_link(entry["link"]) for entry, _ in ranked], _cdf_png(ranked)))
+
+
+def _dataset_tables(loaded: list[tuple[dict[str, Any], str]],
+                    sections: list[Section]) -> list[str]:
+    """One ranked table per dataset (its name and SHA-256; "simulated" when its log says so)."""
+    lines: list[str] = []
+    datasets = {(e["dataset"]["name"], e["dataset"]["sha256"]): e["dataset"]
+                for e, _ in loaded if "dataset" in e}
+    for (name, sha256), dataset in sorted(datasets.items()):
+        suite = f"data:{name}"
+        kind = "simulated data" if dataset["simulated"] else "a real camera's data"
+        description = (f"the log {name}: {kind} (log format {dataset['format']}, sha256 "
+                       f"{sha256[:12]})")
+        ranked = [(e, frames) for e, frames in _ranked(loaded, suite, "data", False)
+                  if e["dataset"]["sha256"] == sha256]
+        lines += [f"## {suite} — {description}", ""]
+        _add_table(lines, sections, (suite, description, DATA_TITLE, f"board-data-{name}"),
+                   ranked)
+    return lines
+
+
+def _unchecked_note(unavailable: list[DatasetUnavailable]) -> list[str]:
+    """The dataset entries left off the board, unchecked, by name and dataset."""
+    if not unavailable:
+        return []
+    names = ", ".join(f"{markdown_cell(missing.entry['name'])} "
+                      f"({markdown_cell(missing.entry['dataset']['name'])})"
+                      for missing in unavailable)
+    return [f"Not shown, because their datasets were not available to check them: {names}.", ""]
 
 
 def _navigation_section(directory: Path, sections: list[Section]) -> list[str]:

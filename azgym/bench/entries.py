@@ -12,7 +12,9 @@ An entry (format in ``entry.schema.json``) is sound when:
 - its per-frame results match ``results_sha256``, are well formed row by row
   (:func:`~azgym.bench.entry_files.parse_frames`) and cover exactly the suite's frames: the
   suite is redrawn for the entry's seed and size, the digest of the cases must be
-  ``cases_sha256`` and each row's scenario, group and cause the drawn frame's;
+  ``cases_sha256`` and each row's scenario, group and cause the drawn frame's; an entry scored
+  on a log (``data:NAME``) takes its cases from the log instead, found and checked unchanged by
+  :mod:`~azgym.bench.entry_data`;
 - every figure under ``metrics`` (overall, 95 % intervals, by cause, by group, runtimes, and the
   track figures of a suite of driven routes) equals the one recomputed from the per-frame
   results and the suite's cases as drawn for the coverage check, and ``n_frames`` their count.
@@ -30,11 +32,13 @@ import math
 import re
 from datetime import UTC, datetime, timedelta
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import jsonschema
 
 from azgym._version import __version__
+from azgym.bench.entry_data import check_data_run, dataset_cases, is_data_entry
 from azgym.bench.entry_files import FrameTable, LeaderboardError, parse_frames
 from azgym.bench.plugin_files import is_portable, plugin_path
 from azgym.bench.results import cases_digest, contender_metrics
@@ -67,7 +71,7 @@ def clean(value: Any) -> Any:
 
 
 def validate_entry(entry: Any, frames_text: str | None, origin: str,
-                   stem: str | None = None) -> None:
+                   stem: str | None = None, datasets: Path | None = None) -> None:
     """Raise :class:`LeaderboardError` naming the problem unless the entry is sound.
 
     Args:
@@ -75,6 +79,10 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
         frames_text: Its per-frame results (None: the file is missing).
         origin: Where it came from, for messages.
         stem: Its file's name without ``.json`` (None: not yet written; its name is used).
+        datasets: Where a dataset entry's log is looked for first (:mod:`.entry_data`).
+
+    Raises:
+        DatasetUnavailable: A dataset entry's log is not found (every other check passed).
     """
     _check_schema(entry, origin)
     _check_identity(entry, origin, entry["name"] if stem is None else stem)
@@ -86,7 +94,7 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
         raise LeaderboardError(f"{origin}: results_sha256: the per-frame results file does not "
                                f"match (its SHA-256 is {digest})")
     table = parse_frames(frames_text, origin)
-    cases = _check_coverage(entry, table, origin)
+    cases = _check_coverage(entry, table, origin, datasets)
     _check_figures(entry, table, cases, origin)
 
 
@@ -115,7 +123,26 @@ def _check_identity(entry: dict[str, Any], origin: str, stem: str) -> None:
 
 
 def _check_run(entry: dict[str, Any], origin: str) -> None:
-    """Suite and version, seed, azgym version, time and the plug-in's spec."""
+    """Suite (or dataset) and version, seed, azgym version, time and the plug-in's spec."""
+    if is_data_entry(entry):
+        check_data_run(entry, origin)
+    else:
+        _check_suite_run(entry, origin)
+    _check_version(entry["azgym_version"], origin)
+    _check_timestamp(entry["timestamp"], origin)
+    localizer = entry["localizer"]
+    if plugin_path(localizer["spec"]) is not None:
+        if not is_portable(localizer["spec"]):
+            raise LeaderboardError(f"{origin}: localizer/spec: {localizer['spec']!r} is an "
+                                   "absolute path; a plug-in file is named relative to the "
+                                   "entry's folder")
+        if "sha256" not in localizer:
+            raise LeaderboardError(f"{origin}: localizer/sha256: a plug-in file's SHA-256 is "
+                                   "required (submit records it)")
+
+
+def _check_suite_run(entry: dict[str, Any], origin: str) -> None:
+    """A suite's entry: the suite at the entry's version, and the split's seed."""
     suite = SUITES.get(entry["suite"])
     if suite is None:
         raise LeaderboardError(f"{origin}: suite: unknown suite {entry['suite']!r}")
@@ -129,17 +156,6 @@ def _check_run(entry: dict[str, Any], origin: str) -> None:
     if entry["split"] == "test" and entry["seed"] == suite.dev_seed:
         raise LeaderboardError(f"{origin}: seed: a test split is drawn from a fresh seed; "
                                f"{suite.dev_seed} is the dev split's")
-    _check_version(entry["azgym_version"], origin)
-    _check_timestamp(entry["timestamp"], origin)
-    localizer = entry["localizer"]
-    if plugin_path(localizer["spec"]) is not None:
-        if not is_portable(localizer["spec"]):
-            raise LeaderboardError(f"{origin}: localizer/spec: {localizer['spec']!r} is an "
-                                   "absolute path; a plug-in file is named relative to the "
-                                   "entry's folder")
-        if "sha256" not in localizer:
-            raise LeaderboardError(f"{origin}: localizer/sha256: a plug-in file's SHA-256 is "
-                                   "required (submit records it)")
 
 
 def release(version: str) -> tuple[int, ...] | None:
@@ -186,22 +202,27 @@ def suite_cases(name: str, version: int, seed: int, quick: bool
     return cases_digest(cases), tuple(cases)
 
 
-def _check_coverage(entry: dict[str, Any], table: FrameTable, origin: str
-                    ) -> tuple[Case, ...]:
-    """The per-frame results hold exactly the frames the suite draws for the entry: its cases."""
-    digest, cases = suite_cases(entry["suite"], entry["suite_version"], entry["seed"],
-                                entry["quick"])
-    frames = [(c.scenario, c.group, c.cause) for c in cases]
-    size = "quick" if entry["quick"] else "full"
+def _check_coverage(entry: dict[str, Any], table: FrameTable, origin: str,
+                    datasets: Path | None) -> tuple[Case, ...]:
+    """The per-frame results hold exactly the entry's frames (the suite's draw, or the log's)."""
+    if is_data_entry(entry):
+        digest, cases = dataset_cases(entry, origin, datasets)
+        source = f"the log {entry['dataset']['name']}"
+        other, rerun, has = f"{source} holds (", "rerun it with azgym bench --data", f"{source} has"
+    else:
+        digest, cases = suite_cases(entry["suite"], entry["suite_version"], entry["seed"],
+                                    entry["quick"])
+        run = f"seed {entry['seed']}, {'quick' if entry['quick'] else 'full'}"
+        other = f"{entry['suite']} v{entry['suite_version']} draws now ({run}; "
+        rerun, has = "rerun it on the current suite", f"{entry['suite']} ({run}) has"
     if entry["cases_sha256"] != digest:
         raise LeaderboardError(
-            f"{origin}: cases_sha256: the entry was scored on other frames than {entry['suite']} "
-            f"v{entry['suite_version']} draws now (seed {entry['seed']}, {size}; their digest is "
-            f"{digest}); rerun it on the current suite")
+            f"{origin}: cases_sha256: the entry was scored on other frames than {other}their "
+            f"digest is {digest}); {rerun}")
+    frames = [(c.scenario, c.group, c.cause) for c in cases]
     if len(table.cause) != len(frames):
-        raise LeaderboardError(
-            f"{origin}: per-frame results: {len(table.cause)} frames, but {entry['suite']} "
-            f"(seed {entry['seed']}, {size}) has {len(frames)}")
+        raise LeaderboardError(f"{origin}: per-frame results: {len(table.cause)} frames, but "
+                               f"{has} {len(frames)}")
     rows = zip(table.scenario, table.group, table.cause, strict=True)
     for index, (row, drawn) in enumerate(zip(rows, frames, strict=True)):
         if row != drawn:

@@ -1,12 +1,12 @@
 """The leaderboard's entries: making one from a run, submitting, reading and rerunning them.
 
 An entry (``leaderboard/entries/NAME.json``, format in ``entry.schema.json``) holds a localizer's
-metrics on one suite, and beside it the per-frame results they were computed from
-(``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Every entry read is checked by
-:func:`~azgym.bench.entries.validate_entry`, which recomputes every figure it shows; ``submit``
-never writes over another entry's files; ``verify`` reruns the entry's localizer (a plug-in file
-is found relative to the entry's folder, and must still have the SHA-256 it was scored with)
-and compares. :mod:`azgym.bench.board` publishes the entries.
+metrics on one suite (or one log, ``data:NAME``), and beside it the per-frame results they were
+computed from (``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Every entry read
+is checked by :func:`~azgym.bench.entries.validate_entry`, which recomputes every figure it
+shows; ``submit`` never writes over another entry's files; ``verify`` reruns the entry's
+localizer (a plug-in file is found relative to the entry's folder, and must still have the
+SHA-256 it was scored with) and compares. :mod:`azgym.bench.board` publishes the entries.
 """
 
 from __future__ import annotations
@@ -24,6 +24,12 @@ from pathlib import Path
 from typing import Any
 
 from azgym.bench.entries import ENTRY_FORMAT, clean, close, schema, validate_entry
+from azgym.bench.entry_data import (
+    DatasetUnavailable,
+    checked_log,
+    default_datasets,
+    is_data_entry,
+)
 from azgym.bench.entry_files import (
     MAX_FRAMES_BYTES,
     LeaderboardError,
@@ -36,10 +42,11 @@ from azgym.bench.results import FRAME_COLUMNS
 from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
+from azgym.logs.bench import run_log_benchmark
 
-__all__ = ["ENTRY_FORMAT", "SUITES", "LeaderboardError", "frames_file_text", "load_all",
-           "load_entries", "load_entry", "make_entry", "schema", "submit", "validate_entry",
-           "verify"]
+__all__ = ["ENTRY_FORMAT", "SUITES", "DatasetUnavailable", "LeaderboardError",
+           "frames_file_text", "load_all", "load_available", "load_entries", "load_entry",
+           "make_entry", "schema", "submit", "validate_entry", "verify"]
 
 
 def frames_file_text(rows: list[list[str]]) -> str:
@@ -79,7 +86,7 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
             "suite": summary["suite"], "suite_version": summary["suite_version"],
             "split": summary["split"], "seed": summary["seed"], "quick": summary["quick"],
             "n_frames": summary["n_frames"], "cases_sha256": summary["cases_sha256"],
-            "azgym_version": summary["azgym_version"],
+            "azgym_version": summary["azgym_version"], **_dataset_of(summary),
             "metrics": clean({key: row[key] for key in figures}),
             "machine": {"platform": platform.platform(), "processor": platform.processor() or
                         platform.machine(), "cpus": os.cpu_count(),
@@ -92,6 +99,14 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
         raise LeaderboardError(f"{results_dir / 'results.json'}: not what azgym bench writes "
                                f"(no field {exc})") from None
     return entry, text
+
+
+def _dataset_of(summary: dict[str, Any]) -> dict[str, Any]:
+    """A log's run: the ``dataset`` record an entry keeps (name, SHA-256, format, simulated)."""
+    if "dataset" not in summary:
+        return {}
+    return {"dataset": {key: summary["dataset"][key]
+                        for key in ("name", "sha256", "format", "simulated")}}
 
 
 def _frames_of(path: Path, label: str) -> str:
@@ -126,8 +141,12 @@ def _portable(row: dict[str, Any], entries_dir: Path) -> dict[str, Any]:
 
 
 def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, version: str,
-           authors: list[str], link: str = "", overwrite: bool = False) -> Path:
+           authors: list[str], link: str = "", overwrite: bool = False,
+           datasets: Path | None = None) -> Path:
     """Validate an entry from a results folder and write it (and its frames) to entries_dir.
+
+    A run on a log (``azgym bench --data``) is checked against the log, looked for in
+    ``datasets`` (default: ``datasets/`` beside ``entries_dir``) and among the shipped logs.
 
     Raises:
         LeaderboardError: The entry is not sound, or its files would replace another entry's
@@ -139,7 +158,8 @@ def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, versi
     prepare_folder(entries_dir)
     entry, text = make_entry(results_dir, label, entries_dir, name=name, version=version,
                              authors=authors, link=link)
-    validate_entry(entry, text, f"entry {name!r}")
+    validate_entry(entry, text, f"entry {name!r}",
+                   datasets=datasets or default_datasets(entries_dir))
     path = entries_dir / f"{name}.json"
     _claim(entries_dir, name, overwrite)
     # mtime=0: the same results give the same bytes.
@@ -177,12 +197,16 @@ def _results_file_of(path: Path) -> str | None:
     return Path(claimed).name if isinstance(claimed, str) else None
 
 
-def load_entry(path: Path) -> dict[str, Any]:
-    """Read and validate one entry file (and its per-frame results beside it)."""
-    return _load(path)[0]
+def load_entry(path: Path, datasets: Path | None = None) -> dict[str, Any]:
+    """Read and validate one entry file (and its per-frame results beside it).
+
+    A dataset entry's log is looked for in ``datasets`` (default: ``datasets/`` beside the
+    entry's folder) and among the shipped logs.
+    """
+    return _load(path, datasets or default_datasets(path.parent))[0]
 
 
-def _load(path: Path) -> tuple[dict[str, Any], str]:
+def _load(path: Path, datasets: Path | None) -> tuple[dict[str, Any], str]:
     """The validated entry and its per-frame results text."""
     entry = read_json(path, "leaderboard entry")
     frames = None
@@ -190,31 +214,55 @@ def _load(path: Path) -> tuple[dict[str, Any], str]:
         frames_path = path.parent / Path(entry["results_file"]).name
         if frames_path.is_file():
             frames = read_frames(frames_path)
-    validate_entry(entry, frames, str(path), stem=path.name.removesuffix(".json"))
+    validate_entry(entry, frames, str(path), stem=path.name.removesuffix(".json"),
+                   datasets=datasets)
     return entry, frames
 
 
-def load_entries(entries_dir: Path) -> list[dict[str, Any]]:
+def load_entries(entries_dir: Path, datasets: Path | None = None) -> list[dict[str, Any]]:
     """Every entry in the folder, validated (the first bad one raises, naming its file)."""
-    return [entry for entry, _ in load_all(entries_dir)]
+    return [entry for entry, _ in load_all(entries_dir, datasets)]
 
 
-def load_all(entries_dir: Path) -> list[tuple[dict[str, Any], str]]:
+def load_all(entries_dir: Path, datasets: Path | None = None
+             ) -> list[tuple[dict[str, Any], str]]:
     """Every entry of the folder with its per-frame results, validated; names unique.
 
-    Names must differ in more than case: on a file system that ignores case, two such entries
-    would share their files.
+    Raises:
+        DatasetUnavailable: A dataset entry's log is not found (:func:`load_available`).
     """
+    loaded, unavailable = load_available(entries_dir, datasets)
+    if unavailable:
+        raise unavailable[0]
+    return loaded
+
+
+def load_available(entries_dir: Path, datasets: Path | None = None
+                   ) -> tuple[list[tuple[dict[str, Any], str]], list[DatasetUnavailable]]:
+    """Every entry that can be checked, validated, and the dataset entries that cannot.
+
+    A dataset entry whose log is not found (in ``datasets``, default ``datasets/`` beside the
+    entries folder, or among the shipped logs) is returned apart, unchecked; any other problem
+    raises. Names must differ in more than case (unchecked entries' too): on a file system
+    that ignores case, two such entries would share their files.
+    """
+    datasets = datasets or default_datasets(entries_dir)
     loaded: list[tuple[dict[str, Any], str]] = []
+    unavailable: list[DatasetUnavailable] = []
     seen: dict[str, str] = {}
     for path in sorted(entries_dir.glob("*.json")):
-        entry, frames = _load(path)
+        try:
+            entry, frames = _load(path, datasets)
+        except DatasetUnavailable as missing:
+            entry, frames = missing.entry, None
+            unavailable.append(missing)
         twin = seen.setdefault(entry["name"].lower(), entry["name"])
         if twin != entry["name"]:
             raise LeaderboardError(f"{path}: name: {entry['name']!r} and {twin!r} differ only in "
                                    "case; entry names must be unique")
-        loaded.append((entry, frames))
-    return loaded
+        if frames is not None:
+            loaded.append((entry, frames))
+    return loaded, unavailable
 
 
 def runnable_spec(path: Path, entry: dict[str, Any]) -> str:
@@ -237,8 +285,9 @@ def runnable_spec(path: Path, entry: dict[str, Any]) -> str:
     return spec
 
 
-def verify(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]]:
-    """Rerun an entry's localizer on its suite, split and seed; return differing figures.
+def verify(path: Path, workers: int = 1, datasets: Path | None = None
+           ) -> dict[str, tuple[Any, Any]]:
+    """Rerun an entry's localizer on its suite, split and seed, or its log; return what differs.
 
     Every accuracy figure (overall, intervals, by cause, by group, tracks) is compared;
     runtimes are not (they depend on the machine). An empty answer means the entry was reproduced.
@@ -247,11 +296,16 @@ def verify(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]]:
         LeaderboardError: The entry is not sound, its plug-in file is missing or changed, or
             the localizer cannot be built.
     """
-    entry = load_entry(path)
+    datasets = datasets or default_datasets(path.parent)
+    entry = load_entry(path, datasets)
     contender = Contender(entry["name"], runnable_spec(path, entry),
                           entry["localizer"]["params"])
-    result = run_benchmark(get_suite(entry["suite"]), [contender], split=entry["split"],
-                           seed=entry["seed"], quick=entry["quick"], workers=workers)
+    if is_data_entry(entry):
+        result = run_log_benchmark(checked_log(entry, str(path), datasets), [contender],
+                                   workers=workers)
+    else:
+        result = run_benchmark(get_suite(entry["suite"]), [contender], split=entry["split"],
+                               seed=entry["seed"], quick=entry["quick"], workers=workers)
     fresh = result.summary["localizers"][entry["name"]]
     if fresh["crashes"] == entry["n_frames"]:
         raise LeaderboardError(f"{path}: the localizer could not run on any frame: "

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from azgym.bench.suites import CAUSES, Case
+from azgym.core import BeaconMap
 from azgym.files import write_file
 from azgym.site import load_scenario
 
@@ -21,8 +22,20 @@ if TYPE_CHECKING:
 
 
 def write_figures(summary: dict[str, Any], frames: list[Case],
-                  outcomes: dict[str, Outcome], out: Path) -> list[Path]:
-    """cdf.png, causes.png and one error_map_<scenario>.png per scenario (needs matplotlib)."""
+                  outcomes: dict[str, Outcome], out: Path,
+                  maps: dict[str, BeaconMap] | None = None) -> list[Path]:
+    """cdf.png, causes.png and one error_map_<scenario>.png per scenario (needs matplotlib).
+
+    Args:
+        summary: The run's summary (results.json).
+        frames: Its cases.
+        outcomes: Each contender's outcome on them.
+        out: The folder.
+        maps: Beacon maps by the cases' scenario name, for maps that are no shipped scenario
+            (a log's ``beacons.csv``): their floor plans show the beacons only, without racks
+            or walls. Any other scenario is loaded by name.
+    """
+    maps = maps or {}
     import matplotlib
 
     matplotlib.use("Agg")
@@ -31,11 +44,12 @@ def write_figures(summary: dict[str, Any], frames: list[Case],
     written = [_error_cdfs(plt, summary, outcomes, out / "cdf.png"),
                _p75_by_cause(plt, summary, out / "causes.png")]
     for scenario_name in dict.fromkeys(f.scenario for f in frames):
-        written.append(_error_map(plt, summary, frames, outcomes, scenario_name,
+        plan = maps.get(scenario_name, scenario_name)
+        written.append(_error_map(plt, summary, frames, outcomes, (scenario_name, plan),
                                   out / f"error_map_{scenario_name}.png"))
         routed = any(f.sequence for f in frames if f.scenario == scenario_name)
         if routed and all(o.estimate is not None for o in outcomes.values()):
-            written.append(_trajectories(plt, summary, frames, outcomes, scenario_name,
+            written.append(_trajectories(plt, summary, frames, outcomes, (scenario_name, plan),
                                          out / f"trajectories_{scenario_name}.png"))
     return written
 
@@ -79,10 +93,15 @@ def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
 
 
 def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
-               outcomes: dict[str, Outcome], scenario_name: str, path: Path) -> Path:
-    """One floor plan per localizer: its position error at each of the scenario's frames."""
+               outcomes: dict[str, Outcome], scenario: tuple[str, str | BeaconMap],
+               path: Path) -> Path:
+    """One floor plan per localizer: its position error at each of the scenario's frames.
+
+    ``scenario`` is the cases' scenario name and its plan (:func:`_floor_plan`).
+    """
     from matplotlib.colors import LogNorm
 
+    scenario_name, plan = scenario
     labels = list(summary["localizers"])
     rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
     xy = np.array([frames[k].pose[:2] for k in rows])
@@ -92,7 +111,7 @@ def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
         outcome = outcomes[label]
         # A missing estimate is drawn at the top of the scale, 1000 cm.
         error = np.where(outcome.ok[rows], outcome.position[rows] * 100, 1000.0)
-        _floor_plan(axes, scenario_name)
+        _floor_plan(axes, plan)
         shown = axes.scatter(xy[:, 0], xy[:, 1], c=np.clip(error, 0.5, 1000.0), s=8,
                              norm=norm, cmap="viridis")
         axes.set_title(label, fontsize=9)
@@ -110,9 +129,18 @@ def _panels(plt: Any, count: int) -> tuple[Any, Any]:
                         constrained_layout=True)
 
 
-def _floor_plan(axes: Any, scenario_name: str) -> None:
-    """The scenario's racks (grey) and walls (dark lines) on the axes."""
-    scenario = load_scenario(scenario_name)
+def _floor_plan(axes: Any, plan: str | BeaconMap) -> None:
+    """A scenario's racks (grey) and walls (dark lines), or a beacon map's beacons only.
+
+    ``plan`` is a scenario's name, or the beacon map of a map that is no shipped scenario (a
+    log's ``beacons.csv``): its beacons are drawn as red triangles, without racks or walls.
+    """
+    if isinstance(plan, BeaconMap):
+        axes.scatter(plan.xyz[:, 0], plan.xyz[:, 1], marker="^", s=14, color="tab:red",
+                     label="beacons")
+        axes.set_aspect("equal")
+        return
+    scenario = load_scenario(plan)
     for rack in scenario.racks:
         axes.fill(*rack.corners().T, color="0.75")
     for wall in scenario.walls:
@@ -121,16 +149,21 @@ def _floor_plan(axes: Any, scenario_name: str) -> None:
 
 
 def _trajectories(plt: Any, summary: dict[str, Any], frames: list[Case],
-                  outcomes: dict[str, Outcome], scenario_name: str, path: Path) -> Path:
-    """One floor plan per contender: the true routes (lines) and its estimates, by error."""
+                  outcomes: dict[str, Outcome], scenario: tuple[str, str | BeaconMap],
+                  path: Path) -> Path:
+    """One floor plan per contender: the true routes (lines) and its estimates, by error.
+
+    ``scenario`` is the cases' scenario name and its plan (:func:`_floor_plan`).
+    """
     from matplotlib.colors import LogNorm
 
+    scenario_name, plan = scenario
     labels = list(summary["localizers"])
     rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
     figure, grid = _panels(plt, len(labels))
     norm = LogNorm(vmin=0.5, vmax=1000.0)
     for axes, label in zip(grid.ravel(), labels, strict=False):
-        _floor_plan(axes, scenario_name)
+        _floor_plan(axes, plan)
         for sequence in dict.fromkeys(frames[k].sequence for k in rows):
             truth = np.array([frames[k].pose[:2] for k in rows if frames[k].sequence == sequence])
             axes.plot(truth[:, 0], truth[:, 1], color="black", linewidth=0.6)

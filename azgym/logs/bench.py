@@ -9,7 +9,9 @@ identity beside it: its name, format, whether it is simulated, and the SHA-256 o
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Sequence
+from pathlib import Path
 
 from azgym.bench.contenders import REFERENCE, Contender, default_contenders
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
@@ -57,3 +59,17 @@ def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *
                           "simulated": log.manifest.simulated, "sha256": log.sha256,
                           "description": log.manifest.description}
     return BenchResult(summary, cases, outcomes)
+
+
+def write_log_results(result: BenchResult, log: Log, out: Path) -> list[Path]:
+    """results.json, frames.csv and, with matplotlib, the figures, on the log's own map.
+
+    A map that is no shipped scenario (``beacons.csv``) is drawn from its beacons (no racks).
+    """
+    written = result.write(out, figures=False)
+    if importlib.util.find_spec("matplotlib") is not None:
+        from azgym.bench.plots import write_figures
+
+        maps = {} if log.shipped_map else {log.map_name: log.beacons}
+        written += write_figures(result.summary, result.cases, result.outcomes, out, maps)
+    return written

@@ -383,8 +383,10 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
     navigation = [f"board-{name}-{split}-{data['seed']}-full"
                   for name in NAVIGATION_SUITES for split in ("dev", "test")
                   for data in [json.loads((NAVIGATION / f"{name}-{split}.json").read_text())]]
-    assert [table for table, _, _ in tables] == [f"board-{suite}" for suite in L.SUITES
-                                                 ] + navigation
+    datasets = sorted({e["dataset"]["name"] for e in L.load_entries(NAVIGATION.parent / "entries")
+                       if "dataset" in e})
+    assert [table for table, _, _ in tables] == [f"board-{suite}" for suite in L.SUITES] + [
+        f"board-data-{name}" for name in datasets] + navigation
     for table, up, down in tables:
         values = [float(cell) for cell in up.split(";")]
         assert values == sorted(values), table
@@ -402,6 +404,9 @@ def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(t
         expected = builtins | trackers if suite.routes else builtins
         assert {e["name"].removesuffix(f"-{name}") for e in entries
                 if e["suite"] == name} == expected, name
+    shipped = "warehouse-small-simulated"  # the shipped log: its odometry and IMU drive trackers
+    assert {e["name"].removesuffix(f"-data-{shipped}") for e in entries
+            if e["suite"] == f"data:{shipped}"} == builtins | trackers
     readme, _ = B.build(root / "entries", tmp_path, NAVIGATION)
     assert readme.read_text() == (root / "README.md").read_text(), \
         "leaderboard/README.md is stale: run python baselines/leaderboard_entries.py"

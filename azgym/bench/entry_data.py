@@ -1,0 +1,136 @@
+"""A dataset entry's checks: the log it was scored on is found, unchanged, and gives its cases.
+
+An entry made from ``azgym bench --data`` (suite ``data:NAME``, split ``data``, seed 0, full
+size) records its ``dataset``: name, SHA-256 of the log's files
+(:func:`~azgym.logs.read.log_digest`), log format and whether it is simulated. When it is read,
+the log is looked for in the datasets folder given (``DATASETS/NAME/``) and then among the logs
+shipped with azgym; its digest must be the entry's (a log edited since the entry was made is
+refused), its format one this azgym reads, its name and ``simulated`` the entry's; the entry's
+cases are then the log's frames (:func:`~azgym.logs.cases.log_cases`), checked and recomputed as
+a suite's. A log that cannot be found raises :class:`DatasetUnavailable`: the entry cannot be
+checked, and the board leaves it out only when told to (``--skip-unavailable``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from azgym.bench.entry_files import LeaderboardError
+from azgym.bench.results import cases_digest
+from azgym.bench.suites import Case
+from azgym.logs.bench import SPLIT
+from azgym.logs.cases import log_cases
+from azgym.logs.manifest import FORMAT_VERSION, MANIFEST
+from azgym.logs.problems import LogError
+from azgym.logs.read import Log, read_log, shipped_logs
+
+PREFIX = "data:"
+"""A dataset entry's suite is ``data:`` and the dataset's name."""
+DATASETS_FOLDER = "datasets"
+"""The datasets folder used by default: ``datasets/`` beside the entries folder, if it exists."""
+
+
+class DatasetUnavailable(LeaderboardError):
+    """A dataset entry's log is neither in the datasets folder nor shipped: it cannot be checked.
+
+    Attributes:
+        entry: The entry (schema, identity and per-frame file already checked).
+    """
+
+    def __init__(self, message: str, entry: dict[str, Any]) -> None:
+        super().__init__(message)
+        self.entry = entry
+
+
+def is_data_entry(entry: dict[str, Any]) -> bool:
+    """Whether the entry claims to be scored on a log (by any of its suite, split or dataset)."""
+    return entry["suite"].startswith(PREFIX) or entry["split"] == SPLIT or "dataset" in entry
+
+
+def default_datasets(entries_dir: Path) -> Path | None:
+    """``datasets/`` beside the entries folder, if there is one."""
+    folder = entries_dir.parent / DATASETS_FOLDER
+    return folder if folder.is_dir() else None
+
+
+def find_dataset(name: str, datasets: Path | None) -> Path | None:
+    """The log folder of dataset ``name``: ``datasets/NAME/``, else a shipped log, else None."""
+    if datasets is not None and (datasets / name / MANIFEST).is_file():
+        return datasets / name
+    return shipped_logs().get(name)
+
+
+def check_data_run(entry: dict[str, Any], origin: str) -> None:
+    """Suite, split, seed, size and the dataset record agree, in a format this azgym reads."""
+    dataset = entry.get("dataset")
+    if dataset is None:
+        raise LeaderboardError(f"{origin}: dataset: an entry scored on a log ({entry['suite']}, "
+                               f"split {entry['split']}) must name its dataset")
+    expected = f"{PREFIX}{dataset['name']}"
+    if entry["suite"] != expected:
+        raise LeaderboardError(f"{origin}: suite: the entry's dataset is {dataset['name']!r}, so "
+                               f"its suite is {expected!r}, not {entry['suite']!r}")
+    if entry["split"] != SPLIT:
+        raise LeaderboardError(f"{origin}: split: an entry scored on a log has split {SPLIT!r}, "
+                               f"not {entry['split']!r}")
+    if entry["seed"] != 0 or entry["quick"]:
+        raise LeaderboardError(f"{origin}: seed: a log's frames are fixed: seed 0 at full size, "
+                               f"the entry says seed {entry['seed']}"
+                               f"{', quick' if entry['quick'] else ''}")
+    if dataset["format"] > FORMAT_VERSION:
+        raise LeaderboardError(f"{origin}: dataset/format: log format {dataset['format']}, this "
+                               f"azgym reads format {FORMAT_VERSION} (a newer azgym made it)")
+    if entry["suite_version"] != dataset["format"]:
+        raise LeaderboardError(f"{origin}: suite_version: a log's suite is at its log format "
+                               f"({dataset['format']}), the entry says {entry['suite_version']}")
+
+
+def dataset_cases(entry: dict[str, Any], origin: str, datasets: Path | None
+                  ) -> tuple[str, tuple[Case, ...]]:
+    """The cases of the entry's log (found, and checked unchanged) and their digest."""
+    try:
+        cases = log_cases(checked_log(entry, origin, datasets))
+    except LogError as exc:  # a log without truth
+        raise LeaderboardError(f"{origin}: dataset: {exc}") from None
+    return cases_digest(cases), tuple(cases)
+
+
+def checked_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Log:
+    """The entry's log, found and checked to be the one it was scored on.
+
+    Raises:
+        DatasetUnavailable: The log is not found.
+        LeaderboardError: The log differs from the one the entry was scored on, or is unreadable.
+    """
+    log = _found_log(entry, origin, datasets)
+    dataset = entry["dataset"]
+    if log.sha256 != dataset["sha256"]:
+        raise LeaderboardError(
+            f"{origin}: dataset/sha256: the log {log.folder} changed since the entry was made "
+            f"(its files' SHA-256 is {log.sha256}, the entry was scored on {dataset['sha256']}); "
+            "rerun the entry on it with azgym bench --data")
+    for field, value in (("name", log.manifest.name), ("simulated", log.manifest.simulated),
+                         ("format", log.manifest.format)):
+        if dataset[field] != value:
+            raise LeaderboardError(f"{origin}: dataset/{field}: the entry says "
+                                   f"{dataset[field]!r}, the log's log.toml says {value!r}")
+    return log
+
+
+def _found_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Log:
+    """The entry's log read and checked (not yet compared with the entry)."""
+    name = entry["dataset"]["name"]
+    folder = find_dataset(name, datasets)
+    if folder is None:
+        where = f"in {datasets} or " if datasets is not None else ""
+        raise DatasetUnavailable(
+            f"{origin}: dataset: the log {name!r} is not available ({where}among the logs "
+            "shipped with azgym), so the entry cannot be checked; put the log in the datasets "
+            "folder as NAME/ (--datasets DIR, default datasets/ beside the entries), or pass "
+            "--skip-unavailable to leave such entries off the board", entry)
+    try:
+        return read_log(folder)
+    except LogError as exc:
+        raise LeaderboardError(f"{origin}: dataset: the log {name!r} cannot be read: "
+                               f"{exc}") from None
