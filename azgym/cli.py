@@ -41,7 +41,7 @@ from azgym.cli_evaluate import add_evaluate
 from azgym.cli_layout import add_layout
 from azgym.cli_logs import add_logs
 from azgym.cli_studies import add_reproduce, add_study
-from azgym.cli_sweep import add_sweep
+from azgym.cli_sweep import add_backend_options, add_sweep
 from azgym.cli_train import add_train
 from azgym.errors import AzgymError, InvalidInputError
 
@@ -55,7 +55,7 @@ DEFAULT_SUITE = "warehouse-static"
 def _bench(args: argparse.Namespace) -> int:
     from azgym.bench.runner import default_workers, run_benchmark
     from azgym.bench.suites import SUITES
-    from azgym.bench.table import ranked_table, tracking_table
+    from azgym.bench.table import run_report
     from azgym.errors import unknown_name
     from azgym.files import prepare_folder
     from azgym.nav.suites import NAVIGATION_SUITES
@@ -86,11 +86,7 @@ def _bench(args: argparse.Namespace) -> int:
                            time_limit=args.time_limit, progress=_progress_printer(),
                            backend=args.backend, address=args.address)
     written = result.write(Path(args.out))
-    print()
-    print(ranked_table(result.summary))
-    if tracks := tracking_table(result.summary):
-        print(f"\n{tracks}")
-    print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
+    print(run_report(result.summary, time.perf_counter() - started, written))
     return 0
 
 
@@ -311,12 +307,7 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
                        help="time a localizer may take on one frame (or to be built); a frame "
                             f"over it is scored unavailable (default: {DEFAULT_TIME_LIMIT:g}; "
                             "frame suites only)")
-    bench.add_argument("--backend", choices=("local", "ray"), default="local",
-                       help="local: worker processes here; ray: Ray actors (pip install "
-                            "\"azgym[ray]\"), on --address or a local instance (frame suites)")
-    bench.add_argument("--address", metavar="ADDR",
-                       help="--backend ray: a Ray cluster's head, HOST:PORT (see `ray start "
-                            "--head`), ray://HOST:PORT or auto (default: a local instance)")
+    add_backend_options(bench, " (frame suites)")
     bench.add_argument("--navigator", action="append", default=[], metavar="NAME",
                        help="navigation suites: who drives, 'pure-pursuit' or 'ppo' (the "
                             "shipped policy); repeatable (default: both)")

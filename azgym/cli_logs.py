@@ -91,7 +91,7 @@ def bench_data(args: argparse.Namespace, progress: Progress) -> int:
     """``azgym bench --data DIR``: every contender on a log's frames."""
     from azgym.bench.isolation import DEFAULT_TIME_LIMIT
     from azgym.bench.runner import default_workers
-    from azgym.bench.table import ranked_table, tracking_table
+    from azgym.bench.table import run_report
     from azgym.cli import _contenders
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
@@ -110,9 +110,5 @@ def bench_data(args: argparse.Namespace, progress: Progress) -> int:
     result = run_log_benchmark(log, contenders, workers=args.workers or default_workers(),
                                time_limit=time_limit, progress=progress)
     written = write_log_results(result, log, Path(args.out))
-    print()
-    print(ranked_table(result.summary))
-    if tracks := tracking_table(result.summary):
-        print(f"\n{tracks}")
-    print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
+    print(run_report(result.summary, time.perf_counter() - started, written))
     return 0

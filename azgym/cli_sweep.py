@@ -12,16 +12,21 @@ import time
 from pathlib import Path
 
 
+def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None:
+    """``--backend local|ray`` and ``--address ADDR``: one definition for bench and sweep."""
+    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+                        help="local: worker processes here; ray: Ray actors (pip install "
+                             f"\"azgym[ray]\"), on --address or a local instance{note}")
+    parser.add_argument("--address", metavar="ADDR",
+                        help="--backend ray: a Ray cluster's head, HOST:PORT (see `ray start "
+                             "--head`), ray://HOST:PORT or auto (default: a local instance)")
+
+
 def add_sweep(commands: argparse._SubParsersAction) -> None:
     """``azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR]``."""
     sweep = commands.add_parser("sweep", help="run a parameter sweep from a TOML file")
     sweep.add_argument("config", metavar="CONFIG", help="the sweep's TOML file (docs/scaling.md)")
-    sweep.add_argument("--backend", choices=("local", "ray"), default="local",
-                       help="local: worker processes here; ray: Ray actors (pip install "
-                            "\"azgym[ray]\"), on --address or a local instance")
-    sweep.add_argument("--address", metavar="ADDR",
-                       help="--backend ray: a Ray cluster's head, HOST:PORT, ray://HOST:PORT or "
-                            "auto (default: a local instance)")
+    add_backend_options(sweep)
     sweep.add_argument("--workers", type=int, default=0,
                        help="workers per localizer at a time (0: one per core, or per CPU of "
                             "the Ray cluster)")

@@ -66,3 +66,12 @@ def tracking_table(summary: dict[str, Any]) -> str:
                      f"{track['max_cm_outside_kidnaps']:9.1f} "
                      f"{track['frames_over_1m_outside_kidnaps']:5d}  {recoveries}")
     return "\n".join(lines)
+
+
+def run_report(summary: dict[str, Any], seconds: float, written: list[Any]) -> str:
+    """What ``azgym bench`` prints after a run: the ranking, the tracks, the time and the files."""
+    parts = ["", ranked_table(summary)]
+    if tracks := tracking_table(summary):
+        parts.append(f"\n{tracks}")
+    parts.append(f"\n{seconds:.1f} s; wrote {', '.join(map(str, written))}")
+    return "\n".join(parts)
