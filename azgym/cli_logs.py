@@ -98,9 +98,10 @@ def bench_data(args: argparse.Namespace, progress: Progress) -> int:
     from azgym.logs import log_cases, read_log
     from azgym.logs.bench import run_log_benchmark, write_log_results
 
-    if args.suite is not None or args.navigator or args.quick or args.split != "dev":
-        raise InvalidInputError("--data scores a log: it takes no --suite, --navigator, "
-                                "--quick or --split")
+    if (args.suite is not None or args.navigator or args.quick or args.split != "dev"
+            or args.backend != "local" or args.address is not None):
+        raise InvalidInputError("--data scores a log in local worker processes: it takes no "
+                                "--suite, --navigator, --quick, --split, --backend or --address")
     log = read_log(args.data)
     log_cases(log)  # a log without truth stops here, before any localizer is built
     time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit

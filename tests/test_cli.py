@@ -161,3 +161,11 @@ def test_localizers_lists_the_presets_with_what_they_are(capsys):
     listed = capsys.readouterr().out
     assert re.search(r"^ransac-weighted +ransac with weighted=true$", listed, re.M)
     assert re.search(r"^mex-coarse +mex with coarse_step=0.1$", listed, re.M)
+
+
+@pytest.mark.parametrize("extra", [["--backend", "ray"], ["--address", "127.0.0.1:6379"]])
+def test_bench_on_a_log_refuses_the_ray_options_by_name(extra, tmp_path, capsys):
+    argv = ["bench", "--data", "warehouse-small-simulated", *extra, "--out", str(tmp_path)]
+    assert cli.main(argv) == 2
+    assert "takes no --suite, --navigator, --quick, --split, --backend or --address" in \
+        capsys.readouterr().err
