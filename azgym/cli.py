@@ -117,7 +117,8 @@ def _contenders(specs: Sequence[str], with_builtins: bool,
 
 def _leaderboard(args: argparse.Namespace) -> int:
     from azgym.bench import board, leaderboard
-    from azgym.nav.board import is_navigation_file, verify_navigation
+    from azgym.nav.board import verify_navigation
+    from azgym.nav.results_file import is_navigation_file
 
     if args.action == "submit":
         path = leaderboard.submit(Path(args.results), args.localizer, Path(args.entries),

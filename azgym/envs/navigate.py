@@ -32,6 +32,8 @@ PHYSICS_DT = 0.02
 """The world's physics step [s]."""
 CONTROL_STEPS = 5
 """Physics steps per control period: the navigator acts and the camera looks every 0.1 s."""
+MAX_STEPS = 600
+"""Control steps before an episode is truncated (``max_steps``'s default: 60 s)."""
 
 class NavigateEnv(gym.Env):
     """Navigation: drive the forklift along a planned path to a spot, seeing the estimated pose.
@@ -156,7 +158,7 @@ class NavigateEnv(gym.Env):
         scenario: str | Scenario = "warehouse-small",
         localizer: str | SupportsLocalize | Tracker = "ransac",
         discrete: bool = False,
-        max_steps: int = 600,
+        max_steps: int = MAX_STEPS,
         progress: float = 1.0,
         collision: float = 1.0,
         time: float = 0.01,

@@ -14,7 +14,7 @@ azgym's own.
 The result (:func:`run_navigation`) is what ``navigation.json`` holds: the run's identity,
 then per contender the summary of :func:`azgym.nav.scoring.summarize`, the wall time, and each
 episode's figures (:func:`episode_rows`), from which the board recomputes the summary
-(:mod:`azgym.nav.board`). A figure that does not exist (no answer, no success) is null.
+(:mod:`azgym.nav.results_file`). A figure that does not exist (no answer, no success) is null.
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ from azgym.bench.suites import get_suite
 from azgym.cli import main
 from azgym.localize.registry import list_trackers
 from azgym.nav.benchmark import contenders_of
-from azgym.nav.board import load_navigation
+from azgym.nav.results_file import load_navigation
 from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS
 
 NAVIGATION = L.Path(__file__).parents[2] / "leaderboard" / "navigation"

@@ -14,7 +14,8 @@ from azgym import cli
 from azgym.bench import board
 from azgym.bench.entry_files import LeaderboardError
 from azgym.nav.benchmark import drive_all
-from azgym.nav.board import load_navigation, verify_navigation
+from azgym.nav.board import verify_navigation
+from azgym.nav.results_file import load_navigation
 from azgym.nav.scoring import wilson_interval
 from azgym.nav.suites import NAVIGATION_SUITES, get_navigation_suite
 
@@ -64,17 +65,20 @@ def test_workers_do_not_change_the_figures(run):
 
 def test_a_rerun_reproduces_the_file_and_finds_an_edited_error_figure(run, tmp_path):
     assert verify_navigation(run) == {}
+    p95 = json.loads(run.read_text())["contenders"][1]["summary"]["error_p95_cm"]
     path = _edited(tmp_path, run, lambda d: d["contenders"][1]["summary"].update(
-        error_p95_cm=1.0))  # not recomputable from the episodes: only a rerun finds it
-    assert verify_navigation(path) == {
-        "contenders/1/summary/error_p95_cm": (1.0, json.loads(run.read_text())[
-            "contenders"][1]["summary"]["error_p95_cm"])}
+        error_p95_cm=p95 + 100.0))  # not recomputable from the episodes: only a rerun finds it
+    assert verify_navigation(path) == {"contenders/1/summary/error_p95_cm": (p95 + 100.0, p95)}
+
+
+def _fail(episode, spl=0.0):
+    """An episode made a failure, by the environment's rules but for ``spl``."""
+    episode.update(success=False, steps=600, time_s=60.0, spl=spl)
 
 
 def _set_success(data):
     data["contenders"][0]["summary"]["success"] = 1.0
-    data["contenders"][0]["episodes"][0]["success"] = False
-    data["contenders"][0]["episodes"][0]["spl"] = 0.0
+    _fail(data["contenders"][0]["episodes"][0])
 
 
 @pytest.mark.parametrize(("edit", "message"), [
@@ -86,7 +90,7 @@ def _set_success(data):
     (lambda d: d.update(seed=5), "a dev run uses the suite's seed 2300"),
     (lambda d: d.update(split="test"), "a dev run uses the suite's seed 2300"),
     (lambda d: d.update(quick=False), "episodes must be 100"),
-    (lambda d: d.update(contenders=[]), "contenders must be a non-empty list"),
+    (lambda d: d.update(contenders=[]), "contenders must be a list of 1 to 64"),
     (lambda d: d["contenders"][0].update(navigator="mine.zip"),
      "'mine.zip' is not a built-in navigator"),
     (lambda d: d["contenders"][0].update(localizer="mine.py:Mine"),
@@ -97,13 +101,36 @@ def _set_success(data):
     (lambda d: d["contenders"][1]["summary"].update(success_interval=[0.9, 1.0]),
      "summary/success_interval"),
     (_set_success, "summary/success: the file says 1.0, its episodes give 0.9"),
-    (lambda d: d["contenders"][0]["episodes"][3].update(success=False),
-     "episodes/3/spl: a failed episode has SPL 0"),
+    (lambda d: _fail(d["contenders"][0]["episodes"][3], spl=0.5),
+     r"episodes/3/spl: must be 0.0: .*a failed episode has SPL 0"),
     (lambda d: d["contenders"][0]["episodes"][3].update(answered_steps=10**6),
      "answered_steps: more than its steps"),
     (lambda d: d["contenders"][0]["episodes"][3].update(collisions=-1),
      "collisions: must be a whole number"),
-    (lambda d: d["contenders"][0]["episodes"][3].update(spl="1"), "spl: must be a number"),
+    (lambda d: d["contenders"][0]["episodes"][3].update(spl="1"), "episodes/3/spl: must be"),
+    (lambda d: d.update(extra=1), r"unknown keys \['extra'\]"),
+    (lambda d: d["contenders"][0].pop("runtime_s"), r"contenders/0: missing keys \['runtime_s'\]"),
+    (lambda d: d["contenders"][0]["episodes"][0].update(note="x"), r"episodes/0: unknown keys"),
+    (lambda d: d["contenders"].append(d["contenders"][0]),
+     r"pure-pursuit \+ truth is in the file twice"),
+    (lambda d: d["contenders"][0].update(runtime_s=-1), "runtime_s: must be a number"),
+    (lambda d: d["contenders"][0].update(localizer="ransac:pr_hit=7"), "does not build"),
+    (lambda d: d["contenders"][0]["episodes"][2].update(time_s=0.1),
+     "episodes/2/time_s: must be its steps times 0.1 s"),
+    (lambda d: d["contenders"][0]["episodes"][2].update(success=False, spl=0.0),
+     "episodes/2/steps: an episode lasts 1 to 600 steps, and a failed one all 600"),
+    (lambda d: d["contenders"][0]["episodes"][2].update(spl=1.0), "episodes/2/spl: must be 0.9"),
+    (lambda d: d["contenders"][0]["episodes"][2].update(path_length_m=0),
+     "path_length_m must be a number > 0"),
+    (lambda d: d["contenders"][1]["summary"].update(error_median_cm=-5.0),
+     "summary: error_median_cm and error_p95_cm must be numbers"),
+    (lambda d: d["contenders"][1]["summary"].update(error_median_cm="1"),
+     "summary: error_median_cm and error_p95_cm must be numbers"),
+    (lambda d: d["contenders"][1]["episodes"][0].update(error_p95_cm=None),
+     "episodes/0: error_median_cm and error_p95_cm must be numbers"),
+    (lambda d: d["contenders"][0]["summary"].update(success=True),
+     "summary/success: the file says True"),
+    (lambda d: d.update(timestamp="x" * 65), "timestamp: must be a text of at most 64"),
 ])
 def test_an_edited_file_is_refused_by_name(run, tmp_path, edit, message):
     with pytest.raises(LeaderboardError, match=message):

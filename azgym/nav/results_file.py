@@ -1,0 +1,242 @@
+"""A navigation results file read as an adversary's edit: every field of its kind, range and rule.
+
+``navigation.json`` (:mod:`azgym.nav.benchmark`) is what the board's navigation tables show,
+so :func:`load_navigation` trusts nothing in it:
+
+- its layout: the keys of the file, of each contender, summary and episode are exactly the
+  ones azgym writes (an unknown or missing key is refused), at most :data:`MAX_CONTENDERS`
+  contenders, each (navigator, localizer) once;
+- its suite exists at the version it was run on, with the suite's environment; its seed is the
+  dev seed exactly when the split is ``dev``; every contender drove the suite's episodes (their
+  count, and seeds seed, seed + 1, ...);
+- its contenders are azgym's own: a built-in navigator (:data:`azgym.nav.suites.NAVIGATORS`)
+  and a built-in localizer or tracker whose hyperparameters build, or ``truth``. A plug-in
+  localizer runs in the loop that simulates the world, and a policy file is unpickled: neither
+  is run from a board's file;
+- each episode obeys the environment's rules: it lasted ``steps`` control periods of 0.1 s
+  (``time_s``), a failed one ran to the step limit, its SPL is l / max(p, l) of its planned
+  path l and driven path p when it succeeded and 0 otherwise, it answered at most every step,
+  and its error quantiles exist exactly when it answered (finite, ≥ 0, p95 ≥ median);
+- each summary figure the episodes determine (:data:`RECOMPUTED`) is recomputed from them. The
+  localization error's quantiles pool every step, which the file does not keep: they are only
+  checked for kind and order here, and ``azgym leaderboard verify`` reruns the episodes.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from azgym.bench.entries import clean, close
+from azgym.bench.entry_files import LeaderboardError, read_json
+from azgym.envs.navigate import CONTROL_STEPS, MAX_STEPS, PHYSICS_DT
+from azgym.errors import AzgymError
+from azgym.localize.registry import is_builtin
+from azgym.nav.benchmark import KIND, RESULTS_FORMAT
+from azgym.nav.scoring import wilson_interval
+from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS
+
+MAX_CONTENDERS = 64
+"""At most this many contenders in a file (the suites' defaults are 20): a rerun of a file
+drives each one's episodes, so a padded file must not cost hours."""
+FILE_KEYS = {"kind", "format", "suite", "suite_version", "split", "seed", "quick", "episodes",
+             "env", "env_kwargs", "azgym_version", "python", "timestamp", "contenders"}
+CONTENDER_KEYS = {"navigator", "localizer", "summary", "runtime_s", "episodes"}
+RECOMPUTED = ("success", "success_interval", "spl", "collisions", "collided", "time_to_goal",
+              "answered")
+"""The summary figures recomputed from a file's episodes when it is read."""
+SUMMARY_KEYS = {*RECOMPUTED, "error_median_cm", "error_p95_cm"}
+EPISODE_KEYS = {"seed", "success", "spl", "collisions", "time_s", "path_length_m",
+                "travelled_m", "steps", "answered_steps", "error_median_cm", "error_p95_cm"}
+PERIOD = CONTROL_STEPS * PHYSICS_DT
+"""An episode's step [s]."""
+
+
+def is_navigation_file(path: Path) -> bool:
+    """Whether ``path`` is a navigation results file (rather than a frame suite's entry).
+
+    A file that cannot be read is not one: reading it as an entry then names the problem.
+    """
+    try:
+        data = read_json(path, "results file")
+    except LeaderboardError:
+        return False
+    return isinstance(data, dict) and data.get("kind") == KIND
+
+
+def load_navigation(path: Path) -> dict[str, Any]:
+    """A navigation results file, every check of the module docstring passed.
+
+    Raises:
+        LeaderboardError: Naming the file and the field at fault.
+    """
+    data = read_json(path, "navigation results file")
+    if not isinstance(data, dict) or data.get("kind") != KIND:
+        raise LeaderboardError(f"{path}: not a navigation results file (kind {KIND!r})")
+    if data.get("format") != RESULTS_FORMAT:
+        raise LeaderboardError(f"{path}: format must be {RESULTS_FORMAT}, got "
+                               f"{data.get('format')!r}")
+    _keys(data, FILE_KEYS, str(path))
+    for key in ("azgym_version", "python", "timestamp"):
+        if not isinstance(data[key], str) or len(data[key]) > 64:
+            raise LeaderboardError(f"{path}: {key}: must be a text of at most 64 characters")
+    _check_suite(data, path)
+    contenders = data["contenders"]
+    if not isinstance(contenders, list) or not 0 < len(contenders) <= MAX_CONTENDERS:
+        raise LeaderboardError(f"{path}: contenders must be a list of 1 to {MAX_CONTENDERS}")
+    seen = set()
+    for k, contender in enumerate(contenders):
+        where = f"{path}: contenders/{k}"
+        _check_contender(contender, data, where)
+        pair = (contender["navigator"], contender["localizer"])
+        if pair in seen:
+            raise LeaderboardError(f"{where}: {pair[0]} + {pair[1]} is in the file twice")
+        seen.add(pair)
+    return data
+
+
+def _keys(table: Any, keys: set[str], where: str) -> None:
+    """``table`` is an object with exactly ``keys``."""
+    if not isinstance(table, dict):
+        raise LeaderboardError(f"{where}: must be an object")
+    if set(table) != keys:
+        extra, missing = sorted(set(table) - keys), sorted(keys - set(table))
+        raise LeaderboardError(f"{where}: " + "; ".join(
+            part for part in (f"unknown keys {extra}" if extra else "",
+                              f"missing keys {missing}" if missing else "") if part))
+
+
+def _check_suite(data: dict[str, Any], path: Path) -> None:
+    """The file's suite exists, at its version, environment, and with its split, seed and size."""
+    suite = NAVIGATION_SUITES.get(data["suite"]) if isinstance(data["suite"], str) else None
+    if suite is None:
+        raise LeaderboardError(f"{path}: suite {data['suite']!r} is not a navigation suite "
+                               f"({', '.join(NAVIGATION_SUITES)})")
+    if data["suite_version"] != suite.version or isinstance(data["suite_version"], bool):
+        raise LeaderboardError(f"{path}: suite_version {data['suite_version']!r}: "
+                               f"{suite.name} is at version {suite.version}; rerun it")
+    if (data["env"], data["env_kwargs"]) != (suite.env_id, suite.env_kwargs):
+        raise LeaderboardError(f"{path}: env and env_kwargs must be the suite's: "
+                               f"{suite.env_id} {suite.env_kwargs}")
+    split, seed, quick = data["split"], data["seed"], data["quick"]
+    if split not in ("dev", "test") or not isinstance(quick, bool):
+        raise LeaderboardError(f"{path}: split must be 'dev' or 'test' and quick true or false")
+    if type(seed) is not int or not 0 <= seed < 2**31:
+        raise LeaderboardError(f"{path}: seed must be a whole number in [0, 2^31), got {seed!r}")
+    if (split == "dev") != (seed == suite.dev_seed):
+        raise LeaderboardError(f"{path}: a dev run uses the suite's seed {suite.dev_seed} and "
+                               f"a test run another, got split {split!r} with seed {seed}")
+    if data["episodes"] != suite.size(quick) or isinstance(data["episodes"], bool):
+        raise LeaderboardError(f"{path}: episodes must be {suite.size(quick)} (the suite's "
+                               f"{'quick' if quick else 'full'} size), got "
+                               f"{data['episodes']!r}")
+
+
+def _check_contender(contender: Any, data: dict[str, Any], where: str) -> None:
+    """A built-in pair that drove the file's episodes, its summary matching them."""
+    _keys(contender, CONTENDER_KEYS, where)
+    navigator, localizer = contender["navigator"], contender["localizer"]
+    if not isinstance(navigator, str) or navigator not in NAVIGATORS:
+        raise LeaderboardError(f"{where}/navigator: {navigator!r} is not a built-in navigator "
+                               f"({', '.join(NAVIGATORS)})")
+    _check_localizer(localizer, f"{where}/localizer")
+    if not _number(contender["runtime_s"], 0.0):
+        raise LeaderboardError(f"{where}/runtime_s: must be a number of seconds ≥ 0")
+    episodes = contender["episodes"]
+    seeds = [data["seed"] + k for k in range(data["episodes"])]
+    if not isinstance(episodes, list) or [
+            e.get("seed") if isinstance(e, dict) else None for e in episodes] != seeds:
+        raise LeaderboardError(f"{where}/episodes: must be the suite's {data['episodes']} "
+                               f"episodes, seeds {data['seed']} to {seeds[-1]} in order")
+    summary = contender["summary"]
+    _keys(summary, SUMMARY_KEYS, f"{where}/summary")
+    for key, value in recomputed_summary(episodes, where).items():
+        if not _agree(summary[key], value):
+            raise LeaderboardError(f"{where}/summary/{key}: the file says "
+                                   f"{summary[key]!r}, its episodes give {value!r}")
+    answered = any(episode["answered_steps"] for episode in episodes)
+    _check_quantiles(summary, answered, f"{where}/summary")
+
+
+def _check_localizer(localizer: Any, where: str) -> None:
+    """``truth``, or a built-in localizer or tracker whose hyperparameters build."""
+    from azgym.nav.estimator import resolve_estimator
+
+    if not isinstance(localizer, str) or not (localizer == "truth" or is_builtin(localizer)):
+        raise LeaderboardError(f"{where}: {localizer!r} is not a built-in localizer or tracker "
+                               "(a board runs no plug-in in the loop)")
+    try:
+        resolve_estimator(localizer)
+    except AzgymError as exc:
+        raise LeaderboardError(f"{where}: {localizer!r} does not build: {exc}") from None
+
+
+def recomputed_summary(episodes: list[dict[str, Any]], where: str) -> dict[str, Any]:
+    """The summary figures the episodes determine (:data:`RECOMPUTED`), as the run's rule has it."""
+    rows = [_episode(episode, f"{where}/episodes/{k}") for k, episode in enumerate(episodes)]
+    successes = [row["time_s"] for row in rows if row["success"]]
+    steps = sum(row["steps"] for row in rows)
+    return clean({
+        "success": sum(row["success"] for row in rows) / len(rows),
+        "success_interval": wilson_interval(sum(row["success"] for row in rows), len(rows)),
+        "spl": sum(row["spl"] for row in rows) / len(rows),
+        "collisions": sum(row["collisions"] for row in rows) / len(rows),
+        "collided": sum(row["collisions"] > 0 for row in rows) / len(rows),
+        "time_to_goal": sum(successes) / len(successes) if successes else math.nan,
+        "answered": sum(row["answered_steps"] for row in rows) / steps})
+
+
+def _episode(episode: dict[str, Any], where: str) -> dict[str, Any]:
+    """An episode's figures, each of its kind and range, and by the environment's rules."""
+    _keys(episode, EPISODE_KEYS, where)
+    if not isinstance(episode["success"], bool):
+        raise LeaderboardError(f"{where}/success: must be true or false")
+    for key in ("collisions", "steps", "answered_steps"):
+        if type(episode[key]) is not int or not 0 <= episode[key] <= 10**9:
+            raise LeaderboardError(f"{where}/{key}: must be a whole number ≥ 0")
+    steps = episode["steps"]
+    if not 1 <= steps <= MAX_STEPS or (not episode["success"] and steps != MAX_STEPS):
+        raise LeaderboardError(f"{where}/steps: an episode lasts 1 to {MAX_STEPS} steps, and a "
+                               f"failed one all {MAX_STEPS}; got {steps}")
+    if episode["answered_steps"] > steps:
+        raise LeaderboardError(f"{where}/answered_steps: more than its steps")
+    if not _number(episode["time_s"], 0.0) or not close(episode["time_s"], steps * PERIOD):
+        raise LeaderboardError(f"{where}/time_s: must be its steps times {PERIOD:g} s")
+    length, travelled = episode["path_length_m"], episode["travelled_m"]
+    if not _number(length, 1e-9) or not _number(travelled, 0.0):
+        raise LeaderboardError(f"{where}: path_length_m must be a number > 0 and travelled_m "
+                               "a number ≥ 0 [m]")
+    spl = length / max(length, travelled) if episode["success"] else 0.0
+    if not _number(episode["spl"], 0.0) or not close(episode["spl"], spl):
+        raise LeaderboardError(f"{where}/spl: must be {spl!r}: l / max(p, l) of its planned and "
+                               "driven paths when it succeeded, 0 otherwise (a failed episode "
+                               "has SPL 0)")
+    _check_quantiles(episode, episode["answered_steps"] > 0, where)
+    return episode
+
+
+def _check_quantiles(figures: dict[str, Any], answered: bool, where: str) -> None:
+    """Error quantiles exist exactly when there were answers: finite, ≥ 0, p95 ≥ median."""
+    median, p95 = figures["error_median_cm"], figures["error_p95_cm"]
+    if not answered:
+        if median is not None or p95 is not None:
+            raise LeaderboardError(f"{where}: error quantiles without an answer must be null")
+        return
+    if not (_number(median, 0.0) and _number(p95, 0.0) and p95 >= median):
+        raise LeaderboardError(f"{where}: error_median_cm and error_p95_cm must be numbers "
+                               "≥ 0 [cm], the p95 at least the median")
+
+
+def _number(value: Any, low: float) -> bool:
+    """A finite int or float (not a bool) of at least ``low``."""
+    return (type(value) in (int, float) and math.isfinite(value) and value >= low)
+
+
+def _agree(claimed: Any, actual: Any) -> bool:
+    if isinstance(actual, list):
+        return isinstance(claimed, list) and len(claimed) == len(actual) and all(
+            _agree(a, b) for a, b in zip(claimed, actual, strict=True))
+    if actual is None or claimed is None:
+        return claimed is None and actual is None
+    return _number(claimed, -math.inf) and close(claimed, actual)
