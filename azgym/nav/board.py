@@ -39,9 +39,13 @@ def verify_navigation(path: Path, workers: int = 1) -> dict[str, tuple[Any, Any]
 
 
 def table_rows(data: dict[str, Any]) -> list[list[str]]:
-    """A file's contenders as table rows, ranked by success, then SPL, then fewer collisions."""
+    """A file's contenders as table rows, ranked by SPL, then success, then fewer collisions.
+
+    SPL ranks, as in embodied navigation's challenges: it counts a success by how directly it
+    was reached, so a navigator that wanders to the goal ranks below one that drives there.
+    """
     ranked = sorted(data["contenders"], key=lambda c: (
-        -c["summary"]["success"], -c["summary"]["spl"], c["summary"]["collisions"],
+        -c["summary"]["spl"], -c["summary"]["success"], c["summary"]["collisions"],
         c["navigator"], c["localizer"]))
     rows = []
     for rank, contender in enumerate(ranked, 1):
