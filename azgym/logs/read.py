@@ -120,6 +120,7 @@ def read_log(folder: str | Path) -> Log:
     assert manifest is not None
     map_name, beacons, shipped = read_map(folder, manifest, problems)
     used = [folder / MANIFEST] + _map_files(folder, manifest)
+    shipped_bytes = {f"map:{map_name}": map_bytes(beacons)} if shipped and beacons else {}
     tables: dict[str, Table | None] = {}
     for name in _TABLES:
         path = find_table(folder, name, problems)
@@ -133,25 +134,38 @@ def read_log(folder: str | Path) -> Log:
     problems.check()
     assert beacons is not None and frames is not None and detections is not None
     return Log(folder, manifest, map_name, beacons, shipped, frames, detections, quality,
-               motion["odometry"], motion["imu"], log_digest(used))
+               motion["odometry"], motion["imu"], log_digest(used, shipped_bytes))
 
 
 def _map_files(folder: Path, manifest: Manifest) -> list[Path]:
-    """The map's file in the folder, if the map is one."""
+    """The map's file in the folder, if the map is one (a shipped scenario is none)."""
     name = manifest.beacons or manifest.scenario or ""
     path = folder / Path(name).name
     return [path] if name and path.is_file() else []
 
 
-def log_digest(paths: list[Path]) -> str:
-    """SHA-256 of a log's files: each file's name and bytes, in order of name.
+def map_bytes(beacons: BeaconMap) -> bytes:
+    """A beacon map as canonical text: ``id,x,y,z,width`` rows, floats by ``repr``, in map order.
 
-    The dataset's identity: the same name and digest are the same frames, truth and map.
+    What a shipped scenario contributes to a log's digest: its beacons, which score the frames
+    (a change to its racks or routes leaves the dataset the same).
     """
+    rows = (",".join([str(int(i)), *(repr(float(v)) for v in (*xyz, w))])
+            for i, xyz, w in zip(beacons.ids, beacons.xyz, beacons.width, strict=True))
+    return ("id,x,y,z,width\n" + "".join(f"{row}\n" for row in rows)).encode()
+
+
+def log_digest(paths: list[Path], named: dict[str, bytes] | None = None) -> str:
+    """SHA-256 of a log's files, and of a shipped map: each one's name and bytes, by name.
+
+    The dataset's identity: the same name and digest are the same frames, truth and map. A
+    shipped scenario's map enters as ``named`` (``map:NAME`` → :func:`map_bytes`), so that a
+    changed shipped map changes the digest of the logs that use it.
+    """
+    blobs = {path.name: path.read_bytes() for path in paths} | dict(named or {})
     digest = hashlib.sha256()
-    for path in sorted(paths, key=lambda p: p.name):
-        data = path.read_bytes()
-        digest.update(f"{path.name}\0{len(data)}\0".encode() + data)
+    for name in sorted(blobs):
+        digest.update(f"{name}\0{len(blobs[name])}\0".encode() + blobs[name])
     return digest.hexdigest()
 
 
