@@ -11,8 +11,8 @@ from logs.mini_log import mini_files, write_log
 from azgym.errors import DependencyNotInstalled
 from azgym.logs import LogError, log_cases, read_log
 from azgym.logs.cases import UNLABELLED, frame_measurements
+from azgym.logs.files import MAX_TABLE_BYTES
 from azgym.logs.problems import MAX_PROBLEMS
-from azgym.logs.tables import MAX_TABLE_BYTES
 
 
 def test_a_valid_log_reads_as_frames_with_truth_and_motion(mini_log):
@@ -24,7 +24,7 @@ def test_a_valid_log_reads_as_frames_with_truth_and_motion(mini_log):
     assert cases[1].pose == (5.1, 5.0, 0.1)
     assert cases[0].initial == cases[0].pose and cases[1].initial is None
     assert {c.sequence for c in cases} == {"mini"} and {c.cause for c in cases} == {UNLABELLED}
-    # Motion: the samples after the previous frame, up to the frame's time; 0.5 s is unused.
+    # Motion: the samples after the previous frame, up to the frame's time; 0.25 s is unused.
     assert [c.motion.odometry.time.tolist() for c in cases] == [[], [0.05], [0.15]]
     assert np.isnan(cases[1].motion.imu.heading[0]) and cases[2].motion.imu.heading[0] == 0.1
     assert cases[2].motion.imu.accel.shape == (1, 2)
