@@ -132,7 +132,7 @@ def _motion_clock(table: Table, samples: np.ndarray, frames: np.ndarray,
                              (np.flatnonzero(samples > last + slack), "after the last", last)):
         if rows.size:
             table.report(problems, f"{rows.size} of its samples lie more than {slack:.3g} s "
-                                   f"(one sample interval) {side} frame's time {edge!r} s: "
+                                   f"(one sample interval) {side} frame's time {edge:.6g} s: "
                                    "the motion samples are on the frames' clock", int(rows[0]),
                          "time")
 
