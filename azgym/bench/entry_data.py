@@ -1,14 +1,15 @@
 """A dataset entry's checks: the log it was scored on is found, unchanged, and gives its cases.
 
 An entry made from ``azgym bench --data`` (suite ``data:NAME``, split ``data``, seed 0, full
-size) records its ``dataset``: name, SHA-256 of the log's files
+size) records its ``dataset``: name, SHA-256 of the log's files and map
 (:func:`~azgym.logs.read.log_digest`), log format and whether it is simulated. When it is read,
 the log is looked for among the logs shipped with azgym and then in the datasets folder given
 (``DATASETS/NAME/``; a folder there of a shipped log's name is refused); its digest must be the
-entry's (a log edited since the entry was made is refused), its format one this azgym reads, its name and ``simulated`` the entry's; the entry's
-cases are then the log's frames (:func:`~azgym.logs.cases.log_cases`), checked and recomputed as
-a suite's. A log that cannot be found raises :class:`DatasetUnavailable`: the entry cannot be
-checked, and the board leaves it out only when told to (``--skip-unavailable``).
+entry's (a log edited since the entry was made is refused), its format one this azgym reads,
+its name and ``simulated`` the entry's; the entry's cases are then the log's frames
+(:func:`~azgym.logs.cases.log_cases`), checked and recomputed as a suite's. A log that cannot
+be found raises :class:`DatasetUnavailable`: the entry cannot be checked, and the board leaves
+it out only when told to (``--skip-unavailable``).
 """
 
 from __future__ import annotations
