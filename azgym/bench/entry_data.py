@@ -1,14 +1,15 @@
 """A dataset entry's checks: the log it was scored on is found, unchanged, and gives its cases.
 
 An entry made from ``azgym bench --data`` (suite ``data:NAME``, split ``data``, seed 0, full
-size) records its ``dataset``: name, SHA-256 of the log's files
+size) records its ``dataset``: name, SHA-256 of the log's files and map
 (:func:`~azgym.logs.read.log_digest`), log format and whether it is simulated. When it is read,
-the log is looked for in the datasets folder given (``DATASETS/NAME/``) and then among the logs
-shipped with azgym; its digest must be the entry's (a log edited since the entry was made is
-refused), its format one this azgym reads, its name and ``simulated`` the entry's; the entry's
-cases are then the log's frames (:func:`~azgym.logs.cases.log_cases`), checked and recomputed as
-a suite's. A log that cannot be found raises :class:`DatasetUnavailable`: the entry cannot be
-checked, and the board leaves it out only when told to (``--skip-unavailable``).
+the log is looked for among the logs shipped with azgym and then in the datasets folder given
+(``DATASETS/NAME/``; a folder there of a shipped log's name is refused); its digest must be the
+entry's (a log edited since the entry was made is refused), its format one this azgym reads,
+its name and ``simulated`` the entry's; the entry's cases are then the log's frames
+(:func:`~azgym.logs.cases.log_cases`), checked and recomputed as a suite's. A log that cannot
+be found raises :class:`DatasetUnavailable`: the entry cannot be checked, and the board leaves
+it out only when told to (``--skip-unavailable``).
 """
 
 from __future__ import annotations
@@ -55,10 +56,22 @@ def default_datasets(entries_dir: Path) -> Path | None:
 
 
 def find_dataset(name: str, datasets: Path | None) -> Path | None:
-    """The log folder of dataset ``name``: ``datasets/NAME/``, else a shipped log, else None."""
-    if datasets is not None and (datasets / name / MANIFEST).is_file():
-        return datasets / name
-    return shipped_logs().get(name)
+    """The log folder of dataset ``name``: a shipped log, else ``datasets/NAME/``, else None.
+
+    Raises:
+        LeaderboardError: The datasets folder holds a log of a shipped log's name: a shipped
+            log's name is taken, so that no folder can stand in for the shipped data.
+    """
+    shipped = shipped_logs().get(name)
+    local = None if datasets is None else datasets / name
+    if local is not None and (local.is_symlink() or local.exists()):
+        if shipped is not None:
+            raise LeaderboardError(f"dataset: {local} has the name of a log shipped with azgym "
+                                   f"({name!r}); a shipped log's name is taken: rename the "
+                                   "folder and its log.toml's name")
+        if (local / MANIFEST).is_file():
+            return local
+    return shipped
 
 
 def check_data_run(entry: dict[str, Any], origin: str) -> None:

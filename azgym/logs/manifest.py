@@ -16,8 +16,10 @@ from typing import Any
 import numpy as np
 
 from azgym.core import BeaconMap
-from azgym.errors import AzgymError
-from azgym.logs.problems import Problems
+from azgym.errors import AzgymError, unknown_name
+from azgym.logs.files import log_file
+from azgym.logs.plausible import Extent
+from azgym.logs.problems import Problems, shown
 from azgym.logs.tables import check_columns, floats, integers, read_table
 
 FORMAT_VERSION = 1
@@ -87,9 +89,11 @@ def read_manifest(folder: Path, problems: Problems) -> Manifest | None:
 
 def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
     """The manifest's fields, each checked."""
-    if data.get("format") != FORMAT_VERSION or isinstance(data.get("format"), bool):
+    given = data.get("format", "(nothing)")
+    if type(given) is not int or given != FORMAT_VERSION:
+        whole = "" if type(given) is int else " (the format is a whole number)"
         problems.add(MANIFEST, f"format: this azgym reads log format {FORMAT_VERSION}, the log "
-                               f"says {data.get('format', '(nothing)')!r}")
+                               f"says {shown(given)}{whole}")
         return None
     for table, keys in _KEYS.items():
         section = data if not table else data.get(table, {})
@@ -103,7 +107,7 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
                             for k in ("camera", "map", "truth"))
     name = _text(data, "name", problems, required=True)
     if name and not NAME.fullmatch(name):
-        problems.add(MANIFEST, f"name: {name!r} must be letters, digits, '.', '_' or '-' "
+        problems.add(MANIFEST, f"name: {shown(name)} must be letters, digits, '.', '_' or '-' "
                                "(at most 64, starting with a letter or digit)")
     simulated = data.get("simulated")
     if not isinstance(simulated, bool):
@@ -113,7 +117,7 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
     if rate is not None and (isinstance(rate, bool) or not isinstance(rate, (int, float))
                              or not 0 < rate < 1e4):
         problems.add(MANIFEST, f"camera.rate_hz: must be a number of frames per second > 0, "
-                               f"got {rate!r}")
+                               f"got {shown(rate)}")
     maps = [key for key in ("scenario", "beacons") if key in where]
     if len(maps) != 1:
         problems.add(MANIFEST, "map: give exactly one of map.scenario (a shipped scenario or a "
@@ -142,8 +146,8 @@ def _text(data: dict[str, Any], key: str, problems: Problems, required: bool = F
 
 
 def read_map(folder: Path, manifest: Manifest, problems: Problems
-             ) -> tuple[str, BeaconMap | None, bool]:
-    """The map's name (the cases' ``scenario``), its beacons, and whether it is a shipped scenario.
+             ) -> tuple[str, BeaconMap | None, bool, Extent | None]:
+    """The map's name (the cases' ``scenario``), beacons, whether shipped, and where truth may lie.
 
     A shipped scenario keeps its name (the figures draw its floor plan); any other map is
     named after the dataset.
@@ -152,28 +156,36 @@ def read_map(folder: Path, manifest: Manifest, problems: Problems
 
     if manifest.scenario is not None:
         shipped = manifest.scenario in list_scenarios()
+        if not shipped and not manifest.scenario.endswith(".toml") and \
+                not (folder / manifest.scenario).exists():
+            unknown = unknown_name("scenario", manifest.scenario, list_scenarios())
+            problems.add(MANIFEST, f"map.scenario: {unknown} (or a .toml file in the log's "
+                                   "folder)")
+            return manifest.name, None, False, None
         target = manifest.scenario if shipped else _inside(folder, manifest.scenario, problems)
         if target is None:
-            return manifest.name, None, False
+            return manifest.name, None, False, None
         try:
-            beacons = load_scenario(target).beacons
+            scenario = load_scenario(target)
         except AzgymError as exc:
             problems.add(MANIFEST, f"map.scenario: {exc}")
-            return manifest.name, None, False
-        return (manifest.scenario if shipped else manifest.name), beacons, shipped
-    if manifest.beacons is None:
-        return manifest.name, None, False
-    path = _inside(folder, manifest.beacons, problems)
-    return manifest.name, None if path is None else _beacon_table(path, problems), False
+            return manifest.name, None, False, None
+        return (manifest.scenario if shipped else manifest.name), scenario.beacons, shipped, \
+            Extent.of_scenario(scenario.bounds)
+    path = None if manifest.beacons is None else _inside(folder, manifest.beacons, problems)
+    beacons = None if path is None else _beacon_table(path, problems)
+    return manifest.name, beacons, False, None if beacons is None else \
+        Extent.of_beacons(beacons)
 
 
 def _inside(folder: Path, name: str, problems: Problems) -> Path | None:
     """A file named in the manifest: a plain file name in the log's folder."""
-    path = folder / name
-    if Path(name).name != name or not path.is_file():
-        problems.add(MANIFEST, f"map: {name!r} is not a file in the log's folder (give a file "
-                               f"name in it, or a shipped scenario's name)")
-        return None
+    before = problems.total
+    path = log_file(folder, name, problems, report_as=MANIFEST) \
+        if Path(name).name == name else None
+    if path is None and problems.total == before:
+        problems.add(MANIFEST, f"map: {shown(name)} is not a file in the log's folder (give a "
+                               "file name in it, or a shipped scenario's name)")
     return path
 
 

@@ -10,6 +10,18 @@ from azgym.errors import InvalidInputError
 
 MAX_PROBLEMS = 50
 """Problems listed before the rest are only counted."""
+MAX_SHOWN = 40
+"""The most characters of a cell a message quotes (a longer one is cut, with "…")."""
+
+
+def cut(text: str, limit: int = MAX_SHOWN) -> str:
+    """Text for a message, cut after ``limit`` characters (with "…")."""
+    return text if len(text) <= limit else text[:limit] + "…"
+
+
+def shown(value: object, limit: int = MAX_SHOWN) -> str:
+    """A cell (or any value from the log) quoted for a message: its repr, cut to ``limit``."""
+    return cut(repr(value), limit)
 
 
 class LogError(InvalidInputError):

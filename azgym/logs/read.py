@@ -23,7 +23,8 @@ import numpy as np
 
 from azgym.core import BeaconMap, Pose
 from azgym.logs.manifest import MANIFEST, Manifest, read_manifest, read_map
-from azgym.logs.problems import LogError, Problems
+from azgym.logs.plausible import check_plausible
+from azgym.logs.problems import LogError, Problems, shown
 from azgym.logs.tables import Table, check_columns, find_table, floats, integers, read_table
 from azgym.sensing.labels import LABEL_NAMES
 from azgym.site.load import SCENARIO_PACKAGE
@@ -118,40 +119,57 @@ def read_log(folder: str | Path) -> Log:
     manifest = read_manifest(folder, problems)
     problems.check()
     assert manifest is not None
-    map_name, beacons, shipped = read_map(folder, manifest, problems)
+    map_name, beacons, shipped, extent = read_map(folder, manifest, problems)
     used = [folder / MANIFEST] + _map_files(folder, manifest)
+    shipped_bytes = {f"map:{map_name}": map_bytes(beacons)} if shipped and beacons else {}
     tables: dict[str, Table | None] = {}
     for name in _TABLES:
+        before = problems.total
         path = find_table(folder, name, problems)
-        if path is None and name in ("frames", "detections"):
+        if path is None and name in ("frames", "detections") and problems.total == before:
             problems.add(f"{name}.csv", "missing (docs/logs.md)")
         tables[name] = None if path is None else read_table(path, problems)
         used += [] if path is None else [path]
     frames = _frames(tables["frames"], manifest, problems)
     detections, quality = _detections(tables["detections"], frames, problems)
     motion = {name: _samples(tables[name], problems) for name in ("odometry", "imu")}
+    check_plausible(tables, {"frames": frames, "detections": detections, **motion}, beacons,
+                    extent, manifest.camera_rate_hz, problems)
     problems.check()
     assert beacons is not None and frames is not None and detections is not None
     return Log(folder, manifest, map_name, beacons, shipped, frames, detections, quality,
-               motion["odometry"], motion["imu"], log_digest(used))
+               motion["odometry"], motion["imu"], log_digest(used, shipped_bytes))
 
 
 def _map_files(folder: Path, manifest: Manifest) -> list[Path]:
-    """The map's file in the folder, if the map is one."""
+    """The map's file in the folder, if the map is one (a shipped scenario is none)."""
     name = manifest.beacons or manifest.scenario or ""
     path = folder / Path(name).name
     return [path] if name and path.is_file() else []
 
 
-def log_digest(paths: list[Path]) -> str:
-    """SHA-256 of a log's files: each file's name and bytes, in order of name.
+def map_bytes(beacons: BeaconMap) -> bytes:
+    """A beacon map as canonical text: ``id,x,y,z,width`` rows, floats by ``repr``, in map order.
 
-    The dataset's identity: the same name and digest are the same frames, truth and map.
+    What a shipped scenario contributes to a log's digest: its beacons, which score the frames
+    (a change to its racks or routes leaves the dataset the same).
     """
+    rows = (",".join([str(int(i)), *(repr(float(v)) for v in (*xyz, w))])
+            for i, xyz, w in zip(beacons.ids, beacons.xyz, beacons.width, strict=True))
+    return ("id,x,y,z,width\n" + "".join(f"{row}\n" for row in rows)).encode()
+
+
+def log_digest(paths: list[Path], named: dict[str, bytes] | None = None) -> str:
+    """SHA-256 of a log's files, and of a shipped map: each one's name and bytes, by name.
+
+    The dataset's identity: the same name and digest are the same frames, truth and map. A
+    shipped scenario's map enters as ``named`` (``map:NAME`` → :func:`map_bytes`), so that a
+    changed shipped map changes the digest of the logs that use it.
+    """
+    blobs = {path.name: path.read_bytes() for path in paths} | dict(named or {})
     digest = hashlib.sha256()
-    for path in sorted(paths, key=lambda p: p.name):
-        data = path.read_bytes()
-        digest.update(f"{path.name}\0{len(data)}\0".encode() + data)
+    for name in sorted(blobs):
+        digest.update(f"{name}\0{len(blobs[name])}\0".encode() + blobs[name])
     return digest.hexdigest()
 
 
@@ -160,9 +178,15 @@ def _checked(table: Table | None, name: str, problems: Problems, prefix: str = "
     return table is not None and check_columns(table, required, optional, problems, prefix)
 
 
-def _increasing(table: Table, column: str, values: np.ndarray, problems: Problems) -> None:
-    """Report each value not greater than the one before it (NaN: already reported)."""
-    for k in np.flatnonzero(values[1:] <= values[:-1]) + 1:
+def _increasing(table: Table, column: str, values: np.ndarray, problems: Problems,
+                good: np.ndarray | None = None) -> None:
+    """Report each value not greater than the one before it.
+
+    A row whose cell did not parse (NaN, or not ``good``: already reported) is compared with
+    neither neighbour, so that one bad cell is one problem.
+    """
+    ok = np.isfinite(values) if good is None else good
+    for k in np.flatnonzero((values[1:] <= values[:-1]) & ok[1:] & ok[:-1]) + 1:
         table.report(problems, f"{values[k].item()!r} is not greater than the row before's "
                                f"{values[k - 1].item()!r} (must increase strictly)", int(k),
                      column)
@@ -175,8 +199,8 @@ def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Colu
     assert table is not None
     if not len(table):
         problems.add(table.file, "no frames: a log holds at least one")
-    number, _ = integers(table, "frame", problems)
-    _increasing(table, "frame", number, problems)
+    number, good = integers(table, "frame", problems)
+    _increasing(table, "frame", number, problems, good)
     values: dict[str, object] = {"frame": number, "time": floats(table, "time", problems)}
     _increasing(table, "time", values["time"], problems)
     given = [key for key in TRUTH if table.has(key)]
@@ -192,8 +216,8 @@ def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Colu
     event = table.cells("event") if table.has("event") else [""] * len(table)
     for k, text in enumerate(event):
         if text not in EVENTS:
-            table.report(problems, f"{text!r} is no event (known: kidnap, outage, or empty)", k,
-                         "event")
+            table.report(problems, f"{shown(text)} is no event (known: kidnap, outage, or "
+                                   "empty)", k, "event")
     return Columns(values | {"sequence": sequence, "event": event})
 
 
@@ -206,8 +230,8 @@ def _check_sequences(table: Table, sequence: list[str], problems: Problems) -> N
         elif k and name != sequence[k - 1]:
             ended.add(sequence[k - 1])
             if name in ended:
-                table.report(problems, f"sequence {name!r} resumes after another; a sequence's "
-                                       "frames are consecutive", k, "sequence")
+                table.report(problems, f"sequence {shown(name)} resumes after another; a "
+                                       "sequence's frames are consecutive", k, "sequence")
 
 
 def _detections(table: Table | None, frames: Columns | None, problems: Problems
@@ -237,8 +261,8 @@ def _detections(table: Table | None, frames: Columns | None, problems: Problems
     if table.has("label"):
         for k, text in enumerate(table.cells("label")):
             if text not in LABEL_NAMES:
-                table.report(problems, f"{text!r} is no label (known: {', '.join(LABEL_NAMES)})",
-                             k, "label")
+                table.report(problems, f"{shown(text)} is no label (known: "
+                                       f"{', '.join(LABEL_NAMES)})", k, "label")
             else:
                 label[k] = LABEL_NAMES.index(text)
     _check_duplicates(table, row, ids, azimuth, problems)

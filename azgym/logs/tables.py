@@ -4,7 +4,9 @@ Every cell is read as text first and parsed here, so that a bad cell becomes a p
 file, line and column (:mod:`azgym.logs.problems`) instead of an exception from deep inside a
 parser. Numbers are plain decimals (``-1.5``, ``2e-3``); ``nan``, ``inf``, ``1_000`` or a
 number with spaces around it are refused, since a log that holds them was not written by a
-careful logger. A Parquet file is read through pyarrow (the ``parquet`` extra).
+careful logger. A Parquet file is read through pyarrow (the ``parquet`` extra,
+:mod:`azgym.logs.parquet`). Table files are plain files in the log's folder, read with byte and
+cell limits (:mod:`azgym.logs.files`).
 """
 
 from __future__ import annotations
@@ -18,13 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
-from azgym.errors import require
-from azgym.logs.problems import Problems
+from azgym.logs.files import MAX_TABLE_CELLS, log_file, read_limited
+from azgym.logs.parquet import parquet_cells
+from azgym.logs.problems import Problems, cut, shown
 
-MAX_TABLE_BYTES = 64 * 1024 * 1024
-"""The largest table file read [bytes]: about a million detections."""
-_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
-_INTEGER = re.compile(r"[+-]?\d{1,18}")
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_INTEGER = re.compile(r"[+-]?[0-9]{1,18}")
 _NOT_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
@@ -65,9 +66,12 @@ class Table:
 
 
 def find_table(folder: Path, name: str, problems: Problems) -> Path | None:
-    """The file of table ``name`` (``name.csv`` or ``name.parquet``), or None if neither is."""
-    found = [folder / f"{name}{suffix}" for suffix in (".csv", ".parquet")
-             if (folder / f"{name}{suffix}").is_file()]
+    """The file of table ``name`` (``name.csv`` or ``name.parquet``), or None if neither is.
+
+    A folder, symlink or special file of that name is reported (:func:`~azgym.logs.files.log_file`).
+    """
+    found = [path for suffix in (".csv", ".parquet")
+             if (path := log_file(folder, f"{name}{suffix}", problems)) is not None]
     if len(found) > 1:
         problems.add(found[1].name, f"both {name}.csv and {name}.parquet exist; keep one")
     return found[0] if found else None
@@ -75,60 +79,49 @@ def find_table(folder: Path, name: str, problems: Problems) -> Path | None:
 
 def read_table(path: Path, problems: Problems) -> Table | None:
     """Read a table file; None (with the problem recorded) when it cannot be read at all."""
-    size = path.stat().st_size
-    if size > MAX_TABLE_BYTES:
-        problems.add(path.name, f"too large: {size} bytes, a log's table has at most "
-                                f"{MAX_TABLE_BYTES} (split the recording into several logs)")
+    data = read_limited(path, problems)
+    if data is None:
         return None
     if path.suffix == ".parquet":
-        return _read_parquet(path, problems)
-    data = path.read_bytes()
+        cells = parquet_cells(data, path.name, problems)
+        if cells is None:
+            return None
+        header, rows = cells
+        return Table(path.name, header, rows, list(range(1, len(rows) + 1)), unit="row")
     try:
         text = data.decode("utf-8-sig")  # a byte-order mark, as spreadsheets write, is fine
     except UnicodeDecodeError as exc:
         problems.add(path.name, f"not UTF-8 text: byte 0x{data[exc.start]:02x} at offset "
                                 f"{exc.start} (save the file as UTF-8)")
         return None
+    del data
+    return _csv_table(path.name, text, problems)
+
+
+def _csv_table(file: str, text: str, problems: Problems) -> Table | None:
+    """A CSV text's rows, stopping as soon as it holds more than :data:`MAX_TABLE_CELLS`."""
     reader = csv.reader(io.StringIO(text, newline=""))
     rows: list[list[str]] = []
     lines: list[int] = []
+    cells = 0
     try:
         header = next(reader, None)
         for row in reader:
+            cells += len(row)
+            if cells > MAX_TABLE_CELLS:
+                problems.add(file, f"too many cells: more than {MAX_TABLE_CELLS} (rows × "
+                                   "columns) by this line (split the recording into several "
+                                   "logs)", reader.line_num)
+                return None
             rows.append(row)
             lines.append(reader.line_num)
     except csv.Error as exc:
-        problems.add(path.name, f"not a CSV file: {exc}", reader.line_num + 1)
+        problems.add(file, f"not a CSV file: {exc}", reader.line_num + 1)
         return None
     if not header:
-        problems.add(path.name, "empty: the first line names the columns")
+        problems.add(file, "empty: the first line names the columns")
         return None
-    return _shaped(Table(path.name, [name.strip() for name in header], rows, lines), problems)
-
-
-def _read_parquet(path: Path, problems: Problems) -> Table | None:
-    """A Parquet file's columns as text cells (floats by repr, so they parse back exactly)."""
-    require("pyarrow", "parquet")
-    import pyarrow.parquet as pq
-
-    try:
-        data = pq.read_table(path).to_pydict()
-    except Exception as exc:  # noqa: BLE001 - pyarrow raises many types on a bad file
-        problems.add(path.name, f"not a Parquet file: {exc}")
-        return None
-    header = list(data)
-    columns = [[_text(value) for value in data[name]] for name in header]
-    rows = [list(row) for row in zip(*columns, strict=True)]
-    return Table(path.name, header, rows, list(range(1, len(rows) + 1)), unit="row")
-
-
-def _text(value: object) -> str:
-    """A Parquet value as the CSV cell that says the same."""
-    if value is None:
-        return ""
-    if isinstance(value, float):
-        return "" if math.isnan(value) else repr(value)
-    return str(value)
+    return _shaped(Table(file, [name.strip() for name in header], rows, lines), problems)
 
 
 def _shaped(table: Table, problems: Problems) -> Table:
@@ -155,15 +148,17 @@ def check_columns(table: Table, required: tuple[str, ...], optional: tuple[str, 
     ok = True
     for name in required:
         if name not in table.header:
-            problems.add(table.file, f"no column {name!r} (columns: {', '.join(table.header)})")
+            problems.add(table.file, f"no column {name!r} (columns: "
+                                     f"{cut(', '.join(table.header), 200)})")
             ok = False
     for name in table.header:
         if table.header.count(name) > 1:
-            problems.add(table.file, f"column {name!r} appears {table.header.count(name)} times")
+            problems.add(table.file, f"column {shown(name)} appears "
+                                     f"{table.header.count(name)} times")
             ok = False
         elif name not in required + optional and not (prefix and name.startswith(prefix)):
             known = ", ".join(required + optional) + (f", {prefix}*" if prefix else "")
-            problems.add(table.file, f"unknown column {name!r} (known: {known})")
+            problems.add(table.file, f"unknown column {shown(name)} (known: {known})")
     return ok
 
 
@@ -179,12 +174,12 @@ def floats(table: Table, column: str, problems: Problems, empty_ok: bool = False
             if math.isfinite(values[k]):
                 continue
             values[k] = math.nan
-            problem = f"{cell} is too large to be a float"
+            problem = f"{shown(cell)} is too large to be a float"
         elif _NOT_FINITE.fullmatch(cell):
-            problem = f"{cell!r} is not finite (a finite number is required)"
+            problem = f"{shown(cell)} is not finite (a finite number is required)"
         else:
             problem = "empty (a number is required)" if cell == "" else \
-                f"{cell!r} is not a number"
+                f"{shown(cell)} is not a number"
         table.report(problems, problem, k, column)
     return values
 
@@ -199,6 +194,6 @@ def integers(table: Table, column: str, problems: Problems, empty_ok: bool = Fal
             values[k], good[k] = int(cell), True
         elif not (cell == "" and empty_ok):
             problem = "empty (a whole number is required)" if cell == "" else \
-                f"{cell!r} is not a whole number"
+                f"{shown(cell)} is not a whole number"
             table.report(problems, problem, k, column)
     return values, good

@@ -202,3 +202,35 @@ def test_a_log_with_a_beacon_table_for_map_gets_its_figures(mini_run):
     pytest.importorskip("matplotlib")
     assert {"error_map_mini.png", "trajectories_mini.png", "cdf.png"} <= names
     assert (out / "error_map_mini.png").stat().st_size > 1000
+
+
+def test_a_datasets_folder_cannot_shadow_a_shipped_log(tmp_path):
+    from azgym.bench.entry_data import find_dataset
+
+    shutil.copytree(read_log("warehouse-small-simulated").folder,
+                    tmp_path / "warehouse-small-simulated")
+    with pytest.raises(L.LeaderboardError, match=r"has the name of a log shipped with azgym "
+                                                 r"\('warehouse-small-simulated'\); a shipped "
+                                                 r"log's name is taken"):
+        find_dataset("warehouse-small-simulated", tmp_path)
+    assert find_dataset("warehouse-small-simulated", None) is not None
+
+
+def test_the_digest_of_a_log_on_a_shipped_map_covers_the_map(monkeypatch):
+    import dataclasses
+
+    import azgym.site
+    from azgym.core import BeaconMap
+
+    before = read_log("warehouse-small-simulated").sha256
+    load = azgym.site.load_scenario
+
+    def moved(name):
+        scenario = load(name)
+        xyz = scenario.beacons.xyz.copy()
+        xyz[0, 0] += 0.5  # one beacon moved half a metre
+        beacons = BeaconMap(scenario.beacons.ids, xyz, scenario.beacons.width)
+        return dataclasses.replace(scenario, beacons=beacons)
+
+    monkeypatch.setattr(azgym.site, "load_scenario", moved)
+    assert read_log("warehouse-small-simulated").sha256 != before

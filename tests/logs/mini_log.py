@@ -34,7 +34,7 @@ def mini_files() -> dict[str, str]:
         "frames.csv": "frame,time,x,y,heading\n" + "".join(
             f"{k},{0.1 * k!r},{x},{y},{h}\n" for k, (x, y, h) in enumerate(POSES)),
         "detections.csv": "\n".join(detections) + "\n",
-        "odometry.csv": "time,speed,steer\n0.05,1.0,0.0\n0.15,1.0,0.01\n0.5,1.0,0.0\n",
+        "odometry.csv": "time,speed,steer\n0.05,1.0,0.0\n0.15,1.0,0.01\n0.25,1.0,0.0\n",
         "imu.csv": "time,yaw_rate,ax,ay,heading\n0.05,0.0,0.1,0.0,\n0.15,0.01,0.0,0.0,0.1\n",
     }
 

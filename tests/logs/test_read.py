@@ -11,8 +11,8 @@ from logs.mini_log import mini_files, write_log
 from azgym.errors import DependencyNotInstalled
 from azgym.logs import LogError, log_cases, read_log
 from azgym.logs.cases import UNLABELLED, frame_measurements
+from azgym.logs.files import MAX_TABLE_BYTES
 from azgym.logs.problems import MAX_PROBLEMS
-from azgym.logs.tables import MAX_TABLE_BYTES
 
 
 def test_a_valid_log_reads_as_frames_with_truth_and_motion(mini_log):
@@ -24,7 +24,7 @@ def test_a_valid_log_reads_as_frames_with_truth_and_motion(mini_log):
     assert cases[1].pose == (5.1, 5.0, 0.1)
     assert cases[0].initial == cases[0].pose and cases[1].initial is None
     assert {c.sequence for c in cases} == {"mini"} and {c.cause for c in cases} == {UNLABELLED}
-    # Motion: the samples after the previous frame, up to the frame's time; 0.5 s is unused.
+    # Motion: the samples after the previous frame, up to the frame's time; 0.25 s is unused.
     assert [c.motion.odometry.time.tolist() for c in cases] == [[], [0.05], [0.15]]
     assert np.isnan(cases[1].motion.imu.heading[0]) and cases[2].motion.imu.heading[0] == 0.1
     assert cases[2].motion.imu.accel.shape == (1, 2)
@@ -57,6 +57,14 @@ def _delete(name):
     def change(files):
         del files[name]
     return change
+
+
+def _azimuths(files, change):
+    """Change every azimuth of detections.csv."""
+    lines = files["detections.csv"].splitlines()
+    rows = [line.split(",") for line in lines[1:]]
+    files["detections.csv"] = "\n".join([lines[0], *(",".join(
+        [*row[:2], repr(change(float(row[2]))), *row[3:]]) for row in rows)]) + "\n"
 
 
 MALFORMED = {
@@ -116,6 +124,66 @@ MALFORMED = {
                  r"odometry.csv, line 2, column speed: '1\\x00' is not a number"),
     "both CSV and Parquet": (lambda f: f.update({"imu.parquet": b"PAR1"}),
                              r"imu.parquet: both imu.csv and imu.parquet exist"),
+    "format not whole": (_replace("log.toml", "format = 1", "format = 1.0"),
+                         r"format: this azgym reads log format 1, the log says 1.0 \(the format "
+                         r"is a whole number\)"),
+    "scenario typo": (_replace("log.toml", 'beacons = "beacons.csv"',
+                               'scenario = "warehouse-smal"'),
+                      r"map.scenario: unknown scenario 'warehouse-smal'. Did you mean "
+                      r"'warehouse-small'\?"),
+    "non-ASCII digits": (_replace("detections.csv", "1,99,", "1,\u0669\u0669,"),
+                         r"line 10, column id: '\u0669\u0669' is not a whole number"),
+    "fullwidth digits": (_replace("frames.csv", "1,0.1,", "1,\uff10.1,"),
+                         r"line 3, column time: '\uff10.1' is not a number"),
+    "long cell cut": (_replace("frames.csv", "1,0.1,", "1," + "x" * 5000 + ","),
+                      r"line 3, column time: 'x{39}… is not a number$"),
+    # Unit mistakes: valid numbers, wrong figures.
+    "heading in degrees": (_replace("frames.csv", "1,0.1,5.1,5.0,0.1", "1,0.1,5.1,5.0,5.7"),
+                           r"frames.csv, line 3, column heading: 5.7 is outside \[-3.142, "
+                           r"3.142\] \(radians, counter-clockwise from the x-axis; degrees\?\)"),
+    "truth in millimetres": (_replace("frames.csv", "1,0.1,5.1,", "1,0.1,5100.0,"),
+                             r"line 3, column x: 5100.0 is outside the map's extent \[-50, 60\] "
+                             r"m \(the beacons' extent and 50 m; millimetres\?\)"),
+    "truth huge": (_replace("frames.csv", "1,0.1,5.1,5.0", "1,0.1,5.1,1e300"),
+                   r"line 3, column y: 1e\+300 is outside the map's extent"),
+    "speed huge": (_replace("odometry.csv", "0.05,1.0,", "0.05,1e300,"),
+                   r"odometry.csv, line 2, column speed: 1e\+300 is outside \[-20, 20\] "
+                   r"\(m/s; km/h or mm/s\?\)"),
+    "steer in degrees": (_replace("odometry.csv", "0.15,1.0,0.01", "0.15,1.0,10.0"),
+                         r"odometry.csv, line 3, column steer: 10.0 is outside \[-3.142"),
+    "yaw rate huge": (_replace("imu.csv", "0.05,0.0,", "0.05,1e300,"),
+                      r"imu.csv, line 2, column yaw_rate: 1e\+300 is outside \[-20, 20\]"),
+    "accel huge": (_replace("imu.csv", "0.05,0.0,0.1,", "0.05,0.0,981.0,"),
+                   r"imu.csv, line 2, column ax: 981.0 is outside \[-100, 100\]"),
+    "rate disagrees": (_replace("log.toml", "[map]", "[camera]\nrate_hz = 1000.0\n\n[map]"),
+                       r"frames.csv, column time: the median frame interval is 0.1 s, but "
+                       r"camera.rate_hz = 1000 says 0.001 s"),
+    "times in milliseconds": (lambda f: f.update({
+        "log.toml": f["log.toml"].replace("[map]", "[camera]\nrate_hz = 10.0\n\n[map]"),
+        "frames.csv": "frame,time,x,y,heading\n0,0.0,5,5,0\n1,100.0,5,5,0\n2,200.0,5,5,0\n",
+        "odometry.csv": "time,speed,steer\n", "imu.csv": "time,yaw_rate,ax,ay\n"}),
+                              r"frames.csv, column time: the median frame interval is 100 s, "
+                              r"but camera.rate_hz = 10 says 0.1 s"),
+    "motion early": (_replace("odometry.csv", "0.05,1.0,0.0", "-5.0,1.0,0.0"),
+                     r"odometry.csv, line 2, column time: 1 of its samples lie more than 1 s "
+                     r"\(one sample interval\) before the first frame's time 0 s"),
+    "motion late": (_replace("imu.csv", "0.15,0.01,", "2.15,0.01,"),
+                    r"imu.csv, line 3, column time: 1 of its samples lie more than 1 s "
+                    r"\(one sample interval\) after the last frame's time 0.2 s"),
+    "motion offset 1 s": (lambda f: f.update({"odometry.csv": "time,speed,steer\n" + "".join(
+        f"{0.05 * k + 1.0!r},1.0,0.0\n" for k in range(5))}),
+                          r"odometry.csv, line 2, column time: 5 of its samples lie more than "
+                          r"0.05 s \(one sample interval\) after the last frame's time 0.2 s"),
+    "azimuths clockwise": (lambda f: _azimuths(f, lambda a: -a),
+                           r"detections.csv, column azimuth: the azimuths disagree with the truth"
+                           r": the median .* over 8 detections of map beacons is 1.57 rad, at "
+                           r"most 0.2 is plausible \(they match the predictions negated: "
+                           r"measured clockwise\?\)"),
+    "azimuths offset": (lambda f: _azimuths(f, lambda a: a + 0.5),
+                        r"is 0.5 rad, .* \(they match the predictions turned by 0.5 rad: a "
+                        r"heading or camera zero offset\?\)"),
+    "azimuths scaled": (lambda f: _azimuths(f, lambda a: a * 0.3),
+                        r"over 8 detections .* \(in degrees, or scaled\?\)"),
 }
 
 

@@ -1,0 +1,178 @@
+"""Unit and clock mistakes a log's values reveal: plausibility checks beyond each cell's syntax.
+
+A value can be a valid number and still wrong by a unit: a heading in degrees, times in
+milliseconds, a truth in millimetres, azimuths measured clockwise. Such a log would be scored
+without complaint and give wrong figures, so :func:`check_plausible` refuses it, naming what the
+values look like:
+
+- headings (truth, IMU) in [−π, π]; odometry |speed| ≤ :data:`MAX_SPEED`, |steer| ≤ π; IMU
+  |yaw_rate| ≤ :data:`MAX_YAW_RATE`, |ax|, |ay| ≤ :data:`MAX_ACCEL` (:data:`BOUNDS`);
+- the truth's x, y within the map's extent (:class:`Extent`);
+- with ``camera.rate_hz``, the median frame interval within a factor :data:`RATE_FACTOR` of
+  1 / rate;
+- odometry and IMU samples on the frames' clock: none more than one sample interval (at most
+  1 s) before the first frame or after the last (:func:`_motion_clock`);
+- with the truth, the detections of map beacons agree with the azimuths the true poses predict
+  (α = atan2(y_b − y, x_b − x) − φ, :mod:`azgym.core`): the median absolute difference at most
+  :data:`MAX_AZIMUTH_RESIDUAL` (a median, since misread ids and mirror images disagree).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from azgym.core import BeaconMap, wrap_angle
+from azgym.logs.problems import Problems
+from azgym.logs.tables import Table
+
+MAX_SPEED = 20.0
+"""The largest odometry |speed| [m/s] (72 km/h: far beyond an indoor vehicle)."""
+MAX_YAW_RATE = 20.0
+"""The largest IMU |yaw_rate| [rad/s] (three turns a second)."""
+MAX_ACCEL = 100.0
+"""The largest IMU |ax|, |ay| [m/s²] (10 g)."""
+BOUNDS = {
+    ("frames", "heading"): (math.pi, "radians, counter-clockwise from the x-axis; degrees?"),
+    ("odometry", "speed"): (MAX_SPEED, "m/s; km/h or mm/s?"),
+    ("odometry", "steer"): (math.pi, "radians; degrees?"),
+    ("imu", "yaw_rate"): (MAX_YAW_RATE, "rad/s; degrees per second?"),
+    ("imu", "ax"): (MAX_ACCEL, "m/s²; mm/s²?"),
+    ("imu", "ay"): (MAX_ACCEL, "m/s²; mm/s²?"),
+    ("imu", "heading"): (math.pi, "radians, counter-clockwise from the x-axis; degrees?"),
+}
+"""(table, column) → (the largest absolute value, a hint at the unit mistake)."""
+RATE_FACTOR = 1.5
+"""How far the median frame interval may be from 1 / ``camera.rate_hz`` (either way)."""
+SCENARIO_MARGIN = 5.0
+"""How far outside a scenario's bounds a true position may lie [m]."""
+BEACONS_MARGIN = 50.0
+"""How far outside the beacons' bounding box a true position may lie [m] (a beacons.csv map
+says nothing of the room)."""
+MAX_CLOCK_SLACK = 1.0
+"""The most a motion sample may lie before the first frame or after the last [s]."""
+MAX_AZIMUTH_RESIDUAL = 0.2
+"""The largest median |measured − predicted azimuth| over a log's detections of map beacons
+[rad] (11°: far above any camera's noise, far below a unit or sign mistake's)."""
+
+
+@dataclass(frozen=True)
+class Extent:
+    """Where the truth may lie: (x_min, y_min, x_max, y_max) [m], margin included, and why."""
+
+    box: tuple[float, float, float, float]
+    what: str
+
+    @classmethod
+    def of_scenario(cls, bounds: tuple[float, float, float, float]) -> Extent:
+        """A scenario's room bounds and :data:`SCENARIO_MARGIN`."""
+        x0, y0, x1, y1 = bounds
+        m = SCENARIO_MARGIN
+        return cls((x0 - m, y0 - m, x1 + m, y1 + m), f"the scenario's bounds and {m:g} m")
+
+    @classmethod
+    def of_beacons(cls, beacons: BeaconMap) -> Extent:
+        """The beacons' bounding box and :data:`BEACONS_MARGIN`."""
+        x0, y0, x1, y1 = beacons.bounds()
+        m = BEACONS_MARGIN
+        return cls((x0 - m, y0 - m, x1 + m, y1 + m), f"the beacons' extent and {m:g} m")
+
+
+def check_plausible(tables: dict[str, Table | None], columns: dict[str, object],
+                    beacons: BeaconMap | None, extent: Extent | None,
+                    rate_hz: float | None, problems: Problems) -> None:
+    """Report the unit and clock mistakes (module docstring); ``columns``: name → Columns."""
+    for (name, column), (bound, hint) in BOUNDS.items():
+        table, values = tables.get(name), columns.get(name)
+        if table is not None and values is not None and column in values.values:
+            for k in np.flatnonzero(np.abs(values[column]) > bound):
+                table.report(problems, f"{float(values[column][k])!r} is outside "
+                                       f"[-{bound:.4g}, {bound:.4g}] ({hint})", int(k), column)
+    frames, table = columns.get("frames"), tables.get("frames")
+    if frames is None or table is None:
+        return
+    _frame_rate(table, frames["time"], rate_hz, problems)
+    for name in ("odometry", "imu"):
+        if columns.get(name) is not None and tables.get(name) is not None:
+            _motion_clock(tables[name], columns[name]["time"], frames["time"], problems)
+    if "x" in frames.values and extent is not None:
+        _truth_in_extent(table, frames, extent, problems)
+    if "x" in frames.values and beacons is not None and columns.get("detections") is not None:
+        _azimuths_agree(tables["detections"], columns["detections"], frames, beacons, problems)
+
+
+def _frame_rate(table: Table, time: np.ndarray, rate_hz: float | None,
+                problems: Problems) -> None:
+    """The median frame interval agrees with ``camera.rate_hz`` within :data:`RATE_FACTOR`."""
+    steps = np.diff(time)
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    if rate_hz is None or not steps.size:
+        return
+    median, expected = float(np.median(steps)), 1.0 / rate_hz
+    if not 1 / RATE_FACTOR <= median / expected <= RATE_FACTOR:
+        problems.add(table.file, f"the median frame interval is {median:.6g} s, but "
+                                 f"camera.rate_hz = {rate_hz:g} says {expected:.6g} s (times in "
+                                 "seconds? the right rate?)", column="time")
+
+
+def _motion_clock(table: Table, samples: np.ndarray, frames: np.ndarray,
+                  problems: Problems) -> None:
+    """No sample more than one sample interval (≤ 1 s) before the first frame or after the last.
+
+    Such samples are on another clock, or offset from the frames': they would silently go to
+    the first frame, or be ignored.
+    """
+    steps = np.diff(samples[np.isfinite(samples)])
+    steps = steps[steps > 0]  # times out of order are reported already
+    slack = min(float(np.median(steps)), MAX_CLOCK_SLACK) if steps.size else MAX_CLOCK_SLACK
+    first, last = float(np.nanmin(frames)), float(np.nanmax(frames))
+    for rows, side, edge in ((np.flatnonzero(samples < first - slack), "before the first", first),
+                             (np.flatnonzero(samples > last + slack), "after the last", last)):
+        if rows.size:
+            table.report(problems, f"{rows.size} of its samples lie more than {slack:.3g} s "
+                                   f"(one sample interval) {side} frame's time {edge:.6g} s: "
+                                   "the motion samples are on the frames' clock", int(rows[0]),
+                         "time")
+
+
+def _truth_in_extent(table: Table, frames: object, extent: Extent, problems: Problems) -> None:
+    """Each true x, y within the map's extent (a truth in millimetres is far outside)."""
+    x0, y0, x1, y1 = extent.box
+    for column, lo, hi in (("x", x0, x1), ("y", y0, y1)):
+        values = frames[column]  # type: ignore[index]
+        for k in np.flatnonzero((values < lo) | (values > hi)):
+            table.report(problems, f"{float(values[k])!r} is outside the map's extent "
+                                   f"[{lo:.6g}, {hi:.6g}] m ({extent.what}; millimetres?)",
+                         int(k), column)
+
+
+def _azimuths_agree(table: Table | None, detections: object, frames: object,
+                    beacons: BeaconMap, problems: Problems) -> None:
+    """The median |azimuth − the truth's prediction| over detections of map beacons is small."""
+    rows = detections["frame"]  # type: ignore[index]
+    index = beacons.index_of(detections["id"])  # type: ignore[index]
+    used = np.flatnonzero((rows >= 0) & (index >= 0))
+    if table is None or not used.size:
+        return
+    x, y, heading = (frames[key][rows[used]] for key in ("x", "y", "heading"))  # type: ignore
+    xy = beacons.xy[index[used]]
+    predicted = np.arctan2(xy[:, 1] - y, xy[:, 0] - x) - heading
+    measured = detections["azimuth"][used]  # type: ignore[index]
+    residual = np.abs(wrap_angle(measured - predicted))
+    median = float(np.nanmedian(residual))
+    if not median > MAX_AZIMUTH_RESIDUAL:  # NaN (a bad cell, already reported) passes
+        return
+    if float(np.nanmedian(np.abs(wrap_angle(measured + predicted)))) <= MAX_AZIMUTH_RESIDUAL:
+        hint = "they match the predictions negated: measured clockwise?"
+    else:
+        offset = float(np.nanmedian(wrap_angle(measured - predicted)))
+        spread = float(np.nanmedian(np.abs(wrap_angle(measured - predicted - offset))))
+        hint = (f"they match the predictions turned by {offset:.3g} rad: a heading or camera "
+                "zero offset?" if spread <= MAX_AZIMUTH_RESIDUAL else
+                "in degrees, or scaled?")
+    problems.add(table.file, f"the azimuths disagree with the truth: the median |azimuth − "
+                             f"the azimuth the true pose predicts| over {used.size} detections "
+                             f"of map beacons is {median:.3g} rad, at most "
+                             f"{MAX_AZIMUTH_RESIDUAL:g} is plausible ({hint})", column="azimuth")
