@@ -137,6 +137,9 @@ def _figures(errors: FloatArray, frames: int) -> tuple[float, float, float, floa
     """(rms, std, bias, failed share) of one cell's position errors (fixes only), shape (F, 2)."""
     if not len(errors):
         return math.nan, math.nan, math.nan, 1.0
-    rms = math.sqrt(float(np.mean(np.sum(errors * errors, axis=1))))
-    std = math.sqrt(float(np.sum(np.var(errors, axis=0, ddof=1)))) if len(errors) > 1 else math.nan
-    return rms, std, float(np.hypot(*errors.mean(axis=0))), 1.0 - len(errors) / frames
+    with np.errstate(over="ignore", invalid="ignore"):  # a finite but absurd fix: an inf RMS
+        rms = math.sqrt(float(np.mean(np.sum(errors * errors, axis=1))))
+        std = (math.sqrt(float(np.sum(np.var(errors, axis=0, ddof=1)))) if len(errors) > 1
+               else math.nan)
+        bias = float(np.hypot(*errors.mean(axis=0)))
+    return rms, std, bias, 1.0 - len(errors) / frames
