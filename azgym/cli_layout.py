@@ -18,23 +18,33 @@ MAX_TOTAL_FRAMES = 10_000_000
 
 
 def _prepared(args: argparse.Namespace) -> tuple[Any, Any, Path]:
-    """The scenario, its floor grid and the output folder (made only when it is used)."""
+    """The scenario, its floor grid and the output folder (made only when it is used).
+
+    ``--out ''`` is the current folder, as for ``azgym bench``.
+    """
     from azgym.layout.floor import floor_grid
+    from azgym.layout.scenario_file import file_stem
     from azgym.site import load_scenario
 
     scenario = load_scenario(args.scenario)
     floor = floor_grid(scenario, args.step)
-    return scenario, floor, Path(args.out or f"results/layout/{scenario.name}")
+    out = Path("results/layout") / file_stem(scenario.name) if args.out is None else Path(args.out)
+    return scenario, floor, out
 
 
 def _analyze(args: argparse.Namespace) -> int:
-    from azgym.arguments import whole_number
+    from azgym.arguments import positive_number, whole_number
+    from azgym.bench.runner import default_workers
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
     from azgym.layout.analysis import analyze, summary, write_analysis
+    from azgym.layout.monte_carlo import check_seed
     from azgym.localize.registry import make_localizer
 
     frames = whole_number("frames", args.frames, minimum=0)
+    seed = check_seed(args.seed)
+    workers = whole_number("workers", args.workers, minimum=0) or default_workers()
+    positive_number("time_limit", args.time_limit, "s")
     make_localizer(args.localizer)  # a bad spec stops here, before any work
     scenario, floor, out = _prepared(args)
     cells = int(floor.free.sum())
@@ -43,13 +53,15 @@ def _analyze(args: argparse.Namespace) -> int:
                                 f"Monte Carlo frames, more than {MAX_TOTAL_FRAMES}; use fewer "
                                 "frames or a larger step")
     prepare_folder(out)  # the last check: every other argument is good
-    print(f"{scenario.name}: {cells} cells of {floor.step:g} m, {len(scenario.beacons)} beacons"
+    print(f"{scenario.name}: {cells} cells of {floor.step:g} m, "
+          f"{_count(scenario.beacons, 'beacon')}"
           + (f"; Monte Carlo: {frames} frames per cell through {args.localizer}" if frames
              else ""), flush=True)
     started = time.perf_counter()
-    prediction, checked = analyze(scenario, floor, args.localizer, frames, args.seed,
-                                  lambda done, total: print(f"  Monte Carlo: {done}/{total} cells",
-                                                            flush=True))
+    prediction, checked = analyze(
+        scenario, floor, args.localizer, frames, seed,
+        lambda done, total: print(f"  Monte Carlo: {done}/{total} cells", flush=True),
+        workers=workers, time_limit=args.time_limit)
     written = write_analysis(out, scenario, prediction, checked)
     if not args.no_figures:
         from azgym.layout.figures import analysis_figure
@@ -60,6 +72,12 @@ def _analyze(args: argparse.Namespace) -> int:
     _print_summary(summary(scenario, prediction, checked))
     print(f"{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
     return 0
+
+
+def _count(items: Any, noun: str) -> str:
+    """``1 beacon``, ``4 beacons``."""
+    count = len(items) if not isinstance(items, int) else items
+    return f"{count} {noun}{'' if count == 1 else 's'}"
 
 
 def _print_summary(result: dict[str, Any]) -> None:
@@ -79,32 +97,60 @@ def _print_summary(result: dict[str, Any]) -> None:
         if check["cells_compared"]:
             print(f"RMS / predicted σ: median {check['ratio_median']:.3f}, within 10 % at "
                   f"{100 * check['share_within_10pct']:.1f} % of {check['cells_compared']} "
-                  f"cells; frames without a fix {100 * check['failed_share']:.2f} %")
+                  "cells")
+        failed = ("" if check["failed_share"] is None else
+                  f"{100 * check['failed_share']:.2f} % of the frames had no fix; ")
+        print(f"run at {_count(check['cells_run'], 'cell')} seeing ≥ 3 beacons: {failed}"
+              f"not run at {_count(check['cells_not_run'], 'cell')} seeing fewer (no fix)")
+        for reason, frames in check["lost_frames"].items():
+            print(f"  {_count(frames, 'frame')} lost: {reason}")
+        if check["lost_frames_other_reasons"]:
+            print(f"  {_count(check['lost_frames_other_reasons'], 'frame')} lost for other "
+                  "reasons")
 
 
 def _optimize(args: argparse.Namespace) -> int:
     from azgym.files import prepare_folder
     from azgym.layout.candidates import candidate_places
-    from azgym.layout.objective import floor_figures
     from azgym.layout.optimize import check_add, place_beacons
-    from azgym.layout.scenario_file import source_data, with_new_beacons, write_scenario
+    from azgym.layout.scenario_file import source_data
 
     scenario, floor, out = _prepared(args)
     candidates = candidate_places(scenario, args.spacing)
     add = check_add(args.add, candidates)
     source_data(scenario)  # a scenario without a file to add to stops here
     prepare_folder(out)  # the last check: every other argument is good
-    print(f"{scenario.name}: {int(floor.free.sum())} cells of {floor.step:g} m; placing {add} "
-          f"beacons on {len(candidates)} candidate places", flush=True)
+    print(f"{scenario.name}: {int(floor.free.sum())} cells of {floor.step:g} m; placing "
+          f"{_count(add, 'beacon')} on {len(candidates)} candidate places", flush=True)
     started = time.perf_counter()
     placement = place_beacons(scenario, floor, candidates, add)
-    before = floor_figures(placement.before, placement.visible_before)
-    after = floor_figures(placement.after, placement.visible_after)
-    name = f"{scenario.name}-plus-{add}"
+    written = _write_placement(args, scenario, floor, placement, out)
+    print(f"{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
+    return 0
+
+
+def _write_placement(args: argparse.Namespace, scenario: Any, floor: Any, placement: Any,
+                     out: Path) -> list[Path]:
+    """The new scenario file and figure, and the printout; refused when nothing helps."""
+    from azgym.errors import InvalidInputError
+    from azgym.layout.objective import floor_figures
+    from azgym.layout.scenario_file import file_stem, with_new_beacons, write_scenario
+
+    placed = len(placement.chosen)
+    if not placed:
+        raise InvalidInputError(f"{scenario.name}: no candidate place lowers the objective (the "
+                                "p95 of the predicted σ, then its mean): none is seen from cells "
+                                "where it would help; nothing written")
+    if placed < args.add:
+        print(f"only {_count(placed, 'beacon')} of the {args.add} asked for lower the objective; "
+              f"placing {placed}")
+    name = f"{file_stem(scenario.name)}-plus-{placed}"
     data = with_new_beacons(scenario, placement.new_xyz, placement.width, name)
     path = out / f"{name}.toml"
-    write_scenario(path, data, f"{scenario.name} with {add} beacons placed by azgym layout "
-                   f"optimize (grid {floor.step:g} m, candidates every {args.spacing:g} m).")
+    write_scenario(path, data, f"{scenario.name} with {_count(placed, 'beacon')} placed by azgym "
+                   f"layout optimize (grid {floor.step:g} m, candidates every {args.spacing:g} m).")
+    before = floor_figures(placement.before, placement.visible_before)
+    after = floor_figures(placement.after, placement.visible_after)
     written = [path]
     if not args.no_figures:
         from azgym.layout.figures import placement_figure
@@ -112,19 +158,20 @@ def _optimize(args: argparse.Namespace) -> int:
         written.append(placement_figure(
             scenario, floor, placement.before, placement.after, placement.new_xyz,
             (before["sigma_p95_m"], after["sigma_p95_m"]), out / "layout-optimized.png"))
-    for k, (index, place) in enumerate(zip(placement.chosen, placement.new_xyz, strict=True)):
-        print(f"  new beacon {int(scenario.beacons.ids.max()) + 1 + k}: ({place[0]:g}, "
-              f"{place[1]:g}, {place[2]:g}) on a {candidates.kind[index]}")
+    for beacon, index in zip(data["beacons"][-placed:], placement.chosen, strict=True):
+        x, y, z = beacon["xyz"]
+        print(f"  new beacon {beacon['id']}: ({x:g}, {y:g}, {z:g}) on a "
+              f"{placement.candidates.kind[index]}")
     for label, figures in (("before", before), ("after", after)):
         print(f"{label:>6}: p95 σ_pos {100 * figures['sigma_p95_m']:.2f} cm, median "
               f"{100 * figures['sigma_median_m']:.2f} cm, cells with < 3 beacons "
               f"{figures['cells_under_3_beacons']}")
-    print(f"{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
-    return 0
+    return written
 
 
 def add_layout(commands: argparse._SubParsersAction) -> None:
     """``azgym layout analyze|optimize``."""
+    from azgym.bench.isolation import DEFAULT_TIME_LIMIT
     from azgym.layout.candidates import DEFAULT_SPACING
     from azgym.layout.floor import DEFAULT_STEP
 
@@ -140,13 +187,21 @@ def add_layout(commands: argparse._SubParsersAction) -> None:
         parser.add_argument("--step", type=float, default=DEFAULT_STEP, metavar="M",
                             help="grid spacing [m]")
         parser.add_argument("--out", metavar="DIR",
-                            help="output folder (default: results/layout/SCENARIO)")
+                            help="output folder (default: results/layout/SCENARIO; '': the "
+                                 "current folder)")
         parser.add_argument("--no-figures", action="store_true", help="skip the PNG files")
     analyze.add_argument("--localizer", default="ransac", metavar="SPEC",
                          help="the localizer of the Monte Carlo check")
     analyze.add_argument("--frames", type=int, default=DEFAULT_FRAMES, metavar="N",
                          help="Monte Carlo frames per cell (0: none)")
-    analyze.add_argument("--seed", type=int, default=0, help="seed of the Monte Carlo draws")
+    analyze.add_argument("--seed", type=int, default=0,
+                         help="seed of the Monte Carlo draws, in [0, 2**31)")
+    analyze.add_argument("--workers", type=int, default=0,
+                         help="processes running the localizer (0: one per core)")
+    analyze.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT,
+                         metavar="SECONDS", help="time the localizer may take on one frame (or "
+                         "to be built); a frame over it has no fix (default: "
+                         f"{DEFAULT_TIME_LIMIT:g}, as azgym bench)")
     analyze.set_defaults(handler=_analyze)
     optimize.add_argument("--add", type=int, required=True, metavar="N",
                           help="how many beacons to place")

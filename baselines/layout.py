@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import azgym
+from azgym.bench.runner import default_workers
 from azgym.files import prepare_folder, write_file
 from azgym.layout.analysis import agreement, predict
 from azgym.layout.candidates import candidate_places
@@ -58,7 +59,8 @@ def prediction_check(localizers: list[str], step: float, frames: int, seed: int,
               "expected_share_within_10pct_if_exact": expected_share(frames)}
     for name in localizers:
         started = time.perf_counter()
-        checked = monte_carlo(scenario, floor.points, prediction.seen, name, frames, seed)
+        checked = monte_carlo(scenario, floor.points, prediction.seen, name, frames, seed,
+                              workers=default_workers())
         result[name] = agreement(prediction.sigma, checked)
         result[name]["seconds"] = round(time.perf_counter() - started, 1)
         ratio = checked.rms / prediction.sigma
@@ -88,7 +90,8 @@ def placement_check(step: float, frames: int, seed: int, out: Path) -> dict:
               "predicted_after": floor_figures(placement.after, placement.visible_after)}
     for label, site in (("before", scenario), ("after", placed)):
         prediction = predict(site, floor)
-        checked = monte_carlo(site, floor.points, prediction.seen, "ransac", frames, seed)
+        checked = monte_carlo(site, floor.points, prediction.seen, "ransac", frames, seed,
+                              workers=default_workers())
         result[f"monte_carlo_{label}"] = agreement(prediction.sigma, checked)
         analysis_figure(site, floor, prediction.sigma, prediction.visible, checked.rms,
                         out / f"warehouse-small-{label}.png", "ransac")

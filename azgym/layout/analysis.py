@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.core import BoolArray, FloatArray
 from azgym.files import write_file
 from azgym.layout.floor import Floor
@@ -27,6 +28,8 @@ from azgym.site import Scenario
 
 AGREEMENT = 0.10
 """A cell's Monte Carlo RMS agrees with the prediction within this relative difference."""
+MAX_REASONS = 5
+"""The most reasons for lost frames the summary lists (a plug-in may word each one apart)."""
 
 
 @dataclass(frozen=True)
@@ -60,14 +63,17 @@ def predict(scenario: Scenario, floor: Floor) -> Prediction:
 
 
 def analyze(scenario: Scenario, floor: Floor, localizer: str, frames: int, seed: int = 0,
-            progress: Callable[[int, int], None] | None = None
-            ) -> tuple[Prediction, MonteCarlo | None]:
-    """The prediction, and with ``frames`` > 0 the Monte Carlo check of ``localizer``."""
+            progress: Callable[[int, int], None] | None = None, *, workers: int = 1,
+            time_limit: float = DEFAULT_TIME_LIMIT) -> tuple[Prediction, MonteCarlo | None]:
+    """The prediction, and with ``frames`` > 0 the Monte Carlo check of ``localizer``.
+
+    ``workers`` and ``time_limit`` are the runner's (:func:`~azgym.layout.monte_carlo.monte_carlo`).
+    """
     prediction = predict(scenario, floor)
     if frames <= 0:
         return prediction, None
     checked = monte_carlo(scenario, floor.points, prediction.seen, localizer, frames, seed,
-                          progress)
+                          progress, workers=workers, time_limit=time_limit)
     return prediction, checked
 
 
@@ -87,12 +93,17 @@ def agreement(sigma: FloatArray, checked: MonteCarlo) -> dict[str, Any]:
 
     The ratios are over the cells where both are finite; ``rms`` holds the RMS's floor figures
     as :func:`~azgym.layout.objective.floor_figures` computes the prediction's (a cell without a
-    fix counting as the penalty), so that the two p95 compare.
+    fix counting as the penalty), so that the two p95 compare. ``failed_share`` is the share of
+    frames without a fix over the cells the localizer was run at (``cells_run``, those seeing
+    three beacons or more; the ``cells_not_run`` have no fix); ``lost_frames`` counts the frames
+    lost to an exception or a time-out by reason (the most frequent :data:`MAX_REASONS`).
     """
     both = np.isfinite(sigma) & np.isfinite(checked.rms)
     ratio = checked.rms[both] / sigma[both]
     std_ratio = checked.std[both] / sigma[both]
     rms = np.where(np.isnan(checked.rms), np.inf, checked.rms)
+    asked = checked.asked
+    lost = sorted(checked.problems.items(), key=lambda item: -item[1])
     return {"localizer": checked.localizer, "frames": checked.frames,
             "rms": floor_figures(rms),
             "cells_compared": int(both.sum()),
@@ -101,8 +112,10 @@ def agreement(sigma: FloatArray, checked: MonteCarlo) -> dict[str, Any]:
             if both.any() else None,
             "std_share_within_10pct": float(np.mean(np.abs(std_ratio - 1) <= AGREEMENT))
             if both.any() else None,
-            "failed_share": float(np.mean(checked.failed[np.isfinite(sigma)]))
-            if np.isfinite(sigma).any() else None}
+            "cells_run": int(asked.sum()), "cells_not_run": int((~asked).sum()),
+            "failed_share": float(np.mean(checked.failed[asked])) if asked.any() else None,
+            "lost_frames": {reason: count for reason, count in lost[:MAX_REASONS]},
+            "lost_frames_other_reasons": sum(count for _, count in lost[MAX_REASONS:])}
 
 
 def write_analysis(folder: Path, scenario: Scenario, prediction: Prediction,

@@ -65,7 +65,8 @@ def candidate_places(scenario: Scenario, spacing: float = DEFAULT_SPACING) -> Ca
     height = float(np.median(scenario.beacons.xyz[:, 2]))
     places: list[tuple[float, float, float, str]] = []
     for (x1, y1), (x2, y2), top in _walls(scenario):
-        parts = max(1, round(math.hypot(x2 - x1, y2 - y1) / spacing))
+        ratio = min(math.hypot(x2 - x1, y2 - y1) / spacing, MAX_CANDIDATES + 1.0)  # no overflow
+        parts = max(1, round(ratio))
         if len(places) + parts > MAX_CANDIDATES:
             raise InvalidInputError(f"spacing {spacing:g} m gives more than {MAX_CANDIDATES} "
                                     "candidate places; use a larger spacing")

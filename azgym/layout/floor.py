@@ -72,8 +72,9 @@ def floor_grid(scenario: Scenario, step: float = DEFAULT_STEP) -> Floor:
                                 f"({x_max - x_min:g} m x {y_max - y_min:g} m)")
     nx, ny = _count(span_x, step), _count(span_y, step)
     if nx * ny > MAX_CELLS:
-        raise InvalidInputError(f"step {step:g} m makes a grid of {nx} x {ny} = {nx * ny} cells "
-                                f"on {scenario.name!r}, more than {MAX_CELLS}; use a larger step")
+        raise InvalidInputError(f"step {step:g} m makes a grid of {nx:.6g} x {ny:.6g} cells on "
+                                f"{scenario.name!r}, more than {MAX_CELLS}; use a larger step")
+    nx, ny = int(nx), int(ny)
     xs = _centred(x_min + WALL_CLEARANCE, span_x, nx, step)
     ys = _centred(y_min + WALL_CLEARANCE, span_y, ny, step)
     gx, gy = np.meshgrid(xs, ys)
@@ -85,9 +86,14 @@ def floor_grid(scenario: Scenario, step: float = DEFAULT_STEP) -> Floor:
     return Floor(xs, ys, free, step)
 
 
-def _count(span: float, step: float) -> int:
-    """How many points ``step`` apart fit in ``span`` (at least one)."""
-    return max(1, math.floor(span / step + 1e-9) + 1)
+def _count(span: float, step: float) -> float:
+    """How many points ``step`` apart fit in ``span`` (at least one), as a float.
+
+    A float, so that a tiny step makes a huge (or infinite) count to compare with the cap rather
+    than an overflow or a 600-digit integer.
+    """
+    ratio = span / step + 1e-9  # Python floats: inf, not an error, for a subnormal step
+    return max(1.0, (math.floor(ratio) if math.isfinite(ratio) else math.inf) + 1.0)
 
 
 def _centred(start: float, span: float, count: int, step: float) -> FloatArray:

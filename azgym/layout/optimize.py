@@ -5,7 +5,8 @@ The information matrix of a layout at a cell is the sum of its beacons' contribu
 once, and trying a candidate is one addition per cell. The search:
 
 1. **Greedy**: add, one at a time, the candidate that lowers the objective
-   (:func:`azgym.layout.objective.objective`) most.
+   (:func:`azgym.layout.objective.objective`) most; stop early when none lowers it (a beacon
+   that helps no cell is not placed, so fewer than asked may be placed, or none).
 2. **Swaps**: for each placed beacon in turn, try every unused candidate in its stead and keep
    the best swap if it lowers the objective; repeat until a whole round changes nothing (at most
    :data:`MAX_SWAP_ROUNDS` rounds). Greedy choices made early, for cells a later beacon covers
@@ -32,6 +33,8 @@ MAX_ADD = 100
 """The most beacons one run places."""
 MAX_SWAP_ROUNDS = 10
 """Rounds of the swap pass at most."""
+IMPROVEMENT = 1e-12
+"""A layout must lower the objective by more than this to count as better [m]."""
 CHUNK_VALUES = 4_000_000
 """Floats of candidate layouts scored at once (bounds the memory of a large floor)."""
 
@@ -42,7 +45,8 @@ class Placement:
 
     Attributes:
         candidates: The places searched.
-        chosen: Indices of the places chosen, in the order placed.
+        chosen: Indices of the places chosen, in the order placed (fewer than asked, or none,
+            when no other candidate lowers the objective).
         width: Width W of the new beacons [m] (the median of the scenario's).
         before, after: Predicted σ_pos per cell [m], shape (P,).
         visible_before, visible_after: Beacons seen per cell, shape (P,).
@@ -90,9 +94,14 @@ def place_beacons(scenario: Scenario, floor: Floor, candidates: Candidates,
         points, candidates.xyz[:, :2], widths, model, seen_new).transpose(1, 0, 2))
     search = _Search(base, base_count, gain, np.ascontiguousarray(seen_new.T))
     chosen: list[int] = []
+    current = search.score(chosen)
     for _ in range(add):
         scores = search.scores(chosen, chosen)
-        chosen.append(int(np.nanargmin(scores)))
+        best = int(np.nanargmin(scores))
+        if not scores[best] < current - IMPROVEMENT:  # no candidate helps: stop
+            break
+        chosen.append(best)
+        current = float(scores[best])
     greedy_score = search.score(chosen)
     chosen = search.swap(chosen)
     info, count = search.layout(chosen)
@@ -139,7 +148,7 @@ class _Search:
                 others = chosen[:k] + chosen[k + 1:]
                 scores = self.scores(others, chosen)
                 best = int(np.nanargmin(scores)) if np.isfinite(scores).any() else -1
-                if best >= 0 and scores[best] < current - 1e-12:
+                if best >= 0 and scores[best] < current - IMPROVEMENT:
                     chosen[k], current, improved = best, float(scores[best]), True
             if not improved:
                 break

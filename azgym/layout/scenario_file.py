@@ -1,25 +1,28 @@
 """The optimized layout as a scenario file: the source file's data, the new beacons appended.
 
 The scenario's own TOML data is read again (from its file, or from the shipped ``envs/``), the
-new beacons are appended as ``[[beacons]]`` tables with fresh ids (after the largest in use), the
-name becomes the new file's stem, and the data is written through the scenario writer
-(:mod:`azgym.site.toml_writer`) after the parser has accepted it, then loaded back and compared:
-the file written is a valid scenario holding exactly that data. Comments of the source file are
-not carried over (TOML readers drop them); the writer's header says where the file came from.
+new beacons are appended as ``[[beacons]]`` tables with fresh ids (:func:`fresh_ids`), the
+name becomes the new file's stem (:func:`file_stem`), and the data is written through the
+scenario writer (:mod:`azgym.site.toml_writer`) after the parser has accepted it, then loaded
+back and compared: the file written is a valid scenario holding exactly that data. Comments of
+the source file are not carried over (TOML readers drop them); the writer's header says where
+the file came from.
 """
 
 from __future__ import annotations
 
+import re
 import tomllib
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from azgym.core import FloatArray
+from azgym.core import FloatArray, IntArray
 from azgym.errors import ScenarioError
 from azgym.files import write_file
 from azgym.site import Scenario, load_scenario, parse_scenario
 from azgym.site.load import SCENARIO_PACKAGE
+from azgym.site.reader import MAX_INTEGER
 from azgym.site.toml_writer import to_toml
 
 
@@ -40,17 +43,40 @@ def source_data(scenario: Scenario) -> dict[str, Any]:
     return tomllib.loads(raw.decode("utf-8"))
 
 
+def file_stem(name: str) -> str:
+    """``name`` as a file name's stem: only letters, digits, ``-``, ``_`` and ``.``, not first.
+
+    The parser admits no other name (:func:`azgym.site.reader.name_problem`); this keeps a
+    scenario built in memory from naming a file outside the output folder too.
+    """
+    return re.sub(r"[^A-Za-z0-9._-]", "_", name).lstrip("._-")[:100] or "scenario"
+
+
+def fresh_ids(ids: IntArray, count: int) -> list[int]:
+    """``count`` beacon ids not in ``ids``.
+
+    Those after the largest in use, or, when they would pass the largest id a file may give
+    (2**31 - 1), the smallest free ones from 1 (a map has at most 10 000 beacons, so there are
+    always enough).
+    """
+    top = int(max(ids, default=0))
+    if top + count <= MAX_INTEGER:
+        return list(range(top + 1, top + 1 + count))
+    taken = {int(i) for i in ids}
+    return [k for k in range(1, count + len(taken) + 1) if k not in taken][:count]
+
+
 def with_new_beacons(scenario: Scenario, xyz: FloatArray, width: float,
                      name: str) -> dict[str, Any]:
-    """The scenario's data with beacons at ``xyz`` (fresh ids) added and named ``name``.
+    """The scenario's data with beacons at ``xyz`` (:func:`fresh_ids`) added, named ``name``.
 
     Raises:
         ScenarioError: The result is not a valid scenario (the parser's message).
     """
     data = source_data(scenario)
-    first = int(scenario.beacons.ids.max()) + 1
-    added = [{"id": first + k, "xyz": [float(v) for v in place], "width": float(width)}
-             for k, place in enumerate(xyz)]
+    added = [{"id": beacon, "xyz": [float(v) for v in place], "width": float(width)}
+             for beacon, place in zip(fresh_ids(scenario.beacons.ids, len(xyz)), xyz,
+                                      strict=True)]
     data["name"] = name
     data["description"] = (f"{data['description']}; {len(added)} beacons added by azgym layout "
                            "optimize")

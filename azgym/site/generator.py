@@ -64,6 +64,7 @@ from azgym.site.generator_layout import (
 )
 from azgym.site.load import load_scenario
 from azgym.site.parse import parse_scenario
+from azgym.site.reader import name_problem
 from azgym.site.scenario import Scenario
 from azgym.site.toml_writer import to_toml
 
@@ -196,11 +197,12 @@ def _checked_size(size: Sequence[float] | None) -> tuple[float, float] | None:
 
 
 def _checked_name(seed: int, name: str | None) -> str:
-    """``name``, or ``generated-<seed>``; a name is one printable line, as in a file."""
+    """``name``, or ``generated-<seed>``; a name is a plain file name, as in a file."""
     if name is None:
         return f"generated-{seed}"
-    if not isinstance(name, str) or not name.strip() or not name.isprintable():
-        raise InvalidInputError(f"name must be a non-empty line of printable text, got {name!r}")
+    problem = name_problem(name) if isinstance(name, str) else "must be a string"
+    if problem:
+        raise InvalidInputError(f"name {problem}")
     return name
 
 

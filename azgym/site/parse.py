@@ -49,7 +49,7 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
     """
     read = Reader(origin)
     read.keys(data, _TOP_KEYS, "")
-    name = read.text(read.require(data, "name"), "name")
+    name = read.name(read.require(data, "name"), "name")
     description = read.text(read.require(data, "description"), "description")
     version = read.integer(read.require(data, "version"), "version", minimum=1)
     bounds = _parse_room(read, data)

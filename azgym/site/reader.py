@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 import reprlib
 from collections.abc import Callable
 from typing import Any, TypeVar
@@ -37,9 +38,27 @@ have: far more than any site, and a bound on the checks that relate tables pairw
 MAX_INTEGER = 2**31 - 1
 """The largest integer a scenario file may give (a version, a beacon id): a signed 32-bit one."""
 
+MAX_NAME = 100
+"""The longest name a scenario may have [characters]."""
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
+"""A scenario's name: a plain file name (output files and folders are named after it)."""
+
 _SHORT = reprlib.Repr()
 _SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxstring, _SHORT.maxother = 2, 6, 40, 40
 _SHORT.maxlong = 24
+
+
+def name_problem(name: str) -> str | None:
+    """Why ``name`` cannot name a scenario, or None when it can.
+
+    A scenario's name becomes file and folder names (``results/layout/NAME``,
+    ``NAME-plus-4.toml``), so it is a plain file name: letters, digits, ``-``, ``_`` and ``.``,
+    starting with a letter or a digit (no separator, no ``..``, not hidden, not an option).
+    """
+    if len(name) > MAX_NAME or not _NAME.fullmatch(name):
+        return (f"must be a plain file name (ASCII letters, digits, '-', '_' and '.', starting "
+                f"with a letter or a digit, at most {MAX_NAME} characters), got {shown(name)}")
+    return None
 
 
 def shown(value: Any) -> str:
@@ -149,6 +168,14 @@ class Reader:
         if not value.isprintable():
             raise self.fail(field, f"must be one line of printable characters, got "
                             f"{shown(value)}")
+        return value
+
+    def name(self, value: Any, field: str) -> str:
+        """``value`` as a scenario's name: text (:meth:`text`) that is a plain file name."""
+        value = self.text(value, field)
+        problem = name_problem(value)
+        if problem:
+            raise self.fail(field, problem)
         return value
 
 

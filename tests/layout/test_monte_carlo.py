@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
+import re
 
+import numpy as np
+import pytest
+
+from azgym.errors import InvalidInputError
 from azgym.layout.analysis import agreement, predict
 from azgym.layout.floor import floor_grid
 from azgym.layout.monte_carlo import monte_carlo
@@ -36,3 +40,72 @@ def test_the_draws_are_the_seeds(paper_room):
     other = monte_carlo(paper_room, floor.points, seen, "lsq", 5, seed=2)
     np.testing.assert_array_equal(first.rms, again.rms)
     assert not np.allclose(first.rms, other.rms)
+
+
+PLUGINS = '''
+import math
+import time
+
+import numpy as np
+
+from azgym.core import Estimate
+
+
+class Raises:
+    def localize(self, measurements, beacons):
+        raise RuntimeError("boom")
+
+
+class Exits:
+    def localize(self, measurements, beacons):
+        raise SystemExit(3)
+
+
+class Tuple:
+    def localize(self, measurements, beacons):
+        return (1.0, 2.0, 0.0)
+
+
+class Sleeps:
+    def localize(self, measurements, beacons):
+        time.sleep(100)
+
+
+class NanOk:
+    def localize(self, measurements, beacons):
+        return Estimate(math.nan, math.nan, 0.0, np.ones(len(measurements.ids), bool))
+
+
+class InfOk:
+    def localize(self, measurements, beacons):
+        return Estimate(math.inf, 0.0, 0.0, np.ones(len(measurements.ids), bool))
+'''
+
+
+@pytest.mark.parametrize(("plugin", "reason"), [
+    ("Raises", "RuntimeError: boom"), ("Exits", "SystemExit: 3"),
+    ("Tuple", "AttributeError: 'tuple' object has no attribute 'ok'"),
+    ("Sleeps", "timed out: took longer than the 0.5 s limit"), ("NanOk", None), ("InfOk", None)])
+def test_a_failing_plugin_costs_its_frames_not_the_run(paper_room, tmp_path, plugin, reason):
+    """Raising, exiting, hanging or answering garbage: each frame has no fix, with the reason."""
+    path = tmp_path / "plugins.py"
+    path.write_text(PLUGINS)
+    floor = floor_grid(paper_room, 10.0)
+    seen = predict(paper_room, floor).seen[:1]
+    checked = monte_carlo(paper_room, floor.points[:1], seen, f"{path}:{plugin}", 3,
+                          time_limit=0.5)
+    assert np.isnan(checked.rms).all() and (checked.failed == 1.0).all()
+    if reason is None:  # ok=True without a finite pose is no fix, and no exception
+        assert checked.problems == {}
+    else:
+        assert sum(checked.problems.values()) >= 1
+        assert any(reason in problem for problem in checked.problems), checked.problems
+
+
+def test_a_seed_outside_0_to_2_31_is_refused(paper_room):
+    floor = floor_grid(paper_room, 10.0)
+    for seed in (-1, 2**31, 1e23, True):
+        with pytest.raises(InvalidInputError, match=re.escape(
+                f"seed must be a whole number in [0, 2**31), got {seed!r}")):
+            monte_carlo(paper_room, floor.points, predict(paper_room, floor).seen, "lsq", 1,
+                        seed=seed)

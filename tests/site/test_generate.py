@@ -104,7 +104,8 @@ def test_a_given_size_is_kept_and_the_seed_still_decides_the_rest():
     ({"seed": 1, "size": (30.0, math.nan)}, r"size must be two sides"),
     ({"seed": 1, "size": 30.0}, r"size must be two sides"),
     ({"seed": 1, "size": (30.0, 30.0, 30.0)}, r"size must be two sides"),
-    ({"seed": 1, "name": "two\nlines"}, r"name must be a non-empty line"),
+    ({"seed": 1, "name": "two\nlines"}, r"name must be a plain file name"),
+    ({"seed": 1, "name": "../up"}, r"name must be a plain file name .*, got '../up'"),
 ])
 def test_bad_arguments_are_refused_by_name(kwargs, message):
     with pytest.raises(InvalidInputError, match=message):

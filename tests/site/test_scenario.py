@@ -218,6 +218,30 @@ MALFORMED = [
 ]
 
 
+PLAIN_NAME = ("must be a plain file name (ASCII letters, digits, '-', '_' and '.', starting with "
+              "a letter or a digit, at most 100 characters), got ")
+
+
+@pytest.mark.parametrize("name", ["/tmp/attack/ABS", "../../up", "a/b", "a\\b", "..", ".hidden",
+                                  "-option", "two words", "é", "x" * 101])
+def test_a_name_that_is_not_a_plain_file_name_is_refused(tmp_path, name):
+    """Output files are named after the scenario: a separator or ``..`` would write elsewhere."""
+    path = write(tmp_path, VALID.replace('name = "tiny"', f"name = {name!r}".replace("'", '"')))
+    with pytest.raises(ScenarioError, match=re.escape(f"{path}: name: {PLAIN_NAME}")):
+        azgym.load_scenario(path)
+
+
+@pytest.mark.parametrize("name", ["tiny", "hall-b-2026-03-04", "warehouse_small.v2", "A-B-C-D",
+                                  "x" * 100])
+def test_plain_names_pass(tmp_path, name):
+    path = write(tmp_path, VALID.replace('name = "tiny"', f'name = "{name}"'))
+    assert azgym.load_scenario(path).name == name
+
+
+def test_every_shipped_scenario_has_a_plain_name():
+    assert all(azgym.load_scenario(name).name == name for name in azgym.list_scenarios())
+
+
 @pytest.mark.parametrize(("text", "message"), MALFORMED)
 def test_malformed_file_names_file_and_field(tmp_path, text, message):
     path = write(tmp_path, text)
