@@ -6,7 +6,8 @@ azgym bench [--suite S | --data DIR] [--localizer SPEC ...] [--with-builtins] [-
 azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR]
 azgym import DIR
 azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [--motion-rate HZ]
-azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S] [--out DIR]
+azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S] [--workers N]
+                      [--time-limit SECONDS] [--out DIR]
 azgym layout optimize SCENARIO --add N [--step M] [--spacing M] [--out DIR]
 azgym leaderboard submit|build|verify ...
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
