@@ -46,9 +46,8 @@ CONNECT_TIMEOUT = 5.0
 """Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
 retrying for minutes)."""
 JOIN_TIMEOUT = 20.0
-"""Seconds ``ray.init`` may take to join the cluster at ``--address``. Something other than Ray
-listening there (a web server, a stale port) would have Ray wait for its control service for
-minutes; joining a live cluster takes a few seconds."""
+"""Seconds ``ray.init`` may take to join the cluster at ``--address`` (joining takes seconds;
+with something else listening there, Ray would wait for minutes)."""
 
 
 class RayWorker:
@@ -166,7 +165,6 @@ def _connect(ray: Any, address: str | None, workers: int) -> None:
                  logging_level=logging.ERROR)
         return
     joined: list[BaseException | None] = []
-
     def join() -> None:
         try:
             ray.init(address=address, logging_level=logging.ERROR)
@@ -174,17 +172,14 @@ def _connect(ray: Any, address: str | None, workers: int) -> None:
         except BaseException as exc:  # noqa: BLE001 - reported by the caller's thread
             joined.append(exc)
 
-    # Ray offers no deadline for joining, so it joins in a thread the runner stops waiting for
-    # (a daemon: it ends with the process).
-    thread = threading.Thread(target=join, name="azgym-ray-join", daemon=True)
+    thread = threading.Thread(target=join, daemon=True)  # Ray has no deadline for joining
     thread.start()
     thread.join(JOIN_TIMEOUT)
     if not joined:
         raise InvalidInputError(f"--address {address}: something answers there but no Ray "
-                                f"cluster joined within {JOIN_TIMEOUT:g} s; is it a Ray head "
-                                "node's address (`ray start --head` prints it)?")
-    if joined[0] is not None:
-        exc = joined[0]
+                                f"cluster joined within {JOIN_TIMEOUT:g} s; is it a head node's "
+                                "(`ray start --head` prints it)?")
+    if (exc := joined[0]) is not None:
         raise InvalidInputError(f"--address {address}: cannot join a Ray cluster there "
                                 f"({type(exc).__name__}: {str(exc).splitlines()[0]})")
 
