@@ -26,3 +26,20 @@ def positive_number(name: str, value: object, unit: str) -> float:
             math.isfinite(value) and value > 0):
         raise InvalidInputError(f"{name} must be a finite number > 0 [{unit}], got {value!r}")
     return float(value)
+
+
+MIN_TIME_LIMIT = 0.01
+"""The shortest time limit a localizer may be given per frame [s]. Below it the limit times the
+operating system, not the localizer: a frame's allowance runs on the runner's clock and includes
+handing the frame to a worker and its answer back (a pipe, a scheduler's time slice, a Ray
+round trip), so every frame would time out, each costing a worker, and the run would be all
+timeouts whatever the localizer."""
+
+
+def time_limit(name: str, value: object) -> float:
+    """``value`` as a time limit in seconds: a finite number >= :data:`MIN_TIME_LIMIT`."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
+            math.isfinite(value) and value >= MIN_TIME_LIMIT):
+        raise InvalidInputError(f"{name} must be a number of seconds >= {MIN_TIME_LIMIT:g}, "
+                                f"got {value!r}")
+    return float(value)

@@ -17,9 +17,40 @@ def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None
     parser.add_argument("--backend", choices=("local", "ray"), default="local",
                         help="local: worker processes here; ray: Ray actors (pip install "
                              f"\"azgym[ray]\"), on --address or a local instance{note}")
-    parser.add_argument("--address", metavar="ADDR",
+    parser.add_argument("--address", metavar="ADDR", type=_address,
                         help="--backend ray: a Ray cluster's head, HOST:PORT (see `ray start "
                              "--head`), ray://HOST:PORT or auto (default: a local instance)")
+
+
+def out_folder(text: str) -> str:
+    """``--out DIR``: refuse an empty folder name (it would mean the current folder, unasked)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty: give a folder (. for the current one)")
+    return text
+
+
+def workers_option(text: str) -> int:
+    """``--workers N``: a whole number >= 0, 0 meaning one per core (or per CPU on Ray)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0 (0: one per core), "
+                                         f"got {text!r}")
+    return value
+
+
+def _address(text: str) -> str:
+    """``--address``: checked for its form (HOST:PORT, a port in 1-65535) as it is parsed."""
+    from azgym.bench.ray_backend import check_address
+    from azgym.errors import InvalidInputError
+
+    try:
+        check_address(text)
+    except InvalidInputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix(f"--address {text}: ")) from None
+    return text
 
 
 def add_sweep(commands: argparse._SubParsersAction) -> None:
@@ -27,10 +58,10 @@ def add_sweep(commands: argparse._SubParsersAction) -> None:
     sweep = commands.add_parser("sweep", help="run a parameter sweep from a TOML file")
     sweep.add_argument("config", metavar="CONFIG", help="the sweep's TOML file (docs/scaling.md)")
     add_backend_options(sweep)
-    sweep.add_argument("--workers", type=int, default=0,
+    sweep.add_argument("--workers", type=workers_option, default=0,
                        help="workers per localizer at a time (0: one per core, or per CPU of "
                             "the Ray cluster)")
-    sweep.add_argument("--out", default="results/sweep", help="output folder")
+    sweep.add_argument("--out", type=out_folder, default="results/sweep", help="output folder")
     sweep.set_defaults(handler=_sweep)
 
 

@@ -4,12 +4,15 @@ table."""
 from __future__ import annotations
 
 import csv
+import math
+from datetime import UTC, datetime
 from pathlib import Path
 
 import pytest
 
-from azgym.bench.sweep import run_sweep
+from azgym.bench.sweep import SweepResult, run_sweep
 from azgym.bench.sweep_config import MAX_RUNS, load_sweep, parse_sweep
+from azgym.bench.sweep_plot import write_sweep_figure
 from azgym.cli import main
 from azgym.errors import InvalidInputError
 
@@ -59,7 +62,23 @@ def config(**changes):
      rf"sweep: localizer: the sweep holds 1200 runs .* more than the cap of {MAX_RUNS}"),
     ({"metric": "p76_cm"}, r"sweep: metric: unknown metric 'p76_cm'. Did you mean 'p75_cm'\?"),
     ({"quick": "yes"}, r"sweep: quick: must be true or false, got 'yes'"),
-    ({"time_limit": 0}, r"sweep: time_limit: must be a number of seconds > 0, got 0"),
+    ({"time_limit": 0}, r"sweep: time_limit: must be a number of seconds >= 0.01, got 0"),
+    ({"time_limit": 1e-300},
+     r"sweep: time_limit: must be a number of seconds >= 0.01, got 1e-300"),
+    ({"localizer": [{"name": "ransac", "grid": {"pr_hit": [datetime(1979, 5, 27, tzinfo=UTC)]}}]},
+     r"sweep: localizer\[0\].grid.pr_hit: must be true, false, a number or a string \(a JSON "
+     r"scalar\), got datetime"),
+    ({"localizer": [{"name": "ransac", "params": {"pr_hit": [0.5]}}]},
+     r"sweep: localizer\[0\].params.pr_hit: must be true, false, a number or a string"),
+    ({"localizer": [{"name": "ransac:pr_hit=0.5", "grid": {"pr_hit": [0.9]}}]},
+     r"sweep: localizer\[0\].grid.pr_hit: is also fixed in the name 'ransac:pr_hit=0.5'"),
+    ({"localizer": [{"name": "ransac-weighted", "params": {"weighted": False}}]},
+     r"sweep: localizer\[0\].params.weighted: is also fixed in the name 'ransac-weighted'"),
+    ({"scenarios": [""]}, r"sweep: scenarios\[0\]: must be a name or a \.toml file, got ''"),
+    ({"scenarios": ["/etc/site.toml"]},
+     r"sweep: scenarios\[0\]: '/etc/site.toml' is outside the config's folder"),
+    ({"scenarios": ["../../../etc/passwd.toml"]},
+     r"sweep: scenarios\[0\]: '\.\./\.\./\.\./etc/passwd.toml' is outside the config's folder"),
     ({"localizer": [{"name": "lsq"}, {"name": "lsq"}]},
      r"sweep: localizer\[1\]: grid point 'lsq' is already in the sweep \(localizer\[0\]\)"),
 ])
@@ -73,6 +92,49 @@ def test_a_file_that_is_not_toml_is_named(tmp_path):
     path.write_text("suites = [warehouse-static\n")
     with pytest.raises(InvalidInputError, match=r"bad.toml: not a TOML file"):
         load_sweep(path)
+
+
+def test_arrays_nested_too_deeply_are_named(tmp_path):
+    path = tmp_path / "deep.toml"
+    path.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(InvalidInputError,
+                       match=r"deep.toml: not a TOML file \(arrays or tables nested too deeply\)"):
+        load_sweep(path)
+
+
+def test_a_scenario_file_in_a_folder_below_the_config_is_taken(tmp_path):
+    (tmp_path / "sites").mkdir()
+    assert main(["generate", "--seed", "3", "--out", str(tmp_path / "sites" / "a.toml")]) == 0
+    (tmp_path / "link.toml").symlink_to(tmp_path / "sites" / "a.toml")
+    on = {key: value for key, value in config().items() if key != "suites"}
+    sweep = parse_sweep({**on, "scenarios": ["sites/a.toml"]}, folder=tmp_path)
+    assert [suite.name for suite in sweep.suites] == ["static:a"]
+    outside = tmp_path / "config"
+    outside.mkdir()
+    (outside / "out.toml").symlink_to(tmp_path / "sites" / "a.toml")
+    with pytest.raises(InvalidInputError, match=r"scenarios\[0\]: 'out.toml' is outside"):
+        parse_sweep({**on, "scenarios": ["out.toml"]}, folder=outside)
+
+
+def test_the_figure_copes_with_a_metric_that_is_nan_everywhere(tmp_path):
+    """Every localizer failing every frame: no error to draw, no log scale, a note instead."""
+    sweep = parse_sweep(config(localizer=[{"name": "lsq"}, {"name": "ransac"}]))
+    row = ["warehouse-static", 7, "lsq", "lsq", 240, 0.0, 1.0, *[math.nan] * 5, math.nan,
+           math.nan]
+    result = SweepResult(sweep, ["suite", "seed", "localizer", "label", "n", "availability",
+                                 "failure_rate", "median_cm", "p75_cm", "p95_cm", "mean_cm",
+                                 "rmse_cm", "p75_cm_lo", "p75_cm_hi"],
+                         [row, [*row[:2], "ransac", "ransac", *row[4:]]], [])
+    assert write_sweep_figure(result, tmp_path / "sweep.png").stat().st_size > 0
+
+
+def test_workers_below_zero_and_an_empty_out_are_refused_by_name(capsys):
+    for option in (["--workers", "-1"], ["--out", ""]):
+        with pytest.raises(SystemExit):
+            main(["sweep", str(EXAMPLE), *option])
+    err = capsys.readouterr().err
+    assert "argument --workers: must be an integer >= 0 (0: one per core), got '-1'" in err
+    assert "argument --out: is empty: give a folder (. for the current one)" in err
 
 
 def test_the_example_config_is_valid_and_its_points_are_canonical_specs():

@@ -28,6 +28,7 @@ import contextlib
 import logging
 import os
 import socket
+import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -44,6 +45,9 @@ from azgym.errors import AzgymError, InvalidInputError, require
 CONNECT_TIMEOUT = 5.0
 """Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
 retrying for minutes)."""
+JOIN_TIMEOUT = 20.0
+"""Seconds ``ray.init`` may take to join the cluster at ``--address`` (joining takes seconds;
+with something else listening there, Ray would wait for minutes)."""
 
 
 class RayWorker:
@@ -140,7 +144,7 @@ def ray_session(address: str | None, workers: int) -> Iterator[int]:
     require("ray", "ray")
     import ray
 
-    if address not in (None, "auto", "local"):
+    if check_address(address) is not None:
         _probe(address)
     started = not ray.is_initialized()
     if started:
@@ -160,22 +164,51 @@ def _connect(ray: Any, address: str | None, workers: int) -> None:
         ray.init(num_cpus=workers or default_workers(), include_dashboard=False,
                  logging_level=logging.ERROR)
         return
-    try:
-        ray.init(address=address, logging_level=logging.ERROR)
-    except Exception as exc:  # noqa: BLE001 - Ray's many errors become one of ours
+    joined: list[BaseException | None] = []
+    def join() -> None:
+        try:
+            ray.init(address=address, logging_level=logging.ERROR)
+            joined.append(None)
+        except BaseException as exc:  # noqa: BLE001 - reported by the caller's thread
+            joined.append(exc)
+
+    thread = threading.Thread(target=join, daemon=True)  # Ray has no deadline for joining
+    thread.start()
+    thread.join(JOIN_TIMEOUT)
+    if not joined:
+        raise InvalidInputError(f"--address {address}: something answers there but no Ray "
+                                f"cluster joined within {JOIN_TIMEOUT:g} s; is it a head node's "
+                                "(`ray start --head` prints it)?")
+    if (exc := joined[0]) is not None:
         raise InvalidInputError(f"--address {address}: cannot join a Ray cluster there "
-                                f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
+                                f"({type(exc).__name__}: {str(exc).splitlines()[0]})")
+
+
+def check_address(address: str | None) -> tuple[str, int] | None:
+    """A cluster's address as (host, port); None for a local instance (None, auto or local).
+
+    Checked for its form before anything runs (frames drawn, Ray started), so a typo is named
+    at once rather than met as a connection that fails.
+
+    Raises:
+        InvalidInputError: Not HOST:PORT or ray://HOST:PORT, or a port outside 1-65535.
+    """
+    if address in (None, "auto", "local"):
+        return None
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host.strip("[]") or not port.isdigit():
+        raise InvalidInputError(f"--address {address}: must be HOST:PORT (a head node's, e.g. "
+                                "127.0.0.1:6379), ray://HOST:PORT or auto")
+    if not 1 <= int(port) <= 65535:
+        raise InvalidInputError(f"--address {address}: invalid port {port}: a port is a whole "
+                                "number in 1-65535")
+    return host.strip("[]"), int(port)
 
 
 def _probe(address: str) -> None:
     """Refuse, within ``CONNECT_TIMEOUT``, an address where nothing is listening."""
-    bare = address.removeprefix("ray://")
-    host, _, port = bare.rpartition(":")
-    if not host or not port.isdigit():
-        raise InvalidInputError(f"--address {address}: must be HOST:PORT (a head node's, e.g. "
-                                "127.0.0.1:6379), ray://HOST:PORT or auto")
     try:
-        socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT).close()
+        socket.create_connection(check_address(address), CONNECT_TIMEOUT).close()
     except OSError as exc:
         raise InvalidInputError(
             f"--address {address}: no Ray cluster answers there within {CONNECT_TIMEOUT:g} s "

@@ -23,12 +23,12 @@ localizer in turn, its grid's combinations with the last key varying fastest.
 from __future__ import annotations
 
 import itertools
-import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from azgym.arguments import time_limit as checked_time_limit
 from azgym.bench.contenders import Contender, check_buildable
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.bench.suites import Suite
@@ -45,6 +45,9 @@ METRICS = ("p75_cm", "median_cm", "mean_cm", "p95_cm", "rmse_cm", "availability"
 """The headline metrics a sweep's figure can show (from each run's overall figures)."""
 KEYS = {"suites", "scenarios", "seeds", "quick", "time_limit", "metric", "localizer"}
 LOCALIZER_KEYS = {"name", "params", "grid"}
+SCALARS = (bool, int, float, str)
+"""The types a hyperparameter's value may have: JSON scalars, as a spec writes them (a TOML
+date, array or table is refused by name)."""
 
 
 @dataclass(frozen=True)
@@ -132,6 +135,9 @@ def load_sweep(path: Path) -> SweepConfig:
         raise InvalidInputError(f"{source}: cannot read the sweep file ({exc.strerror})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InvalidInputError(f"{source}: not a TOML file ({exc})") from None
+    except RecursionError:  # tomllib recurses once per nested array or inline table
+        raise InvalidInputError(f"{source}: not a TOML file (arrays or tables nested too "
+                                "deeply)") from None
     return parse_sweep(data, source, Path(path).parent)
 
 
@@ -155,10 +161,10 @@ def parse_sweep(data: dict[str, Any], source: str = "sweep",
     quick = data.get("quick", False)
     if not isinstance(quick, bool):
         raise fields.error("quick", f"must be true or false, got {quick!r}")
-    time_limit = data.get("time_limit", DEFAULT_TIME_LIMIT)
-    if isinstance(time_limit, bool) or not isinstance(time_limit, int | float) \
-            or not (math.isfinite(time_limit) and time_limit > 0):
-        raise fields.error("time_limit", f"must be a number of seconds > 0, got {time_limit!r}")
+    try:
+        time_limit = checked_time_limit("time_limit", data.get("time_limit", DEFAULT_TIME_LIMIT))
+    except InvalidInputError as exc:
+        raise fields.error("time_limit", str(exc).removeprefix("time_limit ")) from None
     metric = data.get("metric", METRICS[0])
     if metric not in METRICS:
         raise fields.error("metric", str(unknown_name("metric", str(metric), METRICS)))
@@ -170,8 +176,8 @@ def parse_sweep(data: dict[str, Any], source: str = "sweep",
     if runs > MAX_RUNS:
         raise fields.error("localizer", f"the sweep holds {runs} runs (grid points x suites x "
                                         f"seeds), more than the cap of {MAX_RUNS}")
-    points = _points(fields, tables, grids, float(time_limit))
-    return SweepConfig(points, suites, seeds, quick, float(time_limit), metric,
+    points = _points(fields, tables, grids, time_limit)
+    return SweepConfig(points, suites, seeds, quick, time_limit, metric,
                        {scenario.name: scenario.beacons for scenario in scenarios})
 
 
@@ -181,16 +187,32 @@ def _scenarios(fields: _Fields, value: Any, folder: Path) -> list[Scenario]:
         return []
     scenarios = []
     for k, name in enumerate(fields.nonempty_list("scenarios", value)):
-        if not isinstance(name, str):
+        if not isinstance(name, str) or not name.strip():
             raise fields.error(f"scenarios[{k}]", f"must be a name or a .toml file, got {name!r}")
+        where = _beside(fields, f"scenarios[{k}]", folder, name) if name.endswith(".toml") \
+            else name
         try:
-            scenarios.append(load_scenario(folder / name if name.endswith(".toml") else name))
+            scenarios.append(load_scenario(where))
         except AzgymError as exc:
             raise fields.error(f"scenarios[{k}]", str(exc)) from None
     names = [scenario.name for scenario in scenarios]
     if len(set(names)) < len(names):
         raise fields.error("scenarios", f"two scenarios share a name: {names}")
     return scenarios
+
+
+def _beside(fields: _Fields, field: str, folder: Path, name: str) -> Path:
+    """A scenario file of the config: in the config's folder or below it, nowhere else.
+
+    A config names files relative to itself, so it can be shared with its scenarios; one that
+    reached outside (``/etc/...``, ``../../x.toml``) would read whatever the runner's machine
+    has there. Links are resolved first: a link out of the folder is refused too.
+    """
+    path = folder / name
+    if not path.resolve().is_relative_to(folder.resolve()):
+        raise fields.error(field, f"{name!r} is outside the config's folder; a scenario file "
+                                  "must be in the config's folder or below it")
+    return path
 
 
 def _grid(fields: _Fields, field: str, table: Any) -> list[dict[str, Any]]:
@@ -202,17 +224,28 @@ def _grid(fields: _Fields, field: str, table: Any) -> list[dict[str, Any]]:
         raise fields.error(f"{field}.name", "a localizer's name or spec is needed")
     if not isinstance(table.get("params", {}), dict):
         raise fields.error(f"{field}.params", "must be a table of hyperparameters")
+    for key, value in table.get("params", {}).items():
+        _scalar(fields, f"{field}.params.{key}", value)
     grid = table.get("grid", {"": [None]})
     if not isinstance(grid, dict) or not grid:
         raise fields.error(f"{field}.grid", "is empty: give each hyperparameter a list of "
                                             "values, or leave grid out to run the defaults")
     for key, values in grid.items():
-        fields.nonempty_list(f"{field}.grid.{key}", values)
+        for value in fields.nonempty_list(f"{field}.grid.{key}", values):
+            if key:  # not the one point of a localizer without a grid
+                _scalar(fields, f"{field}.grid.{key}", value)
         if key in table.get("params", {}):
             raise fields.error(f"{field}.grid.{key}", "is also fixed in params")
     keys = [key for key in grid if key]
     return [dict(zip(keys, combo, strict=True))
             for combo in itertools.product(*(grid[key] for key in keys))]
+
+
+def _scalar(fields: _Fields, field: str, value: Any) -> None:
+    """Refuse a hyperparameter's value that is not a JSON scalar (:data:`SCALARS`)."""
+    if not isinstance(value, SCALARS):
+        raise fields.error(field, f"must be true, false, a number or a string (a JSON scalar), "
+                                  f"got {value!r}")
 
 
 def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict[str, Any]]],
@@ -229,6 +262,13 @@ def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict
             params = {**table.get("params", {}), **varied}
             try:
                 base = contender(table["name"])
+            except AzgymError as exc:
+                raise fields.error(field, str(exc)) from None
+            for key in sorted(params.keys() & base.params.keys()):
+                where = "grid" if key in varied else "params"
+                raise fields.error(f"{field}.{where}.{key}", f"is also fixed in the name "
+                                                            f"{table['name']!r}")
+            try:
                 candidate = contender(spec_label(base.spec, {**base.params, **params}))
                 if ":" not in candidate.spec:  # a name: azgym's, or an installed package's
                     build(candidate.spec, **candidate.params)

@@ -1,19 +1,22 @@
 """A sweep's figure: the headline metric of every grid point, a panel per suite, a dot per seed.
 
 The p75 position error carries its 95 % bootstrap interval from each run, drawn as a bar; the
-other metrics are drawn as dots only.
+other metrics are drawn as dots only. A run without a value (every frame failed: no position
+error to take a percentile of) is left out, and the panel says how many were; the error axis is
+logarithmic only when the panel has a positive value to show.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from azgym.bench.plots import _save
 
 if TYPE_CHECKING:
     from azgym.bench.sweep import SweepResult
-    from azgym.bench.sweep_config import GridPoint
+    from azgym.bench.sweep_config import GridPoint, SweepConfig
 
 LABELS = {"p75_cm": "p75 position error [cm]", "median_cm": "median position error [cm]",
           "mean_cm": "mean position error [cm]", "p95_cm": "p95 position error [cm]",
@@ -40,27 +43,53 @@ def write_sweep_figure(result: SweepResult, path: Path) -> Path:
                                            4.2), constrained_layout=True)
     seeds = list(dict.fromkeys(row[at["seed"]] for row in result.rows))
     for axes, suite in zip(panels[0], [suite.name for suite in config.suites], strict=True):
+        shown: list[float] = []
+        missing = 0
         for j, seed in enumerate(seeds):
             rows = [r for r in result.rows if r[at["suite"]] == suite and r[at["seed"]] == seed]
+            missing += sum(not _finite(r[at[config.metric]]) for r in rows)
+            rows = [r for r in rows if _finite(r[at[config.metric]])]
             if not rows:
                 continue
             x = [labels.index(r[at["label"]]) + 0.1 * (j - (len(seeds) - 1) / 2) for r in rows]
             y = [r[at[config.metric]] for r in rows]
+            shown += y
             if config.metric == "p75_cm":
-                low = [v - r[at["p75_cm_lo"]] for v, r in zip(y, rows, strict=True)]
-                high = [r[at["p75_cm_hi"]] - v for v, r in zip(y, rows, strict=True)]
+                low = [_bar(v - r[at["p75_cm_lo"]]) for v, r in zip(y, rows, strict=True)]
+                high = [_bar(r[at["p75_cm_hi"]] - v) for v, r in zip(y, rows, strict=True)]
                 axes.errorbar(x, y, yerr=[low, high], fmt="o", capsize=3, label=f"seed {seed}")
             else:
                 axes.plot(x, y, "o", label=f"seed {seed}")
-        axes.set_xticks(range(len(labels)), [_tick(p) for p in config.points], rotation=60,
-                        ha="right", fontsize=7)
-        if config.metric.endswith("_cm"):
-            axes.set_yscale("log")
-        axes.set_title(suite, fontsize=10)
-        axes.grid(axis="y", alpha=0.3)
+        _finish(axes, suite, config, labels, shown, missing)
     panels[0][0].set_ylabel(LABELS[config.metric])
-    panels[0][-1].legend(fontsize=7)
+    if panels[0][-1].get_legend_handles_labels()[0]:
+        panels[0][-1].legend(fontsize=7)
     return _save(figure, path, plt)
+
+
+def _finish(axes: Any, suite: str, config: SweepConfig, labels: list[str], shown: list[float],
+            missing: int) -> None:
+    """A panel's ticks, title and scale, and a note of the runs it could not show."""
+    axes.set_xticks(range(len(labels)), [_tick(p) for p in config.points], rotation=60,
+                    ha="right", fontsize=7)
+    axes.set_xlim(-0.5, len(labels) - 0.5)
+    if config.metric.endswith("_cm") and any(v > 0 for v in shown):
+        axes.set_yscale("log")
+    if missing:
+        axes.text(0.5, 0.98, f"{missing} run(s) without a value (every frame failed): not shown",
+                  transform=axes.transAxes, ha="center", va="top", fontsize=7)
+    axes.set_title(suite, fontsize=10)
+    axes.grid(axis="y", alpha=0.3)
+
+
+def _finite(value: Any) -> bool:
+    """Whether a table cell is a number to draw (not NaN, not infinite)."""
+    return isinstance(value, int | float) and math.isfinite(value)
+
+
+def _bar(length: float) -> float:
+    """One side of an interval's bar: 0 where the interval is unknown (NaN)."""
+    return length if math.isfinite(length) else 0.0
 
 
 def _tick(point: GridPoint) -> str:

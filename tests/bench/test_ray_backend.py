@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import socket
 import subprocess
 import sys
 import time
@@ -110,16 +111,49 @@ def test_a_sweep_gives_the_same_table_on_ray_as_locally(local_ray):
     assert len(here.rows) == 6 and here.rows[0][:4] == ["warehouse-static", 7, "ransac", False]
 
 
-@pytest.mark.parametrize(("address", "problem"), [
-    ("127.0.0.1:1", "no Ray cluster answers there within 5 s"),
-    ("nonsense", "must be HOST:PORT"),
-])
-def test_bench_refuses_a_bad_address_by_name(address, problem, tmp_path, capsys):
+def test_bench_refuses_an_address_where_nothing_listens_by_name(tmp_path, capsys):
     begun = time.monotonic()
-    code = main(["bench", "--backend", "ray", "--address", address, "--localizer", "lsq",
+    code = main(["bench", "--backend", "ray", "--address", "127.0.0.1:1", "--localizer", "lsq",
                  "--workers", "1", "--out", str(tmp_path)])
     assert code == 2
-    assert f"azgym: error: --address {address}: {problem}" in capsys.readouterr().err
+    assert ("azgym: error: --address 127.0.0.1:1: no Ray cluster answers there within 5 s"
+            in capsys.readouterr().err)
+    assert time.monotonic() - begun < 60
+
+
+@pytest.mark.parametrize(("command", "address", "problem"), [
+    ("bench", "nonsense", "must be HOST:PORT"),
+    ("bench", "127.0.0.1:99999", "invalid port 99999: a port is a whole number in 1-65535"),
+    ("sweep", "127.0.0.1:0", "invalid port 0"),
+    ("sweep", ":6379", "must be HOST:PORT"),
+])
+def test_an_address_of_the_wrong_form_is_refused_as_it_is_parsed(command, address, problem,
+                                                                 tmp_path, capsys):
+    """Before a config is read or a frame drawn: the port is not left to a connection attempt."""
+    first = ["bench", "--quick"] if command == "bench" else ["sweep", str(tmp_path / "none.toml")]
+    with pytest.raises(SystemExit) as exit_:
+        main([*first, "--backend", "ray", "--address", address, "--out", str(tmp_path)])
+    assert exit_.value.code == 2
+    assert f"argument --address: {problem}" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+
+
+def test_an_address_where_something_else_listens_fails_by_name_within_the_deadline(tmp_path):
+    """A server that accepts connections but is not Ray: Ray alone would wait for minutes."""
+    with socket.create_server(("127.0.0.1", 0)) as server:
+        port = server.getsockname()[1]
+        code = ("import azgym.bench.ray_backend as backend\n"
+                "backend.JOIN_TIMEOUT = 3.0\n"
+                "from azgym.cli import main\n"
+                f"raise SystemExit(main(['bench', '--backend', 'ray', '--address', "
+                f"'127.0.0.1:{port}', '--quick', '--workers', '1', '--localizer', 'lsq', "
+                f"'--out', {str(tmp_path)!r}]))\n")
+        begun = time.monotonic()
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              timeout=120)
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert (f"azgym: error: --address 127.0.0.1:{port}: something answers there but no Ray "
+            "cluster joined within 3 s") in done.stderr
     assert time.monotonic() - begun < 60
 
 
