@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from collections.abc import Sequence
@@ -41,6 +40,7 @@ from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.cli_evaluate import add_evaluate
 from azgym.cli_layout import add_layout
 from azgym.cli_logs import add_logs
+from azgym.cli_options import out_folder, seconds_option, workers_option
 from azgym.cli_studies import add_reproduce, add_study
 from azgym.cli_sweep import add_backend_options, add_sweep
 from azgym.cli_train import add_train
@@ -275,17 +275,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _seconds(text: str) -> float:
-    """A command-line duration: a finite number of seconds > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a number of seconds > 0, got {text!r}")
-    return value
-
-
 def _add_bench(commands: argparse._SubParsersAction) -> None:
     """``azgym bench``: score localizers on a suite."""
     from azgym.bench.contenders import DEFAULT_SPECS
@@ -304,8 +293,9 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
                             "only the ones named, and ransac as the runtime reference)")
     bench.add_argument("--split", choices=("dev", "test"), default="dev",
                        help="dev: the suite's fixed seed; test: a fresh seed, reported")
-    bench.add_argument("--workers", type=int, default=0, help="processes (0: one per core)")
-    bench.add_argument("--time-limit", type=_seconds, default=None, metavar="SECONDS",
+    bench.add_argument("--workers", type=workers_option, default=0,
+                       help="processes (0: one per core)")
+    bench.add_argument("--time-limit", type=seconds_option, default=None, metavar="SECONDS",
                        help="time a localizer may take on one frame (or to be built); a frame "
                             f"over it is scored unavailable (default: {DEFAULT_TIME_LIMIT:g}; "
                             "frame suites only)")
@@ -316,7 +306,7 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     bench.add_argument("--data", metavar="DIR", help="score on a log of bearing data instead of "
                                                      "a suite (docs/logs.md)")
     bench.add_argument("--quick", action="store_true", help="the suite's small version")
-    bench.add_argument("--out", default="results/bench", help="output folder")
+    bench.add_argument("--out", type=out_folder, default="results/bench", help="output folder")
     bench.set_defaults(handler=_bench)
 
 

@@ -11,6 +11,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from azgym.cli_options import out_folder, seconds_option, workers_option
+
 DEFAULT_FRAMES = 100
 """Monte Carlo frames per cell by default (about 7 % sampling error on an RMS; 400: 3.5 %)."""
 MAX_TOTAL_FRAMES = 10_000_000
@@ -18,10 +20,7 @@ MAX_TOTAL_FRAMES = 10_000_000
 
 
 def _prepared(args: argparse.Namespace) -> tuple[Any, Any, Path]:
-    """The scenario, its floor grid and the output folder (made only when it is used).
-
-    ``--out ''`` is the current folder, as for ``azgym bench``.
-    """
+    """The scenario, its floor grid and the output folder (made only when it is used)."""
     from azgym.layout.floor import floor_grid
     from azgym.layout.scenario_file import file_stem
     from azgym.site import load_scenario
@@ -33,7 +32,7 @@ def _prepared(args: argparse.Namespace) -> tuple[Any, Any, Path]:
 
 
 def _analyze(args: argparse.Namespace) -> int:
-    from azgym.arguments import positive_number, whole_number
+    from azgym.arguments import whole_number
     from azgym.bench.runner import default_workers
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
@@ -43,8 +42,7 @@ def _analyze(args: argparse.Namespace) -> int:
 
     frames = whole_number("frames", args.frames, minimum=0)
     seed = check_seed(args.seed)
-    workers = whole_number("workers", args.workers, minimum=0) or default_workers()
-    positive_number("time_limit", args.time_limit, "s")
+    workers = args.workers or default_workers()
     make_localizer(args.localizer)  # a bad spec stops here, before any work
     scenario, floor, out = _prepared(args)
     cells = int(floor.free.sum())
@@ -186,9 +184,8 @@ def add_layout(commands: argparse._SubParsersAction) -> None:
         parser.add_argument("scenario", help="a shipped scenario's name or a .toml file")
         parser.add_argument("--step", type=float, default=DEFAULT_STEP, metavar="M",
                             help="grid spacing [m]")
-        parser.add_argument("--out", metavar="DIR",
-                            help="output folder (default: results/layout/SCENARIO; '': the "
-                                 "current folder)")
+        parser.add_argument("--out", metavar="DIR", type=out_folder,
+                            help="output folder (default: results/layout/SCENARIO)")
         parser.add_argument("--no-figures", action="store_true", help="skip the PNG files")
     analyze.add_argument("--localizer", default="ransac", metavar="SPEC",
                          help="the localizer of the Monte Carlo check")
@@ -196,9 +193,9 @@ def add_layout(commands: argparse._SubParsersAction) -> None:
                          help="Monte Carlo frames per cell (0: none)")
     analyze.add_argument("--seed", type=int, default=0,
                          help="seed of the Monte Carlo draws, in [0, 2**31)")
-    analyze.add_argument("--workers", type=int, default=0,
+    analyze.add_argument("--workers", type=workers_option, default=0,
                          help="processes running the localizer (0: one per core)")
-    analyze.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT,
+    analyze.add_argument("--time-limit", type=seconds_option, default=DEFAULT_TIME_LIMIT,
                          metavar="SECONDS", help="time the localizer may take on one frame (or "
                          "to be built); a frame over it has no fix (default: "
                          f"{DEFAULT_TIME_LIMIT:g}, as azgym bench)")

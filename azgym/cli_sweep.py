@@ -11,6 +11,8 @@ import argparse
 import time
 from pathlib import Path
 
+from azgym.cli_options import out_folder, workers_option
+
 
 def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None:
     """``--backend local|ray`` and ``--address ADDR``: one definition for bench and sweep."""
@@ -20,25 +22,6 @@ def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None
     parser.add_argument("--address", metavar="ADDR", type=_address,
                         help="--backend ray: a Ray cluster's head, HOST:PORT (see `ray start "
                              "--head`), ray://HOST:PORT or auto (default: a local instance)")
-
-
-def out_folder(text: str) -> str:
-    """``--out DIR``: refuse an empty folder name (it would mean the current folder, unasked)."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError("is empty: give a folder (. for the current one)")
-    return text
-
-
-def workers_option(text: str) -> int:
-    """``--workers N``: a whole number >= 0, 0 meaning one per core (or per CPU on Ray)."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 0 (0: one per core), "
-                                         f"got {text!r}")
-    return value
 
 
 def _address(text: str) -> str:

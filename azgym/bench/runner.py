@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from azgym.arguments import positive_number, whole_number
+from azgym.arguments import time_limit as checked_time_limit
+from azgym.arguments import whole_number
 from azgym.bench.contenders import REFERENCE, Contender, default_contenders, warm_up
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT, Answers, IsolatedRun, start_fork_server
 from azgym.bench.outcome import Outcome
@@ -77,7 +78,7 @@ def run_contenders(
         address: The Ray cluster's address (``backend="ray"`` only).
     """
     Run, session = _backend(backend, address, workers)
-    time_limit = positive_number("time_limit", time_limit, "s")
+    time_limit = checked_time_limit("time_limit", time_limit)
     cases = list(cases)
     say = progress or (lambda _line: None)
     if maps is None:

@@ -107,9 +107,9 @@ def test_a_localizer_that_cannot_be_built_in_time_is_scored_unavailable(cases, p
     assert set(outcome.errors) == {"building the localizer took longer than the 0.5 s limit"}
 
 
-@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), "10"])
+@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), "10", 1e-300])
 def test_the_time_limit_must_be_a_positive_number(cases, bad):
-    with pytest.raises(Exception, match="time_limit must be a finite number > 0"):
+    with pytest.raises(Exception, match="time_limit must be a number of seconds >= 0.01"):
         run_contenders(cases, [Contender("ransac", "ransac")], time_limit=bad)
 
 
@@ -138,7 +138,7 @@ def test_bench_refuses_a_time_limit_that_is_not_a_positive_number(bad, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["bench", "--time-limit", bad])
     assert stop.value.code == 2
-    assert "--time-limit: must be a number of seconds > 0" in capsys.readouterr().err
+    assert "--time-limit: must be a number of seconds" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(("spec", "builtin"), [

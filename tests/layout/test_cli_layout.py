@@ -31,8 +31,6 @@ from azgym.layout.scenario_file import file_stem, fresh_ids
     (["analyze", "paper-room", "--step", "1e-300"], "makes a grid of 2.1e+301 x 2.1e+301 cells"),
     (["optimize", "paper-room", "--add", "1", "--step", "2", "--spacing", "5e-324"],
      "spacing 4.94066e-324 m gives more than 5000 candidate places"),
-    (["analyze", "paper-room", "--time-limit", "0"], "time_limit must be a finite number > 0"),
-    (["analyze", "paper-room", "--workers", "-1"], "workers must be an integer >= 0"),
 ])
 def test_bad_arguments_are_named_errors(argv, message, tmp_path, capsys):
     out = tmp_path / "out"
@@ -141,11 +139,21 @@ def test_optimize_writes_nothing_when_no_candidate_helps(tmp_path, capsys, beaco
     assert list(out.iterdir()) == []
 
 
-def test_one_beacon_is_singular_and_an_empty_out_is_the_current_folder(tmp_path, capsys,
-                                                                       monkeypatch):
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--time-limit", "0"], "argument --time-limit: must be a number of seconds >= 0.01, got 0.0"),
+    (["--workers", "-1"], "argument --workers: must be an integer >= 0 (0: one per core)"),
+    (["--out", ""], "argument --out: is empty: give a folder (. for the current one)"),
+])
+def test_malformed_options_stop_the_parser(argv, message, capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["layout", "analyze", "paper-room", *argv])
+    assert stop.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_one_beacon_is_singular(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert cli.main(["layout", "optimize", "paper-room", "--add", "1", "--step", "3",
-                     "--no-figures", "--out", ""]) == 0
+                     "--no-figures", "--out", "."]) == 0
     assert "placing 1 beacon on" in capsys.readouterr().out
     assert "paper-room with 1 beacon placed" in (tmp_path / "paper-room-plus-1.toml").read_text()
 

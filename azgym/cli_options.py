@@ -1,0 +1,43 @@
+"""The command line's shared option types: one rule per kind of option, for every command.
+
+``--time-limit SECONDS``, ``--workers N`` and ``--out DIR`` mean the same in ``azgym bench``,
+``sweep`` and ``layout``, and are refused the same way while the command line is read.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from azgym.arguments import time_limit
+from azgym.errors import InvalidInputError
+
+
+def seconds_option(text: str) -> float:
+    """``--time-limit SECONDS``: a finite number of seconds, at least the runner's floor."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number of seconds, got {text!r}") from None
+    try:
+        return time_limit("", value)
+    except InvalidInputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).strip()) from None
+
+
+def workers_option(text: str) -> int:
+    """``--workers N``: a whole number >= 0, 0 meaning one per core (or per CPU on Ray)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0 (0: one per core), "
+                                         f"got {text!r}")
+    return value
+
+
+def out_folder(text: str) -> str:
+    """``--out DIR``: refuse an empty folder name (it would mean the current folder, unasked)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty: give a folder (. for the current one)")
+    return text
