@@ -40,7 +40,13 @@ from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.cli_evaluate import add_evaluate
 from azgym.cli_layout import add_layout
 from azgym.cli_logs import add_logs
-from azgym.cli_options import out_folder, seconds_option, workers_option
+from azgym.cli_options import (
+    check_backend,
+    out_folder,
+    resolve_workers,
+    seconds_option,
+    workers_option,
+)
 from azgym.cli_studies import add_reproduce, add_study
 from azgym.cli_sweep import add_backend_options, add_sweep
 from azgym.cli_train import add_train
@@ -54,13 +60,14 @@ DEFAULT_SUITE = "warehouse-static"
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from azgym.bench.runner import default_workers, run_benchmark
+    from azgym.bench.runner import run_benchmark
     from azgym.bench.suites import SUITES
     from azgym.bench.table import run_report
     from azgym.errors import unknown_name
     from azgym.files import prepare_folder
     from azgym.nav.suites import NAVIGATION_SUITES
 
+    check_backend(args)
     if args.data is not None:
         from azgym.cli_logs import bench_data
 
@@ -80,7 +87,7 @@ def _bench(args: argparse.Namespace) -> int:
     if args.time_limit is None:
         args.time_limit = DEFAULT_TIME_LIMIT
     contenders = _contenders(args.localizer, args.with_builtins, args.time_limit)
-    workers = args.workers or (0 if args.backend == "ray" else default_workers())
+    workers = resolve_workers(args)
     prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
     started = time.perf_counter()
     result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
@@ -135,13 +142,13 @@ def _leaderboard(args: argparse.Namespace) -> int:
             print(f"wrote {path}")
     elif is_navigation_file(Path(args.entry)):
         print(f"{args.entry}: rerunning its navigators and localizers (azgym's own)", flush=True)
-        differences = verify_navigation(Path(args.entry), workers=args.workers or 1)
+        differences = verify_navigation(Path(args.entry), workers=resolve_workers(args))
         return _verdict(args.entry, differences)
     else:
         spec = leaderboard.load_entry(Path(args.entry), _datasets(args))["localizer"]["spec"]
         print(f"{args.entry}: rerunning its localizer {spec!r}, which is the submitter's code",
               flush=True)
-        differences = leaderboard.verify(Path(args.entry), workers=args.workers or 1,
+        differences = leaderboard.verify(Path(args.entry), workers=resolve_workers(args),
                                          datasets=_datasets(args))
         return _verdict(args.entry, differences)
     return 0
@@ -341,7 +348,8 @@ def _add_leaderboard(commands: argparse._SubParsersAction) -> None:
     verify = actions.add_parser("verify", help="rerun an entry and compare its figures")
     verify.add_argument("entry", help="path of the entry's .json, or of a navigation results "
                                       "file")
-    verify.add_argument("--workers", type=int, default=1)
+    verify.add_argument("--workers", type=workers_option, default=1,
+                        help="processes (0: one per core; default: 1)")
     verify.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
     board.set_defaults(handler=_leaderboard)
 

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from azgym.cli_options import out_folder, seconds_option, workers_option
+from azgym.cli_options import out_folder, resolve_workers, seconds_option, workers_option
 
 DEFAULT_FRAMES = 100
 """Monte Carlo frames per cell by default (about 7 % sampling error on an RMS; 400: 3.5 %)."""
@@ -33,7 +33,6 @@ def _prepared(args: argparse.Namespace) -> tuple[Any, Any, Path]:
 
 def _analyze(args: argparse.Namespace) -> int:
     from azgym.arguments import whole_number
-    from azgym.bench.runner import default_workers
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
     from azgym.layout.analysis import analyze, summary, write_analysis
@@ -42,7 +41,7 @@ def _analyze(args: argparse.Namespace) -> int:
 
     frames = whole_number("frames", args.frames, minimum=0)
     seed = check_seed(args.seed)
-    workers = args.workers or default_workers()
+    workers = resolve_workers(args)
     make_localizer(args.localizer)  # a bad spec stops here, before any work
     scenario, floor, out = _prepared(args)
     cells = int(floor.free.sum())

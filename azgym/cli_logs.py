@@ -90,9 +90,9 @@ def _export(args: argparse.Namespace) -> int:
 def bench_data(args: argparse.Namespace, progress: Progress) -> int:
     """``azgym bench --data DIR``: every contender on a log's frames."""
     from azgym.bench.isolation import DEFAULT_TIME_LIMIT
-    from azgym.bench.runner import default_workers
     from azgym.bench.table import run_report
     from azgym.cli import _contenders
+    from azgym.cli_options import resolve_workers
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
     from azgym.logs import log_cases, read_log
@@ -108,7 +108,7 @@ def bench_data(args: argparse.Namespace, progress: Progress) -> int:
     contenders = _contenders(args.localizer, args.with_builtins, time_limit)
     prepare_folder(Path(args.out))
     started = time.perf_counter()
-    result = run_log_benchmark(log, contenders, workers=args.workers or default_workers(),
+    result = run_log_benchmark(log, contenders, workers=resolve_workers(args),
                                time_limit=time_limit, progress=progress)
     written = write_log_results(result, log, Path(args.out))
     print(run_report(result.summary, time.perf_counter() - started, written))

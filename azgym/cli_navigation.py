@@ -18,6 +18,7 @@ from azgym.errors import InvalidInputError
 
 def bench_navigation(args: argparse.Namespace, progress) -> int:
     """Run the navigation suite ``args.suite``; print the table and write ``navigation.json``."""
+    from azgym.cli_options import resolve_workers
     from azgym.files import prepare_folder, write_file
     from azgym.nav.benchmark import check_contenders, contenders_of, run_navigation
     from azgym.nav.report import score_table
@@ -33,7 +34,7 @@ def bench_navigation(args: argparse.Namespace, progress) -> int:
         localizers += [name for name in suite.localizers if name not in localizers]
     contenders = contenders_of(list(dict.fromkeys(args.navigator)) or list(NAVIGATORS),
                                localizers)
-    workers = args.workers or _cores()
+    workers = resolve_workers(args)
     out = prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
     check_contenders(suite, contenders)
     started = time.perf_counter()
@@ -46,9 +47,3 @@ def bench_navigation(args: argparse.Namespace, progress) -> int:
           f"{result['episodes']} episodes each; {time.perf_counter() - started:.1f} s; "
           f"wrote {path}")
     return 0
-
-
-def _cores() -> int:
-    from azgym.bench.runner import default_workers
-
-    return default_workers()

@@ -1,12 +1,16 @@
-"""The command line's shared option types: one rule per kind of option, for every command.
+"""The command line's shared options: one rule per kind of option, for every command.
 
 ``--time-limit SECONDS``, ``--workers N`` and ``--out DIR`` mean the same in ``azgym bench``,
-``sweep`` and ``layout``, and are refused the same way while the command line is read.
+``sweep``, ``layout``, ``leaderboard verify`` and ``reproduce``, and are refused the same way
+while the command line is read; :func:`check_backend` and :func:`resolve_workers` are the one
+reading of ``--backend``, ``--address`` and ``--workers`` for the commands that run the
+benchmark.
 """
 
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from azgym.arguments import time_limit
 from azgym.errors import InvalidInputError
@@ -41,3 +45,18 @@ def out_folder(text: str) -> str:
     if not text.strip():
         raise argparse.ArgumentTypeError("is empty: give a folder (. for the current one)")
     return text
+
+
+def check_backend(args: argparse.Namespace) -> None:
+    """``--address`` only with ``--backend ray``: refused before anything is drawn or run."""
+    if args.address is not None and args.backend != "ray":
+        raise InvalidInputError("--address is for --backend ray")
+
+
+def resolve_workers(args: Any) -> int:
+    """``--workers``: 0 is one per core here, or (with Ray) one per CPU of the cluster."""
+    from azgym.bench.runner import default_workers
+
+    if args.workers:
+        return args.workers
+    return 0 if getattr(args, "backend", "local") == "ray" else default_workers()

@@ -11,16 +11,17 @@ import json
 import time
 from pathlib import Path
 
+from azgym.cli_options import resolve_workers, workers_option
+
 
 def _reproduce_paper(args: argparse.Namespace) -> int:
-    from azgym.bench.runner import default_workers
     from azgym.bench.suites.paper import ProtocolConfig
     from azgym.experiments.paper.report import write_outputs
     from azgym.experiments.paper.reproduce import reproduce, time_exhaustive_mex
     from azgym.site import load_scenario
 
     config = ProtocolConfig.quick(seed=args.seed) if args.quick else ProtocolConfig(seed=args.seed)
-    workers = args.workers or default_workers()
+    workers = resolve_workers(args)
     print(f"Reproducing Rátosi & Simon (2021) Sec. 3: grid step {config.grid_step} m, "
           f"{config.realisations} realisations, K in {config.outlier_counts}, "
           f"{workers} worker(s)", flush=True)
@@ -113,7 +114,8 @@ def add_reproduce(commands: argparse._SubParsersAction) -> None:
     paper.add_argument("--quick", action="store_true",
                        help="every other grid point, 2 realisations (about a minute)")
     paper.add_argument("--out", default="results/paper", help="output folder")
-    paper.add_argument("--workers", type=int, default=0, help="worker processes (0: one per core)")
+    paper.add_argument("--workers", type=workers_option, default=0,
+                       help="worker processes (0: one per core)")
     paper.add_argument("--seed", type=int, default=2021, help="seed of every random draw")
     paper.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     paper.set_defaults(handler=_reproduce_paper)

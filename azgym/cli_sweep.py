@@ -11,7 +11,7 @@ import argparse
 import time
 from pathlib import Path
 
-from azgym.cli_options import out_folder, workers_option
+from azgym.cli_options import check_backend, out_folder, resolve_workers, workers_option
 
 
 def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None:
@@ -49,19 +49,16 @@ def add_sweep(commands: argparse._SubParsersAction) -> None:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from azgym.bench.runner import default_workers
     from azgym.bench.sweep import run_sweep
     from azgym.bench.sweep_config import load_sweep
     from azgym.cli import _progress_printer
-    from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
 
-    if args.address is not None and args.backend != "ray":
-        raise InvalidInputError("--address is for --backend ray")
+    check_backend(args)
     config = load_sweep(Path(args.config))
     prepare_folder(Path(args.out))  # before the runs: a bad --out must not waste them
     print(f"{args.config}: {len(config.points)} grid points, {config.runs} runs", flush=True)
-    workers = args.workers or (0 if args.backend == "ray" else default_workers())
+    workers = resolve_workers(args)
     started = time.perf_counter()
     result = run_sweep(config, backend=args.backend, address=args.address, workers=workers,
                        progress=_progress_printer())

@@ -163,9 +163,20 @@ def test_localizers_lists_the_presets_with_what_they_are(capsys):
     assert re.search(r"^mex-coarse +mex with coarse_step=0.1$", listed, re.M)
 
 
-@pytest.mark.parametrize("extra", [["--backend", "ray"], ["--address", "127.0.0.1:6379"]])
-def test_bench_on_a_log_refuses_the_ray_options_by_name(extra, tmp_path, capsys):
+@pytest.mark.parametrize(("extra", "message"), [
+    (["--backend", "ray"], "takes no --suite, --navigator, --quick, --split, --backend or "
+                           "--address"),
+    (["--address", "127.0.0.1:6379"], "--address is for --backend ray"),
+])
+def test_bench_on_a_log_refuses_the_ray_options_by_name(extra, message, tmp_path, capsys):
     argv = ["bench", "--data", "warehouse-small-simulated", *extra, "--out", str(tmp_path)]
     assert cli.main(argv) == 2
-    assert "takes no --suite, --navigator, --quick, --split, --backend or --address" in \
-        capsys.readouterr().err
+    assert message in capsys.readouterr().err
+
+
+def test_an_address_without_the_ray_backend_is_refused_before_any_frame(tmp_path, capsys):
+    assert cli.main(["bench", "--address", "127.0.0.1:6379", "--out", str(tmp_path / "o")]) == 2
+    captured = capsys.readouterr()
+    assert "--address is for --backend ray" in captured.err and "frames drawn" not in \
+        captured.out
+    assert not (tmp_path / "o").exists()

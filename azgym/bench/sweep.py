@@ -22,8 +22,8 @@ from azgym.files import prepare_folder, write_file
 
 FIGURES = ("n", "availability", "failure_rate", "median_cm", "p75_cm", "p95_cm", "mean_cm",
            "rmse_cm")
-"""The accuracy figures of each row (from each run's overall figures), then the p75's 95 %
-interval."""
+"""The accuracy figures of each row, from each run's overall figures (the table then adds the
+p75's 95 % interval, ``p75_cm_lo`` and ``p75_cm_hi``)."""
 
 
 @dataclass

@@ -14,6 +14,7 @@ from typing import Any
 from azgym.bench.entries import clean
 from azgym.bench.leaderboard import differences
 from azgym.nav.benchmark import drive_all
+from azgym.nav.report import figure
 from azgym.nav.results_file import load_navigation
 from azgym.nav.suites import NAVIGATION_SUITES
 
@@ -54,14 +55,10 @@ def table_rows(data: dict[str, Any]) -> list[list[str]]:
         rows.append([str(rank), contender["navigator"], contender["localizer"],
                      f"{100 * s['success']:.0f} [{100 * low:.0f}, {100 * high:.0f}]",
                      f"{s['spl']:.3f}", f"{s['collisions']:.2f}",
-                     f"{100 * s['collided']:.0f}", _fmt(s["time_to_goal"]),
-                     f"{100 * s['answered']:.1f}", _fmt(s["error_median_cm"]),
-                     _fmt(s["error_p95_cm"])])
+                     f"{100 * s['collided']:.0f}", figure(s["time_to_goal"]),
+                     f"{100 * s['answered']:.1f}", figure(s["error_median_cm"]),
+                     figure(s["error_p95_cm"])])
     return rows
-
-
-def _fmt(value: float | None) -> str:
-    return "–" if value is None else f"{value:.1f}"
 
 
 Table = tuple[str, str, str, str, list[str], list[list[str]]]

@@ -7,6 +7,7 @@ and the wall time.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -14,6 +15,11 @@ COLUMNS = (("success %", 1), ("SPL", 3), ("collisions/ep", 2), ("collided %", 1)
            ("time to goal s", 1),
            ("answered %", 1), ("error median cm", 1), ("error p95 cm", 1), ("runtime s", 1))
 """The columns after the contender's names, each with its decimals."""
+
+
+def figure(value: float | None, decimals: int = 1) -> str:
+    """A figure as a table shows it: a dash where it does not exist (no answer, no success)."""
+    return "–" if value is None or math.isnan(value) else f"{value:.{decimals}f}"
 
 
 def score_table(rows: Sequence[dict[str, Any]], keys: Sequence[str]) -> str:
@@ -30,6 +36,6 @@ def score_table(rows: Sequence[dict[str, Any]], keys: Sequence[str]) -> str:
                   summary["error_median_cm"], summary["error_p95_cm"], row["runtime_s"])
         lines.append("  ".join(str(row[key]).ljust(width)
                                for key, width in zip(keys, firsts, strict=True))
-                     + "".join(f"  {value:>{width}.{decimals}f}" for (_, decimals), width, value
-                               in zip(COLUMNS, widths, values, strict=True)))
+                     + "".join(f"  {figure(value, decimals):>{width}}" for (_, decimals), width,
+                               value in zip(COLUMNS, widths, values, strict=True)))
     return "\n".join(lines)

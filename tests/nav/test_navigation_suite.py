@@ -204,3 +204,15 @@ def test_the_shipped_ppo_drives_to_the_goal(env_id):
     result = drive(env, load_policy("ppo", env), 10, get_navigation_suite("navigation").dev_seed)
     assert result["success"] >= 0.9 and result["spl"] >= 0.8
 
+
+
+def test_a_contender_that_never_arrives_nor_answers_prints_dashes():
+    from azgym.nav.report import score_table
+
+    summary = {"success": 0.0, "spl": 0.0, "collisions": 1.0, "collided": 1.0,
+               "time_to_goal": None, "answered": 0.0, "error_median_cm": None,
+               "error_p95_cm": float("nan")}
+    row = score_table([{"navigator": "ppo", "localizer": "dead-reckoning", "summary": summary,
+                        "runtime_s": 1.0}], ["navigator", "localizer"]).splitlines()[1]
+    assert row.split()[:9] == ["ppo", "dead-reckoning", "0.0", "0.000", "1.00", "100.0", "–",
+                               "0.0", "–"]

@@ -15,6 +15,9 @@ from azgym.world.drive import simulate
 
 SCENARIOS = ("warehouse-small", "warehouse-paper")
 """The warehouses of the static and route suites."""
+RANDOM_POSES = {True: 40, False: 400}
+"""Random poses per scenario and fault level, quick and full: warehouse-static's, and a sweep's
+scenario axis's."""
 
 
 def fault_levels(scenario: Scenario) -> dict[str, Scenario]:
@@ -51,7 +54,7 @@ def static(seed: int, quick: bool) -> list[Case]:
     cases = []
     for name in SCENARIOS:
         for level, scenario in fault_levels(load_scenario(name)).items():
-            cases += static_cases(scenario, 40 if quick else 400, rng, f"{name}, {level}")
+            cases += static_cases(scenario, RANDOM_POSES[quick], rng, f"{name}, {level}")
     return cases
 
 
@@ -75,13 +78,13 @@ def stress(seed: int, quick: bool) -> list[Case]:
 
 
 def scenario_suite(scenario: Scenario) -> Suite:
-    """Random poses in one scenario, as shipped (40 quick, 400 full): a sweep's scenario axis.
+    """Random poses in one scenario, as shipped (:data:`RANDOM_POSES`): a sweep's scenario axis.
 
     Named ``static:<scenario>``; its default seed is 0. It is not registered among the suites
     (a leaderboard entry cannot name it): a sweep builds it from the file it was given.
     """
     def build(seed: int, quick: bool) -> list[Case]:
-        return static_cases(scenario, 40 if quick else 400, np.random.default_rng(seed),
+        return static_cases(scenario, RANDOM_POSES[quick], np.random.default_rng(seed),
                             f"{scenario.name}, as shipped")
 
     return Suite(f"static:{scenario.name}", 1, f"random poses in {scenario.name}, as shipped",
