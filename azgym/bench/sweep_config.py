@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from azgym import arguments
 from azgym.arguments import time_limit as checked_time_limit
 from azgym.bench.contenders import Contender, check_buildable
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
@@ -115,11 +116,11 @@ class _Fields:
     def seeds(self, value: Any) -> list[int] | None:
         if value is None:
             return None
-        for k, seed in enumerate(self.nonempty_list("seeds", value)):
-            if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**31:
-                raise self.error(f"seeds[{k}]", f"must be a whole number in [0, 2**31), "
-                                                f"got {seed!r}")
-        return value
+        try:
+            return [arguments.seed(f"seeds[{k}]", seed)
+                    for k, seed in enumerate(self.nonempty_list("seeds", value))]
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"{self.source}: {exc}") from None
 
 
 def load_sweep(path: Path) -> SweepConfig:
