@@ -193,7 +193,11 @@ def _connect(ray: Any, address: str | None, workers: int) -> None:
 
 
 def check_address(address: str | None) -> tuple[str, int] | None:
-    """A cluster's address as (host, port); None for a local instance (None, auto or local).
+    """A cluster's address as (host, port), or None for the forms with no address to probe.
+
+    Those are None (azgym starts a local instance sized by ``--workers``), ``auto`` (Ray joins
+    the cluster already running on the node, as ``ray start`` left it) and ``local`` (Ray
+    starts a new local instance with its own defaults), passed to ``ray.init`` as they are.
 
     Checked for its form before anything runs (frames drawn, Ray started), so a typo is named
     at once rather than met as a connection that fails.
