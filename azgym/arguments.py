@@ -1,8 +1,8 @@
-"""The one rule for numeric arguments: whole numbers and positive numbers, refused by name.
+"""One rule per kind of numeric argument: whole numbers, positive numbers, seeds, time limits.
 
-Environments, the runner and the command line check their numeric arguments with these, so a
-``workers=1.5`` or a ``ray_range=0`` is refused where it is given, with the argument's name,
-instead of failing later deep inside a loop.
+Environments, the runner, the sweeps, the exports and the command line check their numeric
+arguments with these, so a ``workers=1.5``, a ``ray_range=0`` or a ``seed=-1`` is refused where it
+is given, with the argument's name, instead of failing later deep inside a loop.
 """
 
 from __future__ import annotations
@@ -26,6 +26,19 @@ def positive_number(name: str, value: object, unit: str) -> float:
             math.isfinite(value) and value > 0):
         raise InvalidInputError(f"{name} must be a finite number > 0 [{unit}], got {value!r}")
     return float(value)
+
+
+MAX_SEED = 2**31
+"""Seeds are whole numbers in [0, MAX_SEED): any seed numpy's generators take, and the same range
+everywhere a seed is given (runs, sweeps, layout analyses, exports, result files)."""
+
+
+def seed(name: str, value: object) -> int:
+    """``value`` as a seed: a whole number in [0, :data:`MAX_SEED`)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not (
+            0 <= value < MAX_SEED):
+        raise InvalidInputError(f"{name} must be a whole number in [0, 2**31), got {value!r}")
+    return int(value)
 
 
 MIN_TIME_LIMIT = 0.01

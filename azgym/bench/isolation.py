@@ -74,6 +74,33 @@ class Answers:
                    np.full(count, np.nan), [""] * count)
 
 
+def overrun_reason(phase: str, time_limit: float, starter: str) -> str:
+    """Why ``starter`` (the worker, the Ray actor) was stopped at its deadline in ``phase``."""
+    if phase == "building":
+        return f"building the localizer took longer than the {time_limit:g} s limit"
+    if phase == "warming":
+        return f"compiling the built-in took longer than {STARTUP_LIMIT:g} s"
+    if phase == "starting":
+        return f"{starter} did not start within {STARTUP_LIMIT:g} s"
+    return f"timed out: took longer than the {time_limit:g} s limit"
+
+
+def give_up_note(reason: str) -> str:
+    """The error of the frames skipped after :data:`GIVE_UP_AFTER` losses in a row."""
+    return f"not run: {GIVE_UP_AFTER} frames in a row were lost (last: {reason})"
+
+
+def record_answers(answers: Answers, start: int, table: np.ndarray) -> None:
+    """Decode answer rows (``worker.ANSWER_*`` columns) into frames ``start``, ``start + 1``..."""
+    rows = slice(start, start + len(table))
+    posed = table[:, worker.ANSWER_STATE] == worker.POSED
+    answered = np.isin(table[:, worker.ANSWER_STATE], (worker.POSED, worker.NO_POSE))
+    answers.posed[rows] = posed
+    pose = table[:, [worker.ANSWER_X, worker.ANSWER_Y, worker.ANSWER_HEADING]]
+    answers.pose[rows] = np.where(posed[:, None], pose, np.nan)
+    answers.micros[rows] = np.where(answered, table[:, worker.ANSWER_MICROS], np.nan)
+
+
 def context() -> Any:
     """The fork-server context the workers start from (the server starts on first use)."""
     ctx = multiprocessing.get_context("forkserver")
@@ -218,13 +245,10 @@ class IsolatedRun:
         return time.monotonic() > self._deadline(w)
 
     def _overrun_reason(self, w: _Worker) -> str:
-        if not w.ready:
-            if w.progress[0] == worker.BUILDING:
-                return f"building the localizer took longer than the {self.time_limit:g} s limit"
-            if w.progress[0] == worker.WARMING:
-                return f"compiling the built-in took longer than {STARTUP_LIMIT:g} s"
-            return f"the worker did not start within {STARTUP_LIMIT:g} s"
-        return f"timed out: took longer than the {self.time_limit:g} s limit"
+        phase = "answering" if w.ready else {worker.BUILDING: "building",
+                                              worker.WARMING: "warming"}.get(w.progress[0],
+                                                                             "starting")
+        return overrun_reason(phase, self.time_limit, "the worker")
 
     def _drain(self, w: _Worker) -> None:
         """Read every message the worker has sent."""
@@ -254,13 +278,7 @@ class IsolatedRun:
         assert w.batch is not None
         table = np.frombuffer(w.answers, np.float64)[:count * ANSWER_SIZE].reshape(
             count, ANSWER_SIZE).copy()
-        rows = slice(w.batch.start, w.batch.start + count)
-        posed = table[:, worker.ANSWER_STATE] == worker.POSED
-        answered = np.isin(table[:, worker.ANSWER_STATE], (worker.POSED, worker.NO_POSE))
-        self.answers.posed[rows] = posed
-        pose = table[:, [worker.ANSWER_X, worker.ANSWER_Y, worker.ANSWER_HEADING]]
-        self.answers.pose[rows] = np.where(posed[:, None], pose, np.nan)
-        self.answers.micros[rows] = np.where(answered, table[:, worker.ANSWER_MICROS], np.nan)
+        record_answers(self.answers, w.batch.start, table)
         self.finished += count
 
     def _lose(self, w: _Worker, reason: str) -> None:
@@ -281,7 +299,7 @@ class IsolatedRun:
         self.lost_in_a_row += 1
         rest = _Batch(batch.start + done + 1, batch.stop)
         if self.lost_in_a_row >= GIVE_UP_AFTER:
-            note = f"not run: {GIVE_UP_AFTER} frames in a row were lost (last: {reason})"
+            note = give_up_note(reason)
             for pending in [rest, *self.queue]:
                 self._skip(pending, note)
             self.queue.clear()

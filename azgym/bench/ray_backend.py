@@ -38,7 +38,15 @@ from typing import Any
 import numpy as np
 
 from azgym.bench import worker
-from azgym.bench.isolation import GIVE_UP_AFTER, STARTUP_LIMIT, Answers, Report
+from azgym.bench.isolation import (
+    GIVE_UP_AFTER,
+    STARTUP_LIMIT,
+    Answers,
+    Report,
+    give_up_note,
+    overrun_reason,
+    record_answers,
+)
 from azgym.bench.wire import MapData, Packed, unpack, unpack_map
 from azgym.errors import AzgymError, InvalidInputError, require
 
@@ -185,7 +193,11 @@ def _connect(ray: Any, address: str | None, workers: int) -> None:
 
 
 def check_address(address: str | None) -> tuple[str, int] | None:
-    """A cluster's address as (host, port); None for a local instance (None, auto or local).
+    """A cluster's address as (host, port), or None for the forms with no address to probe.
+
+    Those are None (azgym starts a local instance sized by ``--workers``), ``auto`` (Ray joins
+    the cluster already running on the node, as ``ray start`` left it) and ``local`` (Ray
+    starts a new local instance with its own defaults), passed to ``ray.init`` as they are.
 
     Checked for its form before anything runs (frames drawn, Ray started), so a typo is named
     at once rather than met as a connection that fails.
@@ -296,7 +308,7 @@ class RayRun:
         for slot in busy:
             self._drain(slot)
             if slot.stream is not None and time.monotonic() > slot.deadline:
-                self._lose(slot, self._overrun_reason(slot))
+                self._lose(slot, overrun_reason(slot.phase, self.time_limit, "the Ray actor"))
 
     def _drain(self, slot: _Slot) -> None:
         """Read every item the actor has streamed back so far."""
@@ -340,23 +352,9 @@ class RayRun:
         slot.batch, slot.stream, slot.phase = None, None, "idle"
 
     def _record(self, k: int, answer: list[float], error: str) -> None:
-        state = answer[worker.ANSWER_STATE]
-        if state == worker.POSED:
-            self.answers.posed[k] = True
-            self.answers.pose[k] = answer[worker.ANSWER_X:worker.ANSWER_HEADING + 1]
-        if state in (worker.POSED, worker.NO_POSE):
-            self.answers.micros[k] = answer[worker.ANSWER_MICROS]
+        record_answers(self.answers, k, np.asarray([answer], dtype=np.float64))
         self.answers.errors[k] = error
         self.finished += 1
-
-    def _overrun_reason(self, slot: _Slot) -> str:
-        if slot.phase == "building":
-            return f"building the localizer took longer than the {self.time_limit:g} s limit"
-        if slot.phase == "warming":
-            return f"compiling the built-in took longer than {STARTUP_LIMIT:g} s"
-        if slot.phase == "starting":
-            return f"the Ray actor did not start within {STARTUP_LIMIT:g} s"
-        return f"timed out: took longer than the {self.time_limit:g} s limit"
 
     def _lose(self, slot: _Slot, reason: str) -> None:
         """The actor overran or died: score its current frame, requeue the rest, replace it."""
@@ -372,7 +370,7 @@ class RayRun:
         self.finished += 1
         self.lost_in_a_row += 1
         if self.lost_in_a_row >= GIVE_UP_AFTER:
-            note = f"not run: {GIVE_UP_AFTER} frames in a row were lost (last: {reason})"
+            note = give_up_note(reason)
             for first, last in [(start + 1, stop), *self.queue]:
                 self._skip(first, last, note)
             self.queue.clear()

@@ -1,7 +1,8 @@
 """A sweep's configuration: localizers x hyperparameter grids x suites x seeds, from a TOML file.
 
 Every field is checked before anything runs, and a problem is named by the file and the field
-(``sweep.toml: localizer[0].grid.max_iter: ...``). The format (docs/scaling.md)::
+(``sweep.toml: localizer[0].grid.max_iter: Ransac.max_iter must be in [1, inf], got 0``). The
+format (docs/scaling.md)::
 
     suites = ["warehouse-static"]   # frame suites
     scenarios = ["warehouse-large"] # and/or scenarios (names or .toml files beside this one):
@@ -28,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from azgym import arguments
 from azgym.arguments import time_limit as checked_time_limit
 from azgym.bench.contenders import Contender, check_buildable
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
@@ -96,7 +98,8 @@ class _Fields:
     def keys(self, field: str, table: dict[str, Any], known: set[str]) -> None:
         for key in table:
             if key not in known:
-                raise self.error(field or key, str(unknown_name("key", key, known)))
+                raise self.error(f"{field}.{key}" if field else key,
+                             str(unknown_name("key", key, known)))
 
     def names(self, field: str, value: Any, known: list[str]) -> list[str]:
         items = self.nonempty_list(field, value)
@@ -115,11 +118,11 @@ class _Fields:
     def seeds(self, value: Any) -> list[int] | None:
         if value is None:
             return None
-        for k, seed in enumerate(self.nonempty_list("seeds", value)):
-            if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**31:
-                raise self.error(f"seeds[{k}]", f"must be a whole number in [0, 2**31), "
-                                                f"got {seed!r}")
-        return value
+        try:
+            return [arguments.seed(f"seeds[{k}]", seed)
+                    for k, seed in enumerate(self.nonempty_list("seeds", value))]
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"{self.source}: {exc}") from None
 
 
 def load_sweep(path: Path) -> SweepConfig:
@@ -248,11 +251,41 @@ def _scalar(fields: _Fields, field: str, value: Any) -> None:
                                   f"got {value!r}")
 
 
+def _build_problem(base: Contender, params: dict[str, Any], time_limit: float) -> str:
+    """Why ``base`` with ``params`` added does not build ("" when it does)."""
+    from azgym.bench.contenders import contender
+    from azgym.localize.registry import build, spec_label
+
+    try:
+        candidate = contender(spec_label(base.spec, {**base.params, **params}))
+        if ":" not in candidate.spec:  # a name: azgym's, or an installed package's
+            build(candidate.spec, **candidate.params)
+        else:  # a plug-in is built where it will run, in a worker, within the limit
+            check_buildable(candidate, time_limit)
+    except AzgymError as exc:
+        return str(exc)
+    return ""
+
+
+def _culprit(field: str, base: Contender, params: dict[str, Any], varied: dict[str, Any],
+             time_limit: float) -> str:
+    """The field to blame for a grid point the localizer refuses.
+
+    The first key whose value it refuses alone; the table when it refuses none alone (a
+    combination), or does not build without them.
+    """
+    if not _build_problem(base, {}, time_limit):
+        for key, value in params.items():
+            if _build_problem(base, {key: value}, time_limit):
+                return f"{field}.{'grid' if key in varied else 'params'}.{key}"
+    return field
+
+
 def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict[str, Any]]],
             time_limit: float) -> list[GridPoint]:
     """Each grid point as a contender, built once (a bad name or value is named here)."""
     from azgym.bench.contenders import contender
-    from azgym.localize.registry import build, spec_label
+    from azgym.localize.registry import spec_label
 
     points: list[GridPoint] = []
     seen: dict[str, str] = {}
@@ -268,14 +301,10 @@ def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict
                 where = "grid" if key in varied else "params"
                 raise fields.error(f"{field}.{where}.{key}", f"is also fixed in the name "
                                                             f"{table['name']!r}")
-            try:
-                candidate = contender(spec_label(base.spec, {**base.params, **params}))
-                if ":" not in candidate.spec:  # a name: azgym's, or an installed package's
-                    build(candidate.spec, **candidate.params)
-                else:  # a plug-in is built where it will run, in a worker, within the limit
-                    check_buildable(candidate, time_limit)
-            except AzgymError as exc:
-                raise fields.error(field, str(exc)) from None
+            problem = _build_problem(base, params, time_limit)
+            if problem:
+                raise fields.error(_culprit(field, base, params, varied, time_limit), problem)
+            candidate = contender(spec_label(base.spec, {**base.params, **params}))
             if candidate.label in seen:
                 raise fields.error(field, f"grid point {candidate.label!r} is already in the "
                                           f"sweep ({seen[candidate.label]})")

@@ -29,18 +29,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from azgym import arguments
 from azgym.bench.contenders import contender
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.bench.runner import run_contenders
 from azgym.bench.suites import Case
 from azgym.core import BeaconMap, BoolArray, FloatArray, Measurements, wrap_angle
-from azgym.errors import InvalidInputError
 from azgym.layout.information import MIN_BEACONS
 from azgym.sensing.synthetic import ideal_azimuths
 from azgym.site import Scenario
 
-MAX_SEED = 2**31
-"""Seeds are whole numbers in [0, MAX_SEED), as in the benchmark's sweeps."""
 CHUNK_FRAMES = 100_000
 """Frames handed to the runner at once (bounds the memory of a large analysis)."""
 
@@ -68,11 +66,9 @@ class MonteCarlo:
     problems: dict[str, int]
 
 
-def check_seed(seed: object) -> int:
-    """``seed`` as a whole number in [0, :data:`MAX_SEED`), or a named error."""
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < MAX_SEED:
-        raise InvalidInputError(f"seed must be a whole number in [0, 2**31), got {seed!r}")
-    return seed
+def check_seed(value: object) -> int:
+    """``value`` as the analysis' seed, by the one rule for seeds (:func:`azgym.arguments.seed`)."""
+    return arguments.seed("seed", value)
 
 
 def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localizer: str,

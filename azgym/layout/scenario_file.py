@@ -22,7 +22,7 @@ from azgym.errors import ScenarioError
 from azgym.files import write_file
 from azgym.site import Scenario, load_scenario, parse_scenario
 from azgym.site.load import SCENARIO_PACKAGE
-from azgym.site.reader import MAX_INTEGER
+from azgym.site.reader import MAX_INTEGER, MAX_NAME, NAME_CHARACTERS
 from azgym.site.toml_writer import to_toml
 
 
@@ -49,7 +49,7 @@ def file_stem(name: str) -> str:
     The parser admits no other name (:func:`azgym.site.reader.name_problem`); this keeps a
     scenario built in memory from naming a file outside the output folder too.
     """
-    return re.sub(r"[^A-Za-z0-9._-]", "_", name).lstrip("._-")[:100] or "scenario"
+    return re.sub(rf"[^{NAME_CHARACTERS}]", "_", name).lstrip("._-")[:MAX_NAME] or "scenario"
 
 
 def fresh_ids(ids: IntArray, count: int) -> list[int]:

@@ -17,15 +17,17 @@ from pathlib import Path
 
 import numpy as np
 
+from azgym import arguments
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
-from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, NAME
+from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, MAX_NAME
 from azgym.logs.read import QUALITY_PREFIX
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import LABEL_NAMES
 from azgym.sensing.motion import ImuModel, OdometryModel
 from azgym.site import list_scenarios, load_scenario
 from azgym.site.elements import Route
+from azgym.site.reader import name_problem
 from azgym.site.scenario import Scenario
 from azgym.site.toml_writer import to_toml
 from azgym.world.drive import Frame, simulate
@@ -38,23 +40,31 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
     Args:
         scenario: A shipped scenario's name, a scenario file, or a scenario loaded from one.
         route: The route's name (default: the scenario's first).
-        seed: The seed of every draw (as for ``simulate``).
+        seed: The seed of every draw (as for ``simulate``), in [0, 2**31).
         out: The folder to write (created if needed).
         name: The dataset's name (default: ``SCENARIO-ROUTE-sSEED-simulated``).
-        motion_rate_hz: The odometry's and IMU's rate [Hz] (default: their models', 50 Hz).
+        motion_rate_hz: The odometry's and IMU's rate [Hz], a finite number > 0 (default: their
+            models', 50 Hz).
 
     Returns:
         The folder written.
+
+    Raises:
+        InvalidInputError: A seed, rate or name out of its range, named, before anything is
+            simulated or written.
     """
+    seed = arguments.seed("seed", seed)
+    if motion_rate_hz is not None:
+        motion_rate_hz = arguments.positive_number("motion_rate_hz", motion_rate_hz, "Hz")
     scenario = load_scenario(scenario)
     chosen = _route(scenario, route)
     name = name or f"{scenario.name}-{chosen.name}-s{seed}-simulated"
-    if not NAME.fullmatch(name):
-        raise InvalidInputError(f"name: {name!r} must be letters, digits, '.', '_' or '-'")
+    if problem := name_problem(name, MAX_NAME):
+        raise InvalidInputError(f"name: {problem}")
     odometry, imu = OdometryModel(), ImuModel()
     if motion_rate_hz is not None:
-        odometry = dataclasses.replace(odometry, rate_hz=float(motion_rate_hz))
-        imu = dataclasses.replace(imu, rate_hz=float(motion_rate_hz))
+        odometry = dataclasses.replace(odometry, rate_hz=motion_rate_hz)
+        imu = dataclasses.replace(imu, rate_hz=motion_rate_hz)
     sensor = GeometrySensor(scenario)
     frames = list(simulate(scenario, chosen, seed, sensor=sensor, odometry=odometry, imu=imu))
     prepare_folder(out)

@@ -7,7 +7,6 @@ names the map: a shipped scenario, a scenario file in the log's folder, or ``bea
 
 from __future__ import annotations
 
-import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,14 +20,16 @@ from azgym.logs.files import log_file
 from azgym.logs.plausible import Extent
 from azgym.logs.problems import Problems, shown
 from azgym.logs.tables import check_columns, floats, integers, read_table
+from azgym.site.reader import name_problem
 
 FORMAT_VERSION = 1
 """The log format this azgym writes and reads (``format`` in ``log.toml``)."""
 MANIFEST = "log.toml"
 MAX_MANIFEST_BYTES = 64 * 1024
 """The largest manifest read [bytes]."""
-NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
-"""A dataset's name: letters, digits, '.', '_' and '-', at most 64."""
+MAX_NAME = 64
+"""The longest name a dataset may have [characters]; otherwise a plain file name, as a
+scenario's (:func:`azgym.site.reader.name_problem`), since it names the log's folder."""
 _KEYS = {"": {"format", "name", "description", "simulated", "sequence", "camera", "map",
               "truth"},
          "camera": {"rate_hz", "description"}, "map": {"scenario", "beacons"},
@@ -106,9 +107,8 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
     camera, where, truth = (data.get(k) if isinstance(data.get(k), dict) else {}
                             for k in ("camera", "map", "truth"))
     name = _text(data, "name", problems, required=True)
-    if name and not NAME.fullmatch(name):
-        problems.add(MANIFEST, f"name: {shown(name)} must be letters, digits, '.', '_' or '-' "
-                               "(at most 64, starting with a letter or digit)")
+    if name and (problem := name_problem(name, MAX_NAME)):
+        problems.add(MANIFEST, f"name: {problem}")
     simulated = data.get("simulated")
     if not isinstance(simulated, bool):
         problems.add(MANIFEST, "simulated: must be true or false (is the data from a real "

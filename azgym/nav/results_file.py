@@ -28,10 +28,11 @@ import math
 from pathlib import Path
 from typing import Any
 
+from azgym import arguments
 from azgym.bench.entries import clean, close
 from azgym.bench.entry_files import LeaderboardError, read_json
 from azgym.envs.navigate import CONTROL_STEPS, MAX_STEPS, PHYSICS_DT
-from azgym.errors import AzgymError
+from azgym.errors import AzgymError, InvalidInputError
 from azgym.localize.registry import is_builtin
 from azgym.nav.benchmark import KIND, RESULTS_FORMAT
 from azgym.nav.scoring import wilson_interval
@@ -122,8 +123,10 @@ def _check_suite(data: dict[str, Any], path: Path) -> None:
     split, seed, quick = data["split"], data["seed"], data["quick"]
     if split not in ("dev", "test") or not isinstance(quick, bool):
         raise LeaderboardError(f"{path}: split must be 'dev' or 'test' and quick true or false")
-    if type(seed) is not int or not 0 <= seed < 2**31:
-        raise LeaderboardError(f"{path}: seed must be a whole number in [0, 2^31), got {seed!r}")
+    try:
+        arguments.seed("seed", seed)
+    except InvalidInputError as exc:
+        raise LeaderboardError(f"{path}: {exc}") from None
     if (split == "dev") != (seed == suite.dev_seed):
         raise LeaderboardError(f"{path}: a dev run uses the suite's seed {suite.dev_seed} and "
                                f"a test run another, got split {split!r} with seed {seed}")

@@ -40,24 +40,27 @@ MAX_INTEGER = 2**31 - 1
 
 MAX_NAME = 100
 """The longest name a scenario may have [characters]."""
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
-"""A scenario's name: a plain file name (output files and folders are named after it)."""
+NAME_CHARACTERS = "A-Za-z0-9._-"
+"""The characters of a plain file name, as a regular expression's character class."""
+_NAME = re.compile(rf"[A-Za-z0-9][{NAME_CHARACTERS}]*")
+"""A plain file name (output files and folders are named after a scenario, a log)."""
 
 _SHORT = reprlib.Repr()
 _SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxstring, _SHORT.maxother = 2, 6, 40, 40
 _SHORT.maxlong = 24
 
 
-def name_problem(name: str) -> str | None:
-    """Why ``name`` cannot name a scenario, or None when it can.
+def name_problem(name: str, max_length: int = MAX_NAME) -> str | None:
+    """Why ``name`` cannot name a scenario (or a log: ``max_length`` 64), or None when it can.
 
     A scenario's name becomes file and folder names (``results/layout/NAME``,
-    ``NAME-plus-4.toml``), so it is a plain file name: letters, digits, ``-``, ``_`` and ``.``,
-    starting with a letter or a digit (no separator, no ``..``, not hidden, not an option).
+    ``NAME-plus-4.toml``), a log's a folder (``leaderboard/datasets/NAME``), so it is a plain
+    file name: letters, digits, ``-``, ``_`` and ``.``, starting with a letter or a digit (no
+    separator, no ``..``, not hidden, not an option), at most ``max_length`` characters.
     """
-    if len(name) > MAX_NAME or not _NAME.fullmatch(name):
+    if len(name) > max_length or not _NAME.fullmatch(name):
         return (f"must be a plain file name (ASCII letters, digits, '-', '_' and '.', starting "
-                f"with a letter or a digit, at most {MAX_NAME} characters), got {shown(name)}")
+                f"with a letter or a digit, at most {max_length} characters), got {shown(name)}")
     return None
 
 

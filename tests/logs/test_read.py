@@ -74,6 +74,11 @@ MALFORMED = {
     "manifest typo": (_replace("log.toml", "simulated =", "simulatd = true\nsimulated ="),
                       r"log.toml: simulatd: unknown field"),
     "manifest not TOML": (_replace("log.toml", "name = ", "name = = "), r"not valid TOML"),
+    "name not plain": (_replace("log.toml", 'name = "mini"', 'name = "../mini"'),
+                       r"log.toml: name: must be a plain file name \(.*at most 64 characters\), "
+                       r"got '../mini'"),
+    "name too long": (_replace("log.toml", 'name = "mini"', f'name = "{"m" * 65}"'),
+                      r"log.toml: name: must be a plain file name"),
     "no map": (_replace("log.toml", 'beacons = "beacons.csv"', ""), r"map: give exactly one"),
     "no frames": (_delete("frames.csv"), r"frames.csv: missing"),
     "bad number": (_replace("frames.csv", "1,0.1,", "1,abc,"),

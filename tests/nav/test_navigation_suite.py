@@ -88,6 +88,8 @@ def _set_success(data):
     (lambda d: d.update(suite_version=0), "suite_version 0: navigation is at version 1"),
     (lambda d: d.update(env_kwargs={"sensor": "image"}), "env and env_kwargs must be the suite"),
     (lambda d: d.update(seed=5), "a dev run uses the suite's seed 2300"),
+    (lambda d: d.update(seed=-1), r"seed must be a whole number in \[0, 2\*\*31\), got -1"),
+    (lambda d: d.update(seed=2300.0), r"seed must be a whole number in \[0, 2\*\*31\), got 2300.0"),
     (lambda d: d.update(split="test"), "a dev run uses the suite's seed 2300"),
     (lambda d: d.update(quick=False), "episodes must be 100"),
     (lambda d: d.update(contenders=[]), "contenders must be a list of 1 to 64"),
