@@ -32,15 +32,15 @@ def _prepared(args: argparse.Namespace) -> tuple[Any, Any, Path]:
 
 
 def _analyze(args: argparse.Namespace) -> int:
+    from azgym.arguments import seed as seed_rule
     from azgym.arguments import whole_number
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
     from azgym.layout.analysis import analyze, summary, write_analysis
-    from azgym.layout.monte_carlo import check_seed
     from azgym.localize.registry import make_localizer
 
     frames = whole_number("frames", args.frames, minimum=0)
-    seed = check_seed(args.seed)
+    seed = seed_rule("--seed", args.seed)
     workers = resolve_workers(args)
     make_localizer(args.localizer)  # a bad spec stops here, before any work
     scenario, floor, out = _prepared(args)

@@ -66,11 +66,6 @@ class MonteCarlo:
     problems: dict[str, int]
 
 
-def check_seed(value: object) -> int:
-    """``value`` as the analysis' seed, by the one rule for seeds (:func:`azgym.arguments.seed`)."""
-    return arguments.seed("seed", value)
-
-
 def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localizer: str,
                 frames: int, seed: int = 0,
                 progress: Callable[[int, int], None] | None = None, *, workers: int = 1,
@@ -88,7 +83,7 @@ def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localiz
         workers: Worker processes running the localizer.
         time_limit: Seconds the localizer may take on one frame (or to be built).
     """
-    check_seed(seed)
+    arguments.seed("seed", seed)
     runs = contender(localizer)
     asked = np.count_nonzero(seen, axis=1) >= MIN_BEACONS
     figures = np.full((4, len(points)), np.nan)
