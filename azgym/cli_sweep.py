@@ -11,12 +11,13 @@ import argparse
 import time
 from pathlib import Path
 
+from azgym.bench.isolation import BACKENDS
 from azgym.cli_options import check_backend, out_folder, resolve_workers, workers_option
 
 
 def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None:
     """``--backend local|ray`` and ``--address ADDR``: one definition for bench and sweep."""
-    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+    parser.add_argument("--backend", choices=BACKENDS, default="local",
                         help="local: worker processes here; ray: Ray actors (pip install "
                              f"\"azgym[ray]\"), on --address or a local instance{note}")
     parser.add_argument("--address", metavar="ADDR", type=_address,

@@ -46,6 +46,9 @@ GIVE_UP_AFTER = 3
 """Frames lost in a row (time-outs or dead workers) after which a contender's other frames are
 skipped."""
 PRELOAD = "azgym.bench.preload"
+BACKENDS = ("local", "ray")
+"""Where the contenders run: worker processes forked here, or Ray actors on a cluster
+(:mod:`azgym.bench.ray_backend`, imported only when asked for)."""
 
 Report = Callable[[int], None]
 """Called with the number of frames finished so far."""

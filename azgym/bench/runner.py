@@ -23,7 +23,13 @@ import numpy as np
 from azgym.arguments import time_limit as checked_time_limit
 from azgym.arguments import whole_number
 from azgym.bench.contenders import REFERENCE, Contender, default_contenders, warm_up
-from azgym.bench.isolation import DEFAULT_TIME_LIMIT, Answers, IsolatedRun, start_fork_server
+from azgym.bench.isolation import (
+    BACKENDS,
+    DEFAULT_TIME_LIMIT,
+    Answers,
+    IsolatedRun,
+    start_fork_server,
+)
 from azgym.bench.outcome import Outcome
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import Case, Suite
@@ -36,10 +42,6 @@ from azgym.site import load_scenario
 BATCHES_PER_WORKER = 4
 """Frames go to the workers in this many batches per worker: few round trips, and a slow batch
 does not leave the other workers idle for long."""
-
-BACKENDS = ("local", "ray")
-"""Where the contenders run: worker processes forked here, or Ray actors on a cluster
-(:mod:`azgym.bench.ray_backend`, imported only when asked for)."""
 
 Progress = Callable[[str], None]
 """Called with text as a run advances; text starting with a carriage return redraws the line."""
