@@ -17,7 +17,6 @@ import time
 from pathlib import Path
 
 from azgym.arguments import whole_number
-from azgym.errors import InvalidInputError, unknown_name
 
 DEFAULT_ENV = "azgym/Navigate-WarehouseSmall-v2"
 """The environment driven unless ``--env`` names another."""
@@ -29,20 +28,6 @@ training scripts, examples and tests use, so a policy is scored on episodes it h
 tuned on, and the same ones on every run."""
 
 
-def _navigate_id(env_id: str) -> str:
-    """``env_id`` if it is a registered Navigate id; a named error otherwise."""
-    from azgym.envs.registration import NAMESPACE, register_environments
-
-    ids = register_environments()
-    navigators = [name for name in ids if name.startswith(f"{NAMESPACE}/Navigate")]
-    if env_id not in ids:
-        raise unknown_name("environment id", env_id, navigators)
-    if env_id not in navigators:
-        raise InvalidInputError(f"--env {env_id!r} is not a navigation environment; a navigator "
-                                f"drives one of: {', '.join(navigators)}")
-    return env_id
-
-
 def _evaluate_navigator(args: argparse.Namespace) -> int:
     import gymnasium as gym
 
@@ -51,10 +36,11 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     from azgym.nav.policy_file import load_policy
     from azgym.nav.report import score_table
     from azgym.nav.scoring import drive
+    from azgym.nav.train import navigation_spec
 
     episodes = whole_number("--episodes", args.episodes, 1)
     seed = whole_number("--seed", args.seed, 0)
-    env_id = _navigate_id(args.env)
+    env_id = navigation_spec(args.env).id
     out = prepare_folder(Path(args.out)) if args.out else None
     localizers = list(dict.fromkeys(args.localizer or [DEFAULT_LOCALIZER]))
     envs = {name: gym.make(env_id, localizer=name, sensor=args.sensor, ids=args.ids)

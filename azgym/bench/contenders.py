@@ -62,6 +62,14 @@ def default_contenders() -> list[Contender]:
     return [contender(spec) for spec in DEFAULT_SPECS]
 
 
+def with_reference(contenders: Iterable[Contender]) -> list[Contender]:
+    """The contenders, and ``ransac`` last if none of them is the runtime reference."""
+    contenders = list(contenders)
+    if not any(c.is_reference for c in contenders):
+        contenders.append(Contender(REFERENCE, REFERENCE))
+    return contenders
+
+
 def with_defaults(contenders: Iterable[Contender]) -> list[Contender]:
     """The default contenders, then the given ones that are not among them."""
     defaults = default_contenders()

@@ -22,7 +22,13 @@ import numpy as np
 
 from azgym.arguments import time_limit as checked_time_limit
 from azgym.arguments import whole_number
-from azgym.bench.contenders import REFERENCE, Contender, default_contenders, warm_up
+from azgym.bench.contenders import (
+    REFERENCE,
+    Contender,
+    default_contenders,
+    warm_up,
+    with_reference,
+)
 from azgym.bench.isolation import (
     BACKENDS,
     DEFAULT_TIME_LIMIT,
@@ -192,9 +198,7 @@ def run_benchmark(
     """
     if split not in ("dev", "test"):
         raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
-    contenders = list(contenders or default_contenders())
-    if not any(c.is_reference for c in contenders):
-        contenders.append(Contender(REFERENCE, REFERENCE))
+    contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
     if seed is None:
         seed = suite.dev_seed if split == "dev" else secrets.randbits(31)

@@ -13,7 +13,7 @@ import importlib.util
 from collections.abc import Sequence
 from pathlib import Path
 
-from azgym.bench.contenders import REFERENCE, Contender, default_contenders
+from azgym.bench.contenders import Contender, default_contenders, with_reference
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.runner import Progress, run_contenders
@@ -43,9 +43,7 @@ def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *
         LogError: The log has no truth to score against.
     """
     cases = log_cases(log)
-    contenders = list(contenders or default_contenders())
-    if not any(c.is_reference for c in contenders):
-        contenders.append(Contender(REFERENCE, REFERENCE))
+    contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
     say(f"data:{log.manifest.name} ({'simulated' if log.manifest.simulated else 'real'}, "
         f"sha256 {log.sha256[:12]}…): {len(cases)} frames")

@@ -161,8 +161,10 @@ def test_the_command_parses_to_its_handler_with_its_defaults():
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["--env", "azgym/Navigate-Nowhere-v2"], "unknown environment id 'azgym/Navigate-Nowhere-v2'"),
-    (["--env", "azgym/Localize-WarehouseSmall-v1"], "is not a navigation environment"),
+    (["--env", "azgym/Navigate-Nowhere-v2"],
+     "unknown navigation environment 'azgym/Navigate-Nowhere-v2'"),
+    (["--env", "azgym/Localize-WarehouseSmall-v1"],
+     "has no planner's map: it is not a navigation environment"),
     (["--localizer", "truth", "--localizer", "ransak"], "unknown localizer 'ransak'"),
     (["--episodes", "0"], "--episodes must be an integer >= 1, got 0"),
     (["--seed", "-1"], "--seed must be an integer >= 0, got -1"),
