@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from azgym.bench.sweep import SweepResult, run_sweep
+from azgym.bench.sweep import FIGURES, INTERVAL, SweepResult, run_sweep
 from azgym.bench.sweep_config import MAX_RUNS, load_sweep, parse_sweep
 from azgym.bench.sweep_plot import write_sweep_figure
 from azgym.cli import main
@@ -126,11 +126,11 @@ def test_a_scenario_file_in_a_folder_below_the_config_is_taken(tmp_path):
 def test_the_figure_copes_with_a_metric_that_is_nan_everywhere(tmp_path):
     """Every localizer failing every frame: no error to draw, no log scale, a note instead."""
     sweep = parse_sweep(config(localizer=[{"name": "lsq"}, {"name": "ransac"}]))
-    row = ["warehouse-static", 7, "lsq", "lsq", 240, 0.0, 1.0, *[math.nan] * 5, math.nan,
-           math.nan]
-    result = SweepResult(sweep, ["suite", "seed", "localizer", "label", "n", "availability",
-                                 "failure_rate", "median_cm", "p75_cm", "p95_cm", "mean_cm",
-                                 "rmse_cm", "p75_cm_lo", "p75_cm_hi"],
+    assert sweep.metric == "p75_all_cm"  # the headline by default
+    figures = {"n": 240, "p75_all_cm": math.inf, "availability": 0.0, "failure_rate": 1.0}
+    row = ["warehouse-static", 7, "lsq", "lsq", *(figures.get(f, math.nan) for f in FIGURES),
+           math.inf, math.inf]
+    result = SweepResult(sweep, ["suite", "seed", "localizer", "label", *FIGURES, *INTERVAL],
                          [row, [*row[:2], "ransac", "ransac", *row[4:]]], [])
     assert write_sweep_figure(result, tmp_path / "sweep.png").stat().st_size > 0
 
@@ -164,7 +164,9 @@ def test_a_small_sweep_gives_the_same_table_whatever_the_workers(tmp_path, capsy
     rows = list(csv.DictReader(written.splitlines()))
     assert [r["label"] for r in rows] == ["ransac:weighted=false", "ransac-weighted", "lsq"]
     assert [r["weighted"] for r in rows] == ["false", "true", ""]
-    assert float(rows[0]["p75_cm"]) < float(rows[2]["p75_cm"])  # ransac beats lsq here
+    assert float(rows[0]["p75_all_cm"]) < float(rows[2]["p75_all_cm"])  # ransac beats lsq
+    assert float(rows[0]["p75_all_cm_lo"]) <= float(rows[0]["p75_all_cm"]) <= \
+        float(rows[0]["p75_all_cm_hi"])
     assert (tmp_path / "out" / "runtimes.csv").is_file()
     assert (tmp_path / "out" / "sweep.png").stat().st_size > 0
     assert "ransac-weighted" in capsys.readouterr().out
@@ -190,3 +192,22 @@ def test_a_scenario_axis_scores_random_poses_in_a_generated_warehouse(tmp_path):
                                                         ("static:warehouse-small", 1)]
     n, availability = (table.columns.index(key) for key in ("n", "availability"))
     assert all(row[n] == 40 and row[availability] > 0.5 for row in table.rows)
+
+
+@pytest.mark.parametrize("scenario", ["warehouse-large", "warehouse-small.toml"])
+def test_suites_and_scenarios_in_one_sweep_are_each_scored_on_their_own_maps(tmp_path, scenario):
+    """Mixing the axes changes no row: warehouse-static keeps its shipped maps beside a shipped
+    scenario it does not draw from, and beside a scenario file that shadows one of its own
+    (a generated warehouse saved as warehouse-small.toml); the scenario is scored on its map."""
+    assert main(["generate", "--seed", "3", "--out", str(tmp_path / "warehouse-small.toml")]) == 0
+    both = {"suites": ["warehouse-static"], "scenarios": [scenario],
+            "quick": True, "seeds": [7], "localizer": [{"name": "ransac"}]}
+    mixed = run_sweep(parse_sweep(both, folder=tmp_path), workers=1)
+    alone = [run_sweep(parse_sweep({k: v for k, v in both.items() if k != axis},
+                                   folder=tmp_path), workers=1).rows
+             for axis in ("scenarios", "suites")]
+    assert [row[0] for row in mixed.rows] == ["warehouse-static",
+                                              f"static:{scenario.removesuffix('.toml')}"]
+    assert mixed.rows == alone[0] + alone[1]
+    availability = mixed.columns.index("availability")
+    assert alone[0][0][availability] > 0.9  # the suite's frames answered on their own maps

@@ -23,7 +23,7 @@ import numpy as np
 
 from azgym.bench.leaderboard import DatasetUnavailable, LeaderboardError, load_available
 from azgym.bench.suites import SUITES, get_suite
-from azgym.bench.table import rank_key
+from azgym.bench.table import LEGEND, RANK_BY, rank_key
 from azgym.bench.tracking import KIDNAP_WINDOW_S, RECOVERED_CM
 from azgym.files import prepare_folder, write_file
 
@@ -71,19 +71,27 @@ def _ranked(loaded: list[tuple[dict[str, Any], str]], suite: str, split: str,
     return sorted(rows, key=lambda pair: rank_key(pair[0]["metrics"]["all"], pair[0]["name"]))
 
 
-def _interval(bounds: list[float] | None) -> str:
-    return "–" if not bounds or None in bounds else f"{bounds[0]:.2f}–{bounds[1]:.2f}"
+def _interval(bounds: list[float | None] | None) -> str:
+    """A stored 95 % interval (JSON keeps an infinite bound as null: only the upper can be)."""
+    if not bounds or bounds[0] is None:
+        return "–"
+    return f"{_fmt(bounds[0])}–{_headline(bounds[1])}"
 
 
 def _fmt(value: Any, digits: int = 2) -> str:
     return "–" if value is None else f"{value:.{digits}f}"
 
 
+def _headline(value: float | None) -> str:
+    """The headline as stored (null: infinite, more than a quarter of the frames unanswered)."""
+    return "∞" if value is None else _fmt(value)
+
+
 COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
-           ("availability %", "availability"), ("mean cm", "mean_cm"),
-           ("median cm", "median_cm"), ("p75 cm", "p75_cm"), ("p75 95% CI", None),
-           ("p95 cm", "p95_cm"),
-           ("failures %", "failure_rate"), ("µs", None), ("× ransac", None), ("split", None),
+           ("p75 cm", RANK_BY), ("p75 95% CI", None), ("availability %", "availability"),
+           ("failures %", "failure_rate"), ("answered median cm", "median_cm"),
+           ("answered p75 cm", "p75_cm"), ("answered p95 cm", "p95_cm"),
+           ("answered mean cm", "mean_cm"), ("µs", None), ("× ransac", None), ("split", None),
            ("azgym", None)]
 NAME_COLUMN = 1
 """The column of the entry's name, which links to its web link."""
@@ -92,8 +100,11 @@ TRACK_COLUMNS = ("track avail. %", "track max cm")
 kidnapping windows (:mod:`azgym.bench.tracking`)."""
 RECOVERY_COLUMN = "worst recovery s"
 """On a suite with events: the longest recovery, or ``never (k/N)`` when k of N events had none."""
-TRACKS_AT = [c for c, _ in COLUMNS].index("failures %") + 1
+TRACKS_AT = [c for c, _ in COLUMNS].index("answered mean cm") + 1
 """The track columns come after the accuracy ones."""
+BOARD_LEGEND = LEGEND.replace("(inf:", "(∞:").replace("answered median, p75, p95, mean",
+                                                       "answered median, p75, p95, mean cm")
+"""What each column is (:data:`azgym.bench.table.LEGEND`, with the board's ∞)."""
 TRACKS_NOTE = (
     "Suites of driven routes add track columns: *track avail. %* is the share of frames with an "
     "estimate from each route's first fix on, *track max cm* the largest error outside the "
@@ -111,10 +122,10 @@ def _cells(rank: int, entry: dict[str, Any], tracks: int) -> list[str]:
     """A table row: the entry's figures, with ``tracks`` track cells (0, 2 or 3)."""
     stats, runtime = entry["metrics"]["all"], entry["metrics"]["runtime_us"]
     return [str(rank), entry["name"], entry["version"], ", ".join(entry["authors"]),
-            _percent(stats["availability"]), _fmt(stats["mean_cm"]), _fmt(stats["median_cm"]),
-            _fmt(stats["p75_cm"]), _interval(entry["metrics"].get("ci95", {}).get("p75_cm")),
-            _fmt(stats["p95_cm"], 1), _percent(stats["failure_rate"]),
-            *_track_cells(entry["metrics"]["tracking"])[:tracks],
+            _headline(stats[RANK_BY]), _interval(entry["metrics"]["ci95"][RANK_BY]),
+            _percent(stats["availability"]), _percent(stats["failure_rate"]),
+            _fmt(stats["median_cm"]), _fmt(stats["p75_cm"]), _fmt(stats["p95_cm"], 1),
+            _fmt(stats["mean_cm"]), *_track_cells(entry["metrics"]["tracking"])[:tracks],
             _fmt(runtime["median"], 1), _fmt(runtime["ratio_to_ransac"]),
             f"{entry['split']} ({'quick' if entry['quick'] else 'full'})",
             entry["azgym_version"]]
@@ -172,13 +183,14 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
     if unavailable and not skip_unavailable:
         raise unavailable[0]
     lines = ["# azgym leaderboard", "",
-             f"Ranked by the 75th percentile of the position error (EvAAL's headline). Generated "
+             f"Ranked by the 75th percentile of the position error over every frame, a frame "
+             f"without an answer counting as infinitely wrong (EvAAL's rule). Generated "
              f"by `azgym leaderboard build` from {len(loaded)} entries in `entries/`; every "
              "entry's figures are recomputed from its per-frame results when it is read, and "
              "its frames are checked to be the suite's (or the log's). Runs of the dev split at "
              "full size are the ranking; quick runs and the test split have tables of their "
              "own; each dataset (a log) has one table.", "",
-             TRACKS_NOTE, ""]
+             f"Columns: {BOARD_LEGEND}", "", TRACKS_NOTE, ""]
     sections: list[Section] = []
     for suite in SUITES:
         tables = [(split, quick, title, _ranked(loaded, suite, split, quick))
@@ -278,7 +290,7 @@ document.querySelectorAll("table.board th").forEach(function (th) {
     var rows = Array.prototype.slice.call(body.rows);
     rows.sort(function (a, b) {
       var x = a.cells[column].textContent, y = b.cells[column].textContent;
-      var nx = parseFloat(x), ny = parseFloat(y);
+      var nx = x === "∞" ? Infinity : parseFloat(x), ny = y === "∞" ? Infinity : parseFloat(y);
       var order = (isNaN(nx) || isNaN(ny)) ? x.localeCompare(y) : nx - ny;
       return ascending ? order : -order;
     });
@@ -351,7 +363,9 @@ def _html(sections: list[Section], count: int) -> str:
              "th{cursor:pointer;background:#eee}th[data-order=ascending]::after{content:' ▲'}",
              "th[data-order=descending]::after{content:' ▼'}</style></head><body>",
              "<h1>azgym leaderboard</h1>",
-             f"<p>{count} entries, ranked by p75 position error. Click a column to sort.</p>",
+             f"<p>{count} entries, ranked by the p75 position error over every frame, a frame "
+             "without an answer counting as infinitely wrong. Click a column to sort.</p>",
+             f"<p>Columns: {html.escape(BOARD_LEGEND)}</p>",
              f"<p>{html.escape(TRACKS_NOTE.replace('*', ''))}</p>"]
     previous = None
     for suite, description, title, table_id, header, rows, links, cdf in sections:

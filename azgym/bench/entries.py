@@ -44,9 +44,10 @@ from azgym.bench.plugin_files import is_portable, plugin_path
 from azgym.bench.results import cases_digest, contender_metrics
 from azgym.bench.suites import SUITES, Case
 
-ENTRY_FORMAT = 3
+ENTRY_FORMAT = 4
 """The entry format this azgym writes and reads (``format`` in ``entry.schema.json``); 3 added
-the track figures (``metrics/tracking``)."""
+the track figures (``metrics/tracking``), 4 the headline that charges every refusal
+(``p75_all_cm``) and intervals from a block bootstrap on routes."""
 CLOCK_SLACK = timedelta(minutes=10)
 """A timestamp may be this far ahead of the checking machine's clock."""
 _VERSION = re.compile(r"^(\d+(?:\.\d+)*)(?:(?:a|b|rc)\d+)?(?:\.post\d+)?(?:\.dev\d+)?"

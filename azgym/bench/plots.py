@@ -74,7 +74,7 @@ def _error_cdfs(plt: Any, summary: dict[str, Any], outcomes: dict[str, Outcome],
 
 
 def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
-    """Bars of each localizer's p75 position error per fault cause, for the causes that occur."""
+    """Bars of each localizer's p75 error of answered frames per fault cause that occurs."""
     labels = list(summary["localizers"])
     causes = [c for c in CAUSES if any(c in summary["localizers"][lab]["by_cause"]
                                        for lab in labels)]
@@ -86,7 +86,7 @@ def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
         axes.bar(np.arange(len(causes)) + k * width, values, width, label=label)
     axes.set_xticks(np.arange(len(causes)) + 0.4 - width / 2, causes)
     axes.set_yscale("log")
-    axes.set_ylabel("p75 position error [cm]")
+    axes.set_ylabel("p75 position error, answered frames [cm]")
     axes.set_title("by the worst fault in the frame")
     axes.legend(fontsize=8)
     return _save(figure, path, plt)

@@ -23,7 +23,7 @@ import numpy as np
 
 from azgym._version import __version__
 from azgym.bench.contenders import Contender
-from azgym.bench.metrics import confidence_intervals
+from azgym.bench.metrics import bootstrap_blocks, confidence_intervals
 from azgym.bench.outcome import Outcome
 from azgym.bench.plugin_files import plugin_record
 from azgym.bench.suites import CAUSES, Case, Suite
@@ -71,6 +71,9 @@ def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: flo
                       ) -> dict[str, Any]:
     """One contender's figures: overall, 95 % intervals, by cause, by group, runtimes, tracks.
 
+    The intervals resample a route's frames in blocks of a few seconds, frames on their own
+    one by one (:func:`~azgym.bench.metrics.bootstrap_blocks`).
+
     The one rule for them: the runner's summary and a leaderboard entry's check (which
     recomputes them from the entry's per-frame results and the suite's cases, drawn again) both
     call this. ``tracking`` is :func:`~azgym.bench.tracking.tracking_metrics` (None for cases
@@ -88,7 +91,8 @@ def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: flo
     median_us = float(np.median(timed)) if timed.size else math.nan
     return {
         "all": outcome.stats(),
-        "ci95": confidence_intervals(outcome.position, outcome.ok),
+        "ci95": confidence_intervals(outcome.position, outcome.ok, bootstrap_blocks(
+            [case.sequence for case in cases], [case.time for case in cases])),
         "by_cause": {c: outcome.select(cause_of == c).stats() for c in CAUSES
                      if (cause_of == c).any()},
         "by_group": {g: outcome.select(group_of == g).stats() for g in dict.fromkeys(groups)},

@@ -16,14 +16,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from azgym.bench.metrics import HEADLINE
 from azgym.bench.runner import Progress, run_benchmark
 from azgym.bench.sweep_config import SweepConfig
 from azgym.files import prepare_folder, write_file
 
-FIGURES = ("n", "availability", "failure_rate", "median_cm", "p75_cm", "p95_cm", "mean_cm",
-           "rmse_cm")
-"""The accuracy figures of each row, from each run's overall figures (the table then adds the
-p75's 95 % interval, ``p75_cm_lo`` and ``p75_cm_hi``)."""
+FIGURES = ("n", HEADLINE, "availability", "failure_rate", "median_cm", "p75_cm", "p95_cm",
+           "mean_cm", "rmse_cm")
+"""The accuracy figures of each row, from each run's overall figures: the headline (every frame,
+a refusal infinite), then the answered frames' figures. The table then adds the headline's 95 %
+interval (:data:`INTERVAL`)."""
+INTERVAL = (f"{HEADLINE}_lo", f"{HEADLINE}_hi")
+"""The columns of the headline's 95 % interval."""
 
 
 @dataclass
@@ -79,7 +83,7 @@ def run_sweep(config: SweepConfig, *, backend: str = "local", address: str | Non
         address = None  # the session joins it; each run then uses the session
     say = progress or (lambda _line: None)
     hyper = list(dict.fromkeys(key for p in config.points for key in p.varied))
-    columns = ["suite", "seed", "localizer", *hyper, "label", *FIGURES, "p75_cm_lo", "p75_cm_hi"]
+    columns = ["suite", "seed", "localizer", *hyper, "label", *FIGURES, *INTERVAL]
     rows: list[list[Any]] = []
     runtimes: list[list[Any]] = []
     with session as slots:
@@ -91,14 +95,14 @@ def run_sweep(config: SweepConfig, *, backend: str = "local", address: str | Non
                     suite, [p.contender for p in config.points], quick=config.quick,
                     split="dev" if seed == suite.dev_seed else "test", seed=seed,
                     workers=slots, time_limit=config.time_limit, progress=progress,
-                    backend=backend, address=address, maps=config.maps or None)
+                    backend=backend, address=address, maps=config.maps.get(name))
                 figures = result.summary["localizers"]
                 for point in config.points:
                     got = figures[point.contender.label]
                     rows.append([name, seed, point.target,
                                  *(point.varied.get(key, "") for key in hyper),
                                  point.contender.label, *(got["all"][f] for f in FIGURES),
-                                 *got["ci95"]["p75_cm"]])
+                                 *got["ci95"][HEADLINE]])
                     runtimes.append([point.contender.label, name, seed,
                                      got["runtime_us"]["median"],
                                      got["runtime_us"]["ratio_to_ransac"]])

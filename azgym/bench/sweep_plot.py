@@ -1,8 +1,9 @@
 """A sweep's figure: the headline metric of every grid point, a panel per suite, a dot per seed.
 
-The p75 position error carries its 95 % bootstrap interval from each run, drawn as a bar; the
-other metrics are drawn as dots only. A run without a value (every frame failed: no position
-error to take a percentile of) is left out, and the panel says how many were; the error axis is
+The headline (the p75 position error over every frame, a refusal infinite) carries its 95 %
+bootstrap interval from each run, drawn as a bar (an unbounded side is not drawn); the other
+metrics are drawn as dots only. A run without a finite value (every frame failed, or an infinite
+headline) is left out, and the panel says how many were; the error axis is
 logarithmic only when the panel has a positive value to show.
 """
 
@@ -12,14 +13,18 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from azgym.bench.metrics import HEADLINE
 from azgym.bench.plots import _save
+from azgym.bench.sweep import INTERVAL
 
 if TYPE_CHECKING:
     from azgym.bench.sweep import SweepResult
     from azgym.bench.sweep_config import GridPoint, SweepConfig
 
-LABELS = {"p75_cm": "p75 position error [cm]", "median_cm": "median position error [cm]",
-          "mean_cm": "mean position error [cm]", "p95_cm": "p95 position error [cm]",
+LABELS = {HEADLINE: "p75 position error, every frame [cm]",
+          "p75_cm": "p75 position error, answered frames [cm]",
+          "median_cm": "median position error [cm]", "mean_cm": "mean position error [cm]",
+          "p95_cm": "p95 position error [cm]",
           "rmse_cm": "RMS position error [cm]", "availability": "availability",
           "failure_rate": "failure rate"}
 
@@ -54,9 +59,9 @@ def write_sweep_figure(result: SweepResult, path: Path) -> Path:
             x = [labels.index(r[at["label"]]) + 0.1 * (j - (len(seeds) - 1) / 2) for r in rows]
             y = [r[at[config.metric]] for r in rows]
             shown += y
-            if config.metric == "p75_cm":
-                low = [_bar(v - r[at["p75_cm_lo"]]) for v, r in zip(y, rows, strict=True)]
-                high = [_bar(r[at["p75_cm_hi"]] - v) for v, r in zip(y, rows, strict=True)]
+            if config.metric == HEADLINE:
+                low = [_bar(v - r[at[INTERVAL[0]]]) for v, r in zip(y, rows, strict=True)]
+                high = [_bar(r[at[INTERVAL[1]]] - v) for v, r in zip(y, rows, strict=True)]
                 axes.errorbar(x, y, yerr=[low, high], fmt="o", capsize=3, label=f"seed {seed}")
             else:
                 axes.plot(x, y, "o", label=f"seed {seed}")
@@ -88,7 +93,7 @@ def _finite(value: Any) -> bool:
 
 
 def _bar(length: float) -> float:
-    """One side of an interval's bar: 0 where the interval is unknown (NaN)."""
+    """One side of an interval's bar: 0 where the interval is unknown or unbounded."""
     return length if math.isfinite(length) else 0.0
 
 

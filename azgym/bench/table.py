@@ -3,46 +3,86 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+import textwrap
+from collections.abc import Mapping, Sequence
 from typing import Any
 
-RANK_BY = "p75_cm"
-"""Boards rank by the 75th percentile of the position error, the EvAAL competitions' headline."""
+from azgym.bench.metrics import BLOCK_SECONDS, FAILURE_DISTANCE, HEADLINE
+
+RANK_BY = HEADLINE
+"""Boards rank by the p75 position error over every frame, a refusal infinite (EvAAL's rule)."""
+LEGEND = (
+    f"p75: the 75th percentile of the position error over every frame, a frame without an "
+    f"answer counting as infinitely wrong (inf: more than a quarter unanswered); ranked by it, "
+    f"then by fail, then by the answered p75. 95% CI: a bootstrap of p75, resampling a route's "
+    f"frames in {BLOCK_SECONDS:g} s blocks and other frames one by one. avail: frames answered. "
+    f"fail: frames with no answer or one more than {FAILURE_DISTANCE:g} m off. answered "
+    f"median, p75, p95, mean: over the answered frames only. µs: median time of a frame's "
+    f"call; ×ransac: that over ransac's median in the same run.")
+"""What each column of a ranked table is: printed under it and shown on the board."""
 
 
-def rank_key(stats: Mapping[str, Any], name: str) -> tuple[float, float, str]:
-    """Sort key of a contender: p75 error (missing last), then availability (higher first), name.
+def rank_key(stats: Mapping[str, Any], name: str) -> tuple[float, float, float, float, str]:
+    """Sort key of a contender: the headline, then failures, answered p75, availability, name.
+
+    The headline (:data:`~azgym.bench.metrics.HEADLINE`) charges every refusal, so a contender
+    that refuses the frames it would get wrong ranks below one that answers them. Contenders
+    whose headline is infinite (more than a quarter unanswered) are ordered by their failure
+    rate (lower first), then by the p75 of their answered frames. A missing figure (NaN or None,
+    as JSON keeps an infinite one) ranks last.
 
     Args:
         stats: Its overall statistics (``summarize_errors``; NaN or None where missing).
         name: Its name, the last tie-break, so that the order never depends on input order.
     """
-    p75 = stats.get(RANK_BY)
     availability = stats.get("availability")
-    return (math.inf if p75 is None or math.isnan(p75) else p75,
-            -(availability or 0.0), name)
+    return (_or_inf(stats.get(RANK_BY)), _or_inf(stats.get("failure_rate")),
+            _or_inf(stats.get("p75_cm")), -(availability or 0.0), name)
+
+
+def _or_inf(value: float | None) -> float:
+    """A figure to sort on: a missing one (None, NaN) last."""
+    return math.inf if value is None or math.isnan(value) else value
+
+
+def cell(value: float | None, digits: int = 2) -> str:
+    """A figure as a table shows it: ``inf`` for an infinite one, ``-`` for a missing one."""
+    if value is None or math.isnan(value):
+        return "-"
+    return "inf" if math.isinf(value) else f"{value:.{digits}f}"
+
+
+def interval_cell(bounds: Sequence[float | None] | None, digits: int = 2) -> str:
+    """A 95 % interval as ``low-high``; ``-`` without one."""
+    if not bounds or any(b is None or math.isnan(b) for b in bounds):
+        return "-"
+    return f"{cell(bounds[0], digits)}-{cell(bounds[1], digits)}"
 
 
 def ranked_table(summary: dict[str, Any]) -> str:
-    """The contenders of a run, ranked (:func:`rank_key`), as a text table."""
+    """The contenders of a run, ranked (:func:`rank_key`), as a text table with its legend."""
     rows = sorted(summary["localizers"].items(), key=lambda item: rank_key(item[1]["all"],
                                                                            item[0]))
     width = max([len("localizer"), *(len(label) for label, _row in rows)])
     lines = [f"{summary['suite']} v{summary['suite_version']} ({summary['split']}, seed "
              f"{summary['seed']}{', quick' if summary['quick'] else ''}): "
              f"{summary['n_frames']} frames; errors in cm",
-             f"{'#':>2} {'localizer':<{width}} {'avail':>6} {'mean':>8} {'median':>8} {'p75':>8} "
-             f"{'p75 95% CI':>15} {'p95':>8} {'fail':>6} {'µs':>9} {'×ransac':>8}"]
+             f"{'':>2} {'':<{width}} {'':>8} {'':>17} {'':>6} {'':>6} "
+             f"{'answered frames':-^35}",
+             f"{'#':>2} {'localizer':<{width}} {'p75':>8} {'p75 95% CI':>17} {'avail':>6} "
+             f"{'fail':>6} {'median':>8} {'p75':>8} {'p95':>8} {'mean':>8} {'µs':>9} "
+             f"{'×ransac':>8}"]
     for rank, (label, row) in enumerate(rows, 1):
         a, t = row["all"], row["runtime_us"]
-        low, high = row["ci95"].get("p75_cm", [math.nan, math.nan])
-        lines.append(f"{rank:>2} {label:<{width}} {100 * a['availability']:5.1f}% "
-                     f"{a['mean_cm']:8.2f} {a['median_cm']:8.2f} {a['p75_cm']:8.2f} "
-                     f"{f'{low:.2f}-{high:.2f}':>15} "
-                     f"{a['p95_cm']:8.1f} {100 * a['failure_rate']:5.1f}% {t['median']:9.1f} "
-                     f"{t['ratio_to_ransac']:8.2f}")
+        lines.append(f"{rank:>2} {label:<{width}} {cell(a[RANK_BY]):>8} "
+                     f"{interval_cell(row['ci95'].get(RANK_BY)):>17} "
+                     f"{100 * a['availability']:5.1f}% {100 * a['failure_rate']:5.1f}% "
+                     f"{cell(a['median_cm']):>8} {cell(a['p75_cm']):>8} "
+                     f"{cell(a['p95_cm'], 1):>8} {cell(a['mean_cm']):>8} "
+                     f"{cell(t['median'], 1):>9} {cell(t['ratio_to_ransac']):>8}")
         if row["crashes"]:
             lines.append(f"   ! {row['crashes']} frames raised: {row['first_error']}")
+    lines += textwrap.wrap(LEGEND, 100)
     return "\n".join(lines)
 
 

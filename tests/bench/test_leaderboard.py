@@ -110,7 +110,7 @@ def rewrite(path, change):
         (lambda e: e.update(results_sha256="0" * 64), "results_sha256: the per-frame results"),
         (lambda e: e.update(name="bad name!"), "name: 'bad name!' does not match"),
         (lambda e: e.update(format=2), "format: the entry is in format 2, this azgym reads "
-                                       "format 3; make it again"),
+                                       "format 4; make it again"),
         (lambda e: e["metrics"].pop("tracking"), "metrics: 'tracking' is a required property"),
     ],
 )

@@ -64,7 +64,7 @@ def test_a_run_on_a_log_makes_a_sound_entry_that_verify_reproduces(board):
     log = read_log(board.parent.parent / "datasets" / "mini")
     assert (entry["suite"], entry["split"], entry["seed"], entry["quick"]) == \
         ("data:mini", "data", 0, False)
-    assert entry["format"] == L.ENTRY_FORMAT == 3
+    assert entry["format"] == L.ENTRY_FORMAT == 4
     assert entry["dataset"] == {"name": "mini", "sha256": log.sha256, "format": 1,
                                 "simulated": True}
     assert entry["n_frames"] == 3

@@ -7,7 +7,13 @@ import math
 import numpy as np
 import pytest
 
-from azgym.bench.metrics import FAILURE_DISTANCE, summarize_errors
+from azgym.bench.metrics import (
+    FAILURE_DISTANCE,
+    bootstrap_blocks,
+    confidence_intervals,
+    quantile,
+    summarize_errors,
+)
 
 
 def test_hand_worked_statistics():
@@ -77,3 +83,118 @@ def test_same_keys_whether_or_not_estimates_exist():
     some = summarize_errors([0.01], [0.0], [True])
     none = summarize_errors([0.01], [0.0], [False])
     assert set(some) == set(none)
+
+
+# The headline: p75 over every frame, a refusal infinite (EvAAL's rule).
+
+def test_headline_hand_worked():
+    # Errors 1, 2, 3 cm and one refusal: sorted 1, 2, 3, inf; position 0.75·3 = 2.25 lies
+    # between 3 and inf, so the headline is infinite; at 0.5 it is (2 + 3) / 2.
+    stats = summarize_errors([0.01, 0.02, 0.03, 0.0], [0.0] * 4, [True, True, True, False])
+    assert stats["p75_all_cm"] == math.inf
+    assert stats["p75_cm"] == pytest.approx(2.5)  # answered frames only: 2 + 0.5
+    assert quantile([1.0, 2.0, 3.0, math.inf], 0.5) == pytest.approx(2.5)
+    # Eight frames, one refused: position 0.75·7 = 5.25 between the 6th and 7th answered errors.
+    stats = summarize_errors(np.arange(1, 9) / 100, [0.0] * 8, [True] * 7 + [False])
+    assert stats["p75_all_cm"] == pytest.approx(6.25)
+    assert stats["p75_cm"] == pytest.approx(5.5)  # 7 answered: position 4.5 → 5 + 0.5
+
+
+def test_headline_exactly_on_the_first_refusal_is_infinite_and_before_it_finite():
+    # Five frames, position 0.75·4 = 3 exactly: the 4th value.
+    assert quantile([1.0, 2.0, 3.0, 4.0, math.inf], 0.75) == 4.0
+    assert quantile([1.0, 2.0, 3.0, math.inf, math.inf], 0.75) == math.inf
+
+
+def test_headline_equals_the_p75_when_every_frame_is_answered():
+    rng = np.random.default_rng(3)
+    errors = rng.exponential(0.05, 101)
+    stats = summarize_errors(errors, np.zeros(101), np.ones(101, dtype=bool))
+    assert stats["p75_all_cm"] == pytest.approx(stats["p75_cm"], abs=1e-12)
+    assert quantile(errors, 0.3) == pytest.approx(np.percentile(errors, 30), abs=1e-15)
+
+
+def test_refusing_the_hard_frames_does_not_improve_the_headline():
+    # A picky contender answers only its best 30 % of frames: its answered p75 looks great,
+    # its headline is infinite; the one that answers everything keeps a finite headline.
+    rng = np.random.default_rng(0)
+    errors = rng.exponential(0.05, 200)
+    picky = errors < np.quantile(errors, 0.3)
+    honest = summarize_errors(errors, np.zeros(200), np.ones(200, dtype=bool))
+    refusing = summarize_errors(errors, np.zeros(200), picky)
+    assert refusing["p75_cm"] < honest["p75_cm"]
+    assert refusing["p75_all_cm"] == math.inf > honest["p75_all_cm"]
+
+
+def test_no_runs_no_headline_and_no_answers_infinite():
+    assert math.isnan(summarize_errors([], [], [])["p75_all_cm"])
+    assert summarize_errors([0.0], [0.0], [False])["p75_all_cm"] == math.inf
+
+
+# Bootstrap blocks and intervals.
+
+def test_blocks_cut_each_sequence_by_time_and_leave_lone_frames_alone():
+    sequences = ["a"] * 4 + ["", ""] + ["b"] * 3
+    times = [0.0, 4.9, 5.0, 12.0, math.nan, math.nan, 100.0, 103.0, 106.0]
+    blocks = bootstrap_blocks(sequences, times, block_seconds=5.0)
+    # a: [0, 5) → 0, [5, 10) → 1, [10, 15) → 2; lone frames 3 and 4; b from its own start.
+    assert blocks.tolist() == [0, 0, 1, 2, 3, 4, 5, 5, 6]
+
+
+def test_block_bootstrap_is_wider_than_the_frame_bootstrap_on_correlated_errors():
+    # A route whose error wanders slowly (an AR(1) process with a 3 s time constant at 10 Hz):
+    # frames are far from independent, so resampling them one by one is overconfident.
+    rng = np.random.default_rng(1)
+    count, errors = 3000, np.empty(3000)
+    level = 0.0
+    for k in range(count):
+        level = 0.967 * level + rng.normal(0.0, 1.0)
+        errors[k] = abs(level) / 100
+    ok = np.ones(count, dtype=bool)
+    times = np.arange(count) * 0.1
+    frames = confidence_intervals(errors, ok, bootstrap_blocks([""] * count, times))
+    blocks = confidence_intervals(errors, ok, bootstrap_blocks(["r"] * count, times))
+
+    def width(interval):
+        return interval[1] - interval[0]
+
+    assert width(blocks["p75_all_cm"]) > 2 * width(frames["p75_all_cm"])
+    estimate = summarize_errors(errors, np.zeros(count), ok)["p75_all_cm"]
+    for interval in (frames, blocks):
+        assert interval["p75_all_cm"][0] <= estimate <= interval["p75_all_cm"][1]
+
+
+def test_intervals_are_seeded_and_an_unbounded_headline_has_an_infinite_bound():
+    rng = np.random.default_rng(2)
+    errors = rng.exponential(0.05, 400)
+    ok = rng.random(400) > 0.26  # about a quarter refused: the headline hovers at infinity
+    blocks = bootstrap_blocks([""] * 400, [math.nan] * 400)
+    first = confidence_intervals(errors, ok, blocks)
+    assert first == confidence_intervals(errors, ok, blocks)
+    assert first["p75_all_cm"][1] == math.inf
+    low, high = first["failure_rate"]
+    assert low < float(np.mean(~ok)) < high
+
+
+def test_fewer_than_two_blocks_give_no_interval():
+    one = confidence_intervals(np.array([0.01, 0.02]), np.array([True, True]),
+                               np.array([0, 0]))
+    assert all(math.isnan(bound) for bounds in one.values() for bound in bounds)
+
+
+def test_a_runs_intervals_resample_its_routes_in_blocks_and_lone_frames_one_by_one():
+    from azgym.bench.outcome import Outcome
+    from azgym.bench.results import contender_metrics
+    from azgym.bench.suites import get_suite
+
+    for name, routes in (("warehouse-routes", True), ("warehouse-static", False)):
+        cases = get_suite(name).build(get_suite(name).dev_seed, True)
+        rng = np.random.default_rng(0)
+        outcome = Outcome.empty(len(cases))
+        outcome.ok[:] = rng.random(len(cases)) > 0.1
+        outcome.position[:] = rng.exponential(0.05, len(cases))
+        blocks = bootstrap_blocks([case.sequence for case in cases],
+                                  [case.time for case in cases])
+        assert (blocks.max() + 1 < len(cases)) == routes  # routes: fewer blocks than frames
+        figures = contender_metrics(outcome, cases, 10.0)
+        assert figures["ci95"] == confidence_intervals(outcome.position, outcome.ok, blocks)

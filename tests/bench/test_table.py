@@ -4,17 +4,48 @@ from __future__ import annotations
 
 import math
 
-from azgym.bench.table import rank_key
+from azgym.bench.table import LEGEND, cell, interval_cell, rank_key
 
 
-def test_p75_ranks_first_then_availability_then_name():
+def test_headline_ranks_first_then_failures_then_answered_p75_then_availability_then_name():
     rows = {
-        "b": {"p75_cm": 2.0, "availability": 0.9},
-        "a": {"p75_cm": 2.0, "availability": 0.9},
-        "c": {"p75_cm": 2.0, "availability": 1.0},
-        "d": {"p75_cm": 1.0, "availability": 0.5},
-        "nan": {"p75_cm": math.nan, "availability": 0.0},
-        "none": {"p75_cm": None, "availability": None},
+        "b": {"p75_all_cm": 2.0, "failure_rate": 0.1, "p75_cm": 1.5, "availability": 0.9},
+        "a": {"p75_all_cm": 2.0, "failure_rate": 0.1, "p75_cm": 1.5, "availability": 0.9},
+        "c": {"p75_all_cm": 2.0, "failure_rate": 0.1, "p75_cm": 1.5, "availability": 1.0},
+        "d": {"p75_all_cm": 2.0, "failure_rate": 0.1, "p75_cm": 1.0, "availability": 0.5},
+        "e": {"p75_all_cm": 2.0, "failure_rate": 0.05, "p75_cm": 1.9, "availability": 0.95},
+        "f": {"p75_all_cm": 1.0, "failure_rate": 0.2, "p75_cm": 1.0, "availability": 0.8},
+        # Infinite headlines (JSON keeps them as None): by failures, then the answered p75.
+        "inf-few-failures": {"p75_all_cm": math.inf, "failure_rate": 0.3, "p75_cm": 9.0,
+                             "availability": 0.7},
+        "inf-json": {"p75_all_cm": None, "failure_rate": 0.5, "p75_cm": 1.0,
+                     "availability": 0.5},
+        "inf-many-failures": {"p75_all_cm": math.inf, "failure_rate": 0.5, "p75_cm": 2.0,
+                              "availability": 0.5},
+        "nothing": {"p75_all_cm": math.nan, "failure_rate": math.nan, "p75_cm": math.nan,
+                    "availability": math.nan},
     }
     order = sorted(rows, key=lambda name: rank_key(rows[name], name))
-    assert order == ["d", "c", "a", "b", "nan", "none"]
+    assert order == ["f", "e", "d", "c", "a", "b", "inf-few-failures", "inf-json",
+                     "inf-many-failures", "nothing"]
+
+
+def test_a_picky_contender_ranks_below_one_that_answers_every_frame():
+    # The attack: answer only the easy fifth of the frames, with a tiny answered p75.
+    picky = {"p75_all_cm": math.inf, "failure_rate": 0.8, "p75_cm": 1.0, "availability": 0.2}
+    honest = {"p75_all_cm": 6.7, "failure_rate": 0.11, "p75_cm": 6.0, "availability": 0.94}
+    assert rank_key(honest, "z") < rank_key(picky, "a")
+
+
+def test_cells_show_infinite_and_missing_figures():
+    assert cell(math.inf) == "inf" and cell(None) == "-" and cell(math.nan) == "-"
+    assert cell(3.14159) == "3.14" and cell(3.14159, 1) == "3.1"
+    assert interval_cell([1.0, math.inf]) == "1.00-inf"
+    assert interval_cell([math.nan, math.nan]) == "-" and interval_cell(None) == "-"
+
+
+def test_the_legend_says_what_each_column_is():
+    for words in ("every frame", "infinitely wrong", "ranked by it", "then by fail",
+                  "blocks", "avail", "no answer or one more than 1 m off",
+                  "over the answered frames only", "median time", "ransac's median"):
+        assert words in LEGEND, words

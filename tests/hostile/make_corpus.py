@@ -96,7 +96,7 @@ ATTACKS: dict[str, Attack] = {
     "relabelled-cause": lambda e, r: reseal(e, set_cell(r, 3, 4, "outlier" if r[3][4] != "outlier"
                                                         else "clean"), figures=True),
     "two-localizers": lambda e, r: reseal(e, set_cell(r, 1, 0, "ransac")),
-    "edited-ci95": lambda e, r: e["metrics"]["ci95"]["p75_cm"].__setitem__(0, 0.01),
+    "edited-ci95": lambda e, r: e["metrics"]["ci95"]["p75_all_cm"].__setitem__(0, 0.01),
     "edited-runtime": lambda e, r: e["metrics"]["runtime_us"].update(median=0.5),
     "edited-ratio": lambda e, r: e["metrics"]["runtime_us"].update(ratio_to_ransac=0.01),
     "edited-by-cause": lambda e, r: next(iter(e["metrics"]["by_cause"].values())).update(

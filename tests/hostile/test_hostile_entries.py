@@ -23,7 +23,7 @@ SOUND = {"sound", "sound-track"}
 
 EXPECTED = {
     # Figures: every one is recomputed from the per-frame results.
-    "edited-ci95": "metrics/ci95/p75_cm/0: the entry says 0.01, its per-frame results give",
+    "edited-ci95": "metrics/ci95/p75_all_cm/0: the entry says 0.01, its per-frame results give",
     "edited-runtime": "metrics/runtime_us/median: the entry says 0.5, its per-frame results give",
     "edited-ratio": "metrics/runtime_us/ratio_to_ransac: the entry says 0.01",
     "edited-by-cause": "metrics/by_cause/clean/p75_cm: the entry says 0.0",
@@ -68,7 +68,7 @@ EXPECTED = {
     "future-date": "timestamp: 2999-01-01T00:00:00+00:00 is in the future",
     "other-suite-version": "suite_version: stress is at version 1, the entry was scored on "
                            "version 99; rerun it",
-    "old-format": "format: the entry is in format 2, this azgym reads format 3; make it again",
+    "old-format": "format: the entry is in format 2, this azgym reads format 4; make it again",
     # Identity: an entry is its file, and its results are its own.
     "impostor": "name: 'sound', but the file is impostor.json",
     "borrowed-results": "results_file: must be borrowed-results.frames.csv.gz, got "
