@@ -8,6 +8,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.utils import seeding
 
 from azgym.arguments import positive_number, whole_number
 from azgym.core import estimated_pose, pose_error, wrap_scalar
@@ -15,10 +16,11 @@ from azgym.envs.common import check_camera_rate, check_render_mode, reward_weigh
 from azgym.localize.registry import SupportsLocalize
 from azgym.nav.controls import DISCRETE_CONTROLS, controls
 from azgym.nav.estimator import TrackerFeed, is_tracker, resolve_estimator
+from azgym.nav.geodesic import shortest_paths_for
 from azgym.nav.guidance import SUPPORT_SCALE, Guidance
 from azgym.nav.planner import planner_for
 from azgym.nav.pose_keeper import PoseKeeper
-from azgym.nav.spots import HEADING_SPREAD, MIN_GOAL_DISTANCE, aisle_headings, spots_of
+from azgym.nav.spots import HEADING_SPREAD, aisle_headings, draw_route, spots_of
 from azgym.sensing.catalog import make_sensor
 from azgym.sensing.protocol import Observation
 from azgym.site import Scenario, load_scenario
@@ -110,8 +112,10 @@ class NavigateEnv(gym.Env):
     ## Episode End
 
     Terminated when the true position is within ``goal_radius`` of the goal; truncated after
-    ``max_steps`` steps. ``info`` carries what navigation is scored on: ``path_length`` (the
-    planned path's length from the start, SPL's shortest path), ``travelled`` (the true path so
+    ``max_steps`` steps. ``info`` carries what navigation is scored on: ``shortest_path`` (SPL's
+    l: the geodesic shortest path of the body's centre from the start to within ``goal_radius``
+    of the goal, a lower bound of any drive, :mod:`azgym.nav.geodesic`; ``shortest_path(seed)``
+    gives an episode's without resetting), ``travelled`` (the true path of the body's centre so
     far), ``contacts``, ``position_error`` (of this step's answer, None without one; gated or
     not), ``answered``, ``localized`` (answered and through the jump gate) and ``rejected``
     (answers the jump gate has refused so far, :mod:`azgym.nav.pose_keeper`).
@@ -141,7 +145,10 @@ class NavigateEnv(gym.Env):
       the navigator dead-reckons between poses and gates jumps, progress is measured along the
       planned path, the forklift starts along an aisle (its heading was uniform),
       and the discrete actions are 15 (were 5: coast, forward, back, forward-left,
-      forward-right). Localize ids stay at v1.
+      forward-right). Localize ids stay at v1. Revised for SPL against the geodesic:
+      ``info["shortest_path"]`` (the geodesic shortest path) replaces ``info["path_length"]``
+      (the planned path, which a driver could beat by cutting corners); the episodes are the
+      same.
 
     ## Example
 
@@ -196,6 +203,7 @@ class NavigateEnv(gym.Env):
         self.last_observation: Observation | None = None
         self._frames = 0
         self.planner = planner_for(self.scenario, self.spots)
+        self.shortest_paths = shortest_paths_for(self.scenario, self.spots, self.goal_radius)
         self._guidance = Guidance(self.planner, occluder_table(self.scenario.racks,
                                                                self.scenario.walls),
                                   self.n_rays, self.ray_range)
@@ -211,10 +219,7 @@ class NavigateEnv(gym.Env):
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
         """Place the forklift at a spot facing a random way, and pick a goal spot."""
         super().reset(seed=seed)
-        while True:
-            start, goal = self.np_random.choice(len(self.spots), size=2, replace=False)
-            if np.hypot(*(self.spots[goal] - self.spots[start])) >= MIN_GOAL_DISTANCE:
-                break
+        start, goal = draw_route(self.np_random, self.spots)
         headings = self._headings[start]
         heading = wrap_scalar(float(headings[self.np_random.integers(len(headings))]
                                     + self.np_random.uniform(-HEADING_SPREAD, HEADING_SPREAD)))
@@ -222,12 +227,12 @@ class NavigateEnv(gym.Env):
         self._sway.reset()
         self.camera.reset(self.np_random)
         self.last_observation = None
-        self._goal_index = int(goal)
+        self._goal_index = goal
         self._goal = self.spots[goal].astype(np.float64)
         self._steps = 0
         self._potential = self._cost_to_go()
         self._guidance.start(self._goal_index, *self.spots[start])
-        self._path_length = float(self._guidance.path_length)
+        self._shortest_path = float(self.shortest_paths[start, goal])
         self._travelled = 0.0
         self._pose.reset()
         self._localized = False
@@ -350,8 +355,16 @@ class NavigateEnv(gym.Env):
                 "rejected": self._pose.rejected, "position_error": error,
                 "goal": tuple(self._goal), "distance": math.hypot(self._goal[0] - x,
                                                                   self._goal[1] - y),
-                "path_length": self._path_length, "travelled": self._travelled,
+                "shortest_path": self._shortest_path, "travelled": self._travelled,
                 "contacts": len(self._world.contacts)}
+
+    def shortest_path(self, seed: int) -> float:
+        """``info["shortest_path"]`` of the episode ``reset(seed=seed)`` starts, without resetting.
+
+        The start and goal are the first draws of the generator that ``reset`` seeds.
+        """
+        start, goal = draw_route(seeding.np_random(seed)[0], self.spots)
+        return float(self.shortest_paths[start, goal])
 
     def true_pose(self) -> tuple[float, float, float]:
         """The camera's true pose."""

@@ -36,8 +36,9 @@ from azgym.bench.entries import clean
 from azgym.errors import InvalidInputError
 from azgym.nav.suites import NavigationSuite, get_navigation_suite
 
-RESULTS_FORMAT = 1
-"""The layout of ``navigation.json`` (``format``)."""
+RESULTS_FORMAT = 2
+"""The layout of ``navigation.json`` (``format``). 2: an episode's ``shortest_path_m`` (the
+geodesic shortest path, SPL's l) replaces ``path_length_m`` (the planner's path)."""
 KIND = "navigation"
 """``kind`` of a navigation results file, which tells it from a frame suite's."""
 
@@ -156,7 +157,7 @@ def episode_rows(records: list[dict[str, Any]], seed: int) -> list[dict[str, Any
         figures = summarize([record])
         rows.append({"seed": seed + k, "success": record["success"], "spl": record["spl"],
                      "collisions": record["collisions"], "time_s": record["time"],
-                     "path_length_m": record["path_length"],
+                     "shortest_path_m": record["shortest_path"],
                      "travelled_m": record["travelled"], "steps": int(errors.size),
                      "answered_steps": int(round(figures["answered"] * errors.size)),
                      "error_median_cm": figures["error_median_cm"],

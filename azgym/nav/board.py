@@ -2,8 +2,9 @@
 
 The board's navigation tables come from ``navigation.json`` files written by ``azgym bench`` on
 a navigation suite (:mod:`azgym.nav.benchmark`), kept in ``leaderboard/navigation/``. Each file
-is checked when read (:mod:`azgym.nav.results_file`); :func:`verify_navigation` reruns its
-episodes and compares every figure, the pooled error quantiles included.
+is checked when read (:mod:`azgym.nav.results_file`), and the board has one table per suite,
+split and seed; :func:`verify_navigation` reruns a file's episodes and compares every figure,
+the pooled error quantiles included.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from azgym.bench.entries import clean
+from azgym.bench.entry_files import LeaderboardError
 from azgym.bench.leaderboard import differences
 from azgym.nav.benchmark import drive_all
 from azgym.nav.report import figure
@@ -69,9 +71,20 @@ def navigation_tables(directory: Path) -> list[Table]:
     """The tables of every navigation file in ``directory`` (``*.json``), by suite, then split.
 
     Raises:
-        LeaderboardError: A file is not sound (:func:`load_navigation`).
+        LeaderboardError: A file is not sound (:func:`load_navigation`), or two files are runs
+            of one suite, split and seed (naming both: a board shows one table for them).
     """
-    files = [load_navigation(path) for path in sorted(directory.glob("*.json"))]
+    files, origin = [], {}
+    for path in sorted(directory.glob("*.json")):
+        data = load_navigation(path)
+        run = (data["suite"], data["split"], data["seed"])
+        if run in origin:
+            raise LeaderboardError(
+                f"{origin[run]} and {path} are both runs of the {run[0]} suite's {run[1]} "
+                f"split with seed {run[2]}: a board shows one table per suite, split and "
+                "seed; keep one of them")
+        origin[run] = path
+        files.append(data)
     order = list(NAVIGATION_SUITES)
     files.sort(key=lambda d: (order.index(d["suite"]), d["split"] != "dev", d["quick"],
                               d["seed"]))

@@ -92,11 +92,6 @@ class Guidance:
         self.goal = goal
         self._plan(x, y)
 
-    @property
-    def path_length(self) -> float:
-        """Length of the path being followed [m]."""
-        return float(self._along[-1])
-
     def _plan(self, x: float, y: float) -> None:
         self.path, self._along = self.planner.plan(self.goal, x, y)
         self._segment = 0

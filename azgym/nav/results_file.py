@@ -14,12 +14,19 @@ so :func:`load_navigation` trusts nothing in it:
   localizer runs in the loop that simulates the world, and a policy file is unpickled: neither
   is run from a board's file;
 - each episode obeys the environment's rules: it lasted ``steps`` control periods of 0.1 s
-  (``time_s``), a failed one ran to the step limit, its SPL is l / max(p, l) of its planned
-  path l and driven path p when it succeeded and 0 otherwise, it answered at most every step,
-  and its error quantiles exist exactly when it answered (finite, ≥ 0, p95 ≥ median);
+  (``time_s``), a failed one ran to the step limit, its shortest path l is the geodesic of its
+  seed's start and goal (recomputed, :meth:`~azgym.envs.navigate.NavigateEnv.shortest_path`),
+  its SPL is l / max(p, l) of l and the driven path p when it succeeded and 0 otherwise, it
+  answered at most every step, and its error quantiles exist exactly when it answered (finite,
+  ≥ 0, p95 ≥ median);
+- each episode obeys physics: its driven path p took no less time than the forklift needs at
+  its top speed (:data:`MAX_SPEED`), and a successful one is no shorter than l, which is a
+  lower bound of every drive to the goal;
 - each summary figure the episodes determine (:data:`RECOMPUTED`) is recomputed from them. The
   localization error's quantiles pool every step, which the file does not keep: they are only
   checked for kind and order here, and ``azgym leaderboard verify`` reruns the episodes.
+
+An episode's refusal names the file, the contender and the episode's field.
 """
 
 from __future__ import annotations
@@ -36,7 +43,8 @@ from azgym.errors import AzgymError, InvalidInputError
 from azgym.localize.registry import is_builtin
 from azgym.nav.benchmark import KIND, RESULTS_FORMAT
 from azgym.nav.scoring import wilson_interval
-from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS
+from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite
+from azgym.world.forklift import ForkliftSpec
 
 MAX_CONTENDERS = 64
 """At most this many contenders in a file (the suites' defaults are 20): a rerun of a file
@@ -48,10 +56,12 @@ RECOMPUTED = ("success", "success_interval", "spl", "collisions", "collided", "t
               "answered")
 """The summary figures recomputed from a file's episodes when it is read."""
 SUMMARY_KEYS = {*RECOMPUTED, "error_median_cm", "error_p95_cm"}
-EPISODE_KEYS = {"seed", "success", "spl", "collisions", "time_s", "path_length_m",
+EPISODE_KEYS = {"seed", "success", "spl", "collisions", "time_s", "shortest_path_m",
                 "travelled_m", "steps", "answered_steps", "error_median_cm", "error_p95_cm"}
 PERIOD = CONTROL_STEPS * PHYSICS_DT
 """An episode's step [s]."""
+MAX_SPEED = ForkliftSpec().max_centre_speed
+"""The fastest the body's centre, whose path ``travelled_m`` is, can move [m/s]: 3.97."""
 
 
 def is_navigation_file(path: Path) -> bool:
@@ -83,13 +93,14 @@ def load_navigation(path: Path) -> dict[str, Any]:
         if not isinstance(data[key], str) or len(data[key]) > 64:
             raise LeaderboardError(f"{path}: {key}: must be a text of at most 64 characters")
     _check_suite(data, path)
+    shortest = _shortest_paths(NAVIGATION_SUITES[data["suite"]], data)
     contenders = data["contenders"]
     if not isinstance(contenders, list) or not 0 < len(contenders) <= MAX_CONTENDERS:
         raise LeaderboardError(f"{path}: contenders must be a list of 1 to {MAX_CONTENDERS}")
     seen = set()
     for k, contender in enumerate(contenders):
         where = f"{path}: contenders/{k}"
-        _check_contender(contender, data, where)
+        _check_contender(contender, data, shortest, where)
         pair = (contender["navigator"], contender["localizer"])
         if pair in seen:
             raise LeaderboardError(f"{where}: {pair[0]} + {pair[1]} is in the file twice")
@@ -136,7 +147,20 @@ def _check_suite(data: dict[str, Any], path: Path) -> None:
                                f"{data['episodes']!r}")
 
 
-def _check_contender(contender: Any, data: dict[str, Any], where: str) -> None:
+def _shortest_paths(suite: NavigationSuite, data: dict[str, Any]) -> dict[int, float]:
+    """The geodesic shortest path of each of the file's episodes, by seed [m]."""
+    from azgym.nav.benchmark import make_env
+
+    env = make_env(suite, "truth")
+    try:
+        return {seed: env.unwrapped.shortest_path(seed)
+                for seed in range(data["seed"], data["seed"] + data["episodes"])}
+    finally:
+        env.close()
+
+
+def _check_contender(contender: Any, data: dict[str, Any], shortest: dict[int, float],
+                     where: str) -> None:
     """A built-in pair that drove the file's episodes, its summary matching them."""
     _keys(contender, CONTENDER_KEYS, where)
     navigator, localizer = contender["navigator"], contender["localizer"]
@@ -144,6 +168,7 @@ def _check_contender(contender: Any, data: dict[str, Any], where: str) -> None:
         raise LeaderboardError(f"{where}/navigator: {navigator!r} is not a built-in navigator "
                                f"({', '.join(NAVIGATORS)})")
     _check_localizer(localizer, f"{where}/localizer")
+    where = f"{where} ({navigator} + {localizer})"
     if not _number(contender["runtime_s"], 0.0):
         raise LeaderboardError(f"{where}/runtime_s: must be a number of seconds ≥ 0")
     episodes = contender["episodes"]
@@ -154,7 +179,7 @@ def _check_contender(contender: Any, data: dict[str, Any], where: str) -> None:
                                f"episodes, seeds {data['seed']} to {seeds[-1]} in order")
     summary = contender["summary"]
     _keys(summary, SUMMARY_KEYS, f"{where}/summary")
-    for key, value in recomputed_summary(episodes, where).items():
+    for key, value in recomputed_summary(episodes, shortest, where).items():
         if not _agree(summary[key], value):
             raise LeaderboardError(f"{where}/summary/{key}: the file says "
                                    f"{summary[key]!r}, its episodes give {value!r}")
@@ -175,9 +200,17 @@ def _check_localizer(localizer: Any, where: str) -> None:
         raise LeaderboardError(f"{where}: {localizer!r} does not build: {exc}") from None
 
 
-def recomputed_summary(episodes: list[dict[str, Any]], where: str) -> dict[str, Any]:
-    """The summary figures the episodes determine (:data:`RECOMPUTED`), as the run's rule has it."""
-    rows = [_episode(episode, f"{where}/episodes/{k}") for k, episode in enumerate(episodes)]
+def recomputed_summary(episodes: list[dict[str, Any]], shortest: dict[int, float],
+                       where: str) -> dict[str, Any]:
+    """The summary figures the episodes determine (:data:`RECOMPUTED`), as the run's rule has it.
+
+    Args:
+        episodes: The episodes, in the order of their seeds.
+        shortest: The geodesic shortest path of each episode, by seed [m].
+        where: The file and contender, for messages.
+    """
+    rows = [_episode(episode, shortest[episode["seed"]], f"{where}/episodes/{k}")
+            for k, episode in enumerate(episodes)]
     successes = [row["time_s"] for row in rows if row["success"]]
     steps = sum(row["steps"] for row in rows)
     return clean({
@@ -190,8 +223,11 @@ def recomputed_summary(episodes: list[dict[str, Any]], where: str) -> dict[str, 
         "answered": sum(row["answered_steps"] for row in rows) / steps})
 
 
-def _episode(episode: dict[str, Any], where: str) -> dict[str, Any]:
-    """An episode's figures, each of its kind and range, and by the environment's rules."""
+def _episode(episode: dict[str, Any], shortest: float, where: str) -> dict[str, Any]:
+    """An episode's figures, each of its kind and range, by the environment's rules and physics.
+
+    ``shortest`` is the episode's geodesic shortest path [m].
+    """
     _keys(episode, EPISODE_KEYS, where)
     if not isinstance(episode["success"], bool):
         raise LeaderboardError(f"{where}/success: must be true or false")
@@ -206,15 +242,28 @@ def _episode(episode: dict[str, Any], where: str) -> dict[str, Any]:
         raise LeaderboardError(f"{where}/answered_steps: more than its steps")
     if not _number(episode["time_s"], 0.0) or not close(episode["time_s"], steps * PERIOD):
         raise LeaderboardError(f"{where}/time_s: must be its steps times {PERIOD:g} s")
-    length, travelled = episode["path_length_m"], episode["travelled_m"]
+    length, travelled = episode["shortest_path_m"], episode["travelled_m"]
     if not _number(length, 1e-9) or not _number(travelled, 0.0):
-        raise LeaderboardError(f"{where}: path_length_m must be a number > 0 and travelled_m "
+        raise LeaderboardError(f"{where}: shortest_path_m must be a number > 0 and travelled_m "
                                "a number ≥ 0 [m]")
+    if not close(length, shortest):
+        raise LeaderboardError(f"{where}/shortest_path_m: the geodesic shortest path of seed "
+                               f"{episode['seed']}'s start and goal is {shortest!r} m, the file "
+                               f"says {length!r}")
+    if travelled > MAX_SPEED * episode["time_s"] * (1.0 + 1e-9):
+        raise LeaderboardError(
+            f"{where}/travelled_m: {travelled:g} m in {episode['time_s']:g} s is "
+            f"{travelled / episode['time_s']:.2f} m/s on average, faster than the forklift can "
+            f"move ({MAX_SPEED:.2f} m/s)")
+    if episode["success"] and travelled < length * (1.0 - 1e-9):
+        raise LeaderboardError(
+            f"{where}/travelled_m: {travelled:g} m to the goal is shorter than the geodesic "
+            f"shortest path, {length:g} m, which no drive can beat")
     spl = length / max(length, travelled) if episode["success"] else 0.0
     if not _number(episode["spl"], 0.0) or not close(episode["spl"], spl):
-        raise LeaderboardError(f"{where}/spl: must be {spl!r}: l / max(p, l) of its planned and "
-                               "driven paths when it succeeded, 0 otherwise (a failed episode "
-                               "has SPL 0)")
+        raise LeaderboardError(f"{where}/spl: must be {spl!r}: l / max(p, l) of its shortest "
+                               "and driven paths when it succeeded, 0 otherwise (a failed "
+                               "episode has SPL 0)")
     _check_quantiles(episode, episode["answered_steps"] > 0, where)
     return episode
 

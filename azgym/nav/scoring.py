@@ -2,13 +2,15 @@
 
 A navigator is scored as embodied agents are (Anderson et al. 2018, "On Evaluation of Embodied
 Navigation Agents"): success rate, and SPL, success weighted by path length,
-S · l / max(p, l) for the shortest path's length l (the planner's path from the start) and the
-path p driven. azgym adds what a warehouse cares about: collisions per episode (contacts begun
-with racks and walls) and the share of episodes with any (a forklift pinned against a rack
-begins contact after contact, so the mean alone is ruled by a few such episodes), time to the
-goal (of the successful episodes), and the localization error
-along the way (every step the localizer answered), which ties a localizer to where it gets the
-forklift.
+S · l / max(p, l) for the shortest path's length l and the path p driven. l is the geodesic
+shortest path of the body's centre from the start to the goal region
+(:mod:`azgym.nav.geodesic`), a lower bound of every drive, so p ≥ l and SPL is 1 only for a
+drive along it; p is the true path of the same point. azgym adds what a warehouse cares
+about: collisions per episode (contacts begun with racks and walls) and the share of episodes
+with any (a forklift pinned against a rack begins contact after contact, so the mean alone is
+ruled by a few such episodes), time to the goal (of the successful episodes), and the
+localization error along the way (every step the localizer answered), which ties a localizer
+to where it gets the forklift.
 """
 
 from __future__ import annotations
@@ -39,8 +41,8 @@ def drive(env: gym.Env, policy: Policy, episodes: int, seed: int,
     """Drive ``episodes`` episodes (seeds seed, seed + 1, ...) and score them.
 
     Returns:
-        ``episodes`` (one dict per episode: success, spl, collisions, time, path_length,
-        travelled, answered, errors) and the summary of :func:`summarize`.
+        ``episodes`` (one dict per episode: success, spl, collisions, time, shortest_path,
+        travelled, errors) and the summary of :func:`summarize`.
     """
     inner = env.unwrapped
     if not isinstance(inner, NavigateEnv):
@@ -58,11 +60,11 @@ def drive(env: gym.Env, policy: Policy, episodes: int, seed: int,
             error = info["position_error"]
             errors.append(math.nan if error is None else error)
             done = terminated or truncated
-        length, travelled = info["path_length"], info["travelled"]
+        length, travelled = info["shortest_path"], info["travelled"]
         records.append({
             "success": bool(terminated), "collisions": int(info["contacts"]),
             "spl": float(terminated) * length / max(travelled, length),
-            "time": steps * period, "path_length": length, "travelled": travelled,
+            "time": steps * period, "shortest_path": length, "travelled": travelled,
             "errors": np.array(errors)})
         if progress is not None:
             progress(episode + 1)

@@ -36,6 +36,17 @@ def spots_of(scenario: Scenario) -> FloatArray:
     return spots
 
 
+def draw_route(rng: np.random.Generator, spots: FloatArray) -> tuple[int, int]:
+    """An episode's start and goal: two spots :data:`MIN_GOAL_DISTANCE` apart or more, by index.
+
+    The pair is drawn uniformly, drawing again until it is that far apart.
+    """
+    while True:
+        start, goal = rng.choice(len(spots), size=2, replace=False)
+        if np.hypot(*(spots[goal] - spots[start])) >= MIN_GOAL_DISTANCE:
+            return int(start), int(goal)
+
+
 def aisle_headings(scenario: Scenario, spots: FloatArray) -> list[FloatArray]:
     """For each spot, the directions [rad] of the route legs that meet there, both ways.
 

@@ -30,7 +30,8 @@ class NavigationSuite:
 
     Attributes:
         name: Identifier (``azgym bench --suite NAME``).
-        version: Bumped whenever its episodes or their scoring change.
+        version: Bumped whenever its episodes or their scoring change (2: SPL against the
+            geodesic shortest path, :mod:`azgym.nav.geodesic`).
         description: One line for listings and reports.
         dev_seed: The seed of the ``dev`` split's first episode.
         env_id: The Navigate environment driven.
@@ -59,13 +60,13 @@ class NavigationSuite:
 
 NAVIGATION_SUITES: dict[str, NavigationSuite] = {suite.name: suite for suite in (
     NavigationSuite(
-        "navigation", 1, "closed loop in warehouse-small: a navigator drives spot to spot on "
+        "navigation", 2, "closed loop in warehouse-small: a navigator drives spot to spot on "
         "each localizer's pose; success, SPL, collisions, time to goal, error along the way",
         2300, "azgym/Navigate-WarehouseSmall-v2", 100, 10,
         ("truth", "ransac", "lsq", "mex-coarse", "loo", "ng-ransac", "learned", "tkf", "lpkf",
          "gated-ekf")),
     NavigationSuite(
-        "navigation-image", 1, "the navigation suite through the fisheye image path: blobs "
+        "navigation-image", 2, "the navigation suite through the fisheye image path: blobs "
         "detected from pixels, ids decoded from blinking (30 Hz camera)",
         2400, "azgym/Navigate-WarehouseSmall-v2", 100, 5, ("ransac", "lsq", "gated-ekf"),
         {"sensor": "image", "ids": "blink"}),

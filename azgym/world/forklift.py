@@ -71,6 +71,16 @@ class ForkliftSpec:
                 f"ForkliftSpec.max_steer must be in (0, π/2) rad, got {self.max_steer!r}"
             )
 
+    @property
+    def max_centre_speed(self) -> float:
+        """The fastest the body's centre can move [m/s] (3.97 for the defaults).
+
+        The reference axle moves at most ``max_speed``; the centre, half the wheelbase from it,
+        also swings round it at the yaw rate v tan δ / wheelbase (:meth:`Forklift.command`), so
+        at full lock δ it moves at v · √(1 + tan² δ / 4).
+        """
+        return self.max_speed * math.hypot(1.0, 0.5 * math.tan(self.max_steer))
+
 
 class Forklift:
     """The forklift's body in a pymunk space, with its control body and speed state.

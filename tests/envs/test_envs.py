@@ -160,7 +160,7 @@ def test_the_path_ahead_is_shown_in_the_body_frame_of_the_pose():
         expected = [np.interp(arc, along, path[:, 0]), np.interp(arc, along, path[:, 1])]
         assert point == pytest.approx(expected, abs=1e-4)
     assert observation[fields.index("remaining")] == pytest.approx(
-        info["path_length"] / REMAINING_SCALE, abs=1e-6)
+        along[-1] / REMAINING_SCALE, abs=1e-6)
 
 
 def test_reaching_the_goal_terminates_with_success():

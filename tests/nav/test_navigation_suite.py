@@ -50,9 +50,9 @@ def test_a_quick_run_drives_each_contender_on_the_suites_episodes(run, capsys):
     assert [e["seed"] for e in truth["episodes"]] == list(range(2300, 2310))
     assert truth["summary"]["success"] >= 0.9 and truth["summary"]["error_median_cm"] == 0.0
     assert 0.5 < ransac["summary"]["answered"] < 1.0  # ransac abstains on some frames
-    # both drove the same start and goal spots, so the planned paths are the same length
-    assert [e["path_length_m"] for e in truth["episodes"]] == [
-        e["path_length_m"] for e in ransac["episodes"]]
+    # both drove the same start and goal spots, so their shortest paths are the same
+    assert [e["shortest_path_m"] for e in truth["episodes"]] == [
+        e["shortest_path_m"] for e in ransac["episodes"]]
 
 
 def test_workers_do_not_change_the_figures(run):
@@ -83,9 +83,9 @@ def _set_success(data):
 
 @pytest.mark.parametrize(("edit", "message"), [
     (lambda d: d.update(kind="frames"), "not a navigation results file"),
-    (lambda d: d.update(format=2), "format must be 1"),
+    (lambda d: d.update(format=1), "format must be 2"),
     (lambda d: d.update(suite="stress"), "'stress' is not a navigation suite"),
-    (lambda d: d.update(suite_version=0), "suite_version 0: navigation is at version 1"),
+    (lambda d: d.update(suite_version=1), "suite_version 1: navigation is at version 2"),
     (lambda d: d.update(env_kwargs={"sensor": "image"}), "env and env_kwargs must be the suite"),
     (lambda d: d.update(seed=5), "a dev run uses the suite's seed 2300"),
     (lambda d: d.update(seed=-1), r"seed must be a whole number in \[0, 2\*\*31\), got -1"),
@@ -121,9 +121,20 @@ def _set_success(data):
      "episodes/2/time_s: must be its steps times 0.1 s"),
     (lambda d: d["contenders"][0]["episodes"][2].update(success=False, spl=0.0),
      "episodes/2/steps: an episode lasts 1 to 600 steps, and a failed one all 600"),
-    (lambda d: d["contenders"][0]["episodes"][2].update(spl=1.0), "episodes/2/spl: must be 0.9"),
-    (lambda d: d["contenders"][0]["episodes"][2].update(path_length_m=0),
-     "path_length_m must be a number > 0"),
+    (lambda d: d["contenders"][0]["episodes"][2].update(spl=1.0),
+     r"pure-pursuit \+ truth\)/episodes/2/spl: must be 0\.8822"),
+    (lambda d: d["contenders"][0]["episodes"][2].update(shortest_path_m=0),
+     "shortest_path_m must be a number > 0"),
+    (lambda d: d["contenders"][0]["episodes"][2].update(shortest_path_m=5.0),
+     r"contenders/0 \(pure-pursuit \+ truth\)/episodes/2/shortest_path_m: the geodesic "
+     r"shortest path of seed 2302's start and goal is 25\.8603"),
+    (lambda d: d["contenders"][1]["episodes"][2].update(travelled_m=100.0),
+     r"contenders/1 \(pure-pursuit \+ ransac\)/episodes/2/travelled_m: 100 m in [\d.]+ s is "
+     r"[\d.]+ m/s on average, faster than the forklift can move \(3\.97 m/s\)"),
+    (lambda d: d["contenders"][0]["episodes"][2].update(
+        travelled_m=0.9 * d["contenders"][0]["episodes"][2]["shortest_path_m"], spl=1.0),
+     r"episodes/2/travelled_m: [\d.]+ m to the goal is shorter than the geodesic shortest "
+     r"path, [\d.]+ m, which no drive can beat"),
     (lambda d: d["contenders"][1]["summary"].update(error_median_cm=-5.0),
      "summary: error_median_cm and error_p95_cm must be numbers"),
     (lambda d: d["contenders"][1]["summary"].update(error_median_cm="1"),
@@ -140,8 +151,8 @@ def test_an_edited_file_is_refused_by_name(run, tmp_path, edit, message):
 
 
 def test_a_file_with_nan_is_refused(run, tmp_path):
-    path = tmp_path / "navigation.json"
-    path.write_text(run.read_text().replace('"spl": 1.0', '"spl": NaN', 1))
+    path = _edited(tmp_path, run, lambda d: d["contenders"][0]["episodes"][0].update(
+        spl=float("nan")))  # json writes NaN, which is no JSON number
     with pytest.raises(LeaderboardError, match="NaN is not a JSON number"):
         load_navigation(path)
 

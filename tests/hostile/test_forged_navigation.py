@@ -1,0 +1,111 @@
+"""Forged navigation results files: ``azgym leaderboard build`` refuses each, naming the file, the
+contender and the episode's field, before anything is published.
+
+A navigation file's summary is recomputed from its episodes, so the forger redoes that
+bookkeeping: every figure agrees with the episodes, and only physics gives the episodes away.
+The attacks are made on a genuine quick run of pure pursuit with truth and lsq.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+from azgym import cli
+from azgym.nav.scoring import wilson_interval
+
+SHIPPED_ENTRIES = Path(__file__).resolve().parents[2] / "leaderboard" / "entries"
+
+
+@pytest.fixture(scope="module")
+def genuine(tmp_path_factory):
+    out = tmp_path_factory.mktemp("genuine")
+    assert cli.main(["bench", "--suite", "navigation", "--quick", "--navigator", "pure-pursuit",
+                     "--localizer", "truth", "--localizer", "lsq", "--workers", "1",
+                     "--out", str(out)]) == 0
+    return out / "navigation.json"
+
+
+def _forge(genuine: Path, *, speed: float, share: float, shrink: float = 1.0) -> dict:
+    """lsq's every episode made a success driven at ``speed`` over ``share`` of its shortest
+    path, itself shrunk by ``shrink``; its summary recomputed from the forged episodes."""
+    data = json.loads(genuine.read_text())
+    lsq = next(c for c in data["contenders"] if c["localizer"] == "lsq")
+    for episode in lsq["episodes"]:
+        key = next(k for k in ("shortest_path_m", "path_length_m") if k in episode)
+        episode[key] *= shrink
+        travelled = share * episode[key]
+        steps = math.ceil(travelled / (speed * 0.1))
+        episode.update(success=True, spl=1.0, collisions=0, steps=steps, time_s=0.1 * steps,
+                       travelled_m=travelled, answered_steps=steps, error_median_cm=1.0,
+                       error_p95_cm=2.0)
+    episodes = lsq["episodes"]
+    lsq["summary"].update(
+        success=1.0, success_interval=wilson_interval(len(episodes), len(episodes)), spl=1.0,
+        collisions=0.0, collided=0.0, answered=1.0,
+        time_to_goal=sum(e["time_s"] for e in episodes) / len(episodes))
+    return data
+
+
+def _build(tmp_path: Path, files: dict[str, dict | Path], capsys) -> tuple[int, str]:
+    """``azgym leaderboard build`` of one borrowed frame entry and these navigation files."""
+    entries, navigation = tmp_path / "entries", tmp_path / "navigation"
+    entries.mkdir()
+    navigation.mkdir()
+    for name in ("ransac-paper.json", "ransac-paper.frames.csv.gz"):
+        shutil.copy(SHIPPED_ENTRIES / name, entries / name)
+    for name, content in files.items():
+        target = navigation / name
+        if isinstance(content, Path):
+            shutil.copy(content, target)
+        else:
+            target.write_text(json.dumps(content))
+    code = cli.main(["leaderboard", "build", "--entries", str(entries), "--out",
+                     str(tmp_path / "out"), "--navigation", str(navigation)])
+    return code, capsys.readouterr().err
+
+
+def test_a_second_table_with_a_path_driven_faster_than_the_forklift_is_refused(
+        genuine, tmp_path, capsys):
+    # The attack as found: lsq at 100 % success and SPL 1, each path driven at 18 m/s.
+    forged = _forge(genuine, speed=18.0, share=1.0)
+    code, err = _build(tmp_path, {"navigation-dev.json": genuine,
+                                  "navigation-dev-lsq.json": forged}, capsys)
+    assert code == 2
+    assert re.search(r"navigation-dev-lsq\.json: contenders/1 \(pure-pursuit \+ lsq\)/"
+                     r"episodes/0/travelled_m: [\d.]+ m in [\d.]+ s is 1[78]\.\d\d m/s on "
+                     r"average, faster than the forklift can move \(3\.97 m/s\)", err), err
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_a_path_shorter_than_the_geodesic_is_refused_at_any_speed(genuine, tmp_path, capsys):
+    forged = _forge(genuine, speed=2.0, share=0.97)  # cutting corners no drive can cut
+    code, err = _build(tmp_path, {"navigation-dev-lsq.json": forged}, capsys)
+    assert code == 2
+    assert re.search(r"navigation-dev-lsq\.json: contenders/1 \(pure-pursuit \+ lsq\)/"
+                     r"episodes/0/travelled_m: [\d.]+ m to the goal is shorter than the "
+                     r"geodesic shortest path", err), err
+
+
+def test_a_shortest_path_forged_down_with_the_drive_is_refused(genuine, tmp_path, capsys):
+    forged = _forge(genuine, speed=2.0, share=1.0, shrink=0.9)
+    code, err = _build(tmp_path, {"navigation-dev-lsq.json": forged}, capsys)
+    assert code == 2
+    assert re.search(r"navigation-dev-lsq\.json: contenders/1 \(pure-pursuit \+ lsq\)/"
+                     r"episodes/0/shortest_path_m: the geodesic shortest path of seed 2300's "
+                     r"start and goal is [\d.]+ m, the file says [\d.]+", err), err
+
+
+def test_two_files_of_one_suite_split_and_seed_are_refused_naming_both(
+        genuine, tmp_path, capsys):
+    code, err = _build(tmp_path, {"a.json": genuine, "b.json": genuine}, capsys)
+    assert code == 2
+    navigation = tmp_path / "navigation"
+    assert (f"{navigation / 'a.json'} and {navigation / 'b.json'} are both runs of the "
+            "navigation suite's dev split with seed 2300: a board shows one table per suite, "
+            "split and seed") in err
