@@ -72,7 +72,11 @@ def _ranked(loaded: list[tuple[dict[str, Any], str]], suite: str, split: str,
 
 
 def _interval(bounds: list[float | None] | None) -> str:
-    """A stored 95 % interval (JSON keeps an infinite bound as null: only the upper can be)."""
+    """A stored 95 % interval, as :func:`~azgym.bench.table.interval_cell` shows one.
+
+    JSON keeps an infinite bound as null: a null lower bound (an infinite interval, or none)
+    shows ``–``, a null upper bound after a finite lower one ``∞``.
+    """
     if not bounds or bounds[0] is None:
         return "–"
     return f"{_fmt(bounds[0])}–{_headline(bounds[1])}"

@@ -1,6 +1,6 @@
 """Figures of a benchmark run: error CDFs, fault causes, error maps and trajectories.
 
-Error CDFs and a breakdown by fault cause; error maps on the floor plan; and, for driven routes,
+Error CDFs and the headline by fault cause; error maps on the floor plan; and, for driven routes,
 each contender's estimates over the true routes, coloured by their error.
 """
 
@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from azgym.bench.metrics import HEADLINE
 from azgym.bench.suites import CAUSES, Case
 from azgym.core import BeaconMap
 from azgym.files import write_file
@@ -74,20 +75,33 @@ def _error_cdfs(plt: Any, summary: dict[str, Any], outcomes: dict[str, Outcome],
 
 
 def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
-    """Bars of each localizer's p75 error of answered frames per fault cause that occurs."""
+    """Bars of each localizer's headline per fault cause that occurs.
+
+    The headline (:data:`~azgym.bench.metrics.HEADLINE`) counts a refusal as infinitely wrong;
+    an infinite one is drawn as a hatched bar up to the top of the axis, marked ∞.
+    """
     labels = list(summary["localizers"])
     causes = [c for c in CAUSES if any(c in summary["localizers"][lab]["by_cause"]
                                        for lab in labels)]
+    values = np.array([[summary["localizers"][label]["by_cause"].get(c, {}).get(
+        HEADLINE, np.nan) for c in causes] for label in labels], dtype=float)
+    finite = values[np.isfinite(values) & (values > 0)]
+    top = 10.0 ** np.ceil(np.log10(finite.max() * 2)) if finite.size else 100.0
     figure, axes = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
     width = 0.8 / max(len(labels), 1)
     for k, label in enumerate(labels):
-        by_cause = summary["localizers"][label]["by_cause"]
-        values = [by_cause.get(c, {}).get("p75_cm", np.nan) for c in causes]
-        axes.bar(np.arange(len(causes)) + k * width, values, width, label=label)
+        x = np.arange(len(causes)) + k * width
+        bars = axes.bar(x, np.where(np.isinf(values[k]), top, values[k]), width, label=label)
+        for bar, value in zip(bars, values[k], strict=True):
+            if np.isinf(value):
+                bar.set_hatch("//")
+                axes.annotate("∞", (bar.get_x() + width / 2, top), ha="center", va="bottom",
+                              fontsize=7)
     axes.set_xticks(np.arange(len(causes)) + 0.4 - width / 2, causes)
     axes.set_yscale("log")
-    axes.set_ylabel("p75 position error, answered frames [cm]")
-    axes.set_title("by the worst fault in the frame")
+    axes.set_ylim(top=top * 1.5)
+    axes.set_ylabel("p75 position error, every frame [cm]")
+    axes.set_title("by the worst fault in the frame (a refusal infinitely wrong: ∞)")
     axes.legend(fontsize=8)
     return _save(figure, path, plt)
 

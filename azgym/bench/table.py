@@ -13,31 +13,38 @@ RANK_BY = HEADLINE
 """Boards rank by the p75 position error over every frame, a refusal infinite (EvAAL's rule)."""
 LEGEND = (
     f"p75: the 75th percentile of the position error over every frame, a frame without an "
-    f"answer counting as infinitely wrong (inf: more than a quarter unanswered); ranked by it, "
-    f"then by fail, then by the answered p75. 95% CI: a bootstrap of p75, resampling a route's "
-    f"frames in {BLOCK_SECONDS:g} s blocks and other frames one by one. avail: frames answered. "
-    f"fail: frames with no answer or one more than {FAILURE_DISTANCE:g} m off. answered "
-    f"median, p75, p95, mean: over the answered frames only. µs: median time of a frame's "
-    f"call; ×ransac: that over ransac's median in the same run.")
+    f"answer counting as infinitely wrong (inf: more than a quarter unanswered). Ranked by it, "
+    f"then by fail, then by the answered p75; a p75 over {FAILURE_DISTANCE:g} m means more than "
+    f"a quarter of the frames failed, and ranks after every other by fail, then by the answered "
+    f"p75. 95% CI: a bootstrap of p75, resampling a route's frames in {BLOCK_SECONDS:g} s blocks "
+    f"and other frames one by one. avail: frames answered. fail: frames with no answer or one "
+    f"more than {FAILURE_DISTANCE:g} m off. answered median, p75, p95, mean: over the answered "
+    f"frames only. µs: median time of a frame's call; ×ransac: that over ransac's median in the "
+    f"same run.")
 """What each column of a ranked table is: printed under it and shown on the board."""
 
 
-def rank_key(stats: Mapping[str, Any], name: str) -> tuple[float, float, float, float, str]:
+def rank_key(stats: Mapping[str, Any], name: str
+             ) -> tuple[bool, float, float, float, float, str]:
     """Sort key of a contender: the headline, then failures, answered p75, availability, name.
 
     The headline (:data:`~azgym.bench.metrics.HEADLINE`) charges every refusal, so a contender
-    that refuses the frames it would get wrong ranks below one that answers them. Contenders
-    whose headline is infinite (more than a quarter unanswered) are ordered by their failure
-    rate (lower first), then by the p75 of their answered frames. A missing figure (NaN or None,
-    as JSON keeps an infinite one) ranks last.
+    that refuses the frames it would get wrong ranks below one that answers them. A headline
+    over :data:`~azgym.bench.metrics.FAILURE_DISTANCE` (infinite included) says that more than
+    a quarter of the frames failed: no answer, or an answer more than that far off. Such
+    contenders rank after every other, ordered by their failure rate (lower first), then by the
+    p75 of their answered frames, so that a wild guess is worth no more than a refusal: both
+    are failures. A missing figure (NaN or None; JSON keeps an infinite one as None) ranks last.
 
     Args:
         stats: Its overall statistics (``summarize_errors``; NaN or None where missing).
         name: Its name, the last tie-break, so that the order never depends on input order.
     """
+    headline, failures = _or_inf(stats.get(RANK_BY)), _or_inf(stats.get("failure_rate"))
+    failed = headline > FAILURE_DISTANCE * 100
     availability = stats.get("availability")
-    return (_or_inf(stats.get(RANK_BY)), _or_inf(stats.get("failure_rate")),
-            _or_inf(stats.get("p75_cm")), -(availability or 0.0), name)
+    first, second = (failures, headline) if failed else (headline, failures)
+    return (failed, first, second, _or_inf(stats.get("p75_cm")), -(availability or 0.0), name)
 
 
 def _or_inf(value: float | None) -> float:
@@ -53,8 +60,9 @@ def cell(value: float | None, digits: int = 2) -> str:
 
 
 def interval_cell(bounds: Sequence[float | None] | None, digits: int = 2) -> str:
-    """A 95 % interval as ``low-high``; ``-`` without one."""
-    if not bounds or any(b is None or math.isnan(b) for b in bounds):
+    """A 95 % interval as ``low-high``; ``-`` without a finite lower bound (none, or infinite)."""
+    if not bounds or bounds[0] is None or not math.isfinite(bounds[0]) or bounds[1] is None \
+            or math.isnan(bounds[1]):
         return "-"
     return f"{cell(bounds[0], digits)}-{cell(bounds[1], digits)}"
 

@@ -17,8 +17,8 @@ from azgym.bench.entry_files import LeaderboardError
 from azgym.bench.leaderboard import differences
 from azgym.nav.benchmark import drive_all
 from azgym.nav.report import figure
-from azgym.nav.results_file import load_navigation
-from azgym.nav.suites import NAVIGATION_SUITES
+from azgym.nav.results_file import episode_seeds, load_navigation
+from azgym.nav.suites import NAVIGATION_SUITES, overlap
 
 HEADER = ["#", "navigator", "localizer", "success % [95 % CI]", "SPL", "collisions/ep",
           "collided %", "time to goal s", "answered %", "error median cm", "error p95 cm"]
@@ -71,19 +71,22 @@ def navigation_tables(directory: Path) -> list[Table]:
     """The tables of every navigation file in ``directory`` (``*.json``), by suite, then split.
 
     Raises:
-        LeaderboardError: A file is not sound (:func:`load_navigation`), or two files are runs
-            of one suite, split and seed (naming both: a board shows one table for them).
+        LeaderboardError: A file is not sound (:func:`load_navigation`), or two files of one
+            suite share an episode (naming both: a board shows each episode once, and a second
+            run of the same episodes under another seed or size is no new evidence).
     """
-    files, origin = [], {}
+    files: list[dict[str, Any]] = []
+    runs: list[tuple[str, range, Path]] = []
     for path in sorted(directory.glob("*.json")):
         data = load_navigation(path)
-        run = (data["suite"], data["split"], data["seed"])
-        if run in origin:
-            raise LeaderboardError(
-                f"{origin[run]} and {path} are both runs of the {run[0]} suite's {run[1]} "
-                f"split with seed {run[2]}: a board shows one table per suite, split and "
-                "seed; keep one of them")
-        origin[run] = path
+        episodes = episode_seeds(data)
+        for suite, other, where in runs:
+            if suite == data["suite"] and (shared := overlap(episodes, other)):
+                raise LeaderboardError(
+                    f"{where} and {path} share episodes of the {suite} suite (seeds "
+                    f"{shared.start} to {shared.stop - 1}): a board shows each episode once; "
+                    "keep one of them")
+        runs.append((data["suite"], episodes, path))
         files.append(data)
     order = list(NAVIGATION_SUITES)
     files.sort(key=lambda d: (order.index(d["suite"]), d["split"] != "dev", d["quick"],

@@ -19,9 +19,12 @@ so :func:`load_navigation` trusts nothing in it:
   its SPL is l / max(p, l) of l and the driven path p when it succeeded and 0 otherwise, it
   answered at most every step, and its error quantiles exist exactly when it answered (finite,
   ≥ 0, p95 ≥ median);
-- each episode obeys physics: its driven path p took no less time than the forklift needs at
-  its top speed (:data:`MAX_SPEED`), and a successful one is no shorter than l, which is a
-  lower bound of every drive to the goal;
+- each episode obeys physics: its driven path p is no longer than the forklift can drive from
+  rest in the episode's time (full throttle up to its top speed,
+  :meth:`~azgym.world.forklift.ForkliftSpec.max_centre_distance`), and a successful one is
+  longer than l, which is a lower bound of every drive to the goal. These checks refuse the
+  impossible, not the implausible: a forged file that stays within them is caught by
+  ``azgym leaderboard verify``;
 - each summary figure the episodes determine (:data:`RECOMPUTED`) is recomputed from them. The
   localization error's quantiles pool every step, which the file does not keep: they are only
   checked for kind and order here, and ``azgym leaderboard verify`` reruns the episodes.
@@ -43,7 +46,7 @@ from azgym.errors import AzgymError, InvalidInputError
 from azgym.localize.registry import is_builtin
 from azgym.nav.benchmark import KIND, RESULTS_FORMAT
 from azgym.nav.scoring import wilson_interval
-from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite
+from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite, overlap
 from azgym.world.forklift import ForkliftSpec
 
 MAX_CONTENDERS = 64
@@ -60,8 +63,8 @@ EPISODE_KEYS = {"seed", "success", "spl", "collisions", "time_s", "shortest_path
                 "travelled_m", "steps", "answered_steps", "error_median_cm", "error_p95_cm"}
 PERIOD = CONTROL_STEPS * PHYSICS_DT
 """An episode's step [s]."""
-MAX_SPEED = ForkliftSpec().max_centre_speed
-"""The fastest the body's centre, whose path ``travelled_m`` is, can move [m/s]: 3.97."""
+FORKLIFT = ForkliftSpec()
+"""The forklift the navigation environments drive: its limits bound an episode's path."""
 
 
 def is_navigation_file(path: Path) -> bool:
@@ -141,10 +144,19 @@ def _check_suite(data: dict[str, Any], path: Path) -> None:
     if (split == "dev") != (seed == suite.dev_seed):
         raise LeaderboardError(f"{path}: a dev run uses the suite's seed {suite.dev_seed} and "
                                f"a test run another, got split {split!r} with seed {seed}")
-    if data["episodes"] != suite.size(quick) or isinstance(data["episodes"], bool):
+    if type(data["episodes"]) is not int or data["episodes"] != suite.size(quick):
         raise LeaderboardError(f"{path}: episodes must be {suite.size(quick)} (the suite's "
                                f"{'quick' if quick else 'full'} size), got "
                                f"{data['episodes']!r}")
+    dev = suite.dev_episodes
+    if split == "test" and overlap(episode_seeds(data), dev):
+        raise LeaderboardError(f"{path}: a test run's episodes must not be the dev split's "
+                               f"(seeds {dev.start} to {dev.stop - 1}), got seed {seed}")
+
+
+def episode_seeds(data: dict[str, Any]) -> range:
+    """The seeds of a checked file's episodes: seed, seed + 1, ..."""
+    return range(data["seed"], data["seed"] + data["episodes"])
 
 
 def _shortest_paths(suite: NavigationSuite, data: dict[str, Any]) -> dict[int, float]:
@@ -154,7 +166,7 @@ def _shortest_paths(suite: NavigationSuite, data: dict[str, Any]) -> dict[int, f
     env = make_env(suite, "truth")
     try:
         return {seed: env.unwrapped.shortest_path(seed)
-                for seed in range(data["seed"], data["seed"] + data["episodes"])}
+                for seed in episode_seeds(data)}
     finally:
         env.close()
 
@@ -250,15 +262,17 @@ def _episode(episode: dict[str, Any], shortest: float, where: str) -> dict[str, 
         raise LeaderboardError(f"{where}/shortest_path_m: the geodesic shortest path of seed "
                                f"{episode['seed']}'s start and goal is {shortest!r} m, the file "
                                f"says {length!r}")
-    if travelled > MAX_SPEED * episode["time_s"] * (1.0 + 1e-9):
+    # One physics step more than the episode: the simulation integrates each step's end speed.
+    reach = FORKLIFT.max_centre_distance(episode["time_s"] + PHYSICS_DT)
+    if travelled > reach:
         raise LeaderboardError(
-            f"{where}/travelled_m: {travelled:g} m in {episode['time_s']:g} s is "
-            f"{travelled / episode['time_s']:.2f} m/s on average, faster than the forklift can "
-            f"move ({MAX_SPEED:.2f} m/s)")
-    if episode["success"] and travelled < length * (1.0 - 1e-9):
+            f"{where}/travelled_m: {travelled:g} m in {episode['time_s']:g} s is more than the "
+            f"forklift can drive from rest in that time ({reach:.2f} m at full throttle, "
+            f"{FORKLIFT.max_accel:g} m/s² up to {FORKLIFT.max_centre_speed:.2f} m/s)")
+    if episode["success"] and travelled <= length:
         raise LeaderboardError(
-            f"{where}/travelled_m: {travelled:g} m to the goal is shorter than the geodesic "
-            f"shortest path, {length:g} m, which no drive can beat")
+            f"{where}/travelled_m: {travelled:g} m to the goal is no longer than the geodesic "
+            f"shortest path, {length:g} m, which a drive cannot match")
     spl = length / max(length, travelled) if episode["success"] else 0.0
     if not _number(episode["spl"], 0.0) or not close(episode["spl"], spl):
         raise LeaderboardError(f"{where}/spl: must be {spl!r}: l / max(p, l) of its shortest "

@@ -9,14 +9,17 @@ same frames, and the suite is defined by its episodes, not by frames drawn in ad
 
 Episode k of a run is the environment's ``reset(seed=seed + k)``: the start and goal spots and
 every noise draw follow from it. The ``dev`` split uses the suite's fixed seed; the ``test``
-split a seed drawn at run time (and reported), as for the frame suites.
+split a seed drawn at run time (and reported), as for the frame suites, whose episodes are none
+of the dev split's.
 """
 
 from __future__ import annotations
 
+import secrets
 from dataclasses import dataclass, field
 from typing import Any
 
+from azgym.arguments import MAX_SEED
 from azgym.errors import unknown_name
 
 NAVIGATORS = ("pure-pursuit", "ppo")
@@ -56,6 +59,23 @@ class NavigationSuite:
     def size(self, quick: bool) -> int:
         """Episodes per contender in the full or the small version."""
         return self.quick_episodes if quick else self.episodes
+
+    @property
+    def dev_episodes(self) -> range:
+        """The seeds of the dev split's episodes (a test split's must be others)."""
+        return range(self.dev_seed, self.dev_seed + self.episodes)
+
+    def test_seed(self) -> int:
+        """A fresh seed for a test split: its episodes are none of the dev split's."""
+        while True:
+            seed = secrets.randbelow(MAX_SEED - self.episodes)
+            if not overlap(range(seed, seed + self.episodes), self.dev_episodes):
+                return seed
+
+
+def overlap(first: range, second: range) -> range:
+    """The seeds two runs of episodes share (empty: none)."""
+    return range(max(first.start, second.start), min(first.stop, second.stop))
 
 
 NAVIGATION_SUITES: dict[str, NavigationSuite] = {suite.name: suite for suite in (

@@ -81,6 +81,17 @@ class ForkliftSpec:
         """
         return self.max_speed * math.hypot(1.0, 0.5 * math.tan(self.max_steer))
 
+    def max_centre_distance(self, seconds: float) -> float:
+        """The longest path the body's centre can drive from rest in ``seconds`` [m].
+
+        The reference axle's speed grows at most at ``max_accel`` up to ``max_speed``; the
+        centre moves at most :attr:`max_centre_speed` / ``max_speed`` times as fast.
+        """
+        rise = self.max_speed / self.max_accel  # seconds to top speed
+        axle = (0.5 * self.max_accel * seconds**2 if seconds <= rise
+                else self.max_speed * (seconds - 0.5 * rise))
+        return axle * self.max_centre_speed / self.max_speed
+
 
 class Forklift:
     """The forklift's body in a pymunk space, with its control body and speed state.

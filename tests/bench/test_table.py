@@ -37,15 +37,31 @@ def test_a_picky_contender_ranks_below_one_that_answers_every_frame():
     assert rank_key(honest, "z") < rank_key(picky, "a")
 
 
+def test_a_wild_guess_is_worth_no_more_than_a_refusal():
+    # Answering 10 m off instead of refusing gives a finite headline over 1 m: more than a
+    # quarter of the frames failed either way, so the failure rate decides, not the headline.
+    guesser = {"p75_all_cm": 1000.0, "failure_rate": 0.526, "p75_cm": 1000.0,
+               "availability": 1.0}
+    refuser = {"p75_all_cm": math.inf, "failure_rate": 0.458, "p75_cm": 1.4,
+               "availability": 0.6}
+    drifting = {"p75_all_cm": 118.7, "failure_rate": 0.269, "p75_cm": 118.7, "availability": 1.0}
+    close = {"p75_all_cm": 99.0, "failure_rate": 0.24, "p75_cm": 99.0, "availability": 1.0}
+    rows = {"guesser": guesser, "refuser": refuser, "drifting": drifting, "close": close}
+    order = sorted(rows, key=lambda name: rank_key(rows[name], name))
+    assert order == ["close", "drifting", "refuser", "guesser"]
+
+
 def test_cells_show_infinite_and_missing_figures():
     assert cell(math.inf) == "inf" and cell(None) == "-" and cell(math.nan) == "-"
     assert cell(3.14159) == "3.14" and cell(3.14159, 1) == "3.1"
     assert interval_cell([1.0, math.inf]) == "1.00-inf"
     assert interval_cell([math.nan, math.nan]) == "-" and interval_cell(None) == "-"
+    assert interval_cell([math.inf, math.inf]) == "-"  # no finite interval: the p75 says inf
 
 
 def test_the_legend_says_what_each_column_is():
-    for words in ("every frame", "infinitely wrong", "ranked by it", "then by fail",
+    for words in ("every frame", "infinitely wrong", "Ranked by it", "then by fail",
+                  "over 1 m means more than a quarter of the frames failed",
                   "blocks", "avail", "no answer or one more than 1 m off",
                   "over the answered frames only", "median time", "ransac's median"):
         assert words in LEGEND, words

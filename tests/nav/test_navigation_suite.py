@@ -130,11 +130,12 @@ def _set_success(data):
      r"shortest path of seed 2302's start and goal is 25\.8603"),
     (lambda d: d["contenders"][1]["episodes"][2].update(travelled_m=100.0),
      r"contenders/1 \(pure-pursuit \+ ransac\)/episodes/2/travelled_m: 100 m in [\d.]+ s is "
-     r"[\d.]+ m/s on average, faster than the forklift can move \(3\.97 m/s\)"),
+     r"more than the forklift can drive from rest in that time \([\d.]+ m at full throttle, "
+     r"1\.5 m/s² up to 3\.97 m/s\)"),
     (lambda d: d["contenders"][0]["episodes"][2].update(
         travelled_m=0.9 * d["contenders"][0]["episodes"][2]["shortest_path_m"], spl=1.0),
-     r"episodes/2/travelled_m: [\d.]+ m to the goal is shorter than the geodesic shortest "
-     r"path, [\d.]+ m, which no drive can beat"),
+     r"episodes/2/travelled_m: [\d.]+ m to the goal is no longer than the geodesic shortest "
+     r"path, [\d.]+ m, which a drive cannot match"),
     (lambda d: d["contenders"][1]["summary"].update(error_median_cm=-5.0),
      "summary: error_median_cm and error_p95_cm must be numbers"),
     (lambda d: d["contenders"][1]["summary"].update(error_median_cm="1"),
