@@ -8,7 +8,7 @@ import azgym
 from azgym.core import BeaconMap, Measurements, pose_error
 from azgym.sensing.synthetic import ideal_azimuths
 
-__all__ = ["beacon_map", "ideal_frame", "pose_error_of"]
+__all__ = ["beacon_map", "ideal_frame", "pose_error_of", "quick_navigation_run"]
 
 
 def ideal_frame(x: float, y: float, heading: float, beacons: BeaconMap) -> Measurements:
@@ -28,3 +28,14 @@ def beacon_map(xy, width: float = 0.03, first_id: int = 1) -> BeaconMap:
     xy = np.asarray(xy, dtype=float)
     return BeaconMap(np.arange(first_id, first_id + len(xy)), np.c_[xy, np.full(len(xy), 2.5)],
                      width=width)
+
+
+def quick_navigation_run(out, *localizers: str):
+    """A quick dev run of pure pursuit with the localizers, through the command; its file."""
+    from azgym import cli
+
+    argv = ["bench", "--suite", "navigation", "--quick", "--navigator", "pure-pursuit"]
+    for localizer in localizers:
+        argv += ["--localizer", localizer]
+    assert cli.main([*argv, "--workers", "1", "--out", str(out)]) == 0
+    return out / "navigation.json"

@@ -15,6 +15,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from helpers import quick_navigation_run
 
 from azgym import cli
 from azgym.nav.scoring import wilson_interval
@@ -24,11 +25,7 @@ SHIPPED_ENTRIES = Path(__file__).resolve().parents[2] / "leaderboard" / "entries
 
 @pytest.fixture(scope="module")
 def genuine(tmp_path_factory):
-    out = tmp_path_factory.mktemp("genuine")
-    assert cli.main(["bench", "--suite", "navigation", "--quick", "--navigator", "pure-pursuit",
-                     "--localizer", "truth", "--localizer", "lsq", "--workers", "1",
-                     "--out", str(out)]) == 0
-    return out / "navigation.json"
+    return quick_navigation_run(tmp_path_factory.mktemp("genuine"), "truth", "lsq")
 
 
 def _forge(genuine: Path, *, speed: float, share: float, shrink: float = 1.0) -> dict:

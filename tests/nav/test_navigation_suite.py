@@ -9,6 +9,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import pytest
+from helpers import quick_navigation_run
 
 from azgym import cli
 from azgym.bench import board
@@ -26,11 +27,7 @@ SHIPPED_ENTRIES = Path(__file__).parents[2] / "leaderboard" / "entries"
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     """A quick dev run of pure pursuit with truth and ransac, through the command."""
-    out = tmp_path_factory.mktemp("nav")
-    assert cli.main(["bench", "--suite", "navigation", "--quick", "--navigator", "pure-pursuit",
-                     "--localizer", "truth", "--localizer", "ransac", "--workers", "1",
-                     "--out", str(out)]) == 0
-    return out / "navigation.json"
+    return quick_navigation_run(tmp_path_factory.mktemp("nav"), "truth", "ransac")
 
 
 def _edited(tmp_path, run, edit):
