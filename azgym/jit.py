@@ -115,7 +115,33 @@ def drop_stale_cache(package_dir: Path = PACKAGE_DIR) -> bool:
     for folder in _cache_dirs(package_dir):
         if folder.is_dir() and _claim(folder, stamp):
             dropped |= _delete_kernels(folder, names)
+    for sources in {(package_dir / module).parent for module in KERNEL_MODULES}:
+        _prepare(sources, stamp)
     return dropped
+
+
+def _prepare(sources: Path, stamp: str) -> None:
+    """Create, with the record of ``stamp``, the folder numba will cache ``sources``' kernels in.
+
+    Without it, a folder numba creates later (on a first run, or with a new ``NUMBA_CACHE_DIR``)
+    would hold kernels but no record, and the next run would take them for stale and compile
+    them all again. numba's order: the subfolder of ``NUMBA_CACHE_DIR`` when that is set, else
+    the sources' ``__pycache__`` when it can be written, else the user-wide cache's subfolder.
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        candidates = [Path(os.environ["NUMBA_CACHE_DIR"]) / numba_subfolder(sources)]
+    else:
+        candidates = [sources / "__pycache__", Path(AppDirs("numba", appauthor=False)
+                                                     .user_cache_dir) / numba_subfolder(sources)]
+    for folder in candidates:
+        if folder.is_dir() and os.access(folder, os.W_OK):
+            return
+        try:
+            folder.mkdir(parents=True)
+            (folder / STAMP_NAME).write_text(stamp)
+        except OSError:
+            continue
+        return
 
 
 def _claim(folder: Path, stamp: str) -> bool:

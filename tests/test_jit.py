@@ -55,6 +55,23 @@ def test_with_a_shared_cache_folder_only_azgyms_own_subfolders_are_touched(tmp_p
     assert (theirs / "ransac._search-10.py311.nbi").exists()  # another project's ransac.py
 
 
+def test_a_cache_folder_numba_has_yet_to_create_is_made_with_its_record(tmp_path, monkeypatch):
+    # A new NUMBA_CACHE_DIR: numba would create the folder on the first compile, without the
+    # record, and the next run would take the fresh kernels for stale and compile them again.
+    from azgym.jit import STAMP_NAME
+
+    package = fake_package(tmp_path / "site-packages" / "azgym")
+    shared = tmp_path / "empty-cache"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(shared))
+    assert drop_stale_cache(package) is False  # nothing there: nothing dropped
+    ours = {shared / numba_subfolder((package / module).parent) for module in KERNEL_MODULES}
+    for folder in ours:
+        assert (folder / STAMP_NAME).is_file()
+        (folder / "ransac._search-10.py311.nbi").write_text("compiled on the first run")
+    assert drop_stale_cache(package) is False  # the second run keeps the first run's kernels
+    assert all((folder / "ransac._search-10.py311.nbi").exists() for folder in ours)
+
+
 def test_the_shared_cache_subfolder_is_numbas_own():
     from numba.core.caching import _CacheLocator
 

@@ -15,9 +15,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT, build_problem
-from azgym.bench.worker import warm_up_localizer
+from azgym.bench.worker import warm_up as warm_up_tracker
 from azgym.errors import InvalidInputError
-from azgym.localize.registry import make_localizer, parse_spec, spec_label
+from azgym.localize.registry import parse_spec, spec_label
+from azgym.track.base import make_tracker
 
 REFERENCE = "ransac"
 """The localizer every runtime is compared with (added to a run that lacks it)."""
@@ -93,16 +94,17 @@ def check_buildable(candidate: Contender, time_limit: float = DEFAULT_TIME_LIMIT
 
 
 def warm_up(contenders: Iterable[Contender]) -> None:
-    """Run each contender once on a noise-free frame: loads (or compiles) its kernels.
+    """Run each contender through the warm-up route (:func:`azgym.bench.worker.warm_up`).
 
-    The workers' fork server does this for every default contender before it forks any worker.
+    That loads (or compiles) its kernels for every specialization a run's frames reach. The
+    workers' fork server does this for every default contender before it forks any worker.
     On a machine's first run the runner does it too, for the contenders other than ``ransac``,
     while the fork server compiles ``ransac`` (the longest to compile): the fork server then
     finds the others in numba's cache, which shortens the first run by a third.
     """
     for contender in contenders:
         try:
-            warm_up_localizer(make_localizer(contender.spec, **contender.params))
+            warm_up_tracker(make_tracker(contender.spec, **contender.params))
         except Exception:  # noqa: BLE001, S112 - a worker meets (and scores) the same failure
             continue
 

@@ -3,8 +3,9 @@
 Each contender runs in processes of its own (:mod:`azgym.bench.worker`), started from a fork
 server that imported azgym and loaded the built-in localizers' compiled code once, so a worker
 starts in milliseconds and holds nothing of the run that started it: no true pose, no other
-contender. A worker gets frames in batches (one round trip each) and answers into shared
-memory.
+contender. A worker gets a batch of frames in steps and answers each step into shared memory:
+a route's frames one at a time, the next only once the runner has taken this one's answer as
+final (a tracker cannot see its route's future), frames on their own several at a time.
 
 Every call into the localizer gets a time limit. A call that overruns it, or a worker that dies
 (a segfault, ``os._exit``, the kernel's out-of-memory killer), costs that frame only: it is
@@ -13,132 +14,68 @@ goes on. After ``GIVE_UP_AFTER`` such losses in a row the contender's remaining 
 run at all, so a localizer that hangs on every frame costs seconds, not hours.
 
 What isolation does not do: it is not a security sandbox. A plug-in still runs as the user, with
-the user's files and network; run code you do not trust in a container.
+the user's files, network and processes (docs/leaderboard.md lists what it can still read);
+run code you do not trust in a container.
 """
 
 from __future__ import annotations
 
 import contextlib
-import multiprocessing
 import multiprocessing.connection
 import os
-import signal
-import sys
+import selectors
 import time
-import types
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from azgym.bench import worker
-from azgym.bench.wire import MapData, Packed
+from azgym.bench.answers import (
+    GIVE_UP_AFTER,
+    STARTUP_LIMIT,
+    Answers,
+    Report,
+    death,
+    give_up_note,
+    overrun_reason,
+    record_answers,
+)
+from azgym.bench.processes import (
+    Worker,
+    build_verdict,
+    poll,
+    start_worker,
+    stop,
+)
+from azgym.bench.wire import DONE, MapData, Packed, ProtocolError, heard, step_message, write_all
 from azgym.bench.worker import ANSWER_SIZE
 
 DEFAULT_TIME_LIMIT = 10.0
 """Seconds a localizer may take on one frame (or to be built) before it is stopped: 60 times the
 slowest built-in (the exhaustive 1 cm MEX, ~0.15 s a frame)."""
-STARTUP_LIMIT = 300.0
-"""Seconds a new worker may take to come up, not counting the build. The first run on a machine
-compiles azgym's kernels in the fork server (tens of seconds); later runs take milliseconds."""
-GIVE_UP_AFTER = 3
-"""Frames lost in a row (time-outs or dead workers) after which a contender's other frames are
-skipped."""
-PRELOAD = "azgym.bench.preload"
+CHECK_EVERY = 0.01
+"""Seconds between the runner's looks at its workers' deadlines while messages keep coming."""
 BACKENDS = ("local", "ray")
 """Where the contenders run: worker processes forked here, or Ray actors on a cluster
 (:mod:`azgym.bench.ray_backend`, imported only when asked for)."""
 
-Report = Callable[[int], None]
-"""Called with the number of frames finished so far."""
-
-
-@dataclass
-class Answers:
-    """A contender's answers to every frame of a run, in the frames' order.
-
-    Attributes:
-        pose: (x, y, heading) of each usable estimate, NaN elsewhere, shape (F, 3).
-        posed: Whether the frame got a usable pose, shape (F,).
-        micros: Time of the call [µs], NaN when it raised, timed out or was not run, shape (F,).
-        errors: Why a frame got no answer ("" when it got one), one per frame.
-    """
-
-    pose: np.ndarray
-    posed: np.ndarray
-    micros: np.ndarray
-    errors: list[str]
-
-    @classmethod
-    def unanswered(cls, count: int) -> Answers:
-        """No answer yet to any of ``count`` frames."""
-        return cls(np.full((count, 3), np.nan), np.zeros(count, dtype=bool),
-                   np.full(count, np.nan), [""] * count)
-
-
-def overrun_reason(phase: str, time_limit: float, starter: str) -> str:
-    """Why ``starter`` (the worker, the Ray actor) was stopped at its deadline in ``phase``."""
-    if phase == "building":
-        return f"building the localizer took longer than the {time_limit:g} s limit"
-    if phase == "warming":
-        return f"compiling the built-in took longer than {STARTUP_LIMIT:g} s"
-    if phase == "starting":
-        return f"{starter} did not start within {STARTUP_LIMIT:g} s"
-    return f"timed out: took longer than the {time_limit:g} s limit"
-
-
-def give_up_note(reason: str) -> str:
-    """The error of the frames skipped after :data:`GIVE_UP_AFTER` losses in a row."""
-    return f"not run: {GIVE_UP_AFTER} frames in a row were lost (last: {reason})"
-
-
-def record_answers(answers: Answers, start: int, table: np.ndarray) -> None:
-    """Decode answer rows (``worker.ANSWER_*`` columns) into frames ``start``, ``start + 1``..."""
-    rows = slice(start, start + len(table))
-    posed = table[:, worker.ANSWER_STATE] == worker.POSED
-    answered = np.isin(table[:, worker.ANSWER_STATE], (worker.POSED, worker.NO_POSE))
-    answers.posed[rows] = posed
-    pose = table[:, [worker.ANSWER_X, worker.ANSWER_Y, worker.ANSWER_HEADING]]
-    answers.pose[rows] = np.where(posed[:, None], pose, np.nan)
-    answers.micros[rows] = np.where(answered, table[:, worker.ANSWER_MICROS], np.nan)
-
-
-def context() -> Any:
-    """The fork-server context the workers start from (the server starts on first use)."""
-    ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload([PRELOAD])
-    return ctx
-
-
-def start_fork_server() -> None:
-    """Start the fork server now, so its warm-up overlaps whatever the caller does next."""
-    context()
-    from multiprocessing import forkserver
-
-    forkserver.ensure_running()
-
 
 @dataclass
 class _Batch:
-    """Frames [start, stop) of the run, given to one worker."""
+    """Frames [start, stop) of the run, given to one worker, and the step it is answering.
+
+    The step is frames [step_start, step_stop), sent at ``sent`` (``step_stop`` is where the
+    next step starts; before the first, ``start``).
+    """
 
     start: int
     stop: int
+    step_start: int = -1
+    step_stop: int = -1
     sent: float = 0.0
 
-
-@dataclass
-class _Worker:
-    """One worker process and its shared memory."""
-
-    process: Any
-    conn: Any
-    progress: Any
-    answers: Any
-    ready: bool = False
-    batch: _Batch | None = None
-    started: float = 0.0
+    def __post_init__(self) -> None:
+        self.step_start = self.step_stop = self.start
 
 
 class IsolatedRun:
@@ -154,23 +91,28 @@ class IsolatedRun:
         self.spec, self.params, self.frames, self.maps = spec, params, frames, maps
         self.workers, self.time_limit = workers, time_limit
         self.answers = Answers.unanswered(len(frames))
+        self.messages: list[bytes | None] = [None] * len(frames)
         self.queue = [_Batch(start, stop) for start, stop in batches]
         self.capacity = max((stop - start for start, stop in batches), default=1)
-        self.running: list[_Worker] = []
+        self.running: list[Worker] = []
         self.lost_in_a_row = 0
         self.finished = 0
         self.unbuildable = ""
+        self.selector: selectors.BaseSelector | None = None
+        self.check_at = 0.0
 
     def run(self, report: Report) -> Answers:
         """Run every frame; ``report`` hears how many are finished after each batch."""
+        self.selector = selectors.DefaultSelector()
         try:
             while self.queue or any(w.batch is not None for w in self.running):
                 self._fill()
                 self._wait()
                 report(self.finished)
         finally:
-            for w in self.running:
-                _stop(w)
+            for w in list(self.running):
+                self._retire(w)
+            self.selector.close()
         return self.answers
 
     def _fill(self) -> None:
@@ -188,47 +130,94 @@ class IsolatedRun:
                 self._skip(batch, self.unbuildable)
             self.queue.clear()
 
-    def _start(self) -> _Worker:
+    def _start(self) -> Worker:
         """A fresh worker process (its batch is sent once it reports ready)."""
-        ctx = context()
-        mine, theirs = ctx.Pipe()
-        progress = ctx.RawArray("q", [worker.IDLE, 0])
-        answers = ctx.RawArray("d", self.capacity * ANSWER_SIZE)
-        process = ctx.Process(target=worker.serve, daemon=True, name=f"azgym {self.spec}",
-                              args=(theirs, progress, answers, self.spec, self.params,
-                                    self.maps, os.getcwd()))
-        started = time.monotonic()  # before start(): the worker may begin building at once
-        with _caller_main_hidden():
-            process.start()
-        theirs.close()
-        w = _Worker(process, mine, progress, answers, started=started)
+        w = start_worker(self.spec, self.params, self.maps, self.capacity)
         self.running.append(w)
+        if self.selector is not None:
+            self.selector.register(w.conn, selectors.EVENT_READ, w)
+            self.selector.register(w.process.sentinel, selectors.EVENT_READ, w)
+        self.check_at = 0.0
         return w
 
-    def _send(self, w: _Worker) -> None:
-        assert w.batch is not None
-        w.batch.sent = time.monotonic()
-        w.conn.send(list(self.frames[w.batch.start:w.batch.stop]))
+    def _retire(self, w: Worker) -> None:
+        """Stop a worker and forget it."""
+        self._forget(w.conn)
+        self._forget(w.process.sentinel)
+        stop(w)
+        self.running.remove(w)
+
+    def _forget(self, waitable: Any) -> None:
+        """Stop waiting on a worker's pipe or sentinel."""
+        if self.selector is not None:
+            with contextlib.suppress(KeyError, ValueError):
+                self.selector.unregister(waitable)
+
+    def _send(self, w: Worker) -> None:
+        """Send the worker its batch's next step."""
+        batch = w.batch
+        assert batch is not None
+        batch.step_start, batch.step_stop = batch.step_stop, self._step_end(batch.step_stop,
+                                                                            batch.stop)
+        batch.sent = time.monotonic()
+        if batch.step_stop - batch.step_start == 1:
+            message = self.messages[batch.step_start]
+            if message is None:  # a route's frame: made once a run
+                message = self.messages[batch.step_start] = step_message(
+                    self.frames[batch.step_start:batch.step_stop])
+        else:
+            message = step_message(self.frames[batch.step_start:batch.step_stop])
+        write_all(w.conn.fileno(), message)
+
+    def _step_end(self, first: int, stop: int) -> int:
+        """Where the step from frame ``first`` ends (frames up to ``stop`` are the batch's).
+
+        A frame of a sequence is a step of its own: the worker gets the next one only once it
+        has answered this one, so a tracker cannot see its route's future. Frames on their own
+        go together up to the next sequence's.
+        """
+        if self.frames[first][1]:  # its sequence
+            return first + 1
+        end = first + 1
+        while end < stop and not self.frames[end][1]:
+            end += 1
+        return end
 
     def _wait(self) -> None:
-        """Wait for messages, deaths or a deadline, and deal with whatever happened."""
-        busy = [w for w in self.running if w.batch is not None]
-        waitables = [w.conn for w in busy] + [w.process.sentinel for w in busy]
-        multiprocessing.connection.wait(waitables, timeout=self._next_deadline(busy))
-        for w in busy:
-            self._drain(w)
-            if w.batch is not None and not w.process.is_alive():
-                self._lose(w, _death(w.process))
-            elif w.batch is not None and self._overran(w):
-                self._lose(w, self._overrun_reason(w))
+        """Wait for a message, a death or a deadline, and deal with whatever happened.
 
-    def _next_deadline(self, busy: list[_Worker]) -> float:
+        A route's frames come and go one at a time, so this is the runner's inner loop: it
+        reads what is ready (one message a worker), and looks at the deadlines only when the
+        next may have passed (:data:`CHECK_EVERY`).
+        """
+        now = time.monotonic()
+        for key, _ in self.selector.select(max(self.check_at - now, 0.0)):
+            w = key.data
+            if w not in self.running:
+                continue
+            if key.fileobj is w.conn:
+                self._read(w)
+            elif w.batch is None:  # died idle: nothing lost
+                self._retire(w)
+            else:
+                self._drain(w)
+                if w.batch is not None:
+                    self._lose(w, death(w.process))
+        now = time.monotonic()
+        if now >= self.check_at:
+            busy = [w for w in self.running if w.batch is not None]
+            for w in busy:
+                if self._overran(w):
+                    self._lose(w, self._overrun_reason(w))
+            self.check_at = now + min(self._next_deadline(busy), CHECK_EVERY)
+
+    def _next_deadline(self, busy: list[Worker]) -> float:
         """Seconds until the earliest deadline among busy workers (at least 1 ms)."""
         now = time.monotonic()
         soonest = min((self._deadline(w) for w in busy), default=now + 0.1)
         return min(max(soonest - now, 0.001), 0.5)
 
-    def _deadline(self, w: _Worker) -> float:
+    def _deadline(self, w: Worker) -> float:
         """When the worker's current step must be over (monotonic seconds)."""
         if not w.ready:
             if w.progress[0] == worker.BUILDING:  # the worker set it: the build has begun
@@ -238,69 +227,117 @@ class IsolatedRun:
             return w.started + STARTUP_LIMIT
         if w.batch is None:
             return time.monotonic() + 1.0
-        # The whole batch's bound holds even if the localizer scribbles on the shared progress.
-        bound = w.batch.sent + (w.batch.stop - w.batch.start + 1) * self.time_limit
+        # The whole step's bound holds even if the localizer scribbles on the shared progress.
+        bound = w.batch.sent + (w.batch.step_stop - w.batch.step_start + 1) * self.time_limit
         if w.progress[0] >= 0:
             return min(w.progress[1] / 1e9 + self.time_limit, bound)
         return bound
 
-    def _overran(self, w: _Worker) -> bool:
+    def _overran(self, w: Worker) -> bool:
         return time.monotonic() > self._deadline(w)
 
-    def _overrun_reason(self, w: _Worker) -> str:
+    def _overrun_reason(self, w: Worker) -> str:
         phase = "answering" if w.ready else {worker.BUILDING: "building",
                                               worker.WARMING: "warming"}.get(w.progress[0],
                                                                              "starting")
         return overrun_reason(phase, self.time_limit, "the worker")
 
-    def _drain(self, w: _Worker) -> None:
+    def _drain(self, w: Worker) -> None:
         """Read every message the worker has sent."""
-        while w.batch is not None and _poll(w.conn):
-            try:
-                message = w.conn.recv()
-            except (EOFError, OSError):
+        while w.batch is not None and poll(w.conn):
+            if not self._read(w):
                 return
-            if message[0] == "ready":
+
+    def _read(self, w: Worker) -> bool:
+        """Read what the worker has sent and act on it; False when it is gone."""
+        try:
+            data = os.read(w.conn.fileno(), 1 << 16)
+        except OSError:
+            data = b""
+        if not data:  # it is gone, or going: its sentinel says so
+            if w.batch is None:
+                self._retire(w)
+            else:
+                self._forget(w.conn)
+            return False
+        if data == DONE and not w.inbox:  # most of a route: a frame answered, nothing more
+            self._hear(w, ["done"])
+            return True
+        w.inbox += data
+        try:
+            messages = heard(w.inbox)
+        except ProtocolError as exc:
+            return self._broke_protocol(w, str(exc))
+        for message in messages:
+            if w.batch is None or w not in self.running:
+                break
+            self._hear(w, message)
+        return True
+
+    def _hear(self, w: Worker, message: list[Any]) -> None:
+        """Act on one message of the worker's (:func:`azgym.bench.worker.serve` lists them)."""
+        batch = w.batch
+        assert batch is not None
+        match message:
+            case ["done"] if w.ready:
+                self._commit(w)
+                if batch.step_stop < batch.stop:
+                    self._send(w)
+                else:
+                    self.lost_in_a_row = 0
+                    w.batch = None
+            case ["error", int(k), str(text)] if 0 <= k < batch.step_stop - batch.step_start:
+                self.answers.errors[batch.step_start + k] = text
+            case ["warmed"]:
+                pass
+            case ["ready"] if not w.ready:
                 w.ready = True
                 self._send(w)
-            elif message[0] == "unbuildable":
-                self.unbuildable = f"cannot build {self.spec!r}: {message[1]}"
-                self._skip(w.batch, self.unbuildable)
+            case ["unbuildable", str(why)] if not w.ready:
+                self.unbuildable = f"cannot build {self.spec!r}: {why}"
+                self._skip(batch, self.unbuildable)
                 w.batch = None
-                _stop(w)
-                self.running.remove(w)
-            elif message[0] == "error":
-                self.answers.errors[w.batch.start + message[1]] = message[2]
-            elif message[0] == "done":
-                self._collect(w, w.batch.stop - w.batch.start)
-                self.lost_in_a_row = 0
-                w.batch = None
+                self._retire(w)
+            case _:
+                self._broke_protocol(w, f"{str(message)[:80]} out of turn")
 
-    def _collect(self, w: _Worker, count: int) -> None:
-        """Copy the answers to the batch's first ``count`` frames out of shared memory."""
-        assert w.batch is not None
-        table = np.frombuffer(w.answers, np.float64)[:count * ANSWER_SIZE].reshape(
-            count, ANSWER_SIZE).copy()
-        record_answers(self.answers, w.batch.start, table)
-        self.finished += count
+    def _broke_protocol(self, w: Worker, what: str) -> bool:
+        """A worker that sent something the protocol does not allow: it is stopped."""
+        self._lose(w, f"the localizer's process broke the worker's protocol: {what}")
+        return False
 
-    def _lose(self, w: _Worker, reason: str) -> None:
+    def _commit(self, w: Worker, stop: int | None = None) -> None:
+        """Take the answers of the worker's step (of its frames before ``stop``) as final.
+
+        Only now does the worker get its next step: an answer cannot change once the worker
+        has seen a later frame.
+        """
+        batch = w.batch
+        assert batch is not None
+        first, stop = batch.step_start, batch.step_stop if stop is None else stop
+        values = w.answers[:(stop - first) * ANSWER_SIZE]
+        record_answers(self.answers, first, [values[k:k + ANSWER_SIZE]
+                                             for k in range(0, len(values), ANSWER_SIZE)])
+        self.finished += stop - first
+
+    def _lose(self, w: Worker, reason: str) -> None:
         """The worker overran or died: score its current frame, requeue the rest, replace it."""
         batch = w.batch
         assert batch is not None
-        _stop(w)
-        self.running.remove(w)
+        self._retire(w)
         if not w.ready:
             if w.progress[0] == worker.BUILDING:
                 self.unbuildable = reason
             self._skip(batch, reason)
             return
-        done = min(max(int(w.progress[0]), 0), batch.stop - batch.start - 1)
-        self._collect(w, done)
-        self.answers.errors[batch.start + done] = reason
+        # The steps before this one were committed; the worker says which frame it was on.
+        lost = batch.step_start + min(max(int(w.progress[0]), 0),
+                                      batch.step_stop - batch.step_start - 1)
+        self._commit(w, lost)
+        self.answers.errors[lost] = reason
         self.finished += 1
         self.lost_in_a_row += 1
-        rest = _Batch(batch.start + done + 1, batch.stop)
+        rest = _Batch(lost + 1, batch.stop)
         if self.lost_in_a_row >= GIVE_UP_AFTER:
             note = give_up_note(reason)
             for pending in [rest, *self.queue]:
@@ -314,43 +351,22 @@ class IsolatedRun:
         w = self._start()
         try:
             while True:
-                if _poll(w.conn):
-                    message = w.conn.recv()
-                    w.ready = message[0] == "ready"
-                    return "" if w.ready else message[1]
+                if poll(w.conn) and (verdict := build_verdict(w)) is not None:
+                    return verdict
                 if not w.process.is_alive():
-                    return _death(w.process)
+                    return death(w.process)
                 if self._overran(w):
                     return self._overrun_reason(w)
                 multiprocessing.connection.wait([w.conn, w.process.sentinel],
                                                 timeout=self._next_deadline([w]))
         finally:
-            _stop(w)
+            stop(w)
 
     def _skip(self, batch: _Batch, reason: str) -> None:
         """Score frames that will not run as unavailable, with the reason."""
         for k in range(batch.start, batch.stop):
             self.answers.errors[k] = self.answers.errors[k] or reason
         self.finished += batch.stop - batch.start
-
-
-@contextlib.contextmanager
-def _caller_main_hidden() -> Iterator[None]:
-    """Start workers without the caller's main script.
-
-    multiprocessing re-runs the parent's ``__main__`` in a new process so that functions defined
-    there can be found. A worker needs none of it (it runs azgym's worker and a localizer given
-    by an importable spec), and re-running a user's script there would repeat its work, fail for
-    a script read from standard input, and put whatever that script computes (true poses
-    included) into the localizer's process. While a worker starts, ``__main__`` is a bare
-    stand-in module.
-    """
-    main = sys.modules["__main__"]
-    sys.modules["__main__"] = types.ModuleType("__main__")
-    try:
-        yield
-    finally:
-        sys.modules["__main__"] = main
 
 
 def build_problem(spec: str, params: dict[str, Any], time_limit: float) -> str:
@@ -363,36 +379,3 @@ def build_problem(spec: str, params: dict[str, Any], time_limit: float) -> str:
                        batches=[]).build_problem()
 
 
-def _poll(conn: Any) -> bool:
-    try:
-        return bool(conn.poll())
-    except (EOFError, OSError):
-        return False
-
-
-def _death(process: Any) -> str:
-    """Why a worker process ended, in words."""
-    process.join(timeout=1.0)
-    code = process.exitcode
-    if code is not None and code < 0:
-        try:
-            name = signal.Signals(-code).name
-        except ValueError:
-            name = f"signal {-code}"
-        return f"the localizer's process was killed by {name}"
-    return f"the localizer's process exited (exit code {code})"
-
-
-def _stop(w: _Worker) -> None:
-    """End a worker: ask politely when idle, kill it otherwise."""
-    if w.process.is_alive():
-        if w.batch is None and w.ready:
-            try:
-                w.conn.send(None)
-            except (BrokenPipeError, OSError):
-                pass
-            w.process.join(timeout=1.0)
-        if w.process.is_alive():
-            w.process.kill()
-    w.process.join(timeout=5.0)
-    w.conn.close()

@@ -16,6 +16,7 @@ import gzip
 import hashlib
 import io
 import json
+import math
 import os
 import platform
 import sys
@@ -287,10 +288,18 @@ def runnable_spec(path: Path, entry: dict[str, Any]) -> str:
 
 def verify(path: Path, workers: int = 1, datasets: Path | None = None
            ) -> dict[str, tuple[Any, Any]]:
-    """Rerun an entry's localizer on its suite, split and seed, or its log; return what differs.
+    """Rerun an entry's localizer on its suite, or its log; return what disagrees.
 
-    Every accuracy figure (overall, intervals, by cause, by group, tracks) is compared;
-    runtimes are not (they depend on the machine). An empty answer means the entry was reproduced.
+    A ``dev`` entry (and an entry scored on a log) is rerun on its own frames: every accuracy
+    figure (overall, intervals, by cause, by group, tracks) must be the entry's within 1e-6.
+    A ``test`` entry is rerun on a fresh secret seed: its own seed is in the entry, so its
+    frames are public by now, and a plug-in that reads the entry (its path is on ``verify``'s
+    command line) could answer them from the truth. Its figures with 95 % intervals (``ci95``:
+    the headline, the mean error, the failure rate) must then agree: each entry interval must
+    overlap the rerun's (two intervals of one figure from independent draws miss each other
+    far less than once in a hundred reruns; a claim the localizer cannot repeat misses). The
+    other figures depend on the frames drawn and are not compared. Runtimes are never compared
+    (they depend on the machine). An empty answer means the entry was reproduced.
 
     Raises:
         LeaderboardError: The entry is not sound, its plug-in file is missing or changed, or
@@ -300,18 +309,33 @@ def verify(path: Path, workers: int = 1, datasets: Path | None = None
     entry = load_entry(path, datasets)
     contender = Contender(entry["name"], runnable_spec(path, entry),
                           entry["localizer"]["params"])
+    test = entry["split"] == "test"
     if is_data_entry(entry):
         result = run_log_benchmark(checked_log(entry, str(path), datasets), [contender],
                                    workers=workers)
     else:
         result = run_benchmark(get_suite(entry["suite"]), [contender], split=entry["split"],
-                               seed=entry["seed"], quick=entry["quick"], workers=workers)
+                               seed=None if test else entry["seed"], quick=entry["quick"],
+                               workers=workers)
     fresh = result.summary["localizers"][entry["name"]]
     if fresh["crashes"] == entry["n_frames"]:
         raise LeaderboardError(f"{path}: the localizer could not run on any frame: "
                                f"{fresh['first_error']}")
+    if test:
+        return {f"ci95/{key}": (claimed, rerun) for key, claimed in entry["metrics"]["ci95"].items()
+                if not _overlap(claimed, rerun := clean(fresh["ci95"][key]))}
     claimed = {key: value for key, value in entry["metrics"].items() if key != "runtime_us"}
     return differences(claimed, clean({key: fresh[key] for key in claimed}), "")
+
+
+def _overlap(claimed: list[Any], rerun: list[Any]) -> bool:
+    """Whether two intervals as entries store them share a value.
+
+    A bound stored as null (JSON has no infinity) is infinite: the headline's is when more
+    than a quarter of the frames of a resample got no answer.
+    """
+    low, high, rerun_low, rerun_high = (math.inf if v is None else v for v in (*claimed, *rerun))
+    return low <= rerun_high and rerun_low <= high
 
 
 def differences(claimed: Any, fresh: Any, where: str) -> dict[str, tuple[Any, Any]]:

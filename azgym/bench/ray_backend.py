@@ -1,22 +1,25 @@
 """The runner's Ray backend: each contender's batches of frames run as Ray actors.
 
-The same run as :mod:`azgym.bench.isolation`, with Ray actors in place of forked worker
-processes. Each contender gets up to ``workers`` actors at a time, each a process of its own on
-some node, killed when the contender is done (never reused by another contender). An actor gets
-the packed beacon maps once and then batches of packed frames (:mod:`azgym.bench.wire`): the
-measurements only; the true poses never leave the runner, which scores the answers. An actor
-streams one answer per frame back as soon as it has it (a Ray generator), so the runner times
-each call from its own clock:
+The same run as :mod:`azgym.bench.isolation`, with Ray actors in place of the fork server.
+Each contender gets up to ``workers`` actors at a time, each a process of its own on some node,
+killed when the contender is done (never reused by another contender). An actor forks one worker
+process (:func:`azgym.bench.worker.serve`, the pool's own) before it gets any frame; it gets the
+packed beacon maps once and then batches of packed frames (:mod:`azgym.bench.wire`), the
+measurements only: the true poses never leave the runner, which scores the answers. The actor
+hands its worker one frame at a time, the next once this one is answered (a tracker cannot see
+its route's future), and streams the answers back as they come (a Ray generator; gathered for
+up to ``ray_actor.STREAM_EVERY``, at once when a frame is slower), so the runner keeps each
+frame's time limit by its own clock:
 
-- a localizer that raises costs its frame, scored with the exception, as in a worker process
-  (each frame is answered by the workers' own rule, :func:`azgym.bench.worker.answer_batch`);
+- a localizer that raises costs its frame, scored with the exception, as in the pool;
 - a frame that takes longer than the time limit costs that frame: the actor is killed
-  (``ray.kill``), a fresh one takes over the rest of the batch; so does an actor that dies
-  (a segfault, ``os._exit``, a node lost), and after ``GIVE_UP_AFTER`` losses in a row the
-  contender's other frames are not run.
+  (``ray.kill``; its worker dies with it), a fresh one takes over the rest of the batch; so
+  does a worker or an actor that dies (a segfault, ``os._exit``, a node lost), and after
+  ``GIVE_UP_AFTER`` losses in a row the contender's other frames are not run.
 
-What differs from the process pool is in docs/scaling.md: an actor starts as a fresh
-interpreter (about a second, not milliseconds); a plug-in runs inside a Ray worker, with the
+The actor's side is :mod:`azgym.bench.ray_actor`. What differs from the process pool is in
+docs/scaling.md: an actor starts as a fresh
+interpreter (about a second, not milliseconds); a plug-in runs on a Ray node, with the
 cluster's API within reach; runtimes are measured on whichever node ran the frame.
 
 Ray is imported here only, and this module only when ``backend="ray"`` is asked for.
@@ -35,10 +38,7 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
-import numpy as np
-
-from azgym.bench import worker
-from azgym.bench.isolation import (
+from azgym.bench.answers import (
     GIVE_UP_AFTER,
     STARTUP_LIMIT,
     Answers,
@@ -47,8 +47,8 @@ from azgym.bench.isolation import (
     overrun_reason,
     record_answers,
 )
-from azgym.bench.wire import MapData, Packed, unpack, unpack_map
-from azgym.errors import AzgymError, InvalidInputError, require
+from azgym.bench.wire import MapData, Packed
+from azgym.errors import InvalidInputError, require
 
 CONNECT_TIMEOUT = 5.0
 """Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
@@ -58,74 +58,6 @@ JOIN_TIMEOUT = 20.0
 with something else listening there, Ray would wait for minutes)."""
 
 
-class RayWorker:
-    """The contender's side on a Ray node: one localizer (or tracker) in an actor of its own."""
-
-    def __init__(self) -> None:
-        self.tracker: Any = None
-        self.maps: dict[str, Any] = {}
-        self.warm = True
-        self.sequence: str | None = None
-
-    def build(self, spec: str, params: dict[str, Any], maps: Mapping[str, MapData],
-              folder: str) -> Iterator[tuple[Any, ...]]:
-        """Build the contender, saying how far it got.
-
-        Yields ("building",), ("warming",) for a built-in, then ("ready",) or ("unbuildable",
-        why). Relative paths mean what they meant in ``folder``, the runner's working folder,
-        when this node has it.
-        """
-        yield ("building",)
-        if os.path.isdir(folder):
-            os.chdir(folder)
-        self.maps = {name: unpack_map(data) for name, data in maps.items()}
-        from azgym.localize.registry import is_builtin
-        from azgym.track.base import FrameByFrame, make_tracker
-
-        try:
-            self.tracker = make_tracker(spec, **params)
-        except BaseException as exc:  # noqa: BLE001 - reported, the runner scores every frame
-            yield ("unbuildable", str(exc) if isinstance(exc, AzgymError)
-                   else worker.describe(exc))
-            return
-        self.warm = not isinstance(self.tracker, FrameByFrame)
-        if not self.warm and is_builtin(spec):  # azgym's own code compiles as long as it takes
-            yield ("warming",)
-            with contextlib.suppress(BaseException):
-                worker.warm_up_localizer(self.tracker.localizer)
-            self.warm = True
-        yield ("ready",)
-
-    def answer(self, batch: Sequence[Packed]) -> Iterator[tuple[Any, ...]]:
-        """Answer a batch, streaming one answer per frame.
-
-        Yields ("warmed",) after a plug-in's untimed first call, then ("answer", [x, y,
-        heading, state, micros], error) for each frame in order.
-        """
-        frames = [unpack(packed) for packed in batch]
-        if not self.warm and frames:
-            worker.call_untimed(self.tracker.localizer, frames[0].measurements,
-                                self.maps[frames[0].scenario])
-            self.warm = True
-            yield ("warmed",)
-        for frame in frames:
-            answer = [np.nan] * worker.ANSWER_SIZE
-            said = _Said()
-            self.sequence = worker.answer_batch(said, [worker.IDLE, 0], answer, self.tracker,
-                                                [frame], self.maps, self.sequence)
-            yield ("answer", answer, said.error)
-
-
-@dataclass
-class _Said:
-    """Stands in for the worker's pipe: keeps the error a frame raised."""
-
-    error: str = ""
-
-    def send(self, message: tuple[Any, ...]) -> None:
-        self.error = message[2]
-
-
 @cache
 def _actor_class() -> Any:
     """:class:`RayWorker` as a Ray actor: one CPU, never restarted or retried.
@@ -133,6 +65,8 @@ def _actor_class() -> Any:
     A lost frame is the runner's to score, not Ray's to run again.
     """
     import ray
+
+    from azgym.bench.ray_actor import RayWorker
 
     return ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RayWorker)
 
@@ -257,6 +191,8 @@ class RayRun:
         self.workers, self.time_limit = workers, time_limit
         self.answers = Answers.unanswered(len(frames))
         self.queue = list(batches)
+        self.capacity = max((self._step_end(start, stop) - start for start, stop in batches),
+                            default=1)
         self.slots: list[_Slot] = []
         self.lost_in_a_row = 0
         self.finished = 0
@@ -282,7 +218,8 @@ class RayRun:
                 self._send(idle[0], self.queue.pop(0))
             elif len(self.slots) < self.workers:
                 actor = _actor_class().remote()
-                stream = actor.build.remote(self.spec, self.params, self.maps, os.getcwd())
+                stream = actor.build.remote(self.spec, self.params, self.maps, os.getcwd(),
+                                            self.capacity)
                 self.slots.append(_Slot(actor, stream, time.monotonic() + STARTUP_LIMIT,
                                         batch=self.queue.pop(0)))
             else:
@@ -293,9 +230,28 @@ class RayRun:
             self.queue.clear()
 
     def _send(self, slot: _Slot, batch: tuple[int, int]) -> None:
+        """Give the actor a batch, in steps.
+
+        Each step is an argument of the call (a small one, which Ray sends inline with the
+        call, not through its object store, where a plug-in that joins the cluster could read
+        ahead).
+        """
         slot.batch, slot.done, slot.phase = batch, 0, "answering"
-        slot.stream = slot.actor.answer.remote(list(self.frames[batch[0]:batch[1]]))
+        steps, first = [], batch[0]
+        while first < batch[1]:
+            end = self._step_end(first, batch[1])
+            steps.append(list(self.frames[first:end]))
+            first = end
+        slot.stream = slot.actor.answer.remote(*steps)
         slot.deadline = time.monotonic() + self.time_limit
+
+    def _step_end(self, first: int, stop: int) -> int:
+        """Where the step from frame ``first`` ends: after it.
+
+        The actor hands its worker one frame at a time, so a tracker never holds its route's
+        next frame.
+        """
+        return first + 1
 
     def _wait(self) -> None:
         """Wait for an item, a death or a deadline, and deal with whatever happened."""
@@ -330,6 +286,9 @@ class RayRun:
             self.unbuildable = f"cannot build {self.spec!r}: {item[1]}"
             self._retire(slot, self.unbuildable)
             return
+        if item[0] == "died":
+            self._lose(slot, item[1])
+            return
         if item[0] in ("building", "warming"):
             slot.phase = item[0]
             limit = self.time_limit if item[0] == "building" else STARTUP_LIMIT
@@ -339,10 +298,11 @@ class RayRun:
             self._send(slot, slot.batch)
         elif item[0] == "warmed":
             slot.deadline = now + self.time_limit
-        elif item[0] == "answer":
+        elif item[0] == "answers":
             assert slot.batch is not None
-            self._record(slot.batch[0] + slot.done, item[1], item[2])
-            slot.done += 1
+            for answer, error in item[1]:
+                self._record(slot.batch[0] + slot.done, answer, error)
+                slot.done += 1
             slot.deadline = now + self.time_limit
 
     def _end_of_stream(self, slot: _Slot) -> None:
@@ -352,7 +312,7 @@ class RayRun:
         slot.batch, slot.stream, slot.phase = None, None, "idle"
 
     def _record(self, k: int, answer: list[float], error: str) -> None:
-        record_answers(self.answers, k, np.asarray([answer], dtype=np.float64))
+        record_answers(self.answers, k, [answer])
         self.answers.errors[k] = error
         self.finished += 1
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from azgym.arguments import time_limit as checked_time_limit
 from azgym.arguments import whole_number
+from azgym.bench.answers import Answers
 from azgym.bench.contenders import (
     REFERENCE,
     Contender,
@@ -29,17 +30,13 @@ from azgym.bench.contenders import (
     warm_up,
     with_reference,
 )
-from azgym.bench.isolation import (
-    BACKENDS,
-    DEFAULT_TIME_LIMIT,
-    Answers,
-    IsolatedRun,
-    start_fork_server,
-)
+from azgym.bench.isolation import BACKENDS, DEFAULT_TIME_LIMIT, IsolatedRun
 from azgym.bench.outcome import Outcome
+from azgym.bench.processes import start_fork_server
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import Case, Suite
 from azgym.bench.wire import pack, pack_map
+from azgym.bench.worker import hide_process
 from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.jit import localizers_compiled
@@ -186,7 +183,9 @@ def run_benchmark(
         suite: The suite.
         contenders: The localizers (default: :func:`default_contenders`). ``ransac`` is added as
             the runtime reference if missing.
-        split: "dev" (the suite's fixed seed) or "test" (a seed drawn now, and reported).
+        split: "dev" (the suite's fixed seed) or "test" (a seed drawn now in secret: the process
+            turns non-dumpable first, :func:`~azgym.bench.worker.hide_process`, and the seed
+            is printed and written only once every contender has answered).
         quick: Draw the suite's small version.
         workers: Worker processes per contender at a time.
         seed: Draw the cases from this seed instead (to rerun a reported test split).
@@ -200,8 +199,9 @@ def run_benchmark(
         raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
     contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
-    if seed is None:
-        seed = suite.dev_seed if split == "dev" else secrets.randbits(31)
+    if secret := seed is None and split == "test":
+        hide_process()  # no other process of the user's can read it (docs/leaderboard.md)
+    seed = (suite.dev_seed if split == "dev" else secrets.randbits(31)) if seed is None else seed
     first_run = not localizers_compiled()
     if first_run:
         say("compiling azgym's kernels: the first run on an installation takes about 10 s "
@@ -210,7 +210,8 @@ def run_benchmark(
         start_fork_server()  # its warm-up overlaps the drawing of the cases
     started = time.perf_counter()
     cases = suite.build(seed, quick)
-    say(f"{suite.name} v{suite.version} ({split}, seed {seed}): {len(cases)} frames drawn in "
+    shown = "seed withheld until every contender has answered" if secret else f"seed {seed}"
+    say(f"{suite.name} v{suite.version} ({split}, {shown}): {len(cases)} frames drawn in "
         f"{time.perf_counter() - started:.1f} s")
     if first_run:
         # The fork server compiles ransac meanwhile (contenders.warm_up).

@@ -4,10 +4,21 @@ A frame travels as its scenario's name, its sequence (the route it belongs to, f
 the known start pose on a sequence's first frame, its measurements and the motion samples since
 the previous frame. The worker unpacks the arrays as views of the received bytes, which cannot
 be made writable: a localizer cannot change what it was given, let alone what others get.
+
+Frames go in steps (a route's one frame at a time, :mod:`azgym.bench.isolation`), each one
+message on the worker's pipe. A route costs a message a frame, so a route's messages are made
+once a run and the worker reads each with one system call into a buffer of its own. What a
+worker says back (:func:`say`) is JSON, never a pickle: unpickling runs code, and the worker
+runs the contender's.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import pickle
+import struct
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -92,3 +103,96 @@ def _unpack_motion(data: bytes) -> Motion:
     parts = [values[end - size:end] for size, end in zip(sizes, ends, strict=True)]
     return Motion(time, OdometrySamples(*parts[:3]),
                   ImuSamples(parts[3], parts[4], parts[5].reshape(n, 2), parts[6]))
+
+
+_LENGTH = struct.Struct("!i")
+"""A message's length, as ``multiprocessing.connection.Connection.send_bytes`` frames it."""
+
+
+def framed(payload: bytes) -> bytes:
+    """A message as the pipes carry it: its length, then itself."""
+    return _LENGTH.pack(len(payload)) + payload
+
+
+STOP = framed(pickle.dumps(None))
+"""The message that tells a worker to stop."""
+
+
+def step_message(frames: Sequence[Packed]) -> bytes:
+    """A step: its packed frames, in one message (a list, pickled)."""
+    return framed(pickle.dumps(list(frames), protocol=pickle.HIGHEST_PROTOCOL))
+
+
+class StepReader:
+    """Reads steps (:func:`step_message`) from the parent's pipe into a buffer of its own.
+
+    One system call reads most of them.
+    """
+
+    def __init__(self, fd: int) -> None:
+        self.fd = fd
+        self.buffer = bytearray(1 << 16)
+
+    def read(self) -> list[Packed] | None:
+        """The next step's packed frames; None: told to stop, or the parent is gone."""
+        got = os.readv(self.fd, [self.buffer])
+        while 0 < got < _LENGTH.size or got >= _LENGTH.size and \
+                got < _LENGTH.size + _LENGTH.unpack_from(self.buffer)[0]:
+            if got == len(self.buffer):
+                self.buffer.extend(bytes(len(self.buffer)))
+            with memoryview(self.buffer) as view:
+                more = os.readv(self.fd, [view[got:]])
+            if not more:
+                return None
+            got += more
+        if got < _LENGTH.size:
+            return None
+        return pickle.loads(self.buffer[_LENGTH.size:got])
+
+
+MAX_MESSAGE = 1 << 20
+"""The longest message a worker may send [bytes]; a longer one breaks the protocol."""
+
+
+class ProtocolError(Exception):
+    """A worker sent something that is not a message of the protocol."""
+
+
+def say(fd: int, *message: str | int) -> None:
+    """Send the parent a message: a JSON list, framed as ``Connection.send_bytes`` frames."""
+    write_all(fd, framed(json.dumps(message).encode()))
+
+
+DONE = framed(b'["done"]')
+"""``say(fd, "done")``, framed once: a route sends it once a frame."""
+
+
+def heard(inbox: bytearray) -> list[list[Any]]:
+    """Take the complete messages out of what a worker has sent so far (``inbox``).
+
+    Raises:
+        ProtocolError: A message that is too long, or not a JSON list.
+    """
+    messages = []
+    while len(inbox) >= _LENGTH.size:
+        (size,) = _LENGTH.unpack_from(inbox)
+        if not 0 <= size <= MAX_MESSAGE:
+            raise ProtocolError(f"a message of {size} bytes")
+        if len(inbox) < _LENGTH.size + size:
+            break
+        try:
+            message = json.loads(bytes(inbox[_LENGTH.size:_LENGTH.size + size]))
+        except ValueError:
+            raise ProtocolError("a message that is not JSON") from None
+        if not isinstance(message, list) or not message:
+            raise ProtocolError("a message that is not a list")
+        del inbox[:_LENGTH.size + size]
+        messages.append(message)
+    return messages
+
+
+def write_all(fd: int, data: bytes) -> None:
+    """Write all of ``data`` to ``fd`` (a pipe takes a long message in parts)."""
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]

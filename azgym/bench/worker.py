@@ -17,9 +17,12 @@ Layouts shared with :mod:`azgym.bench.isolation`: ``progress`` holds (phase, sta
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import math
 import os
 import signal
+import sys
 import time
 import zlib
 from collections.abc import Mapping, Sequence
@@ -27,10 +30,22 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.wire import MapData, WorkerFrame, unpack, unpack_map
+from azgym.bench.wire import (
+    DONE,
+    MapData,
+    Packed,
+    StepReader,
+    WorkerFrame,
+    pack,
+    pack_map,
+    say,
+    unpack,
+    unpack_map,
+)
 from azgym.core import BeaconMap, Measurements, estimated_pose
 from azgym.errors import AzgymError
 from azgym.localize.registry import is_builtin
+from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 from azgym.track.base import FrameByFrame, Tracker, make_tracker
 
 _CLOCK = time.perf_counter_ns
@@ -48,23 +63,32 @@ ANSWER_X, ANSWER_Y, ANSWER_HEADING, ANSWER_STATE, ANSWER_MICROS = range(ANSWER_S
 PENDING, POSED, NO_POSE, RAISED = 0.0, 1.0, 2.0, 3.0
 """Answer states: not answered yet; a usable pose; an estimate without one; an exception."""
 
+
 def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, Any],
           maps: Mapping[str, MapData], folder: str) -> None:
-    """The worker's main loop: build the contender, then answer batches until told to stop.
+    """The worker's main loop: build the contender, then answer steps until told to stop.
 
     A localizer runs as a tracker without memory (:class:`~azgym.track.base.FrameByFrame`).
     The tracker is reset at each new sequence (a frame on its own is a sequence of one), with
     the sequence's known start pose on its first frame; a worker that takes over in the middle
     of a sequence (after a lost frame) resets it without one.
 
-    Messages to the parent: ``("ready",)`` once built, or ``("unbuildable", why)``; then per
-    batch ``("error", k, text)`` for each frame k that raised, and ``("done",)`` at its end.
+    The parent sends a batch of frames in steps: a frame of a sequence alone, and the next one
+    only once this one is answered, so nothing in this process (its memory, its call stack)
+    ever holds a frame the tracker has not reached; frames on their own (no sequence), which
+    have no future to see, several at a time.
+
+    Messages to the parent (:func:`azgym.bench.wire.say`): ``["ready"]`` once built, or
+    ``["unbuildable", why]``; then per step ``["error", k, text]`` for each frame k (of the
+    step) that raised, ``["warmed"]`` after a plug-in's untimed first call, and ``["done"]``
+    at the step's end.
 
     Args:
-        conn: The pipe to the parent; it sends lists of packed frames
-            (:mod:`azgym.bench.wire`), or None to stop.
-        progress: Shared int64 pair (phase, start time of the current call).
-        answers: Shared float64 array, ``ANSWER_SIZE`` slots per frame of a batch.
+        conn: The pipe to the parent; it sends steps (:func:`azgym.bench.wire.step_message`)
+            or :data:`~azgym.bench.wire.STOP`.
+        progress: Shared int64 pair (phase: the frame of the step being answered; start time
+            of the current call).
+        answers: Shared float64 array, ``ANSWER_SIZE`` slots per frame of a step.
         spec: The localizer's or tracker's spec.
         params: Its hyperparameters.
         maps: Each scenario's beacon map.
@@ -72,45 +96,58 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
             weight file) mean what they meant where the run was started, whichever folder the
             fork server was started in.
     """
+    fd = conn.fileno()
+    seal(fd)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     os.chdir(folder)
     beacon_maps = {name: unpack_map(data) for name, data in maps.items()}
-    _mark(progress, BUILDING)
-    try:
-        tracker = make_tracker(spec, **params)
-    except BaseException as exc:  # noqa: BLE001 - reported, the parent scores every frame
-        why = str(exc) if isinstance(exc, AzgymError) else describe(exc)
-        conn.send(("unbuildable", why))
+    if (built := _build(fd, progress, spec, params)) is None:
         return
-    warm = not isinstance(tracker, FrameByFrame)  # a localizer's first call loads its code
-    if not warm and is_builtin(spec):  # azgym's own code compiles for as long as it takes
-        _mark(progress, WARMING)
-        try:
-            warm_up_localizer(tracker.localizer)
-        except BaseException:  # noqa: BLE001, S110 - the frames' own calls record a failure
-            pass
-        warm = True
-    _mark(progress, IDLE)
-    conn.send(("ready",))
+    tracker, warm = built
     sequence = None
-    while (batch := _receive(conn)) is not None:
-        frames = [unpack(packed) for packed in batch]
+    steps = StepReader(fd)
+    while (step := _receive(steps)) is not None:
+        frames = [unpack(packed) for packed in step]
         if not warm and frames:  # run it once untimed
             _mark(progress, 0)
             first = frames[0]
             call_untimed(tracker.localizer, first.measurements, beacon_maps[first.scenario])
             warm = True
-        sequence = answer_batch(conn, progress, answers, tracker, frames, beacon_maps, sequence)
+            say(fd, "warmed")
+        sequence = answer_step(fd, progress, answers, tracker, frames, beacon_maps, sequence)
         _mark(progress, IDLE)
-        conn.send(("done",))
+        os.write(fd, DONE)
 
 
-def answer_batch(conn: Any, progress: Any, answers: Any, tracker: Tracker,
+def _build(fd: int, progress: Any, spec: str, params: dict[str, Any]
+           ) -> tuple[Tracker, bool] | None:
+    """Build the contender (a built-in then runs through its warm-up) and say it is ready.
+
+    Returns the tracker, and whether its first call may be timed (a plug-in localizer's first
+    call, which loads its code, is not); None when it cannot be built (said to the parent).
+    """
+    _mark(progress, BUILDING)
+    try:
+        tracker = make_tracker(spec, **params)
+    except BaseException as exc:  # noqa: BLE001 - reported, the parent scores every frame
+        say(fd, "unbuildable", str(exc) if isinstance(exc, AzgymError) else describe(exc))
+        return None
+    warm = not isinstance(tracker, FrameByFrame)  # a localizer's first call loads its code
+    if is_builtin(spec):  # azgym's own code compiles for as long as it takes, untimed
+        _mark(progress, WARMING)
+        warm_up(tracker)
+        warm = True
+    _mark(progress, IDLE)
+    say(fd, "ready")
+    return tracker, warm
+
+
+def answer_step(fd: int, progress: Any, answers: Any, tracker: Tracker,
                  frames: Sequence[WorkerFrame], maps: Mapping[str, BeaconMap],
                  sequence: str | None) -> str | None:
-    """Answer each frame, writing its answer (and sending its error) as soon as it is known.
+    """Answer each frame of a step, writing its answer (and sending its error on ``fd``) at once.
 
-    Returns the sequence the tracker is in at the end (the next batch may continue it).
+    Returns the sequence the tracker is in at the end (the next step may continue it).
     """
     for k, frame in enumerate(frames):
         base = k * ANSWER_SIZE
@@ -128,7 +165,7 @@ def answer_batch(conn: Any, progress: Any, answers: Any, tracker: Tracker,
             pose = estimated_pose(estimate)
         except BaseException as exc:  # noqa: BLE001 - SystemExit too: scored, never fatal
             answers[base + ANSWER_STATE] = RAISED
-            conn.send(("error", k, describe(exc)))
+            say(fd, "error", k, describe(exc))
             continue
         answers[base + ANSWER_MICROS] = micros
         if pose is not None:
@@ -146,11 +183,11 @@ def call_untimed(localizer: Any, measurements: Measurements, beacons: BeaconMap)
         pass
 
 
-def _receive(conn: Any) -> Any:
-    """The next batch, or None when told to stop or when the parent is gone."""
+def _receive(steps: StepReader) -> list[Packed] | None:
+    """The next step, or None when told to stop or when the parent is gone."""
     try:
-        return conn.recv()
-    except (EOFError, OSError):
+        return steps.read()
+    except OSError:
         return None
 
 
@@ -160,20 +197,132 @@ def _mark(progress: Any, phase: int) -> None:
     progress[0] = phase
 
 
+_LIBC = ctypes.CDLL(None, use_errno=True) if sys.platform.startswith("linux") else None
+"""The C library, for ``prctl`` and ``capset``: the protections below are Linux's."""
+_PR_SET_PDEATHSIG, _PR_SET_DUMPABLE, _PR_CAPBSET_DROP, _PR_CAP_AMBIENT = 1, 4, 24, 47
+_PR_CAP_AMBIENT_CLEAR_ALL = 4
+_CAPABILITY_VERSION_3 = 0x20080522
+
+
+def hide_process() -> None:
+    """Make this process non-dumpable (Linux; elsewhere nothing is done).
+
+    Other processes of the same user can then no longer read its memory (``/proc/PID/mem``),
+    environment or open files (``/proc/PID/fd``), nor attach a debugger to it; only a process
+    with ``CAP_SYS_PTRACE`` (root's, which workers drop: :func:`seal`) still can. Its command
+    line (``/proc/PID/cmdline``) stays readable to all. A process that holds what a contender
+    must not see (the cases drawn for a test split, a route's frames ahead) calls this first.
+    """
+    if _LIBC is not None:
+        _LIBC.prctl(_PR_SET_DUMPABLE, 0, 0, 0, 0)
+
+
+def quiet_streams() -> None:
+    """Point standard input, output and error at ``/dev/null``."""
+    null = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):
+        os.dup2(null, fd)
+    if null > 2:
+        os.close(null)
+
+
+def seal(keep: int) -> None:
+    """Cut a worker off from what its parents hold, before any contender code runs.
+
+    - Standard input, output and error become ``/dev/null``: the runner's output (redirected to
+      a file, it is readable through ``/proc/self/fd/1``) is not the worker's.
+    - Every other inherited descriptor is closed but ``keep`` (the pipe to the parent).
+    - Linux: the worker dies with its parent (``PR_SET_PDEATHSIG``), so a Ray actor killed at a
+      deadline takes its worker along; and a worker started as root drops every capability
+      (the bounding set too, so no program it starts gets them back), so it can no longer
+      read a non-dumpable process's memory (:func:`hide_process`) as root otherwise could.
+    """
+    quiet_streams()
+    os.closerange(3, keep)
+    os.closerange(keep + 1, os.sysconf("SC_OPEN_MAX"))
+    if _LIBC is None:
+        return
+    parent = os.getppid()
+    _LIBC.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:  # the parent died before the line above
+        os._exit(1)
+    if _capabilities():
+        for capability in range(64):
+            _LIBC.prctl(_PR_CAPBSET_DROP, capability, 0, 0, 0)
+        _LIBC.prctl(_PR_CAP_AMBIENT, _PR_CAP_AMBIENT_CLEAR_ALL, 0, 0, 0)
+        header = (ctypes.c_uint32 * 2)(_CAPABILITY_VERSION_3, 0)
+        if _LIBC.capset(header, (ctypes.c_uint32 * 6)()) != 0 or _capabilities():
+            os._exit(1)  # never run a contender with the capabilities it should not have
+
+
+def _capabilities() -> int:
+    """This process's effective capabilities, as ``/proc/self/status`` shows them."""
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith("CapEff:"):
+                return int(line.split()[1], 16)
+    return 0
+
+
 def describe(exc: BaseException) -> str:
     """An exception as the results report it: its type and message."""
     return f"{type(exc).__name__}: {exc}"
 
 
-def warm_up_localizer(localizer: Any) -> None:
-    """Run one localizer once on a small noise-free frame (five beacons round a room).
+def warm_up(tracker: Tracker) -> None:
+    """Run a tracker (a localizer through :class:`FrameByFrame`) through the warm-up route.
 
-    Its first call loads its compiled code, or compiles it on a machine's first run.
+    Its calls load its compiled code, or compile it on a machine's first run, for every
+    specialization a real frame reaches: numba compiles a kernel once per combination of argument
+    types, and a run's frames come through the wire (read-only arrays), with no quality, one
+    quality column or several (a copied column), with motion or without. The route's frames
+    take every path a localizer has (an exact frame that a consensus settles, outliers that the
+    network or the complete search sorts out, an unknown id, too few beacons to answer), so no
+    compiling is left for a timed call. A call that raises is skipped: the run's frames record
+    whatever failure is real.
     """
-    xyz = np.array([[0.0, 0.0, 3.0], [10.0, 0.0, 3.0], [10.0, 8.0, 3.0], [0.0, 8.0, 3.0],
-                    [5.0, 8.0, 3.0]])
-    beacons = BeaconMap(np.arange(5), xyz)
+    beacons = unpack_map(pack_map(_WARM_UP_MAP))
+    for quality_columns in (0, 1, 3):
+        frames = [unpack(packed) for packed in _warm_up_route(quality_columns)]
+        with contextlib.suppress(BaseException):
+            tracker.reset(0, frames[0].initial)
+        for frame in frames:
+            with contextlib.suppress(BaseException):
+                if frame.motion is not None:
+                    tracker.predict(frame.motion)
+                tracker.update(frame.measurements, beacons)
+
+
+_WARM_UP_MAP = BeaconMap(np.arange(5), np.array([[0.0, 0.0, 3.0], [10.0, 0.0, 3.0],
+                                                 [10.0, 8.0, 3.0], [0.0, 8.0, 3.0],
+                                                 [5.0, 8.0, 3.0]]))
+"""Five beacons round a 10 m × 8 m room: the warm-up route's map."""
+
+
+def _warm_up_route(quality_columns: int) -> list[Packed]:
+    """The warm-up route as a run sends it: four frames, each ``quality_columns`` wide (0: none).
+
+    The frames: every beacon seen exactly (its start pose known, no motion yet), then, each
+    after 0.1 s of motion, two outliers among them (a ghost and a misread id), an id not in
+    the map, and two beacons only.
+    """
+    xyz = _WARM_UP_MAP.xyz
     x, y, heading = 3.0, 2.5, 0.3
-    azimuth = [math.remainder(math.atan2(by - y, bx - x) - heading, math.tau)
-               for bx, by, _ in xyz]
-    localizer.localize(Measurements(np.arange(5), azimuth), beacons)
+    exact = [math.remainder(math.atan2(by - y, bx - x) - heading, math.tau) for bx, by, _ in xyz]
+    views = [(list(range(5)), exact),
+             ([0, 1, 2, 3, 4, 0, 2], [*exact, exact[0] + 1.2, exact[3]]),
+             ([0, 1, 2, 3, 4, 9], [*exact, 0.5]),
+             ([1, 2], exact[1:3])]
+    packed = []
+    for k, (ids, azimuth) in enumerate(views):
+        quality = None if not quality_columns else \
+            np.linspace(0.5, 1.5, len(ids) * quality_columns).reshape(len(ids), quality_columns)
+        if quality_columns == 1:
+            quality = quality[:, 0]
+        samples = np.linspace(0.1 * k - 0.08, 0.1 * k, 5) if k else np.zeros(0)
+        flat = np.zeros_like(samples)
+        motion = Motion(0.1 * k, OdometrySamples(samples, flat + 0.5, flat),
+                        ImuSamples(samples, flat, np.zeros((samples.size, 2)), flat + np.nan))
+        packed.append(pack("warm-up", Measurements(ids, azimuth, quality), "warm-up",
+                           (x, y, heading) if k == 0 else None, motion))
+    return packed

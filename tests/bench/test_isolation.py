@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
 import re
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -12,7 +15,8 @@ import pytest
 
 from azgym.bench import worker
 from azgym.bench.contenders import Contender
-from azgym.bench.isolation import GIVE_UP_AFTER, STARTUP_LIMIT, IsolatedRun, _Worker
+from azgym.bench.isolation import GIVE_UP_AFTER, STARTUP_LIMIT, IsolatedRun
+from azgym.bench.processes import Worker
 from azgym.bench.runner import run_contenders
 from azgym.bench.suites import get_suite
 from azgym.cli import main
@@ -155,8 +159,82 @@ def test_a_built_in_compiling_its_kernels_has_the_startup_allowance_not_the_time
     run = IsolatedRun("ransac", {}, [], {}, workers=1, time_limit=0.5, batches=[])
     began = time.monotonic()
     progress = [worker.WARMING, int(began * 1e9)]
-    warming = _Worker(process=None, conn=None, progress=progress, answers=None, started=began)
+    warming = Worker(process=None, conn=None, progress=progress, answers=None, started=began)
     assert run._deadline(warming) == pytest.approx(began + STARTUP_LIMIT)
     assert "compiling the built-in took longer than 300 s" in run._overrun_reason(warming)
     progress[0] = worker.BUILDING
     assert run._deadline(warming) == pytest.approx(began + 0.5)
+
+
+WARM_UP_CHECK = """
+import sys
+import numba
+from azgym.bench import worker
+from azgym.bench.suites import get_suite
+from azgym.bench.wire import pack, pack_map, unpack, unpack_map
+from azgym.localize.registry import PRESETS, list_localizers, list_trackers
+from azgym.site import load_scenario
+from azgym.track.base import make_tracker
+
+def overloads():
+    return {f"{name}.{attr}": len(value.overloads)
+            for name, module in list(sys.modules.items()) if name.startswith("azgym")
+            for attr, value in vars(module).items()
+            if isinstance(value, numba.core.dispatcher.Dispatcher)}
+
+frames, maps = [], {}
+for suite, seed in (("warehouse-static", 7), ("image-routes", 17), ("paper", 2021)):
+    for case in get_suite(suite).build(seed, True)[:20]:
+        frames.append(unpack(pack(case.scenario, case.measurements, case.sequence, case.initial,
+                                  case.motion)))
+        maps[case.scenario] = unpack_map(pack_map(load_scenario(case.scenario).beacons))
+names = [n for n in list_localizers() if n not in PRESETS] + list(list_trackers())
+trackers = [make_tracker(name) for name in names]
+for tracker in trackers:
+    worker.warm_up(tracker)
+warm = overloads()
+
+import os
+quiet = os.open(os.devnull, os.O_WRONLY)
+for tracker in trackers:
+    worker.answer_step(quiet, [0, 0], [0.0] * (worker.ANSWER_SIZE * len(frames)), tracker,
+                        frames, maps, None)
+print({key: (warm.get(key, 0), count) for key, count in overloads().items()
+       if count != warm.get(key, 0)})
+"""
+
+
+@pytest.mark.slow
+def test_a_built_in_s_warm_up_reaches_every_specialization_of_a_real_frame():
+    # numba compiles a kernel once per combination of argument types: a frame from the wire
+    # (read-only arrays) with a quality column, or motion, is a new one. Whatever a warm-up
+    # leaves out compiles inside a timed call, and on a slow machine runs past the time limit.
+    done = subprocess.run([sys.executable, "-c", WARM_UP_CHECK], capture_output=True, text=True,
+                          timeout=600, check=True)
+    assert done.stdout.strip() == "{}", "compiled after the warm-up: " + done.stdout
+
+
+def bench_availability(out: Path, env: dict[str, str]) -> dict[str, float]:
+    """``azgym bench`` of the learned built-ins with a 1 s limit: each one's availability."""
+    subprocess.run(
+        [sys.executable, "-m", "azgym.cli", "bench", "--suite", "warehouse-static", "--quick",
+         "--localizer", "ng-ransac", "--localizer", "learned", "--time-limit", "1",
+         "--workers", "2", "--out", str(out)],
+        capture_output=True, text=True, timeout=900, env=env, check=True)
+    assert "timed out" not in (out / "frames.csv").read_text()
+    localizers = json.loads((out / "results.json").read_text())["localizers"]
+    return {label: row["all"]["availability"] for label, row in localizers.items()}
+
+
+@pytest.mark.slow
+def test_a_fresh_installation_scores_the_learned_built_ins_as_a_warm_one(tmp_path):
+    # An empty kernel cache: the run compiles everything, yet never inside a timed call (1 s
+    # here; a learned built-in's first frame alone once compiled for 5-14 s), and the next run
+    # loads the kernels the first one cached instead of taking them for stale.
+    kernels = tmp_path / "kernels"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(kernels)}
+    fresh = bench_availability(tmp_path / "fresh", env)
+    cached = {path: path.stat().st_mtime_ns for path in kernels.rglob("*.nbi")}
+    assert fresh == bench_availability(tmp_path / "warm", env)
+    assert min(fresh.values()) > 0.8
+    assert cached and all(path.stat().st_mtime_ns == mtime for path, mtime in cached.items())

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import re
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -10,6 +12,16 @@ from azgym.bench.contenders import Contender
 from azgym.bench.runner import batch_bounds, run_contenders
 from azgym.bench.suites import get_suite
 from azgym.bench.suites.base import Case
+
+PLUGINS = Path(__file__).parents[1] / "hostile" / "plugins"
+
+
+def plugin(stem: str) -> Contender:
+    """The hostile plug-in in ``tests/hostile/plugins/STEM.py``."""
+    path = PLUGINS / f"{stem}.py"
+    name = re.search(r"^class (\w+)", path.read_text(), re.MULTILINE).group(1)
+    return Contender(stem, f"{path}:{name}")
+
 
 CHECKER = '''
     import azgym
@@ -68,3 +80,21 @@ def test_a_tracker_sees_each_route_whole_and_in_order_whatever_the_workers(check
     for workers in (1, 2):
         outcome = run_contenders(cases, [checker], workers=workers)["checker"]
         assert outcome.ok.all(), [e for e in outcome.errors if e][:3]
+
+
+@pytest.fixture(scope="module")
+def route():
+    """The first route of warehouse-routes' quick version, its first 40 frames."""
+    cases = get_suite("warehouse-routes").build(11, True)
+    return [case for case in cases if case.sequence == cases[0].sequence][:40]
+
+
+@pytest.mark.parametrize("backend", ["local", "ray"])
+def test_a_tracker_cannot_find_its_route_s_next_frames_anywhere_in_its_process(route, backend):
+    # It walks its call stack, every object gc knows and its shared memory for frames later
+    # than the one it is asked about: a worker gets a route one frame at a time.
+    if backend == "ray":
+        pytest.importorskip("ray", reason="ray is not installed")
+    outcome = run_contenders(route, [plugin("clairvoyant")], workers=1,
+                             backend=backend)["clairvoyant"]
+    assert outcome.errors == [""] * len(route)  # it answered every frame: "no future here"
