@@ -49,6 +49,7 @@ from azgym.bench.processes import (
 )
 from azgym.bench.wire import DONE, MapData, Packed, ProtocolError, heard, step_message, write_all
 from azgym.bench.worker import ANSWER_SIZE
+from azgym.localize.registry import is_builtin
 
 DEFAULT_TIME_LIMIT = 10.0
 """Seconds a localizer may take on one frame (or to be built) before it is stopped: 60 times the
@@ -90,6 +91,7 @@ class IsolatedRun:
                  batches: Sequence[tuple[int, int]]) -> None:
         self.spec, self.params, self.frames, self.maps = spec, params, frames, maps
         self.workers, self.time_limit = workers, time_limit
+        self.builtin = is_builtin(spec)
         self.answers = Answers.unanswered(len(frames))
         self.messages: list[bytes | None] = [None] * len(frames)
         self.queue = [_Batch(start, stop) for start, stop in batches]
@@ -220,11 +222,16 @@ class IsolatedRun:
     def _deadline(self, w: Worker) -> float:
         """When the worker's current step must be over (monotonic seconds)."""
         if not w.ready:
+            # The phase and its start are the worker's word, which a plug-in can overwrite: they
+            # may shorten the wait, never lengthen it past the runner's own bound. Only a
+            # built-in is given the compile allowance.
+            bound = w.started + STARTUP_LIMIT + (STARTUP_LIMIT if self.builtin
+                                                 else self.time_limit)
             if w.progress[0] == worker.BUILDING:  # the worker set it: the build has begun
-                return w.progress[1] / 1e9 + self.time_limit
-            if w.progress[0] == worker.WARMING:  # a built-in compiling its kernels
-                return w.progress[1] / 1e9 + STARTUP_LIMIT
-            return w.started + STARTUP_LIMIT
+                return min(w.progress[1] / 1e9 + self.time_limit, bound)
+            if w.progress[0] == worker.WARMING and self.builtin:  # compiling its kernels
+                return min(w.progress[1] / 1e9 + STARTUP_LIMIT, bound)
+            return min(w.started + STARTUP_LIMIT, bound)
         if w.batch is None:
             return time.monotonic() + 1.0
         # The whole step's bound holds even if the localizer scribbles on the shared progress.

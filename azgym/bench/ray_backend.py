@@ -49,6 +49,7 @@ from azgym.bench.answers import (
 )
 from azgym.bench.wire import MapData, Packed
 from azgym.errors import InvalidInputError, require
+from azgym.localize.registry import is_builtin
 
 CONNECT_TIMEOUT = 5.0
 """Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
@@ -290,9 +291,9 @@ class RayRun:
             self._lose(slot, item[1])
             return
         if item[0] in ("building", "warming"):
-            slot.phase = item[0]
-            limit = self.time_limit if item[0] == "building" else STARTUP_LIMIT
-            slot.deadline = now + limit
+            slot.phase = item[0]  # only a built-in is given the compile allowance
+            warming = item[0] == "warming" and is_builtin(self.spec)
+            slot.deadline = now + (STARTUP_LIMIT if warming else self.time_limit)
         elif item[0] == "ready":
             assert slot.batch is not None
             self._send(slot, slot.batch)

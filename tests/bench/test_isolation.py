@@ -238,3 +238,17 @@ def test_a_fresh_installation_scores_the_learned_built_ins_as_a_warm_one(tmp_pat
     assert fresh == bench_availability(tmp_path / "warm", env)
     assert min(fresh.values()) > 0.8
     assert cached and all(path.stat().st_mtime_ns == mtime for path, mtime in cached.items())
+
+
+@pytest.mark.parametrize("phase", [worker.BUILDING, worker.WARMING, worker.IDLE])
+def test_a_plugin_scribbling_on_its_build_progress_cannot_wait_without_end(phase):
+    # During its build a plug-in can reach the shared progress slots: a phase and a start time
+    # set far in the future must not lengthen the runner's own bound on the build.
+    run = IsolatedRun("some/plugin.py:Plug", {}, [], {}, workers=1, time_limit=2.0,
+                      batches=[])
+    scribbled = Worker(None, None, [phase, 2**62], None, started=1000.0)
+    assert run._deadline(scribbled) <= 1000.0 + STARTUP_LIMIT + 2.0
+    builtin = IsolatedRun("ransac", {}, [], {}, workers=1, time_limit=2.0, batches=[])
+    warming = Worker(None, None, [worker.WARMING, int(1001e9)], None, started=1000.0)
+    assert builtin._deadline(warming) == 1001.0 + STARTUP_LIMIT  # a built-in's compile allowance
+    assert run._deadline(warming) <= 1000.0 + STARTUP_LIMIT  # not a plug-in's
