@@ -42,7 +42,7 @@ from azgym.bench.entry_data import check_data_run, dataset_cases, is_data_entry
 from azgym.bench.entry_files import FrameTable, LeaderboardError, parse_frames
 from azgym.bench.plugin_files import is_portable, plugin_path
 from azgym.bench.results import cases_digest, contender_metrics
-from azgym.bench.suites import SUITES, Case
+from azgym.bench.suites import NO_TEST_SPLIT, SUITES, Case
 
 ENTRY_FORMAT = 4
 """The entry format this azgym writes and reads (``format`` in ``entry.schema.json``); 3 added
@@ -154,6 +154,8 @@ def _check_suite_run(entry: dict[str, Any], origin: str) -> None:
     if entry["split"] == "dev" and entry["seed"] != suite.dev_seed:
         raise LeaderboardError(f"{origin}: seed: the dev split of {suite.name} is drawn from seed "
                                f"{suite.dev_seed}, the entry says {entry['seed']}")
+    if entry["split"] == "test" and suite.routes:
+        raise LeaderboardError(f"{origin}: {NO_TEST_SPLIT.format(suite=suite.name)}")
     if entry["split"] == "test" and entry["seed"] == suite.dev_seed:
         raise LeaderboardError(f"{origin}: seed: a test split is drawn from a fresh seed; "
                                f"{suite.dev_seed} is the dev split's")

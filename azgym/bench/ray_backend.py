@@ -173,6 +173,7 @@ class _Slot:
     phase: str = "starting"
     batch: tuple[int, int] | None = None
     done: int = 0
+    warmed: bool = False
 
 
 class RayRun:
@@ -297,7 +298,8 @@ class RayRun:
         elif item[0] == "ready":
             assert slot.batch is not None
             self._send(slot, slot.batch)
-        elif item[0] == "warmed":
+        elif item[0] == "warmed" and not slot.warmed:  # once: it must not extend the deadline
+            slot.warmed = True
             slot.deadline = now + self.time_limit
         elif item[0] == "answers":
             assert slot.batch is not None

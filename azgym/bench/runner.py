@@ -34,7 +34,7 @@ from azgym.bench.isolation import BACKENDS, DEFAULT_TIME_LIMIT, IsolatedRun
 from azgym.bench.outcome import Outcome
 from azgym.bench.processes import start_fork_server
 from azgym.bench.results import BenchResult, summarize
-from azgym.bench.suites import Case, Suite
+from azgym.bench.suites import NO_TEST_SPLIT, Case, Suite
 from azgym.bench.wire import pack, pack_map
 from azgym.bench.worker import hide_process
 from azgym.core import BeaconMap, pose_error
@@ -197,6 +197,8 @@ def run_benchmark(
     """
     if split not in ("dev", "test"):
         raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
+    if split == "test" and seed is None and suite.routes:
+        raise InvalidInputError(NO_TEST_SPLIT.format(suite=suite.name))
     contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
     if secret := seed is None and split == "test":

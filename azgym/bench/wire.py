@@ -182,7 +182,7 @@ def heard(inbox: bytearray) -> list[list[Any]]:
             break
         try:
             message = json.loads(bytes(inbox[_LENGTH.size:_LENGTH.size + size]))
-        except ValueError:
+        except (ValueError, RecursionError):  # RecursionError: nested too deeply
             raise ProtocolError("a message that is not JSON") from None
         if not isinstance(message, list) or not message:
             raise ProtocolError("a message that is not a list")

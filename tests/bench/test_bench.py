@@ -12,6 +12,7 @@ from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import CAUSES, SUITES, get_suite
 from azgym.bench.table import ranked_table
 from azgym.cli import main
+from azgym.errors import InvalidInputError
 
 FIGURES = ("n", "availability", "failure_rate", "mean_cm", "median_cm", "p75_cm", "p95_cm",
            "max_cm", "heading_mean_deg")
@@ -131,3 +132,15 @@ def test_cli_default_run_prints_a_ranked_table_and_writes_results(tmp_path, caps
     assert len(lines) == 1 + 6 * summary["n_frames"]
 
 
+
+
+@pytest.mark.parametrize("name", ["warehouse-routes", "image-routes", "route-events"])
+def test_a_suite_of_driven_routes_has_no_secret_test_split(name):
+    # Its routes are the same for every seed: a test split's true poses would be the dev split's.
+    suite = get_suite(name)
+    dev = suite.build(suite.dev_seed, True)
+    other = suite.build(suite.dev_seed + 1, True)
+    assert [case.pose for case in dev] == [case.pose for case in other]
+    with pytest.raises(InvalidInputError, match=rf"split: {name} has no test split: its routes "
+                                               r"are the same for every seed"):
+        run_benchmark(suite, split="test", quick=True)

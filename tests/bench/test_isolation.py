@@ -252,3 +252,14 @@ def test_a_plugin_scribbling_on_its_build_progress_cannot_wait_without_end(phase
     warming = Worker(None, None, [worker.WARMING, int(1001e9)], None, started=1000.0)
     assert builtin._deadline(warming) == 1001.0 + STARTUP_LIMIT  # a built-in's compile allowance
     assert run._deadline(warming) <= 1000.0 + STARTUP_LIMIT  # not a plug-in's
+
+
+def test_a_message_nested_too_deeply_is_a_protocol_breach_not_a_crash():
+    import struct
+
+    from azgym.bench.wire import ProtocolError, heard
+
+    body = b"[" * 100_000 + b"]" * 100_000
+    inbox = bytearray(struct.pack("!i", len(body)) + body)
+    with pytest.raises(ProtocolError, match="not JSON"):
+        heard(inbox)

@@ -580,3 +580,11 @@ def test_the_recovery_column_sorts_never_after_every_time_in_headless_chromium(
     up = attributes["up"].split(";")
     assert up[-1] == "never (4/4)" and float(up[0]) >= 0
     assert attributes["down"].split(";") == up[::-1]
+
+
+def test_a_test_split_entry_of_a_route_suite_is_refused(route_entry):
+    # The same routes for every seed: its "test" frames would have the dev split's true poses.
+    rewrite(route_entry, lambda e: e.update(split="test", seed=12345))
+    with pytest.raises(L.LeaderboardError, match="route-events has no test split: its routes "
+                                                 "are the same for every seed"):
+        L.load_entry(route_entry)

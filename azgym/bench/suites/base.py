@@ -23,6 +23,11 @@ from azgym.sensing.motion import Motion, joined
 if TYPE_CHECKING:
     from azgym.world.drive import Frame
 
+NO_TEST_SPLIT = (
+    "split: {suite} has no test split: its routes are the same for every seed (the seed draws "
+    "only the noise), so frames drawn from a secret seed would have the dev split's true poses, "
+    "which a localizer can redraw; score it on the dev split")
+"""Why a suite of driven routes has no test split (``Suite.routes``)."""
 CAUSES = ("clean", "partial", "moved", "ghost", "misidentified", "outlier")
 """Case causes, from harmless to harmful; a case's cause is its worst detection's."""
 
@@ -73,6 +78,8 @@ class Suite:
         dev_seed: The seed of the public ``dev`` split.
         build: ``build(seed, quick)`` draws the cases.
         routes: Whether its cases are driven routes (sequences with motion): trackers' suites.
+            Such a suite drives the same routes for every seed, so it has no test split
+            (:data:`NO_TEST_SPLIT`).
     """
 
     name: str
