@@ -195,10 +195,7 @@ def run_benchmark(
         address: The Ray cluster's address (``backend="ray"`` only).
         maps: Beacon map of each scenario the cases name (default: the shipped scenarios').
     """
-    if split not in ("dev", "test"):
-        raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
-    if split == "test" and seed is None and suite.routes:
-        raise InvalidInputError(NO_TEST_SPLIT.format(suite=suite.name))
+    _check_split(suite, split, seed)
     contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
     if secret := seed is None and split == "test":
@@ -224,3 +221,11 @@ def run_benchmark(
     reference = next(c.label for c in contenders if c.is_reference)
     summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference)
     return BenchResult(summary, cases, outcomes)
+
+
+def _check_split(suite: Suite, split: str, seed: int | None) -> None:
+    """The split is "dev" or "test", and a secret test split is one the suite can have."""
+    if split not in ("dev", "test"):
+        raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
+    if split == "test" and seed is None and suite.routes:
+        raise InvalidInputError(NO_TEST_SPLIT.format(suite=suite.name))
