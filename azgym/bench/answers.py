@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from azgym.bench import worker
+from azgym.localize.registry import is_builtin
 
 STARTUP_LIMIT = 300.0
 """Seconds a new worker may take to come up, not counting the build. The first run on a machine
@@ -57,6 +58,16 @@ def overrun_reason(phase: str, time_limit: float, starter: str) -> str:
     if phase == "starting":
         return f"{starter} did not start within {STARTUP_LIMIT:g} s"
     return f"timed out: took longer than the {time_limit:g} s limit"
+
+
+def build_allowance(spec: str, warming: bool, time_limit: float) -> float:
+    """Seconds a contender's build phase may take, the one rule of both backends.
+
+    The compile allowance while a built-in warms up (azgym's own code compiling its kernels),
+    the time limit otherwise: a plug-in that says it is warming, through the messages or the
+    shared progress it can reach, gets no more.
+    """
+    return STARTUP_LIMIT if warming and is_builtin(spec) else time_limit
 
 
 def give_up_note(reason: str) -> str:

@@ -35,6 +35,7 @@ from azgym.bench.answers import (
     STARTUP_LIMIT,
     Answers,
     Report,
+    build_allowance,
     death,
     give_up_note,
     overrun_reason,
@@ -49,7 +50,6 @@ from azgym.bench.processes import (
 )
 from azgym.bench.wire import DONE, MapData, Packed, ProtocolError, heard, step_message, write_all
 from azgym.bench.worker import ANSWER_SIZE
-from azgym.localize.registry import is_builtin
 
 DEFAULT_TIME_LIMIT = 10.0
 """Seconds a localizer may take on one frame (or to be built) before it is stopped: 60 times the
@@ -91,7 +91,6 @@ class IsolatedRun:
                  batches: Sequence[tuple[int, int]]) -> None:
         self.spec, self.params, self.frames, self.maps = spec, params, frames, maps
         self.workers, self.time_limit = workers, time_limit
-        self.builtin = is_builtin(spec)
         self.answers = Answers.unanswered(len(frames))
         self.messages: list[bytes | None] = [None] * len(frames)
         self.queue = [_Batch(start, stop) for start, stop in batches]
@@ -225,12 +224,11 @@ class IsolatedRun:
             # The phase and its start are the worker's word, which a plug-in can overwrite: they
             # may shorten the wait, never lengthen it past the runner's own bound. Only a
             # built-in is given the compile allowance.
-            bound = w.started + STARTUP_LIMIT + (STARTUP_LIMIT if self.builtin
-                                                 else self.time_limit)
-            if w.progress[0] == worker.BUILDING:  # the worker set it: the build has begun
-                return min(w.progress[1] / 1e9 + self.time_limit, bound)
-            if w.progress[0] == worker.WARMING and self.builtin:  # compiling its kernels
-                return min(w.progress[1] / 1e9 + STARTUP_LIMIT, bound)
+            bound = w.started + STARTUP_LIMIT + build_allowance(self.spec, True, self.time_limit)
+            if w.progress[0] in (worker.BUILDING, worker.WARMING):  # the build has begun
+                allowance = build_allowance(self.spec, w.progress[0] == worker.WARMING,
+                                            self.time_limit)
+                return min(w.progress[1] / 1e9 + allowance, bound)
             return min(w.started + STARTUP_LIMIT, bound)
         if w.batch is None:
             return time.monotonic() + 1.0

@@ -43,13 +43,13 @@ from azgym.bench.answers import (
     STARTUP_LIMIT,
     Answers,
     Report,
+    build_allowance,
     give_up_note,
     overrun_reason,
     record_answers,
 )
 from azgym.bench.wire import MapData, Packed
 from azgym.errors import InvalidInputError, require
-from azgym.localize.registry import is_builtin
 
 CONNECT_TIMEOUT = 5.0
 """Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
@@ -292,9 +292,9 @@ class RayRun:
             self._lose(slot, item[1])
             return
         if item[0] in ("building", "warming"):
-            slot.phase = item[0]  # only a built-in is given the compile allowance
-            warming = item[0] == "warming" and is_builtin(self.spec)
-            slot.deadline = now + (STARTUP_LIMIT if warming else self.time_limit)
+            slot.phase = item[0]
+            slot.deadline = now + build_allowance(self.spec, item[0] == "warming",
+                                                  self.time_limit)
         elif item[0] == "ready":
             assert slot.batch is not None
             self._send(slot, slot.batch)
