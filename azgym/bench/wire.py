@@ -89,7 +89,8 @@ def unpack(packed: Packed) -> WorkerFrame:
 def _pack_motion(motion: Motion) -> bytes:
     """[time, K odometry samples, L IMU samples, then each column in turn] as float64 bytes."""
     odometry, imu = motion.odometry, motion.imu
-    columns: list[Any] = [odometry.time, odometry.speed, odometry.steer, imu.time, imu.yaw_rate,
+    columns: list[Any] = [odometry.time, odometry.speed, odometry.steer, odometry.yaw_rate,
+                          imu.time, imu.yaw_rate,
                           np.asarray(imu.accel).reshape(-1), imu.heading]
     head = [float(motion.time), float(np.size(odometry.time)), float(np.size(imu.time))]
     return np.concatenate([head, *(np.asarray(c, dtype=np.float64) for c in columns)]).tobytes()
@@ -98,11 +99,11 @@ def _pack_motion(motion: Motion) -> bytes:
 def _unpack_motion(data: bytes) -> Motion:
     values = np.frombuffer(data, np.float64)
     time, k, n = float(values[0]), int(values[1]), int(values[2])
-    sizes = (k, k, k, n, n, 2 * n, n)
+    sizes = (k, k, k, k, n, n, 2 * n, n)
     ends = 3 + np.cumsum(sizes)
     parts = [values[end - size:end] for size, end in zip(sizes, ends, strict=True)]
-    return Motion(time, OdometrySamples(*parts[:3]),
-                  ImuSamples(parts[3], parts[4], parts[5].reshape(n, 2), parts[6]))
+    return Motion(time, OdometrySamples(*parts[:4]),
+                  ImuSamples(parts[4], parts[5], parts[6].reshape(n, 2), parts[7]))
 
 
 _LENGTH = struct.Struct("!i")

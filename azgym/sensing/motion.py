@@ -66,11 +66,38 @@ class ImuModel:
 
 @dataclass(frozen=True, eq=False)
 class OdometrySamples:
-    """Odometry samples: ``time`` [s], ``speed`` [m/s] and ``steer`` [rad], each shape (K,)."""
+    """Odometry samples, K of them, each array of shape (K,).
+
+    A steered vehicle's odometry reports the steering angle, a differential drive's (or any
+    odometry that reports how fast it turns) the turn rate; the one not reported is NaN
+    throughout (left out, it is filled so).
+
+    Attributes:
+        time: Sample times [s].
+        speed: Forward speed [m/s].
+        steer: Steering angle [rad] (NaN: not reported).
+        yaw_rate: Turn rate, counter-clockwise [rad/s] (NaN: not reported).
+    """
 
     time: FloatArray
     speed: FloatArray
     steer: FloatArray
+    yaw_rate: FloatArray = None  # type: ignore[assignment]  # NaN-filled in __post_init__
+
+    def __post_init__(self) -> None:
+        if self.yaw_rate is None:
+            object.__setattr__(self, "yaw_rate", np.full(np.shape(self.time), math.nan))
+
+    @classmethod
+    def turning(cls, time: FloatArray, speed: FloatArray, yaw_rate: FloatArray
+                ) -> OdometrySamples:
+        """Samples of an odometry that reports the turn rate (no steering angle)."""
+        return cls(time, speed, np.full(np.shape(time), math.nan), yaw_rate)
+
+    @property
+    def reports_yaw_rate(self) -> bool:
+        """Whether these samples give the turn rate rather than the steering angle."""
+        return bool(np.size(self.time)) and not np.isnan(self.yaw_rate).all()
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,7 +138,7 @@ def joined(motions: list[Motion]) -> Motion:
     if len(motions) == 1:
         return motions[0]
     odometry = OdometrySamples(*(np.concatenate([getattr(m.odometry, key) for m in motions])
-                                 for key in ("time", "speed", "steer")))
+                                 for key in ("time", "speed", "steer", "yaw_rate")))
     imu = ImuSamples(*(np.concatenate([getattr(m.imu, key) for m in motions])
                        for key in ("time", "yaw_rate", "accel", "heading")))
     return Motion(motions[-1].time, odometry, imu)

@@ -42,7 +42,8 @@ class Case:
     Attributes:
         scenario: Name of the scenario (its beacon map is the localizer's map).
         measurements: The frame's detections.
-        pose: The true camera pose (x, y, heading) [m, m, rad].
+        pose: The true camera pose (x, y, heading) [m, m, rad]; the heading is NaN where the
+            truth has none (position-only truth: scored on position alone).
         cause: The worst fault among the detections (one of ``CAUSES``).
         group: A sub-set name for reports (e.g. "K=3", "warehouse-small, heavy").
         sequence: The sequence (a driven route) the frame belongs to, in order; "" for a frame
@@ -53,6 +54,8 @@ class Case:
         time: The frame's time in its sequence [s] (NaN for a frame on its own).
         event: On the first frame after an event of the sequence ("kidnap": the forklift was
             carried elsewhere without motion data; "outage": no frames for a while), its name.
+        frame: The frame's number in its recording (a log's ``frame`` column), or None: the
+            results number it by its place.
     """
 
     scenario: str
@@ -65,6 +68,7 @@ class Case:
     initial: Pose | None = None
     time: float = math.nan
     event: str = ""
+    frame: int | None = None
 
 
 @dataclass(frozen=True)
