@@ -198,7 +198,8 @@ def parse_profile(data: dict[str, Any], report: Callable[[str], None]) -> Profil
         report(f"sensor.coverage: must be true or false, got {coverage!r}")
     elif coverage is not None:
         sections["sensor"]["coverage"] = coverage
-    if "wheelbase" in sections["vehicle"] and kind == DIFFERENTIAL_DRIVE:
+    if sections["vehicle"].get("kind") == DIFFERENTIAL_DRIVE and \
+            sections["vehicle"].pop("wheelbase", None) is not None:
         report("vehicle.wheelbase: a differential-drive vehicle has no steering wheelbase")
     return Profile(VehicleProfile(**sections["vehicle"]), SensorProfile(**sections["sensor"]),
                    MotionProfile(**sections["motion"]))
