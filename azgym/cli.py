@@ -2,7 +2,7 @@
 
 azgym bench [--suite S | --data DIR] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
             [--workers N] [--time-limit SECONDS] [--quick] [--out DIR] [--navigator NAME ...]
-            [--backend local|ray] [--address ADDR]
+            [--backend local|ray] [--address ADDR] [--profile PROFILE.toml]
 azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR]
 azgym import DIR
 azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [--motion-rate HZ]
@@ -39,10 +39,13 @@ from typing import TYPE_CHECKING, Any
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
 from azgym.cli_evaluate import add_evaluate
 from azgym.cli_layout import add_layout
+from azgym.cli_leaderboard import add_leaderboard
 from azgym.cli_logs import add_logs
 from azgym.cli_options import (
     check_backend,
     out_folder,
+    profile_option,
+    read_profile_option,
     resolve_workers,
     seconds_option,
     workers_option,
@@ -54,6 +57,7 @@ from azgym.errors import AzgymError, InvalidInputError
 
 if TYPE_CHECKING:
     from azgym.bench.contenders import Contender
+    from azgym.profile import Profile
 
 
 DEFAULT_SUITE = "warehouse-static"
@@ -68,10 +72,11 @@ def _bench(args: argparse.Namespace) -> int:
     from azgym.nav.suites import NAVIGATION_SUITES
 
     check_backend(args)
+    profile = read_profile_option(args)
     if args.data is not None:
         from azgym.cli_logs import bench_data
 
-        return bench_data(args, _progress_printer())
+        return bench_data(args, _progress_printer(), profile)
     if args.suite in NAVIGATION_SUITES:
         from azgym.cli_navigation import bench_navigation
 
@@ -84,111 +89,47 @@ def _bench(args: argparse.Namespace) -> int:
     # With no suite named, the default suite runs in its quick size: the README's main job.
     quick = args.quick or args.suite is None
     suite = SUITES[args.suite or DEFAULT_SUITE]
+    if profile is not None:
+        suite.check_profile(profile)
     if args.time_limit is None:
         args.time_limit = DEFAULT_TIME_LIMIT
-    contenders = _contenders(args.localizer, args.with_builtins, args.time_limit)
+    contenders = _contenders(args.localizer, args.with_builtins, args.time_limit, profile)
     workers = resolve_workers(args)
     prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
     started = time.perf_counter()
     result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
                            time_limit=args.time_limit, progress=_progress_printer(),
-                           backend=args.backend, address=args.address)
+                           backend=args.backend, address=args.address, profile=profile)
     written = result.write(Path(args.out))
     print(run_report(result.summary, time.perf_counter() - started, written))
     return 0
 
 
 def _contenders(specs: Sequence[str], with_builtins: bool,
-                time_limit: float = DEFAULT_TIME_LIMIT) -> list[Contender]:
+                time_limit: float = DEFAULT_TIME_LIMIT,
+                profile: Profile | None = None) -> list[Contender]:
     """The contenders ``--localizer`` names (every built-in if none), each built once first.
 
     A bad name, spec or hyperparameter stops the command here, before any frame is drawn,
     rather than scoring a localizer that cannot run as failing every frame. Each is built in a
-    worker process, as the run would build it, within the time limit.
+    worker process, as the run would build it, within the time limit; with a profile, the
+    built-ins too (with the profile's defaults).
     """
     from azgym.bench.contenders import (
         check_buildable,
         contender,
-        default_contenders,
         with_defaults,
     )
 
     named: dict[str, Contender] = {}  # by label: a localizer named twice runs once
     for candidate in map(contender, specs):
         named.setdefault(candidate.label, candidate)
-    for candidate in named.values():
-        check_buildable(candidate, time_limit)
-    if not named:
-        return default_contenders()
-    return with_defaults(named.values()) if with_builtins else list(named.values())
-
-
-def _leaderboard(args: argparse.Namespace) -> int:
-    from azgym.bench import board, leaderboard
-    from azgym.nav.board import verify_navigation
-    from azgym.nav.results_file import is_navigation_file
-
-    if args.action == "submit":
-        path = leaderboard.submit(Path(args.results), args.localizer, Path(args.entries),
-                                  name=args.name, version=args.version, authors=args.authors,
-                                  link=args.link, overwrite=args.overwrite,
-                                  datasets=_datasets(args))
-        print(f"wrote {path}")
-    elif args.action == "build":
-        for path in board.build(Path(args.entries), Path(args.out),
-                                _navigation_dir(args.navigation, Path(args.entries)),
-                                datasets=_datasets(args),
-                                skip_unavailable=args.skip_unavailable):
-            print(f"wrote {path}")
-    elif is_navigation_file(Path(args.entry)):
-        print(f"{args.entry}: rerunning its navigators and localizers (azgym's own)", flush=True)
-        differences = verify_navigation(Path(args.entry), workers=resolve_workers(args))
-        return _verdict(args.entry, differences)
-    else:
-        entry = leaderboard.load_entry(Path(args.entry), _datasets(args))
-        test = entry["split"] == "test"
-        where = "on a fresh secret seed" if test else "on its own frames"
-        print(f"{args.entry}: rerunning its localizer {entry['localizer']['spec']!r}, which is "
-              f"the submitter's code, {where}", flush=True)
-        differences = leaderboard.verify(Path(args.entry), workers=resolve_workers(args),
-                                         datasets=_datasets(args))
-        return _verdict(args.entry, differences, test)
-    return 0
-
-
-def _datasets(args: argparse.Namespace) -> Path | None:
-    """``--datasets DIR``: where dataset entries' logs are looked for (None: the default)."""
-    return None if args.datasets is None else Path(args.datasets)
-
-
-def _verdict(entry: str, differences: dict[str, tuple[Any, Any]],
-             test: bool = False) -> int:
-    """Print a rerun's differing figures, or that it reproduced; the command's exit status.
-
-    A test entry is rerun on fresh frames, so its figures agree when their 95 % intervals
-    overlap (:func:`azgym.bench.leaderboard.verify`); any other, within 1e-6.
-    """
-    if differences:
-        for key, (claimed, fresh) in differences.items():
-            print(f"{key}: entry {claimed}, rerun {fresh}")
-        print(f"{entry}: NOT reproduced")
-        return 1
-    agreed = ("each 95 % interval overlaps the rerun's" if test
-              else "every accuracy figure within 1e-6")
-    print(f"{entry}: reproduced ({agreed})")
-    return 0
-
-
-def _navigation_dir(named: str | None, entries: Path) -> Path | None:
-    """The navigation results folder: the one named (it must exist), else any beside entries."""
-    from azgym.bench.entry_files import LeaderboardError
-
-    if named is None:
-        beside = entries.parent / "navigation"
-        return beside if beside.is_dir() else None
-    if not Path(named).is_dir():
-        raise LeaderboardError(f"--navigation {named}: no such folder")
-    return Path(named)
+    chosen = list(named.values()) if named and not with_builtins else \
+        with_defaults(named.values())
+    for candidate in chosen:  # a built-in may refuse a profile's value: said before the run
+        if candidate.label in named or profile is not None:
+            check_buildable(candidate, time_limit, profile)
+    return chosen
 
 
 def _progress_printer():
@@ -279,7 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"azgym {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
     _add_bench(commands)
-    _add_leaderboard(commands)
+    add_leaderboard(commands)
     add_reproduce(commands)
     add_study(commands)
     add_train(commands)
@@ -321,46 +262,12 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
                             "shipped policy); repeatable (default: both)")
     bench.add_argument("--data", metavar="DIR", help="score on a log of bearing data instead of "
                                                      "a suite (docs/logs.md)")
+    bench.add_argument("--profile", type=profile_option, metavar="PROFILE.toml",
+                       help="a profile (docs/logs.md): every contender's defaults (a spec's own "
+                            "win), a suite's simulated noise, or fields over a log's own")
     bench.add_argument("--quick", action="store_true", help="the suite's small version")
     bench.add_argument("--out", type=out_folder, default="results/bench", help="output folder")
     bench.set_defaults(handler=_bench)
-
-
-DATASETS_HELP = ("where the logs of entries scored on a log are, as DIR/NAME/ (default: "
-                 "datasets/ beside the entries, if there is one; shipped logs are found by name)")
-
-
-def _add_leaderboard(commands: argparse._SubParsersAction) -> None:
-    """``azgym leaderboard submit|build|verify``: make, publish and check entries."""
-    board = commands.add_parser("leaderboard", help="submit, build or verify entries")
-    actions = board.add_subparsers(dest="action", required=True)
-    submit = actions.add_parser("submit", help="make an entry from an azgym bench output")
-    submit.add_argument("results", help="the folder azgym bench wrote (results.json, frames.csv)")
-    submit.add_argument("--localizer", required=True, help="the localizer's label in the results")
-    submit.add_argument("--name", required=True, help="entry name (letters, digits, . _ -)")
-    submit.add_argument("--version", required=True, help="the localizer's version")
-    submit.add_argument("--authors", required=True, nargs="+")
-    submit.add_argument("--link", default="", help="paper or code")
-    submit.add_argument("--entries", default="leaderboard/entries")
-    submit.add_argument("--overwrite", action="store_true")
-    submit.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
-    build = actions.add_parser("build", help="write leaderboard/README.md and index.html")
-    build.add_argument("--entries", default="leaderboard/entries")
-    build.add_argument("--out", default="leaderboard")
-    build.add_argument("--navigation", metavar="DIR",
-                       help="navigation results files (default: navigation/ beside --entries, "
-                            "if there is one)")
-    build.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
-    build.add_argument("--skip-unavailable", action="store_true",
-                       help="leave entries whose dataset is not found off the board (listed "
-                            "as unchecked) instead of refusing to build")
-    verify = actions.add_parser("verify", help="rerun an entry and compare its figures")
-    verify.add_argument("entry", help="path of the entry's .json, or of a navigation results "
-                                      "file")
-    verify.add_argument("--workers", type=workers_option, default=1,
-                        help="processes (0: one per core; default: 1)")
-    verify.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
-    board.set_defaults(handler=_leaderboard)
 
 
 def _add_listings(commands: argparse._SubParsersAction) -> None:

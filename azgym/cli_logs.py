@@ -1,6 +1,7 @@
 """``azgym import DIR``, ``azgym export route`` and ``azgym bench --data DIR``: logged data.
 
-``import`` checks a log folder (docs/logs.md) and prints what it holds, or every problem found
+``import`` checks a log folder (docs/logs.md) and prints what it holds and what the reader
+changed (its notes: repeated time stamps merged, motion samples trimmed), or every problem found
 with its file, line and column; ``export route`` writes a simulated route as a log; ``bench
 --data`` scores localizers and trackers on a log as on a suite.
 """
@@ -17,6 +18,7 @@ import numpy as np
 if TYPE_CHECKING:
     from azgym.bench.runner import Progress
     from azgym.logs.read import Log
+    from azgym.profile import Profile
 
 
 def add_logs(commands: argparse._SubParsersAction) -> None:
@@ -47,34 +49,46 @@ def _import(args: argparse.Namespace) -> int:
 
 
 def describe(log: Log) -> str:
-    """What a log holds, in a few lines: ``azgym import``'s summary."""
+    """What a log holds, in a few lines, and the reader's notes: ``azgym import``'s summary."""
+    from azgym.logs.problems import seconds
+
     manifest, frames, detections = log.manifest, log.frames, log.detections
     times, ids = frames["time"], detections["id"]
     per_frame = np.bincount(detections["frame"], minlength=len(times))
     known = log.beacons.index_of(ids) >= 0
     sequences = list(dict.fromkeys(frames["sequence"]))
+    truth = "none (cannot score)" if not log.has_truth else \
+        "x, y, heading on every frame" if log.has_heading else \
+        "x, y on every frame (position only: heading not scored)"
     lines = [
         f"{manifest.name}: {'SIMULATED' if manifest.simulated else 'real'} data, log format "
         f"{manifest.format}; {manifest.description}",
         f"  map: {log.map_name}, {len(log.beacons)} beacons",
-        f"  frames: {len(times)} over {times[-1] - times[0]:.3f} s, in {len(sequences)} "
-        f"sequence(s); {len(ids)} detections ({per_frame.mean():.2f} a frame; "
+        f"  frames: {len(times)} over {times[-1] - times[0]:.3f} s (from {seconds(times[0])}), in "
+        f"{len(sequences)} sequence(s); {len(ids)} detections ({per_frame.mean():.2f} a frame; "
         f"{int((per_frame == 0).sum())} frames without any)",
         f"  ids not in the map: {int((~known & (ids >= 0)).sum())} detections; undecoded "
         f"(negative ids): {int((ids < 0).sum())}",
-        f"  truth: {'x, y, heading on every frame' if log.has_truth else 'none (cannot score)'}"
-        f"{f' ({manifest.truth})' if manifest.truth and log.has_truth else ''}; labels: "
-        f"{'yes' if detections['labelled'] else 'no'}; quality: "
+        f"  truth: {truth}{f' ({manifest.truth})' if manifest.truth and log.has_truth else ''}; "
+        f"labels: {'yes' if detections['labelled'] else 'no'}; quality: "
         f"{', '.join(log.quality_names) or 'none'}",
     ]
     for name, columns in (("odometry", log.odometry), ("IMU", log.imu)):
         if columns is None:
             lines.append(f"  {name}: none")
             continue
-        late = int((columns["time"] > times[-1]).sum())
-        lines.append(f"  {name}: {columns['time'].size} samples"
-                     f"{f', {late} after the last frame (unused)' if late else ''}")
+        given = [key for key in ("speed", "steer", "yaw_rate", "ax", "ay", "heading")
+                 if key in columns.values]
+        lines.append(f"  {name}: {columns['time'].size} samples ({', '.join(given)}"
+                     f"{'; no accelerations' if name == 'IMU' and 'ax' not in given else ''})")
+    profile = manifest.profile.hyperparameters()
+    if profile:
+        lines.append("  profile: " + ", ".join(f"{key} = {value!r}"
+                                               for key, value in profile.items()))
     lines.append(f"  sha256 of its files: {log.sha256}")
+    if log.notes:
+        lines.append(f"  the reader changed ({len(log.notes)}):")
+        lines += [f"    {note}" for note in log.notes]
     return "\n".join(lines)
 
 
@@ -87,8 +101,11 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
-def bench_data(args: argparse.Namespace, progress: Progress) -> int:
-    """``azgym bench --data DIR``: every contender on a log's frames."""
+def bench_data(args: argparse.Namespace, progress: Progress, profile: Profile | None) -> int:
+    """``azgym bench --data DIR [--profile PROFILE.toml]``: every contender on a log's frames.
+
+    Each takes its defaults from the log's profile, with ``profile``'s fields over it.
+    """
     from azgym.bench.isolation import DEFAULT_TIME_LIMIT
     from azgym.bench.table import run_report
     from azgym.cli import _contenders
@@ -96,7 +113,7 @@ def bench_data(args: argparse.Namespace, progress: Progress) -> int:
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
     from azgym.logs import log_cases, read_log
-    from azgym.logs.bench import run_log_benchmark, write_log_results
+    from azgym.logs.bench import log_profile, run_log_benchmark, write_log_results
 
     if (args.suite is not None or args.navigator or args.quick or args.split != "dev"
             or args.backend != "local" or args.address is not None):
@@ -104,12 +121,15 @@ def bench_data(args: argparse.Namespace, progress: Progress) -> int:
                                 "--suite, --navigator, --quick, --split, --backend or --address")
     log = read_log(args.data)
     log_cases(log)  # a log without truth stops here, before any localizer is built
+    for note in log.notes:  # what the reader changed, said before the figures it shapes
+        progress(f"note: {note}")
     time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
-    contenders = _contenders(args.localizer, args.with_builtins, time_limit)
+    contenders = _contenders(args.localizer, args.with_builtins, time_limit,
+                             log_profile(log, profile))
     prepare_folder(Path(args.out))
     started = time.perf_counter()
     result = run_log_benchmark(log, contenders, workers=resolve_workers(args),
-                               time_limit=time_limit, progress=progress)
+                               time_limit=time_limit, progress=progress, profile=profile)
     written = write_log_results(result, log, Path(args.out))
     print(run_report(result.summary, time.perf_counter() - started, written))
     return 0

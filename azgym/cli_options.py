@@ -4,16 +4,19 @@
 ``sweep``, ``layout``, ``leaderboard verify`` and ``reproduce``, and are refused the same way
 while the command line is read; :func:`check_backend` and :func:`resolve_workers` are the one
 reading of ``--backend``, ``--address`` and ``--workers`` for the commands that run the
-benchmark.
+benchmark. ``--profile PROFILE.toml`` (:func:`profile_option`) names a profile file.
 """
 
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from azgym.arguments import time_limit
 from azgym.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from azgym.profile import Profile
 
 
 def seconds_option(text: str) -> float:
@@ -45,6 +48,33 @@ def out_folder(text: str) -> str:
     if not text.strip():
         raise argparse.ArgumentTypeError("is empty: give a folder (. for the current one)")
     return text
+
+
+def profile_option(text: str) -> str:
+    """``--profile PROFILE.toml``: refuse an empty file name (it names no profile)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty: give a profile file (PROFILE.toml, as "
+                                         "azgym calibrate writes it)")
+    return text
+
+
+def read_profile_option(args: argparse.Namespace) -> Profile | None:
+    """``--profile``: the profile file read (None: not given), for a frame suite or a log.
+
+    Raises:
+        InvalidInputError: With a navigation suite or ``--navigator``; a profile file that
+            cannot be read or holds a bad field (naming the file and the field).
+    """
+    from azgym.nav.suites import NAVIGATION_SUITES
+    from azgym.profile import read_profile
+
+    if args.profile is None:
+        return None
+    if args.navigator or args.suite in NAVIGATION_SUITES:
+        raise InvalidInputError("--profile sets the defaults of localizers and trackers and the "
+                                "noise of a frame suite's simulator; a navigation suite "
+                                "(--navigator) takes none")
+    return read_profile(args.profile)
 
 
 def check_backend(args: argparse.Namespace) -> None:

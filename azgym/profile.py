@@ -143,21 +143,21 @@ class Profile:
         return not self.hyperparameters()
 
 
-_Rule = tuple[str, float, float, bool]
-"""(unit, lowest, highest, lowest excluded) of a number."""
+_Rule = tuple[str, float, float, bool, bool]
+"""(unit, lowest, highest, lowest excluded, highest excluded) of a number."""
 _NUMBERS: dict[str, dict[str, _Rule]] = {
-    "vehicle": {"camera_ahead": ("m", -10.0, 10.0, False),
-                "wheelbase": ("m", 0.0, 20.0, True)},
-    "sensor": {"delta_alpha_d": ("rad", 0.0, math.pi / 2, False),
-               "field_of_view": ("rad", 0.0, 2 * math.pi, True)},
-    "motion": {"speed_factor": ("", 0.0, 10.0, True),
-               "speed_noise": ("m/s", 0.0, 10.0, False),
-               "speed_scale": ("", 0.0, 1.0, False),
-               "scale_walk": ("1/√s", 0.0, 1.0, False),
-               "turn_rate_noise": ("rad/s", 0.0, 10.0, False),
-               "bias_walk": ("rad/s/√s", 0.0, 1.0, False),
-               "heading_walk": ("rad/√s", 0.0, 10.0, False),
-               "position_walk": ("m/√s", 0.0, 10.0, False)},
+    "vehicle": {"camera_ahead": ("m", -10.0, 10.0, False, False),
+                "wheelbase": ("m", 0.0, 20.0, True, False)},
+    "sensor": {"delta_alpha_d": ("rad", 0.0, math.pi / 2, False, True),
+               "field_of_view": ("rad", 0.0, 2 * math.pi, True, False)},
+    "motion": {"speed_factor": ("", 0.0, 10.0, True, False),
+               "speed_noise": ("m/s", 0.0, 10.0, False, False),
+               "speed_scale": ("", 0.0, 1.0, False, False),
+               "scale_walk": ("1/√s", 0.0, 1.0, False, False),
+               "turn_rate_noise": ("rad/s", 0.0, 10.0, False, False),
+               "bias_walk": ("rad/s/√s", 0.0, 1.0, False, False),
+               "heading_walk": ("rad/√s", 0.0, 10.0, False, False),
+               "position_walk": ("m/√s", 0.0, 10.0, False, False)},
 }
 _OTHER = {"vehicle": {"kind"}, "sensor": {"coverage"}, "motion": set()}
 SECTIONS = tuple(_NUMBERS)
@@ -207,12 +207,14 @@ def parse_profile(data: dict[str, Any], report: Callable[[str], None]) -> Profil
 
 def _number_problem(value: Any, rule: _Rule) -> str | None:
     """What is wrong with a profile number, or None."""
-    unit, low, high, low_open = rule
+    unit, low, high, low_open, high_open = rule
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         return f"must be a number{f' [{unit}]' if unit else ''}, got {value!r}"
-    if value > high or value < low or (low_open and value == low):
-        left = "(" if low_open else "["
-        return f"must be in {left}{low:g}, {high:g}]{f' {unit}' if unit else ''}, got {value!r}"
+    if value > high or value < low or (low_open and value == low) or \
+            (high_open and value == high):
+        left, right = "(" if low_open else "[", ")" if high_open else "]"
+        return (f"must be in {left}{low:g}, {high:g}{right}{f' {unit}' if unit else ''}, got "
+                f"{value!r}")
     return None
 
 

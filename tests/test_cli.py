@@ -8,26 +8,27 @@ import textwrap
 
 import pytest
 
-from azgym import cli, cli_studies
+from azgym import cli, cli_leaderboard, cli_studies
 from azgym.bench import runner
 from azgym.bench.contenders import Contender, default_contenders
 
 PARSED = [
     pytest.param(["bench"], cli._bench,
                  {"suite": None, "localizer": [], "with_builtins": False, "split": "dev",
-                  "workers": 0, "quick": False, "out": "results/bench"}, id="bench"),
+                  "workers": 0, "quick": False, "out": "results/bench", "profile": None},
+                 id="bench"),
     pytest.param(["bench", "--localizer", "ransac", "--localizer", "lsq", "--split", "test"],
                  cli._bench, {"localizer": ["ransac", "lsq"], "split": "test"},
                  id="bench-repeated-localizer"),
     pytest.param(["leaderboard", "submit", "out", "--localizer", "ransac", "--name", "mine",
-                  "--version", "1.0", "--authors", "A. B.", "C. D."], cli._leaderboard,
+                  "--version", "1.0", "--authors", "A. B.", "C. D."], cli_leaderboard._leaderboard,
                  {"action": "submit", "results": "out", "authors": ["A. B.", "C. D."],
                   "link": "", "entries": "leaderboard/entries", "overwrite": False},
                  id="leaderboard-submit"),
-    pytest.param(["leaderboard", "build"], cli._leaderboard,
+    pytest.param(["leaderboard", "build"], cli_leaderboard._leaderboard,
                  {"action": "build", "entries": "leaderboard/entries", "out": "leaderboard"},
                  id="leaderboard-build"),
-    pytest.param(["leaderboard", "verify", "entry.json"], cli._leaderboard,
+    pytest.param(["leaderboard", "verify", "entry.json"], cli_leaderboard._leaderboard,
                  {"action": "verify", "entry": "entry.json", "workers": 1},
                  id="leaderboard-verify"),
     pytest.param(["reproduce", "paper"], cli_studies._reproduce_paper,

@@ -53,7 +53,7 @@ def test_good_profile_reads_every_field() -> None:
 
 
 @pytest.mark.parametrize(("text", "problem"), [
-    ("[sensor]\ndelta_alpha_d = 2.0", "sensor.delta_alpha_d: must be in [0, 1.5708] rad"),
+    ("[sensor]\ndelta_alpha_d = 2.0", "sensor.delta_alpha_d: must be in [0, 1.5708) rad"),
     ("[sensor]\ndelta_alpha_d = 'big'", "sensor.delta_alpha_d: must be a number [rad]"),
     ("[sensor]\nfield_of_view = 0.0", "sensor.field_of_view: must be in (0, 6.28319] rad"),
     ("[sensor]\ncoverage = 1", "sensor.coverage: must be true or false"),
@@ -120,3 +120,9 @@ def test_degrees_mistake_is_caught() -> None:
     """A Δα_d of 2.2 written in degrees is outside [0, π/2] rad."""
     _, problems = _parse(f"[sensor]\ndelta_alpha_d = {2.2:.1f}")
     assert problems and math.radians(2.2) < math.pi / 2
+
+
+def test_delta_alpha_d_of_a_right_angle_is_refused() -> None:
+    """Eq. 1's half-width is below π/2 (the error model and ransac need it so)."""
+    _, problems = _parse(f"[sensor]\ndelta_alpha_d = {math.pi / 2!r}")
+    assert problems and problems[0].startswith("sensor.delta_alpha_d: must be in [0, 1.5708)")

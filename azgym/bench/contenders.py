@@ -15,9 +15,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT, build_problem
+from azgym.bench.profiles import contender_params
 from azgym.bench.worker import warm_up as warm_up_tracker
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import parse_spec, spec_label
+from azgym.profile import Profile
 from azgym.track.base import make_tracker
 
 REFERENCE = "ransac"
@@ -78,33 +80,38 @@ def with_defaults(contenders: Iterable[Contender]) -> list[Contender]:
     return defaults + [c for c in contenders if c.label not in labels]
 
 
-def check_buildable(candidate: Contender, time_limit: float = DEFAULT_TIME_LIMIT) -> None:
+def check_buildable(candidate: Contender, time_limit: float = DEFAULT_TIME_LIMIT,
+                    profile: Profile | None = None) -> None:
     """Build the contender once, in a worker: a bad name, spec or hyperparameter raises here.
 
     The build runs where the benchmark runs the localizer (:mod:`azgym.bench.isolation`), with
-    the same time limit, so a plug-in whose module or constructor hangs or crashes is reported
-    instead of stopping the caller.
+    the same time limit and hyperparameters (the profile's defaults under its own), so a
+    plug-in whose module or constructor hangs or crashes is reported instead of stopping the
+    caller.
 
     Raises:
         InvalidInputError: Naming the contender and what went wrong.
     """
-    problem = build_problem(candidate.spec, candidate.params, time_limit)
+    problem = build_problem(candidate.spec, candidate.params, time_limit, profile)
     if problem:
         raise InvalidInputError(f"cannot build {candidate.label}: {problem}")
 
 
-def warm_up(contenders: Iterable[Contender]) -> None:
+def warm_up(contenders: Iterable[Contender], profile: Profile | None = None) -> None:
     """Run each contender through the warm-up route (:func:`azgym.bench.worker.warm_up`).
 
     That loads (or compiles) its kernels for every specialization a run's frames reach. The
     workers' fork server does this for every default contender before it forks any worker.
     On a machine's first run the runner does it too, for the contenders other than ``ransac``,
     while the fork server compiles ``ransac`` (the longest to compile): the fork server then
-    finds the others in numba's cache, which shortens the first run by a third.
+    finds the others in numba's cache, which shortens the first run by a third. Each is built
+    as the run builds it, with the profile's defaults under its hyperparameters (built-ins
+    only: this runs in the caller's process).
     """
     for contender in contenders:
         try:
-            warm_up_tracker(make_tracker(contender.spec, **contender.params))
+            warm_up_tracker(make_tracker(contender.spec, **contender_params(
+                contender.spec, contender.params, profile)))
         except Exception:  # noqa: BLE001, S112 - a worker meets (and scores) the same failure
             continue
 

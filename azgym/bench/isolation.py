@@ -50,6 +50,7 @@ from azgym.bench.processes import (
 )
 from azgym.bench.wire import DONE, MapData, Packed, ProtocolError, heard, step_message, write_all
 from azgym.bench.worker import ANSWER_SIZE
+from azgym.profile import Profile
 
 DEFAULT_TIME_LIMIT = 10.0
 """Seconds a localizer may take on one frame (or to be built) before it is stopped: 60 times the
@@ -83,13 +84,16 @@ class IsolatedRun:
     """One contender on a run's frames, in up to ``workers`` worker processes at a time.
 
     ``batches`` are the (start, stop) ranges of frames each sent in one round trip; the runner
-    keeps a sequence (a route) within one, so a tracker sees it whole and in order.
+    keeps a sequence (a route) within one, so a tracker sees it whole and in order. Each worker
+    builds the contender with ``params`` and ``profile``'s defaults under them
+    (:func:`~azgym.bench.profiles.contender_params`).
     """
 
     def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[Packed],
                  maps: Mapping[str, MapData], *, workers: int, time_limit: float,
-                 batches: Sequence[tuple[int, int]]) -> None:
+                 batches: Sequence[tuple[int, int]], profile: Profile | None = None) -> None:
         self.spec, self.params, self.frames, self.maps = spec, params, frames, maps
+        self.profile = profile
         self.workers, self.time_limit = workers, time_limit
         self.answers = Answers.unanswered(len(frames))
         self.messages: list[bytes | None] = [None] * len(frames)
@@ -133,7 +137,7 @@ class IsolatedRun:
 
     def _start(self) -> Worker:
         """A fresh worker process (its batch is sent once it reports ready)."""
-        w = start_worker(self.spec, self.params, self.maps, self.capacity)
+        w = start_worker(self.spec, self.params, self.profile, self.maps, self.capacity)
         self.running.append(w)
         if self.selector is not None:
             self.selector.register(w.conn, selectors.EVENT_READ, w)
@@ -374,13 +378,15 @@ class IsolatedRun:
         self.finished += batch.stop - batch.start
 
 
-def build_problem(spec: str, params: dict[str, Any], time_limit: float) -> str:
+def build_problem(spec: str, params: dict[str, Any], time_limit: float,
+                  profile: Profile | None = None) -> str:
     """Why the localizer cannot be built in a worker ("" when it can), within the time limit.
 
-    The check runs where a benchmark runs the localizer, so a plug-in whose module or
-    constructor hangs, crashes or exits is caught without harm to the caller.
+    The check runs where a benchmark runs the localizer, with the same hyperparameters (the
+    profile's defaults under ``params``), so a plug-in whose module or constructor hangs,
+    crashes or exits is caught without harm to the caller.
     """
     return IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit,
-                       batches=[]).build_problem()
+                       batches=[], profile=profile).build_problem()
 
 

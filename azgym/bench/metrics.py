@@ -7,7 +7,9 @@ frames it would get wrong, and it is infinite when more than a quarter of the fr
 estimate. Boards rank by it (:func:`azgym.bench.table.rank_key`). Beside it, availability says
 how many frames got an estimate, the failure rate counts a missing estimate or one more than
 :data:`FAILURE_DISTANCE` off as a failure, and the other error statistics (mean, median, p75,
-p95, ...) describe the frames that got an estimate.
+p95, ...) describe the frames that got an estimate. Heading errors are NaN where the truth has
+no heading (a log's position-only truth): the heading figures leave them out, and are None
+(``null`` in results.json) when no answered frame has a true heading to score against.
 
 Intervals (:func:`confidence_intervals`) come from a bootstrap that respects how the frames
 were drawn: frames on their own are resampled one by one, the frames of a driven route in
@@ -88,11 +90,14 @@ def summarize_errors(
         n, availability, failure_rate, the headline ``p75_all_cm`` (every run, a missing
         estimate infinite; NaN without runs), and over the runs with an estimate:
         mean/rmse/median/p75/p90/p95/max position error in cm and mean/median heading error in
-        degrees (NaN when no run produced an estimate).
+        degrees (NaN when no run produced an estimate). The heading figures are over the runs
+        whose heading error is known (not NaN: the truth has a heading), and None when an
+        estimate was produced but none of them is: position-only truth, heading not scored.
     """
     ok = np.asarray(ok, dtype=bool)
     position = np.asarray(position_error, dtype=float)[ok] * 100.0
     heading = np.degrees(np.asarray(heading_error, dtype=float)[ok])
+    heading = heading[~np.isnan(heading)]
     n = int(ok.size)
     failures = int(np.count_nonzero(~ok)) + int(np.count_nonzero(position > FAILURE_DISTANCE * 100))
     stats: dict[str, Any] = {
@@ -111,8 +116,8 @@ def summarize_errors(
             p90_cm=float(q90),
             p95_cm=float(q95),
             max_cm=float(position.max()),
-            heading_mean_deg=float(heading.mean()),
-            heading_median_deg=float(np.median(heading)),
+            heading_mean_deg=float(heading.mean()) if heading.size else None,
+            heading_median_deg=float(np.median(heading)) if heading.size else None,
         )
     else:
         for key in ("mean_cm", "rmse_cm", "median_cm", "p75_cm", "p90_cm", "p95_cm", "max_cm",

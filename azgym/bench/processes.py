@@ -20,6 +20,7 @@ from typing import Any
 from azgym.bench import worker
 from azgym.bench.answers import death
 from azgym.bench.wire import STOP, MapData, ProtocolError, heard, write_all
+from azgym.profile import Profile
 
 PRELOAD = "azgym.bench.preload"
 
@@ -56,15 +57,19 @@ class Worker:
     inbox: bytearray = field(default_factory=bytearray)
 
 
-def start_worker(spec: str, params: dict[str, Any], maps: Mapping[str, MapData],
-                 capacity: int) -> Worker:
-    """A fresh worker process for a contender, answering steps of up to ``capacity`` frames."""
+def start_worker(spec: str, params: dict[str, Any], profile: Profile | None,
+                 maps: Mapping[str, MapData], capacity: int) -> Worker:
+    """A fresh worker process for a contender, answering steps of up to ``capacity`` frames.
+
+    It builds the contender with ``params`` and the profile's defaults under them.
+    """
     ctx = context()
     mine, theirs = ctx.Pipe()
     progress = ctx.RawArray("q", [worker.IDLE, 0])
     answers = ctx.RawArray("d", capacity * worker.ANSWER_SIZE)
     process = ctx.Process(target=worker.serve, daemon=True, name=f"azgym {spec}",
-                          args=(theirs, progress, answers, spec, params, maps, os.getcwd()))
+                          args=(theirs, progress, answers, spec, params, profile, maps,
+                                os.getcwd()))
     started = time.monotonic()  # before start(): the worker may begin building at once
     with _caller_main_hidden():
         process.start()

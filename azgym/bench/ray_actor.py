@@ -15,6 +15,7 @@ from typing import Any
 from azgym.bench import worker
 from azgym.bench.answers import death
 from azgym.bench.wire import MapData, Packed, ProtocolError, heard, step_message, write_all
+from azgym.profile import Profile
 
 STREAM_EVERY = 0.05
 """Seconds an actor gathers answers before it streams them back (one Ray item a frame costs
@@ -38,8 +39,9 @@ class RayWorker:
         self.inbox = bytearray()
         self.said: list[list[Any]] = []
 
-    def build(self, spec: str, params: dict[str, Any], maps: Mapping[str, MapData],
-              folder: str, capacity: int) -> Iterator[tuple[Any, ...]]:
+    def build(self, spec: str, params: dict[str, Any], profile: Profile | None,
+              maps: Mapping[str, MapData], folder: str, capacity: int
+              ) -> Iterator[tuple[Any, ...]]:
         """Start the worker and relay how far its build got.
 
         Yields ("building",), ("warming",) while a built-in compiles, then ("ready",),
@@ -49,6 +51,7 @@ class RayWorker:
         Args:
             spec: The contender's spec.
             params: Its hyperparameters.
+            profile: The profile whose hyperparameters are its defaults (None: none).
             maps: Each scenario's packed beacon map.
             folder: The runner's working folder.
             capacity: The most frames one step will hold.
@@ -61,7 +64,7 @@ class RayWorker:
         self.answers = ctx.RawArray("d", max(capacity, 1) * worker.ANSWER_SIZE)
         self.process = ctx.Process(
             target=worker.serve, daemon=True, name=f"azgym {spec}",
-            args=(theirs, progress, self.answers, spec, params, maps,
+            args=(theirs, progress, self.answers, spec, params, profile, maps,
                   folder if os.path.isdir(folder) else os.getcwd()))
         self.process.start()
         theirs.close()

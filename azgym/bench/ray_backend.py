@@ -50,6 +50,7 @@ from azgym.bench.answers import (
 )
 from azgym.bench.wire import MapData, Packed
 from azgym.errors import InvalidInputError, require
+from azgym.profile import Profile
 
 CONNECT_TIMEOUT = 5.0
 """Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
@@ -184,11 +185,12 @@ class RayRun:
 
     def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[Packed],
                  maps: Mapping[str, MapData], *, workers: int, time_limit: float,
-                 batches: Sequence[tuple[int, int]]) -> None:
+                 batches: Sequence[tuple[int, int]], profile: Profile | None = None) -> None:
         import ray
 
         self.ray = ray
         self.spec, self.params, self.frames = spec, params, frames
+        self.profile = profile
         self.maps = ray.put(dict(maps))
         self.workers, self.time_limit = workers, time_limit
         self.answers = Answers.unanswered(len(frames))
@@ -220,8 +222,8 @@ class RayRun:
                 self._send(idle[0], self.queue.pop(0))
             elif len(self.slots) < self.workers:
                 actor = _actor_class().remote()
-                stream = actor.build.remote(self.spec, self.params, self.maps, os.getcwd(),
-                                            self.capacity)
+                stream = actor.build.remote(self.spec, self.params, self.profile, self.maps,
+                                            os.getcwd(), self.capacity)
                 self.slots.append(_Slot(actor, stream, time.monotonic() + STARTUP_LIMIT,
                                         batch=self.queue.pop(0)))
             else:

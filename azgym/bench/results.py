@@ -2,7 +2,9 @@
 
 ``results.json`` holds the summary (overall, by cause, by group, runtimes, tracks);
 ``frames.csv`` every case's outcome, in the columns of :data:`FRAME_COLUMNS`, which the
-leaderboard's per-frame files share.
+leaderboard's per-frame files share. A frame is numbered as its recording numbers it (a log's
+``frame`` column, ``Case.frame``), else by its place among the cases (0, 1, …). A heading error
+is NaN where the truth has no heading (position-only truth).
 """
 
 from __future__ import annotations
@@ -123,9 +125,15 @@ def cases_digest(cases: Sequence[Case]) -> str:
     return digest.hexdigest()
 
 
+def frame_number(case: Case, place: int) -> int:
+    """A case's frame number in results: the recording's (``Case.frame``), else its place."""
+    return place if case.frame is None else case.frame
+
+
 def frame_rows(label: str, cases: Sequence[Case], outcome: Outcome) -> list[list[str]]:
     """One contender's rows of a per-frame results file (:data:`FRAME_COLUMNS`)."""
-    return [[label, str(k), case.scenario, case.group, case.cause, str(int(outcome.ok[k])),
+    return [[label, str(frame_number(case, k)), case.scenario, case.group, case.cause,
+             str(int(outcome.ok[k])),
              f"{outcome.position[k]:.17g}", f"{outcome.heading[k]:.17g}",
              f"{outcome.micros[k]:.3f}", outcome.errors[k]] for k, case in enumerate(cases)]
 

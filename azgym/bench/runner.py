@@ -33,6 +33,7 @@ from azgym.bench.contenders import (
 from azgym.bench.isolation import BACKENDS, DEFAULT_TIME_LIMIT, IsolatedRun
 from azgym.bench.outcome import Outcome
 from azgym.bench.processes import start_fork_server
+from azgym.bench.profiles import describe_profile
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import NO_TEST_SPLIT, Case, Suite
 from azgym.bench.wire import pack, pack_map
@@ -40,6 +41,7 @@ from azgym.bench.worker import hide_process
 from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.jit import localizers_compiled
+from azgym.profile import Profile, profile_toml
 from azgym.site import load_scenario
 
 BATCHES_PER_WORKER = 4
@@ -65,11 +67,14 @@ def run_contenders(
     progress: Progress | None = None,
     backend: str = "local",
     address: str | None = None,
+    profile: Profile | None = None,
 ) -> dict[str, Outcome]:
     """Score every contender on every case; the outcomes are in the order of ``cases``.
 
     Each contender runs in worker processes of its own (:mod:`azgym.bench.isolation`), which
-    get the measurements and the beacon maps only; the errors are computed here.
+    get the measurements and the beacon maps only; the errors are computed here. A contender
+    is labelled as written; a profile is context (each worker builds its contender with the
+    profile's hyperparameters under the spec's: :func:`~azgym.bench.profiles.contender_params`).
 
     Args:
         cases: The cases.
@@ -81,6 +86,7 @@ def run_contenders(
         backend: "local" (worker processes) or "ray" (actors on the Ray cluster at
             ``address``, else on a local instance; there ``workers=0`` means one per CPU).
         address: The Ray cluster's address (``backend="ray"`` only).
+        profile: Whose hyperparameters are every contender's defaults (None: none).
     """
     Run, session = _backend(backend, address, workers)
     time_limit = checked_time_limit("time_limit", time_limit)
@@ -98,7 +104,7 @@ def run_contenders(
         for contender in contenders:
             begun = time.perf_counter()
             run = Run(contender.spec, contender.params, frames, sent_maps, workers=workers,
-                      time_limit=time_limit, batches=batches)
+                      time_limit=time_limit, batches=batches, profile=profile)
             answers = run.run(_progress_bar(contender.label, len(cases), say))
             outcomes[contender.label] = _score(answers, cases)
             say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
@@ -176,8 +182,13 @@ def run_benchmark(
     backend: str = "local",
     address: str | None = None,
     maps: Mapping[str, BeaconMap] | None = None,
+    profile: Profile | None = None,
 ) -> BenchResult:
     """Score every contender on the suite's cases.
+
+    With a profile, the suite is drawn with its sensor and motion noise
+    (:meth:`~azgym.bench.suites.Suite.profiled`) and every contender takes its hyperparameters
+    as defaults; the summary records it (``profile``: empty as shipped).
 
     Args:
         suite: The suite.
@@ -194,33 +205,68 @@ def run_benchmark(
         backend: "local" or "ray" (:func:`run_contenders`).
         address: The Ray cluster's address (``backend="ray"`` only).
         maps: Beacon map of each scenario the cases name (default: the shipped scenarios').
+        profile: The profile applied to the simulator and the contenders (None: the suite's
+            own, if it is :meth:`~azgym.bench.suites.Suite.profiled` already).
+
+    Raises:
+        InvalidInputError: A bad split, or a profile the suite cannot take.
     """
-    _check_split(suite, split, seed)
+    if profile is not None:
+        suite = suite.profiled(profile)
+    profile = suite.profile  # a suite profiled already: its profile is the run's
     contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
-    if secret := seed is None and split == "test":
-        hide_process()  # no other process of the user's can read it (docs/leaderboard.md)
-    seed = (suite.dev_seed if split == "dev" else secrets.randbits(31)) if seed is None else seed
+    seed, secret = _seed(suite, split, seed)
+    first_run = _start(backend, say)
+    cases = _draw(suite, split, seed, quick, secret, say)
+    if first_run:
+        # The fork server compiles ransac meanwhile (contenders.warm_up).
+        warm_up((c for c in default_contenders() if c.spec != REFERENCE), profile)
+    outcomes = run_contenders(cases, contenders, workers=workers, maps=maps,
+                              time_limit=time_limit, progress=progress, backend=backend,
+                              address=address, profile=profile)
+    reference = next(c.label for c in contenders if c.is_reference)
+    summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference)
+    summary["profile"] = profile_toml(profile or Profile())
+    return BenchResult(summary, cases, outcomes)
+
+
+def _start(backend: str, say: Progress) -> bool:
+    """Start the fork server (locally); whether this run compiles the kernels (said if so)."""
     first_run = not localizers_compiled()
     if first_run:
         say("compiling azgym's kernels: the first run on an installation takes about 10 s "
             "longer; they are cached for the next runs")
     if backend == "local":
         start_fork_server()  # its warm-up overlaps the drawing of the cases
+    return first_run
+
+
+def _seed(suite: Suite, split: str, seed: int | None) -> tuple[int, bool]:
+    """The seed the cases are drawn from, and whether it is secret (a test split's, drawn now).
+
+    A secret seed is drawn once the process is not dumpable
+    (:func:`~azgym.bench.worker.hide_process`): no other process of the user's can read it
+    (docs/leaderboard.md).
+    """
+    _check_split(suite, split, seed)
+    if secret := seed is None and split == "test":
+        hide_process()
+    return (suite.dev_seed if split == "dev" else secrets.randbits(31)) if seed is None \
+        else seed, secret
+
+
+def _draw(suite: Suite, split: str, seed: int, quick: bool, secret: bool, say: Progress
+          ) -> list[Case]:
+    """The suite's cases, and the run's header: what was drawn (and the profile, if any)."""
     started = time.perf_counter()
     cases = suite.build(seed, quick)
     shown = "seed withheld until every contender has answered" if secret else f"seed {seed}"
     say(f"{suite.name} v{suite.version} ({split}, {shown}): {len(cases)} frames drawn in "
         f"{time.perf_counter() - started:.1f} s")
-    if first_run:
-        # The fork server compiles ransac meanwhile (contenders.warm_up).
-        warm_up(c for c in default_contenders() if c.spec != REFERENCE)
-    outcomes = run_contenders(cases, contenders, workers=workers, maps=maps,
-                              time_limit=time_limit, progress=progress, backend=backend,
-                              address=address)
-    reference = next(c.label for c in contenders if c.is_reference)
-    summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference)
-    return BenchResult(summary, cases, outcomes)
+    if suite.profile is not None:
+        say(f"  {describe_profile(suite.profile, suite.simulates)}")
+    return cases
 
 
 def _check_split(suite: Suite, split: str, seed: int | None) -> None:

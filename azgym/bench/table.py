@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import textwrap
 from collections.abc import Mapping, Sequence
@@ -22,6 +23,19 @@ LEGEND = (
     f"frames only. µs: median time of a frame's call; ×ransac: that over ransac's median in the "
     f"same run.")
 """What each column of a ranked table is: printed under it and shown on the board."""
+POSITION_ONLY = ("position-only truth: heading not scored (the truth has no heading; the heading "
+                 "figures are null in results.json)")
+"""Printed under a ranked table when the truth has no heading (:func:`heading_scored`)."""
+
+
+def heading_scored(summary: Mapping[str, Any]) -> bool:
+    """Whether a run's heading was scored: False when an answered frame's heading figure is None.
+
+    :func:`~azgym.bench.metrics.summarize_errors` leaves a heading figure out (None) only when
+    estimates were given and the truth had no heading to score them against.
+    """
+    return all(row["all"].get("heading_median_deg", 0.0) is not None
+               for row in summary["localizers"].values())
 
 
 def rank_key(stats: Mapping[str, Any], name: str
@@ -75,6 +89,7 @@ def ranked_table(summary: dict[str, Any]) -> str:
     lines = [f"{summary['suite']} v{summary['suite_version']} ({summary['split']}, seed "
              f"{summary['seed']}{', quick' if summary['quick'] else ''}): "
              f"{summary['n_frames']} frames; errors in cm",
+             *profile_lines(summary),
              f"{'':>2} {'':<{width}} {'':>8} {'':>17} {'':>6} {'':>6} "
              f"{'answered frames':-^35}",
              f"{'#':>2} {'localizer':<{width}} {'p75':>8} {'p75 95% CI':>17} {'avail':>6} "
@@ -91,7 +106,18 @@ def ranked_table(summary: dict[str, Any]) -> str:
         if row["crashes"]:
             lines.append(f"   ! {row['crashes']} frames raised: {row['first_error']}")
     lines += textwrap.wrap(LEGEND, 100)
+    if not heading_scored(summary):
+        lines += textwrap.wrap(POSITION_ONLY, 100)
     return "\n".join(lines)
+
+
+def profile_lines(summary: dict[str, Any]) -> list[str]:
+    """The profile a run applied (``summary["profile"]``), wrapped: [] when none was."""
+    given = [f"{section}.{name}={json.dumps(value)}"
+             for section, values in (summary.get("profile") or {}).items()
+             for name, value in values.items()]
+    return textwrap.wrap(f"profile (the contenders' defaults): {', '.join(given)}", 100) \
+        if given else []
 
 
 def tracking_table(summary: dict[str, Any]) -> str:

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from azgym.bench.profiles import contender_params
 from azgym.bench.wire import (
     DONE,
     MapData,
@@ -45,6 +46,7 @@ from azgym.bench.wire import (
 from azgym.core import BeaconMap, Measurements, estimated_pose
 from azgym.errors import AzgymError
 from azgym.localize.registry import is_builtin
+from azgym.profile import Profile
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 from azgym.track.base import FrameByFrame, Tracker, make_tracker
 
@@ -65,7 +67,7 @@ PENDING, POSED, NO_POSE, RAISED = 0.0, 1.0, 2.0, 3.0
 
 
 def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, Any],
-          maps: Mapping[str, MapData], folder: str) -> None:
+          profile: Profile | None, maps: Mapping[str, MapData], folder: str) -> None:
     """The worker's main loop: build the contender, then answer steps until told to stop.
 
     A localizer runs as a tracker without memory (:class:`~azgym.track.base.FrameByFrame`).
@@ -91,6 +93,9 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
         answers: Shared float64 array, ``ANSWER_SIZE`` slots per frame of a step.
         spec: The localizer's or tracker's spec.
         params: Its hyperparameters.
+        profile: The profile whose hyperparameters are its defaults (None: none), resolved
+            here (:func:`~azgym.bench.profiles.contender_params`): the runner never imports a
+            plug-in.
         maps: Each scenario's beacon map.
         folder: The runner's working folder: relative paths in the spec (a plug-in file, a
             weight file) mean what they meant where the run was started, whichever folder the
@@ -101,7 +106,7 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     os.chdir(folder)
     beacon_maps = {name: unpack_map(data) for name, data in maps.items()}
-    if (built := _build(fd, progress, spec, params)) is None:
+    if (built := _build(fd, progress, spec, params, profile)) is None:
         return
     tracker, warm = built
     sequence = None
@@ -119,16 +124,18 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
         os.write(fd, DONE)
 
 
-def _build(fd: int, progress: Any, spec: str, params: dict[str, Any]
+def _build(fd: int, progress: Any, spec: str, params: dict[str, Any], profile: Profile | None
            ) -> tuple[Tracker, bool] | None:
     """Build the contender (a built-in then runs through its warm-up) and say it is ready.
+
+    Its hyperparameters are ``params`` with the profile's under them.
 
     Returns the tracker, and whether its first call may be timed (a plug-in localizer's first
     call, which loads its code, is not); None when it cannot be built (said to the parent).
     """
     _mark(progress, BUILDING)
     try:
-        tracker = make_tracker(spec, **params)
+        tracker = make_tracker(spec, **contender_params(spec, params, profile))
     except BaseException as exc:  # noqa: BLE001 - reported, the parent scores every frame
         say(fd, "unbuildable", str(exc) if isinstance(exc, AzgymError) else describe(exc))
         return None

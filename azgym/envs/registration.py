@@ -2,7 +2,8 @@
 
 Each scenario file in ``envs/`` gives ``azgym/Localize-<Scenario>-v1`` and, when it has routes
 (whose waypoints are the pick and drop spots), ``azgym/Navigate-<Scenario>-v2`` and
-``azgym/NavigateDiscrete-<Scenario>-v2`` (each task's version is in :data:`VERSIONS`).
+``azgym/NavigateDiscrete-<Scenario>-v2`` (each task's version is in :data:`VERSIONS`); Navigate
+drives a forklift, so a scenario whose routes a differential-drive robot drives has no Navigate id.
 ``gym.make(id, scenario="path/to/my.toml")`` runs an id's environment on a user's file instead.
 
 Registering needs Gymnasium and reads the scenario files, so it is not done when azgym is
@@ -40,7 +41,8 @@ def register_environments() -> tuple[str, ...]:
     ids = []
     for name in list_scenarios():
         entries = [("Localize", "azgym.envs.localize:LocalizeEnv", {})]
-        if load_scenario(name).routes:
+        scenario = load_scenario(name)
+        if scenario.routes and not scenario.differential_drive:  # Navigate drives a forklift
             entries += [("Navigate", "azgym.envs.navigate:NavigateEnv", {}),
                         ("NavigateDiscrete", "azgym.envs.navigate:NavigateEnv",
                          {"discrete": True})]

@@ -1,11 +1,13 @@
 """Logged bearing data: azgym's log format, read and checked, scored, and written from a route.
 
-A log (docs/logs.md) is a folder: ``log.toml`` (the manifest), ``frames.csv`` (one row per
-camera frame: its time and, optionally, the true pose), ``detections.csv`` (one row per
+A log (docs/logs.md) is a folder: ``log.toml`` (the manifest, with the vehicle's, camera's and
+motion sensors' profile from format 2 on), ``frames.csv`` (one row per camera frame: its number,
+time and, optionally, the true position and heading), ``detections.csv`` (one row per
 detection: frame, beacon id, azimuth, quality), and optionally ``odometry.csv``, ``imu.csv`` and
 ``beacons.csv``. :func:`read_log` checks every file and names each problem's file, line and
-column; :func:`log_cases` turns a log into the benchmark's cases; :func:`export_route` writes a
-simulated route as a log.
+column, and settles what real loggers' clocks do with a note (``Log.notes``,
+:mod:`azgym.logs.clocks`); :func:`log_cases` turns a log into the benchmark's cases;
+:func:`export_route` writes a simulated route as a log.
 """
 
 from azgym.logs.cases import log_cases

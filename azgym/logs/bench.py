@@ -5,6 +5,10 @@ A log is scored as a suite of one dataset, ``data:NAME``: its frames are the cas
 map, and the summary is the suite's (:func:`~azgym.bench.results.summarize`) with the dataset's
 identity beside it: its name, format, whether it is simulated, and the SHA-256 of its files
 (:func:`~azgym.logs.read.log_digest`), which names exactly which data the figures are of.
+
+Every contender takes its defaults from the log's profile (its manifest's ``[vehicle]``,
+``[sensor]`` and ``[motion]``), with a profile given to the run over it; the summary records
+the profile applied (``profile``).
 """
 
 from __future__ import annotations
@@ -15,12 +19,13 @@ from pathlib import Path
 
 from azgym.bench.contenders import Contender, default_contenders, with_reference
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.profiles import describe_profile
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.runner import Progress, run_contenders
 from azgym.bench.suites import Case, Suite
 from azgym.logs.cases import log_cases
-from azgym.logs.manifest import FORMAT_VERSION
 from azgym.logs.read import Log
+from azgym.profile import Profile, profile_toml
 
 SPLIT = "data"
 """The ``split`` of a log's results: a log has neither a dev nor a test split."""
@@ -29,33 +34,51 @@ SPLIT = "data"
 def data_suite(log: Log, cases: Sequence[Case]) -> Suite:
     """The log as a suite named ``data:NAME`` (its cases fixed: seed and size mean nothing)."""
     frozen = list(cases)
-    return Suite(f"data:{log.manifest.name}", FORMAT_VERSION, log.manifest.description, 0,
+    return Suite(f"data:{log.manifest.name}", log.manifest.format, log.manifest.description, 0,
                  lambda _seed, _quick: list(frozen),
                  routes=log.odometry is not None or log.imu is not None)
 
 
+def log_profile(log: Log, profile: Profile | None = None) -> Profile:
+    """The profile a log's contenders take: ``profile``'s fields over the log's own."""
+    return log.manifest.profile if profile is None else profile.over(log.manifest.profile)
+
+
 def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *,
                       workers: int = 1, time_limit: float = DEFAULT_TIME_LIMIT,
-                      progress: Progress | None = None) -> BenchResult:
+                      progress: Progress | None = None, profile: Profile | None = None
+                      ) -> BenchResult:
     """Score every contender on the log's frames (``ransac`` added as the runtime reference).
+
+    Args:
+        log: The log.
+        contenders: The localizers and trackers (default: the built-in localizers).
+        workers: Worker processes per contender at a time.
+        time_limit: Seconds a contender may take on one frame (or to be built).
+        progress: Called with text as the run advances.
+        profile: Fields over the log's own profile (:func:`log_profile`), whose
+            hyperparameters are every contender's defaults; None: the log's own.
 
     Raises:
         LogError: The log has no truth to score against.
     """
     cases = log_cases(log)
     contenders = with_reference(contenders or default_contenders())
+    applied = log_profile(log, profile)
     say = progress or (lambda _line: None)
     say(f"data:{log.manifest.name} ({'simulated' if log.manifest.simulated else 'real'}, "
         f"sha256 {log.sha256[:12]}…): {len(cases)} frames")
+    say(f"  {describe_profile(applied)}")
     outcomes = run_contenders(cases, contenders, workers=workers,
                               maps={log.map_name: log.beacons}, time_limit=time_limit,
-                              progress=progress)
+                              progress=progress, profile=applied)
     reference = next(c.label for c in contenders if c.is_reference)
     summary = summarize(data_suite(log, cases), SPLIT, 0, False, contenders, cases, outcomes,
                         reference)
-    summary["dataset"] = {"name": log.manifest.name, "format": FORMAT_VERSION,
+    summary["dataset"] = {"name": log.manifest.name, "format": log.manifest.format,
                           "simulated": log.manifest.simulated, "sha256": log.sha256,
                           "description": log.manifest.description}
+    summary["profile"] = profile_toml(applied)
     return BenchResult(summary, cases, outcomes)
 
 

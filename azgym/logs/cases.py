@@ -1,15 +1,21 @@
 """A log as the benchmark's cases: each frame's measurements, truth, motion and sequence.
 
 Each frame becomes a :class:`~azgym.bench.suites.Case` as a driven route's frame does
-(:func:`~azgym.bench.suites.base.route_cases`): its group and sequence are the frame's sequence
-(a tracker is reset at the start of each), the first frame of a sequence carries its true pose
-as the known start, and with odometry or IMU samples each frame's ``motion`` holds the samples
-timed after the previous frame and up to its own time (the first frame: every sample up to its
-time). Its cause is the worst of its detections' labels, or ``"unlabelled"`` without labels (a
-real camera's detections have none), which no cause breakdown lists.
+(:func:`~azgym.bench.suites.base.route_cases`), keeping its number (``Case.frame``): its group
+and sequence are the frame's sequence (a tracker is reset at the start of each), the first frame
+of a sequence carries its true pose as the known start (none with position-only truth: a start
+needs a heading), and with odometry or IMU samples each frame's ``motion`` holds the samples
+timed after the previous frame and up to its own time (a sequence's first frame: those up to
+:data:`~azgym.logs.clocks.MOTION_LEAD` before it, the reader having trimmed earlier ones). An
+odometry reporting ``yaw_rate`` gives turning samples (``OdometrySamples.turning``); an IMU
+without accelerations gives NaN ones. Its cause is the worst of its detections' labels, or
+``"unlabelled"`` without labels (a real camera's detections have none), which no cause
+breakdown lists.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -46,8 +52,9 @@ def log_cases(log: Log) -> list[Case]:
     """
     if not log.has_truth:
         raise LogError(str(log.folder), [
-            "frames.csv: no truth (columns x, y, heading): a log without the true poses can be "
-            "read and localized (azgym.logs.read_log, frame_measurements), but not scored"])
+            "frames.csv: no truth (columns x, y and optionally heading): a log without the true "
+            "positions can be read and localized (azgym.logs.read_log, frame_measurements), but "
+            "not scored"])
     frames = log.frames
     times = frames["time"]
     motions = _motions(log, times)
@@ -60,9 +67,12 @@ def log_cases(log: Log) -> list[Case]:
         frame_labels = labels[bounds[k]:bounds[k + 1]]
         cause = frame_cause(frame_labels) if log.detections["labelled"] else UNLABELLED
         pose = log.pose(k)
+        assert pose is not None
+        start = first and not math.isnan(pose[2])
         cases.append(Case(log.map_name, measurements, pose, cause, sequence, sequence=sequence,
-                          motion=motions[k], initial=pose if first else None,
-                          time=float(times[k]), event=frames["event"][k]))
+                          motion=motions[k], initial=pose if start else None,
+                          time=float(times[k]), event=frames["event"][k],
+                          frame=int(frames["frame"][k])))
     return cases
 
 
@@ -84,19 +94,24 @@ def _motions(log: Log, times: np.ndarray) -> list[Motion | None]:
 
 
 def _odometry(columns: Columns | None, rows: slice) -> OdometrySamples:
-    """Odometry samples of some rows (none without odometry)."""
+    """Odometry samples of some rows: turning ones with ``yaw_rate`` (none without odometry)."""
     if columns is None:
         empty = np.zeros(0)
         return OdometrySamples(empty, empty.copy(), empty.copy())
-    return OdometrySamples(*(columns[key][rows].copy() for key in ("time", "speed", "steer")))
+    time, speed = columns["time"][rows].copy(), columns["speed"][rows].copy()
+    if "yaw_rate" in columns.values:
+        return OdometrySamples.turning(time, speed, columns["yaw_rate"][rows].copy())
+    return OdometrySamples(time, speed, columns["steer"][rows].copy())
 
 
 def _imu(columns: Columns | None, rows: slice) -> ImuSamples:
-    """IMU samples of some rows (heading NaN without a heading column; none without an IMU)."""
+    """IMU samples of some rows (NaN where not given; none without an IMU)."""
     if columns is None:
         return ImuSamples(np.zeros(0), np.zeros(0), np.zeros((0, 2)), np.zeros(0))
     time = columns["time"][rows].copy()
-    heading = columns.values.get("heading")
+    absent = np.full(time.size, np.nan)
+    given = columns.values
     return ImuSamples(time, columns["yaw_rate"][rows].copy(),
-                      np.column_stack([columns["ax"][rows], columns["ay"][rows]]),
-                      np.full(time.size, np.nan) if heading is None else heading[rows].copy())
+                      np.column_stack([given[key][rows] if key in given else absent
+                                       for key in ("ax", "ay")]),
+                      given["heading"][rows].copy() if "heading" in given else absent.copy())

@@ -1,7 +1,10 @@
 """Write a simulated route as a log: the round trip that pins the log format to the simulator.
 
 :func:`export_route` drives a route (:func:`azgym.world.drive.simulate`) and writes every frame
-in azgym's log format with its truth, the detections' labels, and the odometry and IMU samples.
+in azgym's log format (:data:`~azgym.logs.manifest.FORMAT_VERSION`) with its truth, the
+detections' labels, and the odometry (its turn rate for a vehicle whose odometry reports one,
+else its steering angle) and IMU samples; the manifest states the scenario's vehicle and
+sensor (``Scenario.profile``).
 Floats are written by ``repr``, which reads back to the same float, so that ``azgym bench
 --data`` on the log scores exactly the frames that scoring the route directly would.
 """
@@ -9,7 +12,6 @@ Floats are written by ``repr``, which reads back to the same float, so that ``az
 from __future__ import annotations
 
 import csv
-import dataclasses
 import io
 import math
 from collections.abc import Iterable
@@ -22,15 +24,15 @@ from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
 from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, MAX_NAME
 from azgym.logs.read import QUALITY_PREFIX
+from azgym.profile import profile_toml
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import LABEL_NAMES
-from azgym.sensing.motion import ImuModel, OdometryModel
 from azgym.site import list_scenarios, load_scenario
 from azgym.site.elements import Route
 from azgym.site.reader import name_problem
 from azgym.site.scenario import Scenario
 from azgym.site.toml_writer import to_toml
-from azgym.world.drive import Frame, simulate
+from azgym.world.drive import Frame, motion_models, simulate
 
 
 def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Path, *,
@@ -43,8 +45,8 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
         seed: The seed of every draw (as for ``simulate``), in [0, 2**31).
         out: The folder to write (created if needed).
         name: The dataset's name (default: ``SCENARIO-ROUTE-sSEED-simulated``).
-        motion_rate_hz: The odometry's and IMU's rate [Hz], a finite number > 0 (default: their
-            models', 50 Hz).
+        motion_rate_hz: The odometry's and IMU's rate [Hz], a finite number > 0 (default: the
+            vehicle's models', :func:`azgym.world.drive.motion_models`).
 
     Returns:
         The folder written.
@@ -61,10 +63,7 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
     name = name or f"{scenario.name}-{chosen.name}-s{seed}-simulated"
     if problem := name_problem(name, MAX_NAME):
         raise InvalidInputError(f"name: {problem}")
-    odometry, imu = OdometryModel(), ImuModel()
-    if motion_rate_hz is not None:
-        odometry = dataclasses.replace(odometry, rate_hz=motion_rate_hz)
-        imu = dataclasses.replace(imu, rate_hz=motion_rate_hz)
+    odometry, imu = motion_models(scenario, motion_rate_hz)
     sensor = GeometrySensor(scenario)
     frames = list(simulate(scenario, chosen, seed, sensor=sensor, odometry=odometry, imu=imu))
     prepare_folder(out)
@@ -75,15 +74,15 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
         "camera": {"rate_hz": float(sensor.frame_rate_hz),
                    "description": "azgym's geometry sensor (simulated)"},
         "map": {"scenario": _map(scenario, out)},
-        "truth": {"source": "simulation: the camera's true pose"}}
+        "truth": {"source": "simulation: the camera's true pose"},
+        **profile_toml(scenario.profile)}
     write_file(out / MANIFEST, to_toml(manifest, "An azgym log (docs/logs.md): SIMULATED."))
     write_file(out / "frames.csv", _csv(["frame", "time", "x", "y", "heading"],
                                         ([f.index, f.time, *f.pose] for f in frames)))
     write_file(out / "detections.csv", _detections(frames, sensor.quality_names))
-    write_file(out / "odometry.csv", _csv(["time", "speed", "steer"], (
-        row for f in frames for row in zip(f.odometry.time, f.odometry.speed, f.odometry.steer,
-                                           strict=True))))
-    write_file(out / "imu.csv", _imu(frames))
+    write_file(out / "odometry.csv", _odometry(frames))
+    if imu is not None:  # a vehicle without an IMU (a robot's) gets no imu.csv
+        write_file(out / "imu.csv", _imu(frames))
     return out
 
 
@@ -134,11 +133,20 @@ def _detections(frames: list[Frame], quality_names: tuple[str, ...]) -> str:
     rows = []
     for frame in frames:
         m = frame.measurements
-        quality = np.zeros((len(m), 0)) if m.quality is None else m.quality.reshape(len(m), -1)
+        quality = np.zeros((len(m), 0)) if m.quality is None else \
+            m.quality.reshape(len(m), len(quality_names))  # a frame may have no detection
         for k in range(len(m)):
             rows.append([frame.index, int(m.ids[k]), float(m.azimuth[k]),
                          *(float(q) for q in quality[k]), LABEL_NAMES[int(frame.truth.label[k])]])
     return _csv(header, rows)
+
+
+def _odometry(frames: list[Frame]) -> str:
+    """odometry.csv: time, speed and the turn rate (if the odometry reports it) or steer."""
+    turn = "yaw_rate" if any(f.odometry.reports_yaw_rate for f in frames) else "steer"
+    return _csv(["time", "speed", turn], (
+        row for f in frames for row in zip(f.odometry.time, f.odometry.speed,
+                                           getattr(f.odometry, turn), strict=True)))
 
 
 def _imu(frames: list[Frame]) -> str:

@@ -1,8 +1,10 @@
 """A log's manifest (``log.toml``) and its beacon map: what the log is, and where its map is.
 
-The manifest says which format the log is in (:data:`FORMAT_VERSION`), names and describes the
+The manifest says which format the log is in (:data:`FORMATS`), names and describes the
 dataset, says whether it is simulated, describes the camera and where the truth came from, and
-names the map: a shipped scenario, a scenario file in the log's folder, or ``beacons.csv``.
+names the map: a shipped scenario, a scenario file in the log's folder, or ``beacons.csv``. From
+format 2 on it may also state the vehicle, the camera's azimuth noise and view, and the motion
+sensors' errors (``[vehicle]``, ``[sensor]``, ``[motion]``: a profile, :mod:`azgym.profile`).
 """
 
 from __future__ import annotations
@@ -20,10 +22,14 @@ from azgym.logs.files import log_file
 from azgym.logs.plausible import Extent
 from azgym.logs.problems import Problems, shown
 from azgym.logs.tables import check_columns, floats, integers, read_table
+from azgym.profile import SECTIONS, Profile, parse_profile
 from azgym.site.reader import name_problem
 
-FORMAT_VERSION = 1
-"""The log format this azgym writes and reads (``format`` in ``log.toml``)."""
+FORMAT_VERSION = 2
+"""The log format this azgym writes (``format`` in ``log.toml``)."""
+FORMATS = (1, 2)
+"""The log formats this azgym reads: 2 added the profile sections, odometry with a turn rate,
+an IMU without accelerations and truth without a heading (docs/logs.md)."""
 MANIFEST = "log.toml"
 MAX_MANIFEST_BYTES = 64 * 1024
 """The largest manifest read [bytes]."""
@@ -52,6 +58,7 @@ class Manifest:
         scenario: The map as a shipped scenario's name or a ``.toml`` file in the folder.
         beacons: The map as a table file name in the folder (``beacons.csv``).
         truth: Where the true poses came from, in words.
+        profile: The vehicle, sensor and motion sections (format 2; empty in format 1).
     """
 
     format: int
@@ -64,6 +71,7 @@ class Manifest:
     scenario: str | None = None
     beacons: str | None = None
     truth: str = ""
+    profile: Profile = Profile()
 
 
 def read_manifest(folder: Path, problems: Problems) -> Manifest | None:
@@ -91,12 +99,14 @@ def read_manifest(folder: Path, problems: Problems) -> Manifest | None:
 def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
     """The manifest's fields, each checked."""
     given = data.get("format", "(nothing)")
-    if type(given) is not int or given != FORMAT_VERSION:
+    if type(given) is not int or given not in FORMATS:
         whole = "" if type(given) is int else " (the format is a whole number)"
-        problems.add(MANIFEST, f"format: this azgym reads log format {FORMAT_VERSION}, the log "
+        readable = " and ".join(map(str, FORMATS))
+        problems.add(MANIFEST, f"format: this azgym reads log formats {readable}, the log "
                                f"says {shown(given)}{whole}")
         return None
-    for table, keys in _KEYS.items():
+    known = _KEYS | ({"": _KEYS[""] | set(SECTIONS)} if given >= 2 else {})
+    for table, keys in known.items():
         section = data if not table else data.get(table, {})
         if not isinstance(section, dict):
             problems.add(MANIFEST, f"{table}: must be a table ([{table}])")
@@ -122,14 +132,16 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
     if len(maps) != 1:
         problems.add(MANIFEST, "map: give exactly one of map.scenario (a shipped scenario or a "
                                ".toml file in the log's folder) and map.beacons (beacons.csv)")
+    profile = parse_profile(data, lambda problem: problems.add(MANIFEST, problem)) \
+        if given >= 2 else Profile()
     return Manifest(
-        format=FORMAT_VERSION, name=name, description=_text(data, "description", problems, True),
+        format=given, name=name, description=_text(data, "description", problems, True),
         simulated=bool(simulated), sequence=_text(data, "sequence", problems) or name,
         camera=_text(camera, "description", problems, where="camera."),
         camera_rate_hz=float(rate) if isinstance(rate, (int, float)) else None,
         scenario=_text(where, "scenario", problems, where="map.") or None,
         beacons=_text(where, "beacons", problems, where="map.") or None,
-        truth=_text(truth, "source", problems, where="truth."))
+        truth=_text(truth, "source", problems, where="truth."), profile=profile)
 
 
 def _text(data: dict[str, Any], key: str, problems: Problems, required: bool = False,

@@ -5,16 +5,19 @@ milliseconds, a truth in millimetres, azimuths measured clockwise. Such a log wo
 without complaint and give wrong figures, so :func:`check_plausible` refuses it, naming what the
 values look like:
 
-- headings (truth, IMU) in [−π, π]; odometry |speed| ≤ :data:`MAX_SPEED`, |steer| ≤ π; IMU
-  |yaw_rate| ≤ :data:`MAX_YAW_RATE`, |ax|, |ay| ≤ :data:`MAX_ACCEL` (:data:`BOUNDS`);
+- headings (truth, IMU) in [−π, π]; odometry |speed| ≤ :data:`MAX_SPEED`, |steer| ≤ π;
+  odometry and IMU |yaw_rate| ≤ :data:`MAX_YAW_RATE`, |ax|, |ay| ≤ :data:`MAX_ACCEL`
+  (:data:`BOUNDS`);
 - the truth's x, y within the map's extent (:class:`Extent`);
 - with ``camera.rate_hz``, the median frame interval within a factor :data:`RATE_FACTOR` of
   1 / rate;
-- odometry and IMU samples on the frames' clock: none more than one sample interval (at most
-  1 s) before the first frame or after the last (:func:`_motion_clock`);
 - with the truth, the detections of map beacons agree with the azimuths the true poses predict
   (α = atan2(y_b − y, x_b − x) − φ, :mod:`azgym.core`): the median absolute difference at most
-  :data:`MAX_AZIMUTH_RESIDUAL` (a median, since misread ids and mirror images disagree).
+  :data:`MAX_AZIMUTH_RESIDUAL` (a median, since misread ids and mirror images disagree). With
+  position-only truth each frame's φ is the one that fits its detections best (their circular
+  mean), and only frames with two or more detections of map beacons count.
+
+Whether the motion samples are on the frames' clock is :mod:`azgym.logs.clocks`' question.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ BOUNDS = {
     ("frames", "heading"): (math.pi, "radians, counter-clockwise from the x-axis; degrees?"),
     ("odometry", "speed"): (MAX_SPEED, "m/s; km/h or mm/s?"),
     ("odometry", "steer"): (math.pi, "radians; degrees?"),
+    ("odometry", "yaw_rate"): (MAX_YAW_RATE, "rad/s; degrees per second?"),
     ("imu", "yaw_rate"): (MAX_YAW_RATE, "rad/s; degrees per second?"),
     ("imu", "ax"): (MAX_ACCEL, "m/s²; mm/s²?"),
     ("imu", "ay"): (MAX_ACCEL, "m/s²; mm/s²?"),
@@ -51,8 +55,6 @@ SCENARIO_MARGIN = 5.0
 BEACONS_MARGIN = 50.0
 """How far outside the beacons' bounding box a true position may lie [m] (a beacons.csv map
 says nothing of the room)."""
-MAX_CLOCK_SLACK = 1.0
-"""The most a motion sample may lie before the first frame or after the last [s]."""
 MAX_AZIMUTH_RESIDUAL = 0.2
 """The largest median |measured − predicted azimuth| over a log's detections of map beacons
 [rad] (11°: far above any camera's noise, far below a unit or sign mistake's)."""
@@ -94,9 +96,6 @@ def check_plausible(tables: dict[str, Table | None], columns: dict[str, object],
     if frames is None or table is None:
         return
     _frame_rate(table, frames["time"], rate_hz, problems)
-    for name in ("odometry", "imu"):
-        if columns.get(name) is not None and tables.get(name) is not None:
-            _motion_clock(tables[name], columns[name]["time"], frames["time"], problems)
     if "x" in frames.values and extent is not None:
         _truth_in_extent(table, frames, extent, problems)
     if "x" in frames.values and beacons is not None and columns.get("detections") is not None:
@@ -115,26 +114,6 @@ def _frame_rate(table: Table, time: np.ndarray, rate_hz: float | None,
         problems.add(table.file, f"the median frame interval is {median:.6g} s, but "
                                  f"camera.rate_hz = {rate_hz:g} says {expected:.6g} s (times in "
                                  "seconds? the right rate?)", column="time")
-
-
-def _motion_clock(table: Table, samples: np.ndarray, frames: np.ndarray,
-                  problems: Problems) -> None:
-    """No sample more than one sample interval (≤ 1 s) before the first frame or after the last.
-
-    Such samples are on another clock, or offset from the frames': they would silently go to
-    the first frame, or be ignored.
-    """
-    steps = np.diff(samples[np.isfinite(samples)])
-    steps = steps[steps > 0]  # times out of order are reported already
-    slack = min(float(np.median(steps)), MAX_CLOCK_SLACK) if steps.size else MAX_CLOCK_SLACK
-    first, last = float(np.nanmin(frames)), float(np.nanmax(frames))
-    for rows, side, edge in ((np.flatnonzero(samples < first - slack), "before the first", first),
-                             (np.flatnonzero(samples > last + slack), "after the last", last)):
-        if rows.size:
-            table.report(problems, f"{rows.size} of its samples lie more than {slack:.3g} s "
-                                   f"(one sample interval) {side} frame's time {edge:.6g} s: "
-                                   "the motion samples are on the frames' clock", int(rows[0]),
-                         "time")
 
 
 def _truth_in_extent(table: Table, frames: object, extent: Extent, problems: Problems) -> None:
@@ -156,15 +135,26 @@ def _azimuths_agree(table: Table | None, detections: object, frames: object,
     used = np.flatnonzero((rows >= 0) & (index >= 0))
     if table is None or not used.size:
         return
-    x, y, heading = (frames[key][rows[used]] for key in ("x", "y", "heading"))  # type: ignore
+    x, y = (frames[key][rows[used]] for key in ("x", "y"))  # type: ignore[index]
     xy = beacons.xy[index[used]]
-    predicted = np.arctan2(xy[:, 1] - y, xy[:, 0] - x) - heading
+    bearing = np.arctan2(xy[:, 1] - y, xy[:, 0] - x)
     measured = detections["azimuth"][used]  # type: ignore[index]
+    if "heading" in frames.values:  # type: ignore[attr-defined]
+        heading = frames["heading"][rows[used]]  # type: ignore[index]
+    else:  # position-only truth: each frame's best-fitting heading, from two detections on
+        heading = _fitted_headings(rows[used], bearing - measured)
+        used, bearing, measured, heading = (values[np.isfinite(heading)] for values in
+                                            (used, bearing, measured, heading))
+        if not used.size:
+            return
+    predicted = bearing - heading
     residual = np.abs(wrap_angle(measured - predicted))
     median = float(np.nanmedian(residual))
     if not median > MAX_AZIMUTH_RESIDUAL:  # NaN (a bad cell, already reported) passes
         return
-    if float(np.nanmedian(np.abs(wrap_angle(measured + predicted)))) <= MAX_AZIMUTH_RESIDUAL:
+    if "heading" not in frames.values:  # type: ignore[attr-defined]
+        hint = "measured clockwise, in degrees, or scaled?"
+    elif float(np.nanmedian(np.abs(wrap_angle(measured + predicted)))) <= MAX_AZIMUTH_RESIDUAL:
         hint = "they match the predictions negated: measured clockwise?"
     else:
         offset = float(np.nanmedian(wrap_angle(measured - predicted)))
@@ -176,3 +166,13 @@ def _azimuths_agree(table: Table | None, detections: object, frames: object,
                              f"the azimuth the true pose predicts| over {used.size} detections "
                              f"of map beacons is {median:.3g} rad, at most "
                              f"{MAX_AZIMUTH_RESIDUAL:g} is plausible ({hint})", column="azimuth")
+
+
+def _fitted_headings(frame: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """The heading that fits each detection's frame best (NaN: fewer than two in the frame).
+
+    It is the circular mean of the frame's detections' bearing − azimuth.
+    """
+    count = np.bincount(frame)
+    mean = np.arctan2(np.bincount(frame, np.sin(offset)), np.bincount(frame, np.cos(offset)))
+    return np.where(count[frame] >= 2, mean[frame], np.nan)

@@ -12,6 +12,8 @@ MAX_PROBLEMS = 50
 """Problems listed before the rest are only counted."""
 MAX_SHOWN = 40
 """The most characters of a cell a message quotes (a longer one is cut, with "…")."""
+MAX_PLACES = 5
+"""The most runs of lines a message lists (then it counts the rest)."""
 
 
 def cut(text: str, limit: int = MAX_SHOWN) -> str:
@@ -22,6 +24,30 @@ def cut(text: str, limit: int = MAX_SHOWN) -> str:
 def shown(value: object, limit: int = MAX_SHOWN) -> str:
     """A cell (or any value from the log) quoted for a message: its repr, cut to ``limit``."""
     return cut(repr(value), limit)
+
+
+def seconds(time: float) -> str:
+    """A time for a message, in full: ``1248440000.123 s``, never ``1.24844e+09 s``.
+
+    The shortest text that reads back as the same float, so that a message locates the row
+    even with epoch times.
+    """
+    return f"{float(time)!r} s"
+
+
+def places(lines: list[int], unit: str = "line", limit: int = MAX_PLACES) -> str:
+    """Lines (or rows) for a message, runs joined: ``lines 2-40, 57 and 3 more`` (lines)."""
+    runs: list[list[int]] = []
+    for line in lines:
+        if runs and line == runs[-1][1] + 1:
+            runs[-1][1] = line
+        else:
+            runs.append([line, line])
+    parts = [f"{a}" if a == b else f"{a}-{b}" for a, b in runs[:limit]]
+    rest = sum(b - a + 1 for a, b in runs[limit:])
+    more = f" and {rest} more" if rest else ""
+    plural = "s" if len(lines) > 1 else ""
+    return f"{unit}{plural} {', '.join(parts)}{more}"
 
 
 class LogError(InvalidInputError):

@@ -2,12 +2,14 @@
 
 :func:`read_log` checks the whole log before refusing it (:class:`~azgym.logs.problems.LogError`
 lists every problem with its file, line and column). The rules (docs/logs.md): frames numbered
-and timed strictly increasing (one clock for the whole log); each detection in a listed frame,
-the detections in frame order; azimuths in [−π, π]; the truth pose given in full (x, y and
-heading on every frame) or not at all; motion samples strictly increasing in time. Ids missing
-from the map are kept (a localizer ignores them), and so is the same id twice in a frame at
-different azimuths (a mirror image carries its beacon's id); the very same detection twice is
-refused as a logging bug.
+strictly increasing and timed never decreasing (one clock for the whole log); each detection in
+a listed frame, the detections in frame order; azimuths in [−π, π]; the truth given on every
+frame or not at all (x and y, and in format 2 the heading optionally); motion samples never
+decreasing in time. Ids missing from the map are kept (a localizer ignores them), and so is the
+same id twice in a frame at different azimuths (a mirror image carries its beacon's id); the
+very same detection twice is refused as a logging bug. What real loggers' clocks do (repeated
+time stamps, motion before the first frame or after the last) is settled, not refused, with a
+note (:mod:`azgym.logs.clocks`, ``Log.notes``).
 """
 
 from __future__ import annotations
@@ -22,25 +24,37 @@ from typing import Any
 import numpy as np
 
 from azgym.core import BeaconMap, Pose
+from azgym.logs.clocks import settle_frames, settle_stream
 from azgym.logs.manifest import MANIFEST, Manifest, read_manifest, read_map
 from azgym.logs.plausible import check_plausible
 from azgym.logs.problems import LogError, Problems, shown
 from azgym.logs.tables import Table, check_columns, find_table, floats, integers, read_table
+from azgym.profile import DIFFERENTIAL_DRIVE
 from azgym.sensing.labels import LABEL_NAMES
 from azgym.site.load import SCENARIO_PACKAGE
 
 TRUTH = ("x", "y", "heading")
-"""The true camera pose's columns in ``frames.csv`` [m, m, rad]."""
+"""The true camera pose's columns in ``frames.csv`` [m, m, rad] (format 2: heading optional)."""
 EVENTS = ("", "kidnap", "outage")
 """What the ``event`` column of ``frames.csv`` may say (azgym.bench.suites.Case.event)."""
 QUALITY_PREFIX = "quality_"
 """A ``detections.csv`` column named ``quality_NAME`` is a quality column."""
+TURNS = ("steer", "yaw_rate")
+"""An odometry's turn columns (format 2): exactly one, the steering angle or the turn rate."""
+ACCELERATIONS = ("ax", "ay")
+"""An IMU's acceleration columns (format 2: both or neither)."""
 _TABLES = {
     "frames": (("frame", "time"), (*TRUTH, "sequence", "event")),
     "detections": (("frame", "id", "azimuth"), ("label",)),
+    "odometry": (("time", "speed"), TURNS),
+    "imu": (("time", "yaw_rate"), (*ACCELERATIONS, "heading")),
+}
+"""Each table's required and optional columns (format 2)."""
+_FORMAT_1 = {
     "odometry": (("time", "speed", "steer"), ()),
     "imu": (("time", "yaw_rate", "ax", "ay"), ("heading",)),
 }
+"""Where format 1 differs."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,13 +77,18 @@ class Log:
         map_name: The cases' ``scenario``: a shipped scenario's name, or the dataset's.
         beacons: The beacon map.
         shipped_map: Whether the map is a shipped scenario (the figures draw its floor plan).
-        frames: ``frames.csv``'s columns: frame, time, x/y/heading (if given), sequence, event.
+        frames: ``frames.csv``'s columns: frame (its number), time (settled:
+            :mod:`azgym.logs.clocks`), x/y/heading (if given), sequence, event.
         detections: ``detections.csv``'s: frame (its row in ``frames``), id, azimuth,
             quality (D, Q), label (−1 without labels) and labelled (whether it has labels).
         quality_names: The quality columns' names, without the prefix.
-        odometry: ``odometry.csv``'s columns, or None.
-        imu: ``imu.csv``'s columns (heading NaN where empty), or None.
+        odometry: ``odometry.csv``'s columns (time, speed, and steer or yaw_rate; settled), or
+            None.
+        imu: ``imu.csv``'s columns (time, yaw_rate, ax/ay if given, heading NaN where empty;
+            settled), or None.
         sha256: The digest of the files read (:func:`log_digest`).
+        notes: What the reader changed (:mod:`azgym.logs.clocks`), each naming its file, lines
+            and count.
     """
 
     folder: Path
@@ -83,17 +102,24 @@ class Log:
     odometry: Columns | None
     imu: Columns | None
     sha256: str
+    notes: tuple[str, ...] = ()
 
     @property
     def has_truth(self) -> bool:
-        """Whether every frame has its true pose."""
+        """Whether every frame has its true position."""
         return "x" in self.frames.values
 
+    @property
+    def has_heading(self) -> bool:
+        """Whether every frame has its true heading too (else the truth is position-only)."""
+        return "heading" in self.frames.values
+
     def pose(self, k: int) -> Pose | None:
-        """The true pose of frame row ``k``, or None without truth."""
+        """The true pose of frame row ``k`` (heading NaN: position-only truth), or None."""
         if not self.has_truth:
             return None
-        return tuple(float(self.frames[key][k]) for key in TRUTH)  # type: ignore[return-value]
+        return tuple(float(self.frames[key][k]) if key in self.frames.values else math.nan
+                     for key in TRUTH)  # type: ignore[return-value]
 
 
 def shipped_logs() -> dict[str, Path]:
@@ -132,13 +158,30 @@ def read_log(folder: str | Path) -> Log:
         used += [] if path is None else [path]
     frames = _frames(tables["frames"], manifest, problems)
     detections, quality = _detections(tables["detections"], frames, problems)
-    motion = {name: _samples(tables[name], problems) for name in ("odometry", "imu")}
+    motion = {name: _samples(tables[name], manifest, problems) for name in ("odometry", "imu")}
     check_plausible(tables, {"frames": frames, "detections": detections, **motion}, beacons,
                     extent, manifest.camera_rate_hz, problems)
     problems.check()
     assert beacons is not None and frames is not None and detections is not None
+    notes: list[str] = []
+    frames, motion = _settled(tables, frames, motion, notes, problems)
+    problems.check()
     return Log(folder, manifest, map_name, beacons, shipped, frames, detections, quality,
-               motion["odometry"], motion["imu"], log_digest(used, shipped_bytes))
+               motion["odometry"], motion["imu"], log_digest(used, shipped_bytes), tuple(notes))
+
+
+def _settled(tables: dict[str, Table | None], frames: Columns,
+             motion: dict[str, Columns | None], notes: list[str], problems: Problems
+             ) -> tuple[Columns, dict[str, Columns | None]]:
+    """Frames and motion with their clocks settled (:mod:`azgym.logs.clocks`), with notes."""
+    assert tables["frames"] is not None
+    time = settle_frames(tables["frames"], frames["time"], notes)
+    settled: dict[str, Columns | None] = {}
+    for name, columns in motion.items():
+        table = tables[name]
+        settled[name] = None if columns is None or table is None else Columns(settle_stream(
+            table, columns.values, time, frames["sequence"], notes, problems))
+    return Columns(frames.values | {"time": time}), settled
 
 
 def _map_files(folder: Path, manifest: Manifest) -> list[Path]:
@@ -173,27 +216,35 @@ def log_digest(paths: list[Path], named: dict[str, bytes] | None = None) -> str:
     return digest.hexdigest()
 
 
-def _checked(table: Table | None, name: str, problems: Problems, prefix: str = "") -> bool:
-    required, optional = _TABLES[name]
+def _columns(name: str, log_format: int) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """A table's required and optional columns in a log format."""
+    return _FORMAT_1[name] if log_format == 1 and name in _FORMAT_1 else _TABLES[name]
+
+
+def _checked(table: Table | None, name: str, problems: Problems, prefix: str = "",
+             log_format: int = 2) -> bool:
+    required, optional = _columns(name, log_format)
     return table is not None and check_columns(table, required, optional, problems, prefix)
 
 
 def _increasing(table: Table, column: str, values: np.ndarray, problems: Problems,
-                good: np.ndarray | None = None) -> None:
-    """Report each value not greater than the one before it.
+                good: np.ndarray | None = None, strictly: bool = True) -> None:
+    """Report each value smaller than the one before it (or equal, ``strictly``).
 
     A row whose cell did not parse (NaN, or not ``good``: already reported) is compared with
     neither neighbour, so that one bad cell is one problem.
     """
     ok = np.isfinite(values) if good is None else good
-    for k in np.flatnonzero((values[1:] <= values[:-1]) & ok[1:] & ok[:-1]) + 1:
-        table.report(problems, f"{values[k].item()!r} is not greater than the row before's "
-                               f"{values[k - 1].item()!r} (must increase strictly)", int(k),
-                     column)
+    wrong = values[1:] <= values[:-1] if strictly else values[1:] < values[:-1]
+    than, rule = ("not greater than", "must increase strictly") if strictly else \
+        ("less than", "a clock never runs back")
+    for k in np.flatnonzero(wrong & ok[1:] & ok[:-1]) + 1:
+        table.report(problems, f"{values[k].item()!r} is {than} the row before's "
+                               f"{values[k - 1].item()!r} ({rule})", int(k), column)
 
 
 def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Columns | None:
-    """``frames.csv``: numbers and times increasing, the truth whole or absent."""
+    """``frames.csv``: numbers increasing, times never decreasing, the truth whole or absent."""
     if not _checked(table, "frames", problems):
         return None
     assert table is not None
@@ -202,14 +253,11 @@ def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Colu
     number, good = integers(table, "frame", problems)
     _increasing(table, "frame", number, problems, good)
     values: dict[str, object] = {"frame": number, "time": floats(table, "time", problems)}
-    _increasing(table, "time", values["time"], problems)
-    given = [key for key in TRUTH if table.has(key)]
-    if given and len(given) < len(TRUTH):
-        missing = ", ".join(key for key in TRUTH if key not in given)
-        problems.add(table.file, f"truth partly present: columns {', '.join(given)} without "
-                                 f"{missing} (give x, y and heading, or none of them)")
-    elif given:
-        values |= {key: floats(table, key, problems) for key in TRUTH}
+    _increasing(table, "time", values["time"], problems, strictly=False)
+    if (problem := _truth_problem([key for key in TRUTH if table.has(key)], manifest.format)):
+        problems.add(table.file, problem)
+    else:
+        values |= {key: floats(table, key, problems) for key in TRUTH if table.has(key)}
     sequence = table.cells("sequence") if table.has("sequence") else \
         [manifest.sequence] * len(table)
     _check_sequences(table, sequence, problems)
@@ -219,6 +267,17 @@ def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Colu
             table.report(problems, f"{shown(text)} is no event (known: kidnap, outage, or "
                                    "empty)", k, "event")
     return Columns(values | {"sequence": sequence, "event": event})
+
+
+def _truth_problem(given: list[str], log_format: int) -> str | None:
+    """What is wrong with the truth columns given: x and y (and a heading) or none."""
+    needed = list(TRUTH) if log_format == 1 else ["x", "y"]
+    if not given or all(key in given for key in needed):
+        return None
+    missing = ", ".join(key for key in needed if key not in given)
+    rule = "give x, y and heading, or none of them" if log_format == 1 else \
+        "give x and y, and optionally heading, or none of them"
+    return f"truth partly present: columns {', '.join(given)} without {missing} ({rule})"
 
 
 def _check_sequences(table: Table, sequence: list[str], problems: Problems) -> None:
@@ -284,15 +343,40 @@ def _check_duplicates(table: Table, row: np.ndarray, ids: np.ndarray, azimuth: n
         seen.setdefault(key, k)
 
 
-def _samples(table: Table | None, problems: Problems) -> Columns | None:
-    """``odometry.csv`` or ``imu.csv``: finite samples, strictly increasing in time."""
+def _samples(table: Table | None, manifest: Manifest, problems: Problems) -> Columns | None:
+    """``odometry.csv`` or ``imu.csv``: finite samples, never decreasing in time."""
     if table is None:
         return None
     name = Path(table.file).stem
-    if not _checked(table, name, problems):
+    if not _checked(table, name, problems, log_format=manifest.format):
         return None
-    required, optional = _TABLES[name]
+    required, optional = _columns(name, manifest.format)
+    if name == "odometry" and manifest.format >= 2 and \
+            not _odometry_turns(table, manifest, problems):
+        return None
+    if name == "imu" and table.has(ACCELERATIONS[0]) != table.has(ACCELERATIONS[1]):
+        given, missing = sorted(ACCELERATIONS, key=lambda key: not table.has(key))
+        problems.add(table.file, f"column {given} without {missing} (give both accelerations "
+                                 "or neither)")
+        return None
     values = {key: floats(table, key, problems, empty_ok=key == "heading")
               for key in required + optional if table.has(key)}
-    _increasing(table, "time", values["time"], problems)
+    _increasing(table, "time", values["time"], problems, strictly=False)
     return Columns(values)
+
+
+def _odometry_turns(table: Table, manifest: Manifest, problems: Problems) -> bool:
+    """Exactly one turn column, and not a steering angle on a differential drive."""
+    given = [key for key in TURNS if table.has(key)]
+    if len(given) != 1:
+        which = "both columns steer and" if given else "neither column steer nor"
+        problems.add(table.file, f"{which} yaw_rate: odometry reports exactly one (steer: a "
+                                 "steered vehicle's steering angle; yaw_rate: its turn rate)")
+        return False
+    kind = manifest.profile.vehicle.kind
+    if given == ["steer"] and kind == DIFFERENTIAL_DRIVE:
+        problems.add(table.file, f"column steer, but {MANIFEST} says vehicle.kind = "
+                                 f"{kind!r}: a differential drive has no steering angle "
+                                 "(write its turn rate as yaw_rate)", column="steer")
+        return False
+    return True

@@ -7,6 +7,12 @@ noise. The IMU reports the yaw rate (a gyro with a bias that random-walks, and w
 linear acceleration in the body frame (white noise) and, optionally, an absolute heading from an
 orientation sensor (white noise). ``ImuModel.plotter()`` is the smartphone of Dang et al. (2015):
 26 Hz, accelerometer variance 0.011 (m/s²)² and orientation variance 0.235 deg².
+
+A differential-drive robot's odometry (:class:`DifferentialOdometryModel`) reports the forward
+speed and the turn rate, stamped as a real logger stamps them: 10 ms apart mostly, 20-50 ms when
+the logger is busy, an occasional gap over 0.1 s, repeated stamps at millisecond resolution. Its
+distance reads short by a scale (a wheel's radius off by 10 %) and its turn rate carries a bias
+that wanders, so that its heading drifts by degrees a second.
 """
 
 from __future__ import annotations
@@ -18,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from azgym.core import FloatArray
+from azgym.errors import InvalidInputError
+from azgym.profile import MotionProfile
 
 
 @dataclass(frozen=True)
@@ -62,6 +70,84 @@ class ImuModel:
         """The smartphone sensors of Dang et al. (2015), Sec. V-A, at their 26 Hz."""
         return cls(rate_hz=26.0, accel_noise=math.sqrt(0.011),
                    orientation_noise=math.radians(math.sqrt(0.235)))
+
+
+@dataclass(frozen=True)
+class DifferentialOdometryModel:
+    """A differential drive's odometry: forward speed and turn rate, stamped by a busy logger.
+
+    Each interval between stamps is drawn: a repeated stamp (0) at ``repeat_share``, a gap of
+    ``gap`` at ``gap_share``, a busy interval of ``busy`` at ``busy_share``, else the nominal
+    ``period`` with ``period_jitter`` (each range uniform); stamps are rounded to
+    ``stamp_resolution``. A sample reads the true speed times the run's scale,
+    (1 + ``speed_scale`` · N(0, 1)) / ``speed_factor``, plus ``speed_noise``; and the true turn
+    rate plus the run's bias (N(0, ``turn_rate_bias``), walking by ``bias_walk``) plus
+    ``turn_rate_noise``. The defaults follow a real recording of a wheeled robot (docs/robot.md).
+
+    Attributes:
+        period: Nominal interval between samples [s].
+        period_jitter: Half-width of the nominal interval's jitter [s].
+        busy: Range of a busy logger's intervals [s].
+        busy_share: Share of busy intervals.
+        gap: Range of a gap's length [s].
+        gap_share: Share of gaps.
+        repeat_share: Share of samples stamped like the one before.
+        stamp_resolution: The logger's clock tick [s].
+        speed_factor: True distance over read distance, the run's mean [1].
+        speed_scale: Standard deviation of a run's scale error around it [1].
+        speed_noise: White noise of a speed sample [m/s].
+        turn_rate_noise: White noise of a turn-rate sample [rad/s].
+        turn_rate_bias: Standard deviation of a run's turn-rate bias at the start [rad/s].
+        bias_walk: Random walk of the turn-rate bias [rad/s/√s].
+    """
+
+    period: float = 0.0098
+    period_jitter: float = 0.0015
+    busy: tuple[float, float] = (0.020, 0.050)
+    busy_share: float = 0.25
+    gap: tuple[float, float] = (0.10, 0.30)
+    gap_share: float = 0.002
+    repeat_share: float = 0.03
+    stamp_resolution: float = 0.001
+    speed_factor: float = 1.1
+    speed_scale: float = 0.02
+    speed_noise: float = 0.01
+    turn_rate_noise: float = 0.2
+    turn_rate_bias: float = 0.015
+    bias_walk: float = 0.001
+
+    def __post_init__(self) -> None:
+        for name in ("period", "stamp_resolution", "speed_factor"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise InvalidInputError(f"DifferentialOdometryModel.{name} must be > 0, got "
+                                        f"{getattr(self, name)!r}")
+        for name in ("period_jitter", "speed_scale", "speed_noise", "turn_rate_noise",
+                     "turn_rate_bias", "bias_walk"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise InvalidInputError(f"DifferentialOdometryModel.{name} must be >= 0, got "
+                                        f"{getattr(self, name)!r}")
+        if not self.period_jitter < self.period:
+            raise InvalidInputError("DifferentialOdometryModel.period_jitter must be less than "
+                                    f"its period {self.period}, got {self.period_jitter!r}")
+        shares = (self.busy_share, self.gap_share, self.repeat_share)
+        if not (all(0 <= share <= 1 for share in shares) and sum(shares) < 1):
+            raise InvalidInputError("DifferentialOdometryModel's busy_share, gap_share and "
+                                    f"repeat_share must be >= 0 and sum to < 1, got {shares}")
+        for name in ("busy", "gap"):
+            low, high = getattr(self, name)
+            if not 0 < low <= high < math.inf:
+                raise InvalidInputError(f"DifferentialOdometryModel.{name} must be a range "
+                                        f"(low, high) with 0 < low <= high, got "
+                                        f"{getattr(self, name)!r}")
+
+    def motion_profile(self) -> MotionProfile:
+        """Its errors as a profile's ``[motion]`` section: what ``azgym calibrate`` should find.
+
+        The start bias (``turn_rate_bias``) has no profile field and is left out.
+        """
+        return MotionProfile(speed_factor=self.speed_factor, speed_scale=self.speed_scale,
+                             speed_noise=self.speed_noise, turn_rate_noise=self.turn_rate_noise,
+                             bias_walk=self.bias_walk)
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,6 +198,11 @@ class ImuSamples:
     yaw_rate: FloatArray
     accel: FloatArray
     heading: FloatArray
+
+    @classmethod
+    def none(cls) -> ImuSamples:
+        """No samples: a vehicle without an IMU."""
+        return cls(np.empty(0), np.empty(0), np.empty((0, 2)), np.empty(0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,6 +261,57 @@ class Odometer:
         """The samples since the last call, up to time ``until`` [s] (later ones wait)."""
         time, speed, steer = np.array(_taken(self._rows, until), dtype=np.float64).reshape(-1, 3).T
         return OdometrySamples(time=time.copy(), speed=speed.copy(), steer=steer.copy())
+
+
+class DifferentialOdometer:
+    """Produces a differential drive's odometry samples at its logger's stamps.
+
+    Each physics step reports the velocity it held over its span (:meth:`update`); every stamp
+    in that span gets a sample of it. The run's scale and bias are drawn at construction.
+    """
+
+    def __init__(self, model: DifferentialOdometryModel, rng: np.random.Generator) -> None:
+        self.model = model
+        self._rng = rng
+        self._scale = (1.0 + model.speed_scale * rng.standard_normal()) / model.speed_factor
+        self._bias = model.turn_rate_bias * rng.standard_normal()
+        self._next = max(1, round(model.period / model.stamp_resolution))  # the next stamp [ticks]
+        self._previous = 0
+        self._rows: list[tuple[float, float, float]] = []
+
+    def _interval(self) -> float:
+        """The next interval between stamps [s] (the class docstring's mixture)."""
+        model = self.model
+        u, v = self._rng.random(2)
+        if u < model.repeat_share:
+            return 0.0
+        u -= model.repeat_share
+        if u < model.gap_share:
+            return model.gap[0] + v * (model.gap[1] - model.gap[0])
+        u -= model.gap_share
+        if u < model.busy_share:
+            return model.busy[0] + v * (model.busy[1] - model.busy[0])
+        return model.period + (2.0 * v - 1.0) * model.period_jitter
+
+    def update(self, time: float, speed: float, yaw_rate: float) -> None:
+        """Sample every stamp up to ``time`` [s]: the velocity held since the previous call."""
+        model = self.model
+        tick = model.stamp_resolution
+        while self._next * tick <= time + 1e-12:
+            stamp = self._next * tick
+            walk = math.sqrt((self._next - self._previous) * tick)
+            noise = self._rng.standard_normal(3)
+            self._bias += model.bias_walk * walk * noise[0]
+            self._rows.append((stamp, speed * self._scale + model.speed_noise * noise[1],
+                               yaw_rate + self._bias + model.turn_rate_noise * noise[2]))
+            self._previous = self._next
+            self._next += round(self._interval() / tick)
+
+    def take(self, until: float = math.inf) -> OdometrySamples:
+        """The samples since the last call, up to time ``until`` [s] (later ones wait)."""
+        rows = _taken(self._rows, until)
+        time, speed, yaw_rate = np.array(rows, dtype=np.float64).reshape(-1, 3).T
+        return OdometrySamples.turning(time.copy(), speed.copy(), yaw_rate.copy())
 
 
 class Imu:

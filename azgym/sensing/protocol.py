@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike
 from azgym.core import BoolArray, FloatArray, IntArray, Measurements, Pose
 from azgym.errors import InvalidInputError
 from azgym.sensing.labels import LABEL_NAMES
+from azgym.site.elements import CAMERA_RATE_HZ as CAMERA_RATE_HZ  # the sensors' default rate
 
 if TYPE_CHECKING:
     from azgym.sensing.image.detect import Blob
@@ -35,8 +36,6 @@ Tilt = tuple[float, float]
 """(pitch, roll) of the camera's axis from the vertical [rad]."""
 LEVEL: Tilt = (0.0, 0.0)
 """A camera looking straight up."""
-CAMERA_RATE_HZ = 10.0
-"""The camera's frame rate unless a sensor needs another (blinking ids need 30 Hz) [Hz]."""
 Seed = int | Sequence[int] | np.random.SeedSequence | np.random.Generator | None
 """Anything ``numpy.random.default_rng`` takes."""
 

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from azgym.core import FloatArray, wrap_angle
+from azgym.profile import FORKLIFT
 
 
 @dataclass(frozen=True)
@@ -72,20 +73,56 @@ class Wall:
     reflectivity: float = 0.0
 
 
+CAMERA_RATES_HZ = (0.1, 1000.0)
+"""The camera frame rates azgym accepts [Hz]: slower would leave a route without frames (and
+take forever to reach the next one), faster is no camera."""
+CAMERA_RATE_HZ = 10.0
+"""A camera's frame rate unless its scenario or sensor says otherwise [Hz]."""
+ALL_ROUND = 2.0 * math.pi
+"""The field of view of a camera that sees all round (the upward fisheye) [rad]."""
+
+
 @dataclass(frozen=True)
 class Camera:
-    """The upward fisheye camera as the sensor geometry needs it.
+    """The camera as the sensor geometry needs it: an upward fisheye, or a forward camera.
 
     Attributes:
         height: Height of the lens above the floor [m].
         min_elevation: Lowest elevation the lens sees, from the horizon [rad].
         max_range: Distance at which a beacon's flux falls to the detection threshold [m, 3-D];
             a ghost's reflected flux must reach the same threshold.
+        field_of_view: The full horizontal view, centred on the heading [rad]; a detection is
+            kept only if its measured azimuth is within half of it (the image's edge).
+            ``ALL_ROUND`` (2π): the upward fisheye, which sees all round.
+        rate_hz: Frames per second of the geometry sensor [Hz].
     """
 
     height: float = 2.0
     min_elevation: float = 0.0
     max_range: float = 60.0
+    field_of_view: float = ALL_ROUND
+    rate_hz: float = CAMERA_RATE_HZ
+
+    @property
+    def all_round(self) -> bool:
+        """Whether the camera sees all round (no field-of-view limit)."""
+        return self.field_of_view >= ALL_ROUND
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """What drives the scenario's routes, and where its camera sits.
+
+    Attributes:
+        kind: One of :data:`azgym.profile.VEHICLE_KINDS`: ``"forklift"`` (the default, driven by
+            :mod:`azgym.world.forklift`) or ``"differential-drive"`` (:mod:`azgym.world.robot`).
+        camera_ahead: A differential drive's camera offset ahead of its turning axis, along the
+            heading [m] (negative: behind it); None for a forklift, whose camera sits where
+            :class:`~azgym.world.forklift.ForkliftSpec` puts it.
+    """
+
+    kind: str = FORKLIFT
+    camera_ahead: float | None = None
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from azgym.profile import DIFFERENTIAL_DRIVE, FORKLIFT, VEHICLE_KINDS
+from azgym.site.elements import Route, Vehicle
 from azgym.site.parse_layout import (
     Obstacles,
     check_beacons_outside_racks,
@@ -26,16 +28,20 @@ from azgym.site.parse_layout import (
     parse_light,
     parse_rack,
     parse_route,
+    parse_unmapped,
     parse_wall,
 )
 from azgym.site.parse_sensor import parse_camera, parse_error_model, parse_faults, parse_fisheye
-from azgym.site.reader import Reader, parse_tables
+from azgym.site.reader import Reader, parse_tables, shown
 from azgym.site.scenario import Scenario
 
 _TOP_KEYS = {"name", "description", "version", "room", "error_model", "beacon_defaults",
              "beacons", "camera", "faults", "racks", "walls", "routes",
-             "bumps", "fisheye", "lights"}
+             "bumps", "fisheye", "lights", "vehicle", "unmapped"}
 _ROOM_KEYS = {"bounds"}
+_VEHICLE_KEYS = {"kind", "camera_ahead"}
+MAX_CAMERA_AHEAD = 10.0
+"""The farthest a camera may sit from the turning axis [m] (a profile's bound)."""
 
 
 def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario:
@@ -53,15 +59,21 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
     description = read.text(read.require(data, "description"), "description")
     version = read.integer(read.require(data, "version"), "version", minimum=1)
     bounds = _parse_room(read, data)
+    vehicle = _parse_vehicle(read, data.get("vehicle", {}))
     error_model = parse_error_model(read, data.get("error_model", {}))
     beacons, physical_xyz = parse_beacons(read, data, bounds)
     racks = parse_tables(read, data, "racks", parse_rack)
     walls = parse_tables(read, data, "walls", parse_wall)
     check_beacons_outside_racks(read, beacons.ids, physical_xyz, racks)
+    unmapped = parse_unmapped(read, data, bounds, beacons)
+    if unmapped is not None:
+        check_beacons_outside_racks(read, unmapped.ids, unmapped.xyz, racks, "unmapped")
     routes = parse_tables(read, data, "routes",
                           functools.partial(parse_route, bounds=bounds,
                                             obstacles=Obstacles(racks, walls)))
     check_route_names_unique(read, routes)
+    if vehicle.kind == DIFFERENTIAL_DRIVE:
+        _check_forwards(read, routes)
     return Scenario(name=name, description=description, version=version, bounds=bounds,
                     beacons=beacons, error_model=error_model, racks=racks, walls=walls,
                     routes=routes, bumps=parse_tables(read, data, "bumps", parse_bump),
@@ -71,7 +83,36 @@ def parse_scenario(data: dict[str, Any], origin: str = "<scenario>") -> Scenario
                     camera=parse_camera(read, data.get("camera", {})),
                     faults=parse_faults(read, data.get("faults", {})),
                     physical_xyz=None if np.array_equal(physical_xyz, beacons.xyz)
-                    else physical_xyz)
+                    else physical_xyz, vehicle=vehicle, unmapped=unmapped)
+
+
+def _parse_vehicle(read: Reader, table: Any) -> Vehicle:
+    """The ``[vehicle]`` table: its ``kind`` and, for a differential drive, ``camera_ahead``.
+
+    Without the table, a forklift. A differential drive's camera sits ``camera_ahead`` metres
+    ahead of its turning axis (default 0: on it); a forklift's sits where its model puts it.
+    """
+    read.table(table, "vehicle", _VEHICLE_KEYS)
+    kind = table.get("kind", FORKLIFT)
+    if kind not in VEHICLE_KINDS:
+        raise read.fail("vehicle.kind", f"must be one of {', '.join(map(repr, VEHICLE_KINDS))}, "
+                        f"got {shown(kind)}")
+    if kind == FORKLIFT:
+        if "camera_ahead" in table:
+            raise read.fail("vehicle.camera_ahead", "a forklift's camera sits where its model "
+                            "puts it; camera_ahead is for a differential-drive robot")
+        return Vehicle(kind)
+    return Vehicle(kind, read.number(table.get("camera_ahead", 0.0), "vehicle.camera_ahead",
+                                     maximum=MAX_CAMERA_AHEAD))
+
+
+def _check_forwards(read: Reader, routes: tuple[Route, ...]) -> None:
+    """Reject a reversed leg: a differential-drive robot drives its routes forwards."""
+    for k, route in enumerate(routes):
+        if any(route.reverse):
+            leg = route.reverse.index(True)
+            raise read.fail(f"routes[{k}].reverse[{leg}]", "a differential-drive robot drives "
+                            "its routes forwards (it turns on the spot instead of reversing)")
 
 
 def _parse_room(read: Reader, data: dict[str, Any]) -> tuple[float, float, float, float]:

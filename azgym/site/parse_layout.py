@@ -33,6 +33,7 @@ from azgym.site.reader import MAX_INTEGER, Reader, shown
 
 _DEFAULT_KEYS = {"width", "z"}
 _BEACON_KEYS = {"id", "xy", "xyz", "width", "z", "moved_to"}
+_UNMAPPED_KEYS = {"id", "xy", "xyz", "width", "z"}
 _RACK_KEYS = {"center", "size", "angle_deg", "height", "reflectivity"}
 _WALL_KEYS = {"start", "end", "height", "reflectivity"}
 _ROUTE_KEYS = {"name", "waypoints", "reverse", "speed"}
@@ -80,6 +81,41 @@ def parse_beacons(read: Reader, data: dict[str, Any],
         width.append(read.number(entry.get("width", default_width), f"{where}width",
                                  positive=True))
     return BeaconMap(np.array(ids), np.array(xyz), np.array(width)), np.array(physical)
+
+
+def parse_unmapped(read: Reader, data: dict[str, Any], bounds: tuple[float, float, float, float],
+                   beacons: BeaconMap) -> BeaconMap | None:
+    """The ``[[unmapped]]`` markers: coded, seen like beacons, but with codes the map lacks.
+
+    Each has an ``id`` no map beacon has (and no other marker), a position in the room
+    (``xy`` and ``z``, or ``xyz``; ``z`` and ``width`` default to ``[beacon_defaults]``'s).
+    None when the file has none.
+    """
+    entries = data.get("unmapped", [])
+    if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
+        raise read.fail("unmapped", "must be an array of [[unmapped]] tables")
+    if not entries:
+        return None
+    read.count(entries, "unmapped")
+    defaults = data.get("beacon_defaults", {})
+    default_width, default_z = defaults.get("width", 0.03), defaults.get("z", 0.0)
+    mapped = {int(i): k for k, i in enumerate(beacons.ids)}
+    ids: list[int] = []
+    xyz, width = [], []
+    for k, entry in enumerate(entries):
+        where = f"unmapped[{k}]."
+        read.table(entry, f"unmapped[{k}]", _UNMAPPED_KEYS)
+        marker = _beacon_id(read, entry, where, ids)
+        if marker in mapped:
+            raise read.fail(f"{where}id", f"{marker} is a map beacon's id (beacons"
+                            f"[{mapped[marker]}]); an unmapped marker's code is not in the map")
+        ids.append(marker)
+        position = _beacon_position(read, entry, where, default_z)
+        xyz.append(_in_room(read, position, f"{where}{'xyz' if 'xyz' in entry else 'xy'}",
+                            marker, bounds))
+        width.append(read.number(entry.get("width", default_width), f"{where}width",
+                                 positive=True))
+    return BeaconMap(np.array(ids), np.array(xyz), np.array(width))
 
 
 def _beacon_id(read: Reader, entry: dict[str, Any], where: str, earlier: list[int]) -> int:
@@ -135,8 +171,11 @@ def _in_room(read: Reader, xyz: list[float], field: str, beacon_id: int,
 
 
 def check_beacons_outside_racks(read: Reader, ids: IntArray, physical_xyz: FloatArray,
-                                racks: tuple[Rack, ...]) -> None:
-    """Reject a beacon whose physical position lies in a rack's footprint (the first such)."""
+                                racks: tuple[Rack, ...], table: str = "beacons") -> None:
+    """Reject a beacon whose physical position lies in a rack's footprint (the first such).
+
+    ``table`` names the array the positions come from (``beacons`` or ``unmapped``).
+    """
     first: tuple[int, int] | None = None  # (beacon, rack): the first beacon, its first rack
     for r, rack in enumerate(racks):  # every beacon at once, rack by rack: O(beacons) memory
         inside = np.flatnonzero(rack.contains(physical_xyz[:, 0], physical_xyz[:, 1]))
@@ -144,7 +183,7 @@ def check_beacons_outside_racks(read: Reader, ids: IntArray, physical_xyz: Float
             first = (int(inside[0]), r)
     if first is not None:
         k, r = first
-        raise read.fail(f"beacons[{k}]", f"beacon {ids[k]} at ({physical_xyz[k, 0]:g}, "
+        raise read.fail(f"{table}[{k}]", f"beacon {ids[k]} at ({physical_xyz[k, 0]:g}, "
                         f"{physical_xyz[k, 1]:g}) is inside racks[{r}]")
 
 

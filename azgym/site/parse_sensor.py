@@ -13,30 +13,44 @@ import math
 from typing import Any
 
 from azgym.errors import InvalidInputError
-from azgym.site.elements import Camera, Faults
+from azgym.site.elements import ALL_ROUND, CAMERA_RATES_HZ, Camera, Faults
 from azgym.site.error_model import ErrorModel
 from azgym.site.fisheye import MAX_IMAGE_SIDE, FisheyeCamera
 from azgym.site.reader import Reader, shown
 
-_CAMERA_KEYS = {"height", "min_elevation_deg", "max_range"}
+_CAMERA_KEYS = {"height", "min_elevation_deg", "max_range", "field_of_view_deg", "rate_hz"}
 _FISHEYE_KEYS = {"focal_px", "principal_point", "image_size", "distortion"}
 _ERROR_KEYS = {"delta_alpha_d_deg", "center_error_px", "horizon_radius_px", "coverage"}
 _FAULT_KEYS = {"misdecode_rate"}
 
 
 def parse_camera(read: Reader, table: Any) -> Camera:
-    """The ``[camera]`` table: height, elevation limit and range; :class:`Camera`'s by default."""
+    """The ``[camera]`` table: height, elevation limit, range, field of view and frame rate.
+
+    Each defaults to :class:`Camera`'s (an upward fisheye seeing all round at 10 Hz).
+    """
     read.table(table, "camera", _CAMERA_KEYS)
     default = Camera()
     elevation = read.number(table.get("min_elevation_deg", math.degrees(default.min_elevation)),
                             "camera.min_elevation_deg")
     if not -90.0 < elevation < 90.0:
         raise read.fail("camera.min_elevation_deg", f"must be in (-90, 90), got {elevation}")
+    view = read.number(table.get("field_of_view_deg", math.degrees(default.field_of_view)),
+                       "camera.field_of_view_deg", positive=True)
+    if view > 360.0:
+        raise read.fail("camera.field_of_view_deg", f"must be in (0, 360] (360: all round), "
+                        f"got {view}")
+    low, high = CAMERA_RATES_HZ
+    rate = read.number(table.get("rate_hz", default.rate_hz), "camera.rate_hz", positive=True)
+    if not low <= rate <= high:
+        raise read.fail("camera.rate_hz", f"must be from {low:g} to {high:g} [Hz], got {rate}")
     return Camera(
         height=read.number(table.get("height", default.height), "camera.height", positive=True),
         min_elevation=math.radians(elevation),
         max_range=read.number(table.get("max_range", default.max_range), "camera.max_range",
                               positive=True),
+        field_of_view=ALL_ROUND if view == 360.0 else math.radians(view),
+        rate_hz=rate,
     )
 
 

@@ -10,7 +10,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from azgym.core import BeaconMap, FloatArray
-from azgym.site.elements import Bump, Camera, Faults, Light, Rack, Route, Wall
+from azgym.profile import DIFFERENTIAL_DRIVE, Profile, SensorProfile, VehicleProfile
+from azgym.site.elements import Bump, Camera, Faults, Light, Rack, Route, Vehicle, Wall
 from azgym.site.error_model import ErrorModel
 from azgym.site.fisheye import FisheyeCamera
 
@@ -35,6 +36,9 @@ class Scenario:
         fisheye: The fisheye's intrinsics, for the image path.
         lights: Lights that are not beacons (lamps, windows): distractors on the image.
         physical_xyz: Where the beacons really are, if some were moved after mapping.
+        vehicle: What drives the routes (a forklift, or a differential-drive robot).
+        unmapped: Coded markers the camera reads whose codes the map lacks (another robot's
+            tag, a marker never surveyed), or None; their detections are labelled distractors.
         source: The file it was loaded from.
     """
 
@@ -53,7 +57,28 @@ class Scenario:
     fisheye: FisheyeCamera = FisheyeCamera()
     lights: tuple[Light, ...] = ()
     physical_xyz: FloatArray | None = None
+    vehicle: Vehicle = Vehicle()
+    unmapped: BeaconMap | None = None
     source: Path | None = None
+
+    @property
+    def differential_drive(self) -> bool:
+        """Whether a differential-drive robot drives the routes (else a forklift)."""
+        return self.vehicle.kind == DIFFERENTIAL_DRIVE
+
+    @property
+    def profile(self) -> Profile:
+        """The vehicle and sensor this scenario simulates, as a log's manifest states them.
+
+        The vehicle's kind and camera offset (a forklift's offset is its model's, left out), and
+        the camera's eq. 1 half-width Δα_d, coverage error and field of view. The motion
+        sensors' errors are the models' of :mod:`azgym.sensing.motion`, not the scenario's.
+        """
+        return Profile(
+            vehicle=VehicleProfile(kind=self.vehicle.kind, camera_ahead=self.vehicle.camera_ahead),
+            sensor=SensorProfile(delta_alpha_d=self.error_model.delta_alpha_d,
+                                 coverage=self.error_model.coverage,
+                                 field_of_view=self.camera.field_of_view))
 
     @property
     def beacon_positions(self) -> FloatArray:

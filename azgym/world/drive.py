@@ -1,4 +1,4 @@
-"""The frame source: drive a scenario's route and yield what the forklift's sensors saw, per frame.
+"""The frame source: drive a scenario's route and yield what the vehicle's sensors saw, per frame.
 
 ``simulate(scenario, route, seed)`` runs the world (pymunk physics at ``dt``), the pure-pursuit
 driver, wheel odometry and the IMU at their own rates, and the camera at ``camera_rate_hz``
@@ -10,10 +10,17 @@ independent streams for the camera's frames, the odometry, the IMU, the camera's
 stretches and the sensor's own sequence (its ``reset``), so that changing one sensor's settings
 leaves the others' draws alone. On a bump the camera sways (:class:`~azgym.world.sway.CameraSway`:
 a damped mast that the bumps shake, so consecutive frames see nearly the same tilt).
+
+A scenario whose vehicle is a differential-drive robot is driven by :mod:`azgym.world.robot`
+instead: a unicycle, odometry of speed and turn rate at a logger's irregular stamps
+(:class:`~azgym.sensing.motion.DifferentialOdometryModel`), no IMU unless one is given, a level
+camera ``camera_ahead`` of the turning axis.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import numbers
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -23,13 +30,21 @@ import numpy as np
 from azgym.core import Measurements, Pose
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.geometry.sensor import GeometrySensor
-from azgym.sensing.motion import ImuModel, ImuSamples, Motion, OdometryModel, OdometrySamples
-from azgym.sensing.protocol import DetectionTruth, Observation, Sensor
+from azgym.sensing.motion import (
+    DifferentialOdometryModel,
+    ImuModel,
+    ImuSamples,
+    Motion,
+    OdometryModel,
+    OdometrySamples,
+)
+from azgym.sensing.protocol import LEVEL, DetectionTruth, Observation, Sensor, Tilt
 from azgym.site import Scenario, load_scenario
-from azgym.site.elements import Route
+from azgym.site.elements import CAMERA_RATES_HZ, Route
 from azgym.world.driver import PurePursuit
 from azgym.world.forklift import ForkliftSpec
-from azgym.world.motion_sensors import MotionSensors
+from azgym.world.motion_sensors import MotionSensors, RobotMotionSensors
+from azgym.world.robot import Robot, RobotDriver, RobotSpec
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
 
@@ -85,13 +100,15 @@ def _route(scenario: Scenario, route: str | Route | None) -> Route:
     return names[route]
 
 
-CAMERA_RATES_HZ = (0.1, 1000.0)
-"""The camera frame rates azgym accepts [Hz]: slower would leave a route without frames (and
-take forever to reach the next one), faster is no camera."""
 STOPPED_SPEED = 0.05
-"""Below this speed [m/s] a forklift at the end of its route has stopped: the drive is over."""
+"""Below this speed [m/s] a vehicle at the end of its route has stopped: the drive is over."""
 FRAME_TIME_TOLERANCE = 1e-9
 """A physics step ending this close before a frame's time [s] takes the frame (rounding)."""
+FORKLIFT_DEFAULTS = (0.02, 600.0)
+"""A forklift's physics step and a drive's time limit [s]."""
+ROBOT_DEFAULTS = (0.01, 1800.0)
+"""A robot's step (its odometry's nominal interval) and a drive's time limit [s]: the real
+recordings it follows are 15 min long."""
 
 
 def checked_camera_rate(camera_rate_hz: float) -> float:
@@ -112,8 +129,6 @@ def _frames(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
     ``on_step`` sees the world after every physics step (and at the start). The drive ends at
     the frame after the forklift has stopped at the route's end, or after ``max_time``.
     """
-    if not dt > 0:
-        raise InvalidInputError(f"dt must be > 0 [s], got {dt}")
     world = World(scenario, route.start_pose(), spec, dt)
     forklift = world.forklift
     driver = PurePursuit(route, forklift.spec)
@@ -132,21 +147,127 @@ def _frames(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
         world.step(*driver.command(x, y, heading, forklift.speed))
 
 
+def _robot_frames(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
+                  spec: RobotSpec | None, max_time: float,
+                  on_step: Callable[[Robot], None] | None = None) -> Iterator[Robot]:
+    """Like :func:`_frames`, for a differential-drive robot: the robot at every frame time.
+
+    ``on_step`` sees the robot after every step. The drive ends at the frame after the robot
+    has stopped at the route's end, or after ``max_time``.
+    """
+    robot = Robot(route.start_pose(), spec or RobotSpec(), dt, scenario.vehicle.camera_ahead)
+    driver = RobotDriver(route, robot.spec)
+    period = 1.0 / checked_camera_rate(camera_rate_hz)
+    next_frame = 0.0
+    while True:
+        if robot.time + FRAME_TIME_TOLERANCE >= next_frame:
+            done = driver.done and abs(robot.speed) < STOPPED_SPEED
+            yield robot
+            next_frame += period
+            if done or robot.time > max_time:
+                return
+        robot.step(*driver.command(*robot.pose))
+        if on_step is not None:
+            on_step(robot)
+
+
 def _camera_pose(world: World) -> Pose:
     x, y = world.forklift.camera_position()
     return x, y, world.forklift.pose[2]
 
 
+def _checked_spec(scenario: Scenario, spec: ForkliftSpec | RobotSpec | None) -> None:
+    """Refuse a vehicle spec of the other kind than the scenario's vehicle."""
+    wanted = RobotSpec if scenario.differential_drive else ForkliftSpec
+    if spec is not None and not isinstance(spec, wanted):
+        raise InvalidInputError(f"spec: scenario {scenario.name!r} is driven by a "
+                                f"{scenario.vehicle.kind}, whose spec is a {wanted.__name__}, "
+                                f"got {type(spec).__name__}")
+
+
+def _defaults(scenario: Scenario, dt: float | None, max_time: float | None
+              ) -> tuple[float, float]:
+    """The physics step and time limit [s]: the given ones, else the vehicle's defaults."""
+    step, limit = ROBOT_DEFAULTS if scenario.differential_drive else FORKLIFT_DEFAULTS
+    dt = step if dt is None else dt
+    if not (isinstance(dt, numbers.Real) and math.isfinite(dt) and dt > 0):
+        raise InvalidInputError(f"dt must be > 0 [s], got {dt!r}")
+    return float(dt), limit if max_time is None else max_time
+
+
 def camera_trajectory(scenario: Scenario, route: Route, camera_rate_hz: float = 10.0,
-                      dt: float = 0.02, spec: ForkliftSpec | None = None,
-                      max_time: float = 600.0) -> np.ndarray:
+                      dt: float | None = None, spec: ForkliftSpec | RobotSpec | None = None,
+                      max_time: float | None = None) -> np.ndarray:
     """The camera pose (x, y, heading) at each frame of a route, shape (F, 3).
 
     The drive is deterministic (no random draw), the same for every seed; ``simulate`` adds the
     sensors along it.
     """
+    _checked_spec(scenario, spec)
+    dt, max_time = _defaults(scenario, dt, max_time)
+    if scenario.differential_drive:
+        return np.array([robot.camera_pose() for robot in _robot_frames(
+            scenario, route, camera_rate_hz, dt, spec, max_time)])  # type: ignore[arg-type]
     return np.array([_camera_pose(world) for world in _frames(
-        scenario, route, camera_rate_hz, dt, spec, max_time)])
+        scenario, route, camera_rate_hz, dt, spec, max_time)])  # type: ignore[arg-type]
+
+
+def motion_models(scenario: Scenario, rate_hz: float | None = None
+                  ) -> tuple[OdometryModel | DifferentialOdometryModel, ImuModel | None]:
+    """The scenario's vehicle's default odometry and IMU models (None: no IMU).
+
+    A forklift's: :class:`OdometryModel` and :class:`ImuModel`; a differential-drive robot's:
+    :class:`DifferentialOdometryModel` and no IMU. ``rate_hz`` [Hz] sets the odometry's (and
+    IMU's) rate: a robot's nominal interval becomes 1 / ``rate_hz``, its jitter scaled alike.
+    """
+    if scenario.differential_drive:
+        robot = DifferentialOdometryModel()
+        if rate_hz is None:
+            return robot, None
+        scale = 1.0 / (rate_hz * robot.period)
+        return dataclasses.replace(robot, period=robot.period * scale,
+                                   period_jitter=robot.period_jitter * scale), None
+    odometry, imu = OdometryModel(), ImuModel()
+    if rate_hz is None:
+        return odometry, imu
+    return (dataclasses.replace(odometry, rate_hz=rate_hz),
+            dataclasses.replace(imu, rate_hz=rate_hz))
+
+
+_Moment = tuple[float, Pose, Tilt, OdometrySamples, ImuSamples, int]
+"""What the vehicle did up to a frame: time, camera pose, tilt, motion samples, new contacts."""
+
+
+def _forklift_moments(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
+                      spec: ForkliftSpec | None, max_time: float,
+                      odometry: OdometryModel | None, imu: ImuModel | None,
+                      rngs: list[np.random.Generator]) -> Iterator[_Moment]:
+    """The forklift's frames: pymunk, its odometry and IMU, the mast's sway on bumps."""
+    odometry_rng, imu_rng, sway_rng = rngs
+    default_odometry, default_imu = motion_models(scenario)
+    motion = MotionSensors(odometry or default_odometry, imu or default_imu,  # type: ignore[arg-type]
+                           odometry_rng, imu_rng, dt)
+    sway = CameraSway(scenario, 1.0 / camera_rate_hz, spec)
+    contacts_seen = 0
+    for world in _frames(scenario, route, camera_rate_hz, dt, spec, max_time,
+                         on_step=motion.step):
+        pose = _camera_pose(world)
+        tilt = sway.step(pose[0], pose[1], sway_rng)
+        yield (world.time, pose, tilt, *motion.take(), len(world.contacts) - contacts_seen)
+        contacts_seen = len(world.contacts)
+
+
+def _robot_moments(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
+                   spec: RobotSpec | None, max_time: float,
+                   odometry: DifferentialOdometryModel | None, imu: ImuModel | None,
+                   rngs: list[np.random.Generator]) -> Iterator[_Moment]:
+    """The robot's frames: the unicycle, its odometry (and IMU if asked for); a level camera."""
+    odometry_rng, imu_rng, _ = rngs
+    motion = RobotMotionSensors(odometry or motion_models(scenario)[0],  # type: ignore[arg-type]
+                                imu, odometry_rng, imu_rng)
+    for robot in _robot_frames(scenario, route, camera_rate_hz, dt, spec, max_time,
+                               on_step=motion.step):
+        yield (robot.time, robot.camera_pose(), LEVEL, *motion.take(robot.time), 0)
 
 
 def simulate(
@@ -156,13 +277,18 @@ def simulate(
     *,
     sensor: Sensor | None = None,
     camera_rate_hz: float | None = None,
-    dt: float = 0.02,
-    spec: ForkliftSpec | None = None,
-    odometry: OdometryModel | None = None,
+    dt: float | None = None,
+    spec: ForkliftSpec | RobotSpec | None = None,
+    odometry: OdometryModel | DifferentialOdometryModel | None = None,
     imu: ImuModel | None = None,
-    max_time: float = 600.0,
+    max_time: float | None = None,
 ) -> Iterator[Frame]:
     """Drive ``route`` through ``scenario`` and yield a :class:`Frame` per camera frame.
+
+    The scenario's vehicle drives: a forklift (pymunk, wheel odometry of speed and steering
+    angle, an IMU, a swaying mast) or a differential-drive robot (a unicycle, odometry of speed
+    and turn rate at a logger's irregular stamps, no IMU unless ``imu`` is given, a level
+    camera).
 
     Args:
         scenario: The scenario or its name.
@@ -170,13 +296,18 @@ def simulate(
         seed: Seed of every random draw.
         sensor: The camera model (default: a :class:`GeometrySensor` of the scenario); it is
             reset here, from its own stream of the seed.
-        camera_rate_hz: Camera frames per second (default: the sensor's ``frame_rate_hz``,
-            10 Hz, or 30 Hz for blinking ids).
-        dt: Physics step [s].
-        spec: The forklift (default: :class:`ForkliftSpec`).
-        odometry: Wheel odometry errors (default: :class:`OdometryModel`).
-        imu: IMU errors (default: :class:`ImuModel`).
-        max_time: Stop after this much simulated time even if the route is not finished [s].
+        camera_rate_hz: Camera frames per second (default: the sensor's ``frame_rate_hz``: the
+            scenario camera's rate, or 30 Hz for blinking ids).
+        dt: Physics step [s] (default: 0.02 for a forklift, 0.01 for a robot).
+        spec: The vehicle (default: :class:`ForkliftSpec` or :class:`RobotSpec`).
+        odometry: Wheel odometry errors (default: :class:`OdometryModel` for a forklift,
+            :class:`DifferentialOdometryModel` for a robot).
+        imu: IMU errors (default: :class:`ImuModel` for a forklift, none for a robot).
+        max_time: Stop after this much simulated time even if the route is not finished [s]
+            (default: 600 for a forklift, 1800 for a robot).
+
+    Raises:
+        InvalidInputError: A sensor, spec or odometry model that does not fit the scenario.
     """
     scenario = load_scenario(scenario)
     chosen = _route(scenario, route)
@@ -185,23 +316,22 @@ def simulate(
         raise InvalidInputError(f"sensor must be an azgym Sensor (reset and observe), got "
                                 f"{type(sensor).__name__}; make one with "
                                 f"azgym.sensing.catalog.make_sensor")
+    _checked_spec(scenario, spec)
+    wanted = DifferentialOdometryModel if scenario.differential_drive else OdometryModel
+    if odometry is not None and not isinstance(odometry, wanted):
+        raise InvalidInputError(f"odometry: scenario {scenario.name!r} is driven by a "
+                                f"{scenario.vehicle.kind}, whose odometry model is a "
+                                f"{wanted.__name__}, got {type(odometry).__name__}")
+    dt, max_time = _defaults(scenario, dt, max_time)
     camera_rate_hz = checked_camera_rate(
         sensor.frame_rate_hz if camera_rate_hz is None else camera_rate_hz)
     streams = np.random.SeedSequence(seed).spawn(5)
-    camera_rng, odometry_rng, imu_rng, sway_rng = (
-        np.random.default_rng(stream) for stream in streams[:4])
+    camera_rng, *rngs = (np.random.default_rng(stream) for stream in streams[:4])
     sensor.reset(streams[4])
-    motion = MotionSensors(odometry or OdometryModel(), imu or ImuModel(), odometry_rng, imu_rng,
-                           dt)
-    sway = CameraSway(scenario, 1.0 / camera_rate_hz, spec)
-    contacts_seen = 0
-    for index, world in enumerate(_frames(scenario, chosen, camera_rate_hz, dt, spec, max_time,
-                                          on_step=motion.step)):
-        pose = _camera_pose(world)
-        tilt = sway.step(pose[0], pose[1], sway_rng)
-        odometry_samples, imu_samples = motion.take()
+    drive = _robot_moments if scenario.differential_drive else _forklift_moments
+    moments = drive(scenario, chosen, camera_rate_hz, dt, spec, max_time,  # type: ignore[arg-type]
+                    odometry, imu, rngs)
+    for index, (time, pose, tilt, odometry_samples, imu_samples, contacts) in enumerate(moments):
         observation = sensor.observe(pose, camera_rng, tilt)
-        yield Frame(index=index, time=world.time, observation=observation, pose=pose,
-                    odometry=odometry_samples, imu=imu_samples,
-                    contacts=len(world.contacts) - contacts_seen)
-        contacts_seen = len(world.contacts)
+        yield Frame(index=index, time=time, observation=observation, pose=pose,
+                    odometry=odometry_samples, imu=imu_samples, contacts=contacts)

@@ -67,7 +67,7 @@ class PurePursuit:
                 self._progress = 0.0
                 self.done = self._stretch == len(self._stretches)
             return brake, 0.0
-        target = _point_at(points, lengths, min(total, self._progress + self.lookahead))
+        target = point_at(points, lengths, min(total, self._progress + self.lookahead))
         travel = heading + (math.pi if backwards else 0.0)
         alpha = wrap_scalar(math.atan2(target[1] - reference[1], target[0] - reference[0])
                             - travel)
@@ -96,8 +96,8 @@ def _project(points: FloatArray, lengths: FloatArray, p: FloatArray) -> float:
     return float(lengths[:k].sum() + t[k] * lengths[k])
 
 
-def _point_at(points: FloatArray, lengths: FloatArray, s: float) -> FloatArray:
-    """The polyline point at arc length s."""
+def point_at(points: FloatArray, lengths: FloatArray, s: float) -> FloatArray:
+    """The polyline point at arc length s (``lengths``: its legs' lengths)."""
     for k, length in enumerate(lengths):
         if s <= length or k == len(lengths) - 1:
             t = 0.0 if length == 0 else min(s / length, 1.0)

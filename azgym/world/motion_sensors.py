@@ -1,4 +1,4 @@
-"""The forklift's motion sensors in the world: wheel odometry and the IMU, after every physics step.
+"""The vehicles' motion sensors in the world: wheel odometry and the IMU, after every physics step.
 
 One rule for what the wheel encoders and the IMU report while the world runs, shared by the
 driven routes (:func:`azgym.world.drive.simulate`) and the navigation environment
@@ -6,6 +6,8 @@ driven routes (:func:`azgym.world.drive.simulate`) and the navigation environmen
 the body's yaw rate, its heading and its acceleration — the change of the body's velocity over
 the step, turned into the body frame (forward, left). Each samples at its own rate
 (:mod:`azgym.sensing.motion`); the samples wait here until taken, for a tracker's ``predict``.
+A differential-drive robot's odometry (:class:`RobotMotionSensors`) reads its speed and turn
+rate at its logger's stamps; it has an IMU only when one is asked for.
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ import math
 import numpy as np
 
 from azgym.sensing.motion import (
+    DifferentialOdometer,
+    DifferentialOdometryModel,
     Imu,
     ImuModel,
     ImuSamples,
@@ -23,6 +27,7 @@ from azgym.sensing.motion import (
     OdometryModel,
     OdometrySamples,
 )
+from azgym.world.robot import Robot
 from azgym.world.world import World
 
 
@@ -68,3 +73,36 @@ class MotionSensors:
     def motion(self, time: float) -> Motion:
         """A tracker's ``predict`` for a frame at ``time`` [s]: the samples untaken up to it."""
         return Motion(time, *self.take(time))
+
+
+class RobotMotionSensors:
+    """A differential-drive robot's odometry, and its IMU if it has one, after every step.
+
+    Call :meth:`step` after every step of the robot (each step's speed and turn rate are held
+    over it, so a stamp inside the step reads them).
+
+    Args:
+        odometry: The odometry's errors and stamps.
+        imu: The IMU's errors, or None: no IMU (its samples are empty).
+        odometry_rng: The odometry's own random stream.
+        imu_rng: The IMU's own random stream.
+    """
+
+    def __init__(self, odometry: DifferentialOdometryModel, imu: ImuModel | None,
+                 odometry_rng: np.random.Generator, imu_rng: np.random.Generator) -> None:
+        self._odometer = DifferentialOdometer(odometry, odometry_rng)
+        self._imu = None if imu is None else Imu(imu, imu_rng)
+        self._speed = 0.0
+
+    def step(self, robot: Robot) -> None:
+        """Sample the step just taken."""
+        self._odometer.update(robot.time, robot.speed, robot.turn_rate)
+        if self._imu is not None:  # forward: the speed's change; left: the centripetal part
+            accel = ((robot.speed - self._speed) / robot.dt, robot.speed * robot.turn_rate)
+            self._imu.update(robot.time, robot.turn_rate, accel, robot.heading)
+        self._speed = robot.speed
+
+    def take(self, until: float = math.inf) -> tuple[OdometrySamples, ImuSamples]:
+        """The samples since the last call, up to time ``until`` [s]; later ones wait."""
+        imu = ImuSamples.none() if self._imu is None else self._imu.take(until)
+        return self._odometer.take(until), imu

@@ -198,3 +198,14 @@ def test_a_runs_intervals_resample_its_routes_in_blocks_and_lone_frames_one_by_o
         assert (blocks.max() + 1 < len(cases)) == routes  # routes: fewer blocks than frames
         figures = contender_metrics(outcome, cases, 10.0)
         assert figures["ci95"] == confidence_intervals(outcome.position, outcome.ok, blocks)
+
+
+def test_position_only_truth_leaves_the_heading_figures_out():
+    # A log's truth without heading gives NaN heading errors: not a zero, not a NaN figure.
+    stats = summarize_errors([0.1, 0.3], [math.nan, math.nan], [True, True])
+    assert stats["median_cm"] == pytest.approx(20.0)
+    assert stats["heading_mean_deg"] is None and stats["heading_median_deg"] is None
+    none_answered = summarize_errors([math.nan], [math.nan], [False])
+    assert math.isnan(none_answered["heading_median_deg"])  # nothing answered: NaN as before
+    some = summarize_errors([0.1, 0.1], [math.radians(2.0), math.nan], [True, True])
+    assert some["heading_mean_deg"] == pytest.approx(2.0)  # over the frames with a heading

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from azgym.bench.table import LEGEND, cell, interval_cell, rank_key
+from azgym.bench.table import LEGEND, POSITION_ONLY, cell, interval_cell, rank_key, ranked_table
 
 
 def test_headline_ranks_first_then_failures_then_answered_p75_then_availability_then_name():
@@ -65,3 +65,29 @@ def test_the_legend_says_what_each_column_is():
                   "blocks", "avail", "no answer or one more than 1 m off",
                   "over the answered frames only", "median time", "ransac's median"):
         assert words in LEGEND, words
+
+
+def _summary(heading_median_deg):
+    stats = {"p75_all_cm": 2.0, "failure_rate": 0.0, "availability": 1.0, "median_cm": 1.0,
+             "p75_cm": 2.0, "p95_cm": 3.0, "mean_cm": 1.5, "heading_median_deg": heading_median_deg}
+    return {"suite": "data:mini", "suite_version": 2, "split": "data", "seed": 0, "quick": False,
+            "n_frames": 3, "localizers": {"ransac": {
+                "all": stats, "ci95": {}, "crashes": 0,
+                "runtime_us": {"median": 10.0, "ratio_to_ransac": 1.0}}}}
+
+
+def test_a_table_on_position_only_truth_says_the_heading_was_not_scored():
+    assert "position-only truth: heading not scored" in POSITION_ONLY
+    assert "position-only truth: heading not scored" in ranked_table(_summary(None))
+    assert "heading not scored" not in ranked_table(_summary(0.5))
+    assert "heading not scored" not in ranked_table(_summary(math.nan))  # nothing answered
+
+
+def test_the_table_says_which_profile_set_the_defaults() -> None:
+    """A run with a profile prints it above the rows; a plain run prints no profile line."""
+    from azgym.bench.table import profile_lines
+
+    assert profile_lines({"profile": {}}) == [] and profile_lines({}) == []
+    assert profile_lines({"profile": {"sensor": {"delta_alpha_d": 0.07, "coverage": False}}}) \
+        == ["profile (the contenders' defaults): sensor.delta_alpha_d=0.07, "
+            "sensor.coverage=false"]

@@ -354,3 +354,15 @@ def test_a_site_whose_spots_are_all_close_is_refused_for_navigation(tmp_path):
     close.write_text(text[:start] + routes + (text[end:] if end > 0 else ""))
     with pytest.raises(InvalidInputError, match="no two spots .* are 5.0 m apart"):
         gym.make("azgym/Navigate-WarehouseSmall-v2", scenario=str(close))
+
+
+def test_navigate_refuses_a_differential_drive_scenario() -> None:
+    """Navigate drives a forklift: no Navigate id for robot-arena, and a clear refusal."""
+    import azgym
+    from azgym.errors import InvalidInputError
+
+    assert "azgym/Localize-RobotArena-v1" in azgym.ENV_IDS
+    assert not any("Navigate" in i and "RobotArena" in i for i in azgym.ENV_IDS)
+    with pytest.raises(InvalidInputError, match="differential-drive robot; Navigate drives a "
+                                                "forklift"):
+        gym.make("azgym/Navigate-WarehouseSmall-v2", scenario="robot-arena")

@@ -63,7 +63,8 @@ def test_a_wall_stops_the_forklift_and_the_contact_is_recorded():
 
 
 ROUTES = [(name, route.name) for name in list_scenarios()
-          for route in load_scenario(name).routes]
+          for route in load_scenario(name).routes
+          if not load_scenario(name).differential_drive]  # a robot's: tests/world/test_robot.py
 
 
 def run_route(scenario_name, route_name, max_steps=40_000):

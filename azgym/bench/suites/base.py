@@ -9,6 +9,7 @@ results can be broken down by cause.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -16,7 +17,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.core import Measurements, Pose
+from azgym.errors import InvalidInputError
+from azgym.profile import Profile
 from azgym.sensing.labels import DIRECT, DISTRACTOR, GHOST, MISIDENTIFIED, MOVED, PARTIAL
 from azgym.sensing.motion import Motion, joined
 
@@ -80,18 +84,55 @@ class Suite:
         version: Bumped whenever the cases it draws change.
         description: One line for listings and reports.
         dev_seed: The seed of the public ``dev`` split.
-        build: ``build(seed, quick)`` draws the cases.
+        build: ``build(seed, quick)`` draws the cases; a suite that ``simulates`` profile
+            fields draws them with ``build(seed, quick, noise=SimulatedNoise(...))`` too.
         routes: Whether its cases are driven routes (sequences with motion): trackers' suites.
             Such a suite drives the same routes for every seed, so it has no test split
             (:data:`NO_TEST_SPLIT`).
+        simulates: The profile fields (``section.field``) its simulator takes
+            (:mod:`azgym.bench.profiles`); none: it takes no profile.
+        vehicle: The kind of vehicle that drives its routes (a profile of another kind is
+            refused); None: any (frames on their own).
+        profile: The profile it is drawn with (:meth:`profiled`); None: as shipped.
     """
 
     name: str
     version: int
     description: str
     dev_seed: int
-    build: Callable[[int, bool], list[Case]]
+    build: Callable[..., list[Case]]
     routes: bool = False
+    simulates: tuple[str, ...] = ()
+    vehicle: str | None = None
+    profile: Profile | None = None
+
+    def check_profile(self, profile: Profile) -> None:
+        """Refuse a profile the suite cannot be drawn with (:meth:`profiled` says why)."""
+        if not self.simulates:
+            raise InvalidInputError(f"profile: {self.name} takes no profile: its simulator's "
+                                    "noise is not one a profile sets")
+        if self.profile is not None:
+            raise InvalidInputError(f"profile: {self.name} is drawn with a profile already")
+        kind = profile.vehicle.kind
+        if kind is not None and self.vehicle is not None and kind != self.vehicle:
+            raise InvalidInputError(
+                f"profile: vehicle.kind is {kind!r}, but {self.name}'s routes are driven by a "
+                f"{self.vehicle}: its motion data would not be the kind the profile describes")
+
+    def profiled(self, profile: Profile) -> Suite:
+        """The suite drawn with a profile's sensor and motion noise (:class:`SimulatedNoise`).
+
+        Its cases differ from the suite's as shipped (unless the profile sets none of the
+        fields it ``simulates``), so a leaderboard entry of the suite cannot be one of them.
+
+        Raises:
+            InvalidInputError: The suite takes no profile, is profiled already, or its
+                routes are driven by another kind of vehicle than the profile's.
+        """
+        self.check_profile(profile)
+        return dataclasses.replace(
+            self, build=functools.partial(self.build, noise=SimulatedNoise(profile)),
+            profile=profile)
 
 
 def frame_cause(labels: np.ndarray) -> str:
@@ -100,10 +141,15 @@ def frame_cause(labels: np.ndarray) -> str:
     return CAUSES[worst]
 
 
-def route_cases(scenario: str, group: str, frames: Iterable[Frame]) -> list[Case]:
-    """Every frame of a driven route, as one sequence for trackers, from its start pose."""
+def route_cases(scenario: str, group: str, frames: Iterable[Frame],
+                noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:
+    """Every frame of a driven route, as one sequence for trackers, from its start pose.
+
+    ``noise`` is the one the route was simulated with: its odometry reads the speed as it says
+    (:meth:`SimulatedNoise.read`).
+    """
     cases = [Case(scenario, frame.measurements, frame.pose, frame_cause(frame.truth.label),
-                  group, sequence=group, motion=frame.motion, time=frame.time)
+                  group, sequence=group, motion=noise.read(frame.motion), time=frame.time)
              for frame in frames]
     if cases:
         cases[0] = dataclasses.replace(cases[0], initial=cases[0].pose)

@@ -18,6 +18,7 @@ import dataclasses
 
 import numpy as np
 
+from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, route_cases
 from azgym.bench.suites.warehouse import SCENARIOS
 from azgym.errors import ScenarioError
@@ -31,13 +32,15 @@ KIDNAP_AT, KIDNAP_S = 0.6, 10.0
 """Where the kidnapping happens and how far along the route (in driving time) it carries [s]."""
 
 
-def build(seed: int, quick: bool) -> list[Case]:
+def build(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:
     """Both warehouses' first routes with their events (the suite is small: quick is the same)."""
     cases: list[Case] = []
     for k, name in enumerate(SCENARIOS):
-        scenario = load_scenario(name)
+        scenario = noise.scenario(load_scenario(name))
         route = scenario.routes[0]
-        frames = route_cases(name, f"{name}/{route.name}", simulate(scenario, route, seed=seed + k))
+        driven = simulate(scenario, route, seed=seed + k, odometry=noise.odometry(),
+                          imu=noise.imu())
+        frames = route_cases(name, f"{name}/{route.name}", driven, noise)
         cases += with_events(frames)
     return cases
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, keep_every, route_cases
 from azgym.bench.suites.warehouse import SCENARIOS
 from azgym.sensing.image.sensor import ImageSensor
@@ -12,8 +13,11 @@ SCORED_EVERY = 3
 """Every third frame of the blinking camera is scored, as a 10 Hz localizer would use them."""
 
 
-def routes(seed: int, quick: bool) -> list[Case]:
-    """Every route rendered, detected and decoded; every third frame (quick: one route, 12th)."""
+def routes(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:
+    """Every route rendered, detected and decoded; every third frame (quick: one route, 12th).
+
+    The azimuths come from pixels: ``noise`` sets the motion sensors' only.
+    """
     cases = []
     every = 4 * SCORED_EVERY if quick else SCORED_EVERY
     for name in SCENARIOS:
@@ -21,6 +25,7 @@ def routes(seed: int, quick: bool) -> list[Case]:
         chosen = scenario.routes[:1] if quick else scenario.routes
         for k, route in enumerate(chosen):
             sensor = ImageSensor(scenario, ids="blink")
-            frames = simulate(scenario, route, [seed, k], sensor=sensor)
-            cases += keep_every(route_cases(name, f"{name}/{route.name}", frames), every)
+            frames = simulate(scenario, route, [seed, k], sensor=sensor,
+                              odometry=noise.odometry(), imu=noise.imu())
+            cases += keep_every(route_cases(name, f"{name}/{route.name}", frames, noise), every)
     return cases

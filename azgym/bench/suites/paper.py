@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case
 from azgym.core import BeaconMap, BoolArray, FloatArray, Measurements, wrap_angle
 from azgym.errors import InvalidInputError
@@ -137,8 +138,11 @@ def cases_of(scenario: Scenario, runs: list[Runs]) -> list[Case]:
     return cases
 
 
-def build(seed: int, quick: bool) -> list[Case]:
-    """The paper suite: the very runs of ``azgym reproduce paper`` (quick: of its quick version)."""
-    scenario = load_scenario("paper-room")
+def build(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:
+    """The paper suite: the very runs of ``azgym reproduce paper`` (quick: of its quick version).
+
+    ``noise`` sets the azimuth errors of eq. 3 (as shipped: the paper's).
+    """
+    scenario = noise.scenario(load_scenario("paper-room"))
     config = ProtocolConfig.quick(seed=seed) if quick else ProtocolConfig(seed=seed)
     return cases_of(scenario, draw_runs(scenario, config))

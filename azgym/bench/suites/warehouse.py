@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 
+from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, Suite, frame_cause, keep_every, route_cases
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.site import Scenario, load_scenario
@@ -48,32 +49,33 @@ def static_cases(scenario: Scenario, count: int, rng: np.random.Generator,
     return cases
 
 
-def static(seed: int, quick: bool) -> list[Case]:
+def static(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:
     """warehouse-static: random poses in each warehouse at each fault level."""
     rng = np.random.default_rng(seed)
     cases = []
     for name in SCENARIOS:
-        for level, scenario in fault_levels(load_scenario(name)).items():
+        for level, scenario in fault_levels(noise.scenario(load_scenario(name))).items():
             cases += static_cases(scenario, RANDOM_POSES[quick], rng, f"{name}, {level}")
     return cases
 
 
-def routes(seed: int, quick: bool) -> list[Case]:
+def routes(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:
     """warehouse-routes: every route driven, every 10 Hz frame (quick: one route, every 4th)."""
     cases = []
     for name in SCENARIOS:
-        scenario = load_scenario(name)
+        scenario = noise.scenario(load_scenario(name))
         chosen = scenario.routes[:1] if quick else scenario.routes
         for k, route in enumerate(chosen):
-            frames = simulate(scenario, route, seed=seed + k)
-            cases += route_cases(name, f"{name}/{route.name}", frames)
+            frames = simulate(scenario, route, seed=seed + k, odometry=noise.odometry(),
+                              imu=noise.imu())
+            cases += route_cases(name, f"{name}/{route.name}", frames, noise)
     return keep_every(cases, 4) if quick else cases
 
 
-def stress(seed: int, quick: bool) -> list[Case]:
+def stress(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:
     """stress: random poses in warehouse-large with heavy faults."""
     rng = np.random.default_rng(seed)
-    heavy = fault_levels(load_scenario("warehouse-large"))["heavy"]
+    heavy = fault_levels(noise.scenario(load_scenario("warehouse-large")))["heavy"]
     return static_cases(heavy, 60 if quick else 600, rng, "warehouse-large, heavy")
 
 

@@ -7,6 +7,11 @@ are. Decoding faults (a misread id) come from a rate. On top of all of this, eve
 the centre-detection error of eq. 1, uniform on ±Δα_d; the coverage error of eq. 2 is not drawn,
 since partial occlusion now produces it. The kernels are in :mod:`azgym.sensing.geometry.frame`
 (which calls :mod:`~azgym.sensing.geometry.direct` and :mod:`~azgym.sensing.geometry.mirrors`).
+
+A forward camera (``Camera.field_of_view`` under 2π) keeps the detections whose measured azimuth
+is within half its view of the heading: the image's edge cuts where the blob is found. Markers
+whose codes the map lacks (``Scenario.unmapped``) are seen like beacons and reported with their
+codes; their truth is a distractor's (no map beacon, label DISTRACTOR).
 """
 
 from __future__ import annotations
@@ -31,8 +36,8 @@ from azgym.sensing.geometry.frame import (
     collect,
     finish_frame,
 )
+from azgym.sensing.labels import DISTRACTOR
 from azgym.sensing.protocol import (
-    CAMERA_RATE_HZ,
     LEVEL,
     Observation,
     Seed,
@@ -54,18 +59,28 @@ class GeometrySensor:
 
     quality_names = ("log_brightness",)
     quality_high = (10.0,)
-    frame_rate_hz = CAMERA_RATE_HZ
 
     def __init__(self, scenario: Scenario) -> None:
         self.scenario = scenario
+        self.frame_rate_hz = scenario.camera.rate_hz
         self._segments = occluder_table(scenario.racks, scenario.walls)
-        self._xyz = np.array(scenario.beacon_positions, dtype=np.float64, order="C")
+        unmapped = scenario.unmapped
+        self._mapped = len(scenario.beacons)
+        seen = scenario.beacon_positions if unmapped is None else np.vstack(
+            [scenario.beacon_positions, unmapped.xyz])
+        self._xyz = np.array(seen, dtype=np.float64, order="C")
         self._xyz.setflags(write=False)  # as the map's: one compiled kernel for every scenario
-        self._width = scenario.beacons.width
-        self._moved = np.any(self._xyz != scenario.beacons.xyz, axis=1)
+        self._width = scenario.beacons.width if unmapped is None else np.concatenate(
+            [scenario.beacons.width, unmapped.width])
+        self._codes = scenario.beacons.ids if unmapped is None else np.concatenate(
+            [scenario.beacons.ids, unmapped.ids])
+        self._moved = np.zeros(len(self._xyz), dtype=bool)
+        self._moved[:self._mapped] = np.any(self._xyz[:self._mapped] != scenario.beacons.xyz,
+                                            axis=1)
         camera = scenario.camera
         self._lens = (float(camera.min_elevation), float(camera.max_range))
-        n = len(scenario.beacons)
+        self._half_view = None if camera.all_round else 0.5 * camera.field_of_view
+        n = len(self._xyz)
         self._capacity = n * (1 + int(np.count_nonzero(self._segments[:, SEG_REFLECTIVITY] > 0)))
         # The detections of a frame before noise, filled by collect (rows FOUND_*).
         self._found = np.empty((FOUND_FLOAT_ROWS, self._capacity))
@@ -93,7 +108,8 @@ class GeometrySensor:
         Entries past M are padded (id −1). If a frame has more detections than ``out`` holds,
         the ones with the largest azimuths are dropped — size the buffers with :attr:`capacity`
         to keep them all. ``misdecode_rate`` overrides the scenario's (the image path's blinking
-        ids set it to 0: their misreads come from decoding).
+        ids set it to 0: their misreads come from decoding). A forward camera's frame holds
+        only what is in its view; an unmapped marker's entry has beacon −1, label DISTRACTOR.
         """
         if misdecode_rate is None:
             misdecode_rate = self.scenario.faults.misdecode_rate
@@ -104,8 +120,13 @@ class GeometrySensor:
                         self._moved, self._segments, found, found_ints)
         finish_frame(found, found_ints, count, float(heading), (float(tilt[0]), float(tilt[1])),
                      rng.random((3, count)), self.scenario.error_model.delta_alpha_d,
-                     misdecode_rate, self.scenario.beacons.ids, out.floats, out.ints)
-        return min(count, out.size)
+                     misdecode_rate, self._codes, out.floats, out.ints)
+        count = min(count, out.size)
+        if self._mapped < len(self._xyz):
+            _unmapped_as_distractors(out, count, self._mapped)
+        if self._half_view is not None:
+            count = _crop_to_view(out, count, self._half_view)
+        return count
 
     def observe(self, pose: Pose, rng: np.random.Generator, tilt: Tilt = LEVEL,
                 camera_height: float | None = None) -> Observation:
@@ -128,6 +149,35 @@ class GeometrySensor:
         out = self._buffers
         count = self.observe_into(check_pose(pose), rng, out, tilt, camera_height)
         return out.observation(count)
+
+
+def _unmapped_as_distractors(out: FrameBuffers, count: int, mapped: int) -> None:
+    """Give an unmapped marker's entries (row >= ``mapped``) a distractor's truth.
+
+    Among the first ``count`` entries: no map beacon (−1), label DISTRACTOR; their ids stay the
+    codes read.
+    """
+    beacon = out.ints[FRAME_BEACON, :count]
+    unmapped = beacon >= mapped
+    out.ints[FRAME_LABEL, :count][unmapped] = DISTRACTOR
+    beacon[unmapped] = -1
+
+
+def _crop_to_view(out: FrameBuffers, count: int, half_view: float) -> int:
+    """Keep the first ``count`` entries whose measured azimuth is within ±``half_view``.
+
+    The kept entries move to the front in their order (by azimuth), the rest is padded as
+    ``finish_frame`` pads; returns how many are kept.
+    """
+    keep = np.flatnonzero(np.abs(out.floats[FRAME_AZIMUTH, :count]) <= half_view)
+    if keep.size == count:
+        return count
+    out.floats[:, :keep.size] = out.floats[:, keep]
+    out.ints[:, :keep.size] = out.ints[:, keep]
+    out.floats[:, keep.size:count] = 0.0
+    out.ints[:, keep.size:count] = -1
+    out.ints[FRAME_MIRRORED, keep.size:count] = 0
+    return int(keep.size)
 
 
 class FrameBuffers:

@@ -84,6 +84,11 @@ class ImageSensor:
             raise InvalidInputError(f"threshold must be in (0, 255), got {threshold!r}")
         if noise_frames < 1:
             raise InvalidInputError(f"noise_frames must be >= 1, got {noise_frames!r}")
+        if not scenario.camera.all_round:
+            raise InvalidInputError(
+                f"the image sensor renders an upward fisheye, but scenario {scenario.name!r} has "
+                f"a forward camera (field of view {scenario.camera.field_of_view:.3g} rad): use "
+                f'sensor="geometry"')
         self.scenario = scenario
         self.camera = scenario.fisheye
         self.ids = ids

@@ -1,0 +1,37 @@
+"""The robot suite: a differential-drive robot's routes in robot-arena, for trackers.
+
+The robot wanders an 8 m x 6 m arena among 15 landmarks, seeing 1-2 of them at a time through a
+forward camera of 1.2 rad, its odometry (speed and turn rate) stamped irregularly and drifting
+as a real robot's does (docs/robot.md). Every 5 Hz frame of the four ``wander-*`` routes is
+scored; the scenario's ``long`` route (15 min) is left out, for calibrating a profile on.
+"""
+
+from __future__ import annotations
+
+from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
+from azgym.bench.suites.base import Case, keep_every, route_cases
+from azgym.site import load_scenario
+from azgym.world.drive import motion_models, simulate
+
+__all__ = ["ROUTES", "SCENARIO", "routes"]
+
+SCENARIO = "robot-arena"
+"""The scenario the suite drives."""
+ROUTES = ("wander-1", "wander-2", "wander-3", "wander-4")
+"""The routes it scores (about 2.6 min each)."""
+
+
+def routes(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:
+    """robot-routes: every frame of each route (quick: the first route, every second frame).
+
+    ``noise`` sets the bearing noise and the odometry's errors from a profile (``--profile``).
+    """
+    scenario = noise.scenario(load_scenario(SCENARIO))
+    odometry, _ = motion_models(scenario)
+    odometry = noise.differential_odometry(odometry)
+    chosen = [route for route in scenario.routes if route.name in ROUTES]
+    cases: list[Case] = []
+    for k, route in enumerate(chosen[:1] if quick else chosen):
+        frames = simulate(scenario, route, seed=seed + k, odometry=odometry)
+        cases += route_cases(SCENARIO, f"{SCENARIO}/{route.name}", frames, noise)
+    return keep_every(cases, 2) if quick else cases
