@@ -48,3 +48,38 @@ def write_log(folder: Path, files: dict[str, str | bytes]) -> Path:
         else:
             path.write_text(content, encoding="utf-8")
     return folder
+
+
+MANIFEST_2 = """format = 2
+name = "mini2"
+description = "a hand-made log of format 2 for tests"
+simulated = true
+
+[map]
+beacons = "beacons.csv"
+
+[vehicle]
+kind = "differential-drive"
+camera_ahead = 0.1
+
+[sensor]
+delta_alpha_d = 0.01
+field_of_view = 6.0
+"""
+
+
+def mini_files_2() -> dict[str, str]:
+    """The mini log in format 2: frames numbered 10, 12, 13, a differential drive's odometry
+    (speed and turn rate), an IMU without accelerations."""
+    files = mini_files()
+    numbers = {0: 10, 1: 12, 2: 13}
+    files["log.toml"] = MANIFEST_2
+    files["frames.csv"] = "frame,time,x,y,heading\n" + "".join(
+        f"{numbers[k]},{0.1 * k!r},{x},{y},{h}\n" for k, (x, y, h) in enumerate(POSES))
+    lines = files["detections.csv"].splitlines()
+    files["detections.csv"] = "\n".join([lines[0], *(
+        ",".join([str(numbers[int(line.split(",")[0])]), *line.split(",")[1:]])
+        for line in lines[1:])]) + "\n"
+    files["odometry.csv"] = "time,speed,yaw_rate\n0.05,1.0,0.0\n0.15,1.0,0.5\n"
+    files["imu.csv"] = "time,yaw_rate\n0.05,0.0\n0.15,0.01\n"
+    return files

@@ -14,7 +14,9 @@ def test_import_summarizes_a_log(mini_log, capsys):
     assert "frames: 3 over 0.200 s" in out and "10 detections" in out
     assert "1 frames without any" in out
     assert "ids not in the map: 1 detections; undecoded (negative ids): 1" in out
-    assert "odometry: 3 samples, 1 after the last frame (unused)" in out
+    assert "odometry: 2 samples (speed, steer)" in out  # the one after the last frame: trimmed
+    assert "the reader changed (1):\n    odometry.csv: 1 sample(s) (line 4) after the last frame " \
+        "(0.2 s) trimmed" in out
 
 
 def test_import_lists_every_problem_and_exits_2(tmp_path, capsys):
