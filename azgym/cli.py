@@ -5,6 +5,8 @@ azgym bench [--suite S | --data DIR] [--localizer SPEC ...] [--with-builtins] [-
             [--backend local|ray] [--address ADDR] [--profile PROFILE.toml]
 azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR]
 azgym import DIR
+azgym calibrate LOG --out PROFILE.toml [--figure FILE] [--turn-rate auto|odometry|imu] [--seed N]
+                [--overwrite]
 azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [--motion-rate HZ]
 azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S] [--workers N]
                       [--time-limit SECONDS] [--out DIR]
@@ -37,6 +39,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.cli_calibrate import add_calibrate
 from azgym.cli_evaluate import add_evaluate
 from azgym.cli_layout import add_layout
 from azgym.cli_leaderboard import add_leaderboard
@@ -226,6 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_train(commands)
     add_evaluate(commands)
     add_logs(commands)
+    add_calibrate(commands)
     add_layout(commands)
     add_sweep(commands)
     _add_listings(commands)
