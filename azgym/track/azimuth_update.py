@@ -4,8 +4,8 @@ The measurement model is the paper's (Rátosi & Simon 2021, eq. 19-22): beacon i
 is seen at α_i = atan2(y_i − y, x_i − x) − φ, with the Jacobian row
 [(y_i − y)/r², −(x_i − x)/r², −1, 0, 0] over the state [x, y, φ, b, k]. Its noise is the error
 model's (eq. 1-3: two uniform errors, variance (Δα_d² + Δα_c,i²)/3 with the coverage bound
-Δα_c,i = atan2(W_i/2, r_i) of eq. 2), plus ``extra_sigma``² for what the model leaves out (the
-camera's sway on bumps, a blob centre on a rendered image).
+Δα_c,i = atan2(W_i/2, r_i) of eq. 2, unless ``coverage`` is off), plus ``extra_sigma``² for
+what the model leaves out (the camera's sway on bumps, a blob centre on a rendered image).
 
 Gating (Packi & Hanebeck: a Gaussian density filter that tests each measurement against the
 prediction): the innovation ν_i of each measurement has variance S_i = H_i P H_iᵀ + R_i; it is
@@ -50,7 +50,7 @@ from azgym.track.unicycle import IPHI, IX, IY
 
 
 def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_index: IntArray,
-                 delta_d: float, extra_sigma: float, threshold: float
+                 delta_d: float, coverage: bool, extra_sigma: float, threshold: float
                  ) -> tuple[BoolArray, FloatArray]:
     """Gate a frame's azimuths and correct ``state`` and ``cov`` with those that pass, in place.
 
@@ -61,6 +61,7 @@ def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_
             width by the ``ROW_*`` constants), one column per measurement.
         beacon_index: The measured beacon's row in the map, per measurement.
         delta_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1).
+        coverage: Whether the noise includes eq. 2's coverage term Δα_c,i.
         extra_sigma: Azimuth noise beyond the error model [rad].
         threshold: The gate: the largest ν²/S accepted.
 
@@ -70,14 +71,14 @@ def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_
     """
     passed = np.zeros(floats.shape[1], dtype=np.bool_)
     distance = np.empty(floats.shape[1])
-    _gated_update(state, cov, floats, beacon_index, delta_d, extra_sigma, threshold, passed,
-                  distance)
+    _gated_update(state, cov, floats, beacon_index, delta_d, bool(coverage), extra_sigma,
+                  threshold, passed, distance)
     return passed, distance
 
 
 @jit
-def _gated_update(state, cov, floats, beacon_index, delta_d, extra_sigma, threshold, passed,
-                  distance):
+def _gated_update(state, cov, floats, beacon_index, delta_d, coverage, extra_sigma, threshold,
+                  passed, distance):
     """The compiled step of :func:`gated_update`; writes ``passed`` and ``distance``."""
     count, size = floats.shape[1], state.size
     nu = np.empty(count)
@@ -91,8 +92,8 @@ def _gated_update(state, cov, floats, beacon_index, delta_d, extra_sigma, thresh
         rows[i, IX] = dy / r2
         rows[i, IY] = -dx / r2
         rows[i, IPHI] = -1.0
-        coverage = math.atan2(0.5 * floats[ROW_WIDTH, i], math.sqrt(r2))
-        noise[i] = (delta_d * delta_d + coverage * coverage) / 3.0 + extra_sigma * extra_sigma
+        cover = math.atan2(0.5 * floats[ROW_WIDTH, i], math.sqrt(r2)) if coverage else 0.0
+        noise[i] = (delta_d * delta_d + cover * cover) / 3.0 + extra_sigma * extra_sigma
         spread = noise[i]
         for a in range(size):
             for b in range(size):

@@ -26,7 +26,13 @@ from azgym.hyperparameters import Hyperparameters
 from azgym.localize.base import MAX_MEASUREMENTS
 from azgym.localize.registry import SupportsLocalize, build
 from azgym.sensing.motion import Motion
-from azgym.track._motion_check import NOT_FINITE, OUT_OF_ORDER, stream_fault
+from azgym.track._motion_check import NOT_FINITE, OUT_OF_ORDER, PARTLY_GIVEN, stream_fault
+
+COLUMNS = {"odometry": ("speed", "steer", "yaw_rate"), "imu": ("yaw_rate", "ax", "ay")}
+"""The value columns of each motion stream that :func:`check_motion` checks."""
+OPTIONAL = {"odometry": np.array([False, True, True]), "imu": np.array([False, True, True])}
+"""Which of them a stream may leave out (NaN throughout): a steered vehicle's odometry reports
+no yaw rate, a differential drive's no steering angle, a log's IMU may give no accelerations."""
 
 
 class Tracker(Hyperparameters, ABC):
@@ -56,18 +62,24 @@ class Tracker(Hyperparameters, ABC):
                     f"heading), got {initial!r}")
             initial = (float(pose[0]), float(pose[1]), float(pose[2]))
         object.__setattr__(self, "_clock", -math.inf)
+        object.__setattr__(self, "_given", {})
         self._reset(np.random.default_rng(seed), initial)
 
     def predict(self, motion: Motion) -> None:
         """Move the state to ``motion.time`` with the motion samples since the previous frame.
 
+        A frame may repeat the previous frame's time (it then carries no samples), and samples
+        may repeat a time stamp.
+
         Raises:
-            InvalidInputError: Before ``reset``; a time not after the previous one; samples out
-                of order, outside (previous time, time], or not finite (an IMU heading may be
-                NaN: no orientation sensor).
+            InvalidInputError: Before ``reset``; a time before the previous one; samples out of
+                order, outside (previous time, time], or not finite, except a column a stream
+                leaves out (NaN in every sample of every frame: :data:`OPTIONAL`; an IMU
+                heading may be NaN in any sample: no orientation sensor).
         """
         clock = self._started("predict")
-        check_motion(motion, clock)
+        given = check_motion(motion, clock)
+        self._check_columns(given)
         object.__setattr__(self, "_clock", float(motion.time))
         self._predict(motion)
 
@@ -91,6 +103,22 @@ class Tracker(Hyperparameters, ABC):
         self._validate_once()
         return self._update(measurements, beacons)
 
+    def _check_columns(self, given: dict[str, int]) -> None:
+        """Refuse a stream that gives a column it left out before, or leaves out one it gave."""
+        seen = self.__dict__["_given"]
+        if given == seen:
+            return
+        for stream, columns in given.items():
+            before = seen.setdefault(stream, columns) if columns else columns
+            if before == columns:
+                continue
+            c = next(c for c in range(len(COLUMNS[stream])) if (before ^ columns) >> c & 1)
+            now, earlier = ("given", "NaN") if columns >> c & 1 else ("NaN", "given")
+            raise InvalidInputError(
+                f"motion.{stream}.{COLUMNS[stream][c]} is {now} in this frame's samples but was "
+                f"{earlier} in earlier frames: a column is given throughout a stream or left out "
+                "(NaN) throughout")
+
     def _started(self, method: str) -> float:
         """The time of the last prediction; refuses a call before ``reset``."""
         clock = self.__dict__.get("_clock")
@@ -113,26 +141,46 @@ class Tracker(Hyperparameters, ABC):
         """Correct the state with one frame; return its estimate."""
 
 
-def check_motion(motion: Any, after: float) -> None:
-    """Refuse motion data a tracker cannot use: out of order, in the past, or not finite."""
+def check_motion(motion: Any, after: float) -> dict[str, int]:
+    """Refuse motion data a tracker cannot use: out of order, in the past, or not finite.
+
+    Returns:
+        Per stream, which of its :data:`COLUMNS` it gives (bit c for column c; 0: no samples).
+    """
     if not isinstance(motion, Motion):
         raise InvalidInputError(f"motion must be an azgym Motion, got {type(motion).__name__}")
-    if not math.isfinite(motion.time) or motion.time <= after:
+    if not math.isfinite(motion.time) or motion.time < after:
         raise InvalidInputError(
-            f"motion.time must be finite and after the previous frame's ({after}), got "
-            f"{motion.time}")
+            f"motion.time must be finite and not before the previous frame's ({after!r}), got "
+            f"{motion.time!r}")
     odometry, imu = motion.odometry, motion.imu
-    # Three value columns a stream (the odometry's two, its steering given twice).
-    streams = {"odometry": (odometry.time, odometry.speed, odometry.steer, odometry.steer),
+    streams = {"odometry": (odometry.time, odometry.speed, odometry.steer, odometry.yaw_rate),
                "imu": (imu.time, imu.yaw_rate, imu.accel[:, 0], imu.accel[:, 1])}
+    given = {}
     for stream, (time, *values) in streams.items():
-        fault = stream_fault(after, float(motion.time), time, *values)
+        fault, column, given[stream] = stream_fault(after, float(motion.time), time, *values,
+                                                    OPTIONAL[stream])
+        if not fault:
+            continue
+        where = f"motion.{stream}" + (f".{COLUMNS[stream][column]}" if column >= 0 else ".time")
         if fault == OUT_OF_ORDER:
             raise InvalidInputError(
-                f"motion.{stream}.time must increase within ({after}, {motion.time}], got "
+                f"{where} must not decrease and lie within ({after!r}, {motion.time!r}], got "
                 f"{time.tolist()[:6]}")
         if fault == NOT_FINITE:
-            raise InvalidInputError(f"motion.{stream} holds a NaN or infinite value")
+            raise InvalidInputError(f"{where} holds a NaN or infinite value")
+        if fault == PARTLY_GIVEN:
+            raise InvalidInputError(
+                f"{where} is NaN in some samples only: a column is given throughout a stream or "
+                "left out (NaN) throughout")
+    return given
+
+
+def check_choice(owner: str, name: str, value: Any, choices: tuple[str, ...]) -> None:
+    """Raise :class:`InvalidInputError` unless ``value`` is one of ``choices``."""
+    if value not in choices:
+        raise InvalidInputError(
+            f"{owner}.{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
 
 
 class FrameByFrame(Tracker):

@@ -67,6 +67,24 @@ def update(x: FloatArray, P: FloatArray, z: FloatArray, predicted: FloatArray, H
     return distance
 
 
+def scalar_update(x: FloatArray, P: FloatArray, innovation: float, H: FloatArray,
+                  variance: float) -> None:
+    """Correct the state with one scalar observation (eq. 6-9 without a matrix inverse).
+
+    Args:
+        x: State, updated in place.
+        P: Its covariance, updated in place.
+        innovation: The observation less what the state predicts.
+        H: The observation's Jacobian row, (SIZE,).
+        variance: The observation's variance.
+    """
+    PHt = P @ H
+    gain = PHt / (float(H @ PHt) + variance)
+    x += gain * innovation
+    P -= np.outer(gain, PHt)
+    P[:] = 0.5 * (P + P.T)
+
+
 def camera_observation(x: FloatArray, ahead: float) -> tuple[FloatArray, FloatArray]:
     """The camera pose a state predicts, ``ahead`` metres in front of the IMU, and its Jacobian.
 

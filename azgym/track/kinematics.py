@@ -1,9 +1,11 @@
-"""The motion model the trackers share: the forklift's kinematics and how samples span time.
+"""The motion model the trackers share: the vehicles' kinematics and how samples span time.
 
-Wheel odometry reports the speed v of the reference axle (the one that does not steer) and the
-steering angle δ; the forklift then turns at ω = v tan δ / L (:mod:`azgym.world.forklift`'s
-bicycle model). A point ``ahead`` metres in front of that axle along the heading (the camera;
-negative: behind it) moves at v along the heading plus ω·ahead across it.
+Wheel odometry reports the speed v of the turning axis: a forklift's reference axle (the one
+that does not steer), a differential drive's wheel axle. A forklift's odometry reports the
+steering angle δ, and it turns at ω = v tan δ / L (:mod:`azgym.world.forklift`'s bicycle
+model); a differential drive's odometry reports ω itself (``OdometrySamples.yaw_rate``). A point
+``ahead`` metres in front of the turning axis along the heading (the camera; negative: behind
+it) moves at v along the heading plus ω·ahead across it, on either vehicle.
 
 Samples hold over time the way the simulator's physics uses them: a reading holds from its own
 time until the next one (a zero-order hold). pymunk moves a body with the velocity it had after
@@ -19,6 +21,9 @@ import math
 import numpy as np
 
 from azgym.core import FloatArray, wrap_scalar
+from azgym.errors import InvalidInputError
+from azgym.profile import DIFFERENTIAL_DRIVE, FORKLIFT
+from azgym.sensing.motion import OdometrySamples
 from azgym.world.forklift import ForkliftSpec
 
 _SPEC = ForkliftSpec()
@@ -43,6 +48,30 @@ def held_spans(times: FloatArray, start: float, end: float) -> FloatArray:
 def yaw_rates(speed: FloatArray, steer: FloatArray, wheelbase: float) -> FloatArray:
     """ω = v tan δ / L of the bicycle model [rad/s]."""
     return speed * np.tan(steer) / wheelbase
+
+
+def odometry_yaw_rates(odometry: OdometrySamples, vehicle: str, wheelbase: float) -> FloatArray:
+    """The turn rate the odometry reports, per sample [rad/s].
+
+    Its ``yaw_rate`` when it reports one (a differential drive's, or any odometry that reports
+    its turn rate); else, on a forklift, the bicycle model's v tan δ / L from its steering angle.
+
+    Raises:
+        InvalidInputError: The odometry reports no turn rate and, on a forklift, no steering
+            angle either: the turn rate must then come from the IMU's gyro.
+    """
+    if odometry.reports_yaw_rate or not odometry.time.size:
+        return odometry.yaw_rate
+    if vehicle == FORKLIFT and not np.isnan(odometry.steer).any():
+        return yaw_rates(odometry.speed, odometry.steer, wheelbase)
+    if vehicle == DIFFERENTIAL_DRIVE and not np.isnan(odometry.steer).any():
+        raise InvalidInputError(
+            "vehicle='differential-drive' turns at the odometry's yaw_rate, but this odometry "
+            "reports a steering angle instead: set vehicle='forklift', or take the turn rate "
+            "from the IMU (yaw_source='gyro')")
+    raise InvalidInputError(
+        "the odometry reports neither a yaw_rate nor a steering angle: take the turn rate "
+        "from the IMU (yaw_source='gyro')")
 
 
 def advance(pose: tuple[float, float, float], speed: float, yaw_rate: float, ahead: float,

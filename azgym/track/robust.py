@@ -4,9 +4,10 @@ On top of :class:`~azgym.track.gated_ekf.GatedEkf`:
 
 * **start**: any per-frame fix with three inliers starts the track, but a start from exactly
   three (which any three azimuths fit, a ghost among them or not) stays *tentative*, answering
-  ``ok=False``, until a frame in which four beacons pass the gate confirms it, or a frame whose
-  three pass it once the camera has moved ``confirm_travel`` from the start (where only three
-  beacons are in sight, odometry carries the start to a pose it was not fitted to); a tentative
+  ``ok=False``, until a frame in which four beacons pass the gate confirms it, or three azimuths
+  (in one frame or over several) pass it once the camera has moved ``confirm_travel`` from the
+  start (where only a few beacons are in sight, odometry carries the start to poses it was not
+  fitted to); a tentative
   track that a frame contradicts (a measured beacon fails the gate) is dropped, and the frame
   tried for a new start (the idea of Packi & Hanebeck's leave-one-out test: trust a start only
   once a measurement it was not fitted to agrees with it);
@@ -31,7 +32,9 @@ import numpy as np
 
 from azgym.core import BeaconMap, Estimate, Measurements, Pose
 from azgym.hyperparameters import check_range
-from azgym.track.gated_ekf import GatedEkf, subset
+from azgym.profile import FORKLIFT
+from azgym.track.gated_ekf import DEFAULT_NOISE, GatedEkf, subset
+from azgym.track.kinematics import WHEELBASE
 from azgym.track.unicycle import IPHI, IX, IY
 
 CONFIRMING_BEACONS = 4
@@ -55,8 +58,17 @@ class Robust(GatedEkf):
     name = "robust"
 
     def __init__(self, *, gate_probability: float = 0.999,
-                 delta_alpha_d: float = math.radians(0.4), extra_sigma: float = math.radians(0.1),
-                 position_walk: float = 0.02, initializer: str = "ransac",
+                 delta_alpha_d: float = math.radians(0.4), coverage: bool = True,
+                 extra_sigma: float = math.radians(0.1), vehicle: str = FORKLIFT,
+                 yaw_source: str | None = None, camera_ahead: float | None = None,
+                 wheelbase: float = WHEELBASE, speed_factor: float = 1.0,
+                 speed_noise: float = DEFAULT_NOISE.speed_noise,
+                 speed_scale: float = DEFAULT_NOISE.speed_scale,
+                 scale_walk: float = DEFAULT_NOISE.scale_walk,
+                 turn_rate_noise: float = DEFAULT_NOISE.turn_rate_noise,
+                 bias_walk: float = DEFAULT_NOISE.bias_walk,
+                 heading_walk: float = DEFAULT_NOISE.heading_walk,
+                 position_walk: float = DEFAULT_NOISE.position_walk, initializer: str = "ransac",
                  min_init_inliers: int = 3, max_position_std: float = 0.5,
                  relocalize_after: float = 0.5, strong_fix: int = 6,
                  confirm_travel: float = 1.0) -> None:
@@ -64,9 +76,14 @@ class Robust(GatedEkf):
         self.confirm_travel = confirm_travel
         self.relocalize_after = relocalize_after
         self.strong_fix = strong_fix
-        super().__init__(gate_probability=gate_probability, delta_alpha_d=delta_alpha_d,
-                         extra_sigma=extra_sigma, position_walk=position_walk,
-                         initializer=initializer, min_init_inliers=min_init_inliers)
+        super().__init__(
+            gate_probability=gate_probability, delta_alpha_d=delta_alpha_d, coverage=coverage,
+            extra_sigma=extra_sigma, vehicle=vehicle, yaw_source=yaw_source,
+            camera_ahead=camera_ahead, wheelbase=wheelbase, speed_factor=speed_factor,
+            speed_noise=speed_noise, speed_scale=speed_scale, scale_walk=scale_walk,
+            turn_rate_noise=turn_rate_noise, bias_walk=bias_walk, heading_walk=heading_walk,
+            position_walk=position_walk, initializer=initializer,
+            min_init_inliers=min_init_inliers)
 
     def _check_params(self) -> None:
         super()._check_params()
@@ -81,6 +98,7 @@ class Robust(GatedEkf):
         self._tentative = False
         self._bad_since: float | None = None
         self._started_at = np.zeros(2)
+        self._checked = 0
 
     def _now(self) -> float:
         return self._steps.time if self._steps.time is not None else 0.0
@@ -91,6 +109,7 @@ class Robust(GatedEkf):
         self._bad_since = None
         self._tentative = fix.n_inliers < CONFIRMING_BEACONS
         self._started_at = np.array(fix.pose[:2])
+        self._checked = 0
         return self._answer(fix.inliers, {"initialized": True})
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
@@ -120,14 +139,18 @@ class Robust(GatedEkf):
     def _confirms(self, accepted: int) -> bool:
         """Whether a frame all of whose beacons passed the gate confirms a tentative start.
 
-        Four beacons in one frame do; so do three once the camera has moved ``confirm_travel``
-        from the start: the azimuths of a pose the start was not fitted to, reached by odometry,
-        check it (a standing camera's frames repeat the start's geometry and check nothing).
+        Four beacons in one frame do; so do three azimuths, in one frame or over several, that
+        passed once the camera had moved ``confirm_travel`` from the start: the azimuths of poses
+        the start was not fitted to, reached by odometry, check it (a standing camera's frames
+        repeat the start's geometry and check nothing; a forward camera sees one or two beacons
+        a frame).
         """
         if accepted >= CONFIRMING_BEACONS:
             return True
         travel = math.hypot(*(self._state[[IX, IY]] - self._started_at))
-        return accepted >= 3 and travel >= self.confirm_travel
+        if travel >= self.confirm_travel:
+            self._checked += accepted
+        return self._checked >= 3
 
     def _relocalize(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         """A lost track (its prediction beyond ``max_position_std``) moves to a per-frame fix.
@@ -146,6 +169,7 @@ class Robust(GatedEkf):
         self._state[[IX, IY, IPHI]] = fix.pose
         self._started_at = np.array(fix.pose[:2])
         self._tentative = fix.n_inliers < CONFIRMING_BEACONS
+        self._checked = 0
         self._bad_since = None
         chosen = np.flatnonzero(fix.inliers)
         accepted, _ = self._correct(subset(measurements, chosen), beacons)
@@ -167,7 +191,7 @@ class Robust(GatedEkf):
         if self._tentative:
             return Estimate.failure(
                 "tentative start from three inliers, not yet confirmed by "
-                f"{CONFIRMING_BEACONS} beacons in one frame or three after confirm_travel="
+                f"{CONFIRMING_BEACONS} beacons in one frame or three azimuths after confirm_travel="
                 f"{self.confirm_travel} m", inliers.size)
         std = self._position_std()
         if std > self.max_position_std:

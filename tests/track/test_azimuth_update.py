@@ -18,7 +18,7 @@ CHI2_999 = 10.83
 def update(state, cov, ids, azimuths, beacons, delta_d=0.003, extra=0.0, threshold=CHI2_999):
     problem = Problem.from_frame(Measurements(ids, azimuths), beacons)
     return gated_update(state, cov, problem.floats, problem.ints[ROW_BEACON_INDEX], delta_d,
-                        extra, threshold)
+                        True, extra, threshold)
 
 
 def test_an_update_by_hand():

@@ -53,12 +53,13 @@ def test_a_tracker_refuses_frames_before_reset(route):
 
 
 @pytest.mark.parametrize(("bad", "message"), [
-    (motion(0.1), r"motion.time must be finite and after the previous frame's \(0.2\)"),
+    (motion(0.1), r"motion.time must be finite and not before the previous frame's \(0.2\)"),
     (motion(math.nan), "motion.time must be finite"),
-    (motion(0.3, odometry_times=[0.25, 0.22]), r"motion.odometry.time must increase within"),
-    (motion(0.3, imu_times=[0.2]), r"motion.imu.time must increase within \(0.2, 0.3\]"),
-    (motion(0.3, imu_times=[0.35]), r"motion.imu.time must increase within"),
-    (motion(0.3, odometry_times=[0.25], value=math.nan), "motion.odometry holds a NaN"),
+    (motion(0.3, odometry_times=[0.25, 0.22]), r"motion.odometry.time must not decrease"),
+    (motion(0.3, imu_times=[0.2]),
+     r"motion.imu.time must not decrease and lie within \(0.2, 0.3\]"),
+    (motion(0.3, imu_times=[0.35]), r"motion.imu.time must not decrease"),
+    (motion(0.3, odometry_times=[0.25], value=math.nan), "motion.odometry.speed holds a NaN"),
     ("not motion", "motion must be an azgym Motion, got str"),
 ])
 def test_motion_out_of_order_or_not_finite_is_refused(bad, message):

@@ -15,7 +15,7 @@ from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 from azgym.track.unicycle import MotionNoise, MotionSteps, Step, predict
 from azgym.world.drive import simulate
 
-SILENT = MotionNoise(speed_noise=0.0, speed_scale=0.0, scale_walk=0.0, gyro_noise=0.0,
+SILENT = MotionNoise(speed_noise=0.0, speed_scale=0.0, scale_walk=0.0, turn_rate_noise=0.0,
                      bias_walk=0.0, position_walk=0.0, heading_walk=0.0)
 BEACONS = beacon_map([(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0), (5.0, 12.0)])
 
@@ -44,19 +44,23 @@ def test_a_prediction_by_hand():
 def test_the_samples_hold_until_the_next_and_a_silent_gap_is_unobserved():
     steps = MotionSteps(0.02)
     steps.steps(steady(0.1, 2.0, 0.0))
-    [(speed, rate, observed, dt, unseen)] = steps.steps(steady(0.2, 1.0, 0.5, start=0.1))
+    [(speed, rate, observed, dt, unseen, speed_spread, turn_spread)] = steps.steps(
+        steady(0.2, 1.0, 0.5, start=0.1))
     # (0.1, 0.12] still runs on the last sample of the previous frame (2 m/s, no turn).
     assert (speed, rate) == (pytest.approx(0.02 * 2.0 / 0.1 + 0.08 * 1.0 / 0.1),
                              pytest.approx(0.08 * 0.5 / 0.1))
     assert (observed, dt, unseen) == (pytest.approx(0.1), pytest.approx(0.1),
                                       pytest.approx(0.0, abs=1e-12))
+    # Each sample's white noise weighs by its hold: 0.02 s of the old one, four of 0.02 s.
+    assert speed_spread == turn_spread == pytest.approx(5 * 0.02**2)
     gap = steps.steps(steady(10.0, 1.0, 0.0, start=9.9))  # 9.7 s without samples
-    # Observed: the old sample's 1.5 periods (0.03 s), then 9.92 … 10.0 up to the frame (0.08 s),
-    # in 40 steps of 0.245 s; the 9.69 s unseen are charged to the last step.
+    # Observed: the old sample's hold (HOLD_FLOOR_S, 0.25 s: a stopped stream is told from
+    # jitter only after it), then 9.92 … 10.0 up to the frame (0.08 s), in 40 steps of 0.245 s;
+    # the 9.47 s unseen are charged to the last step.
     assert len(gap) == 40 and sum(step.seconds for step in gap) == pytest.approx(9.8)
-    assert sum(step.observed for step in gap) == pytest.approx(0.11)
+    assert sum(step.observed for step in gap) == pytest.approx(0.33)
     assert [step.unseen for step in gap[:-1]] == [0.0] * 39
-    assert gap[-1].unseen == pytest.approx(9.8 - 0.11)
+    assert gap[-1].unseen == pytest.approx(9.8 - 0.33)
 
 
 @pytest.mark.parametrize("name", ["gated-ekf", "robust"])
@@ -99,7 +103,19 @@ def test_reset_forgets_the_track_and_starts_from_the_initial_pose():
     ({"delta_alpha_d": -0.1}, r"GatedEkf.delta_alpha_d must be in"),
     ({"extra_sigma": "wide"}, r"GatedEkf.extra_sigma must be a number"),
     ({"position_walk": math.nan}, r"GatedEkf.position_walk must be a number"),
-    ({"initializer": "mex"}, r"GatedEkf.initializer must be one of \('ransac', 'loo'\)"),
+    ({"initializer": "mex"}, r"GatedEkf.initializer must be one of 'ransac', 'loo', got 'mex'"),
+    ({"vehicle": "tank"}, r"GatedEkf.vehicle must be one of 'forklift', 'differential-drive'"),
+    ({"yaw_source": "compass"}, r"GatedEkf.yaw_source must be one of 'gyro', 'odometry'"),
+    ({"camera_ahead": math.inf}, r"GatedEkf.camera_ahead must be a number, got inf"),
+    ({"wheelbase": 0.0}, r"GatedEkf.wheelbase must be in \(0.0, inf\]"),
+    ({"coverage": "yes"}, r"GatedEkf.coverage must be True or False"),
+    ({"speed_factor": 0.0}, r"GatedEkf.speed_factor must be in \(0.0, inf\]"),
+    ({"speed_noise": -0.1}, r"GatedEkf.speed_noise must be in \[0.0, inf\]"),
+    ({"speed_scale": math.nan}, r"GatedEkf.speed_scale must be a number"),
+    ({"scale_walk": -1e-3}, r"GatedEkf.scale_walk must be in"),
+    ({"turn_rate_noise": -1.0}, r"GatedEkf.turn_rate_noise must be in"),
+    ({"bias_walk": "1e-4"}, r"GatedEkf.bias_walk must be a number"),
+    ({"heading_walk": -0.1}, r"GatedEkf.heading_walk must be in"),
     ({"min_init_inliers": 2}, r"GatedEkf.min_init_inliers must be in \[3, inf\]"),
     ({"delta_alpha_d": 0.0, "extra_sigma": 0.0}, "gives the azimuths no noise"),
 ])

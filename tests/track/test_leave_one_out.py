@@ -23,8 +23,8 @@ BEACONS = beacon_map([(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0), (5.0, 
 POSE = (4.0, 3.0, 0.3)
 GATE = NormalDist().inv_cdf(0.5 + 0.5 * 0.999) ** 2
 """The default gate (gate_probability 0.999, one degree of freedom)."""
-NOISE = (math.radians(0.4), math.radians(0.1))
-"""The default delta_alpha_d and extra_sigma."""
+NOISE = (math.radians(0.4), True, math.radians(0.1))
+"""The default delta_alpha_d, coverage and extra_sigma."""
 # (map row of the moved beacon, how far it moved [m], the map rows measured): each moved
 # beacon pulled the old filter, started at the true pose, 40-44 cm off in one frame.
 MOVES = [(2, (1.0, 0.0), [0, 2, 4]), (3, (0.0, 1.5), [0, 2, 3, 4])]
@@ -75,7 +75,7 @@ def test_azimuths_that_agree_pass_however_far_from_a_wide_prediction():
     nu = np.angle(np.exp(1j * (frame.azimuth - np.arctan2(offset[:, 1], offset[:, 0])
                                + state[2])))
     coverage = np.arctan2(0.5 * BEACONS.width, np.hypot(*offset.T))
-    noise = (NOISE[0] ** 2 + coverage**2) / 3 + NOISE[1] ** 2
+    noise = (NOISE[0] ** 2 + coverage**2) / 3 + NOISE[2] ** 2
     assert (d2 < GATE).all() and (nu * nu / noise).sum() > GATE
     assert passed.all()
 

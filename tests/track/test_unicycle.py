@@ -10,7 +10,7 @@ import pytest
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 from azgym.track.unicycle import MAX_STEP_S, MotionNoise, MotionSteps, predict
 
-SILENT = MotionNoise(speed_noise=0.0, speed_scale=0.0, scale_walk=0.0, gyro_noise=0.0,
+SILENT = MotionNoise(speed_noise=0.0, speed_scale=0.0, scale_walk=0.0, turn_rate_noise=0.0,
                      bias_walk=0.0, position_walk=0.0, heading_walk=0.0)
 RATE = 50.0
 
