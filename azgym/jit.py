@@ -29,7 +29,8 @@ from azgym.core import wrap_scalar
 PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
     "core.py", "errors.py", "hyperparameters.py", "jit.py", "learn/features.py",
-    "learn/network.py", "learn/regression.py", "learn/weights.py", "localize/learned.py",
+    "learn/distribution.py", "learn/network.py", "learn/regression.py", "learn/weights.py",
+    "localize/learned.py",
     "localize/ng_ransac.py", "localize/_angles.py", "localize/_circles.py",
     "localize/_kernels.py", "localize/_levenberg_marquardt.py", "localize/_ng_search.py",
     "localize/_ransac_search.py",

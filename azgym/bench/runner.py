@@ -213,7 +213,7 @@ def run_benchmark(
     """
     if profile is not None:
         suite = suite.profiled(profile)
-    profile = suite.profile  # a suite profiled already: its profile is the run's
+    profile = suite.contender_profile()  # a suite profiled already: its profile is the run's
     contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
     seed, secret = _seed(suite, split, seed)

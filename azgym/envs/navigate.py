@@ -13,7 +13,6 @@ from gymnasium.utils import seeding
 from azgym.arguments import positive_number, whole_number
 from azgym.core import estimated_pose, pose_error, wrap_scalar
 from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
-from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize
 from azgym.nav.controls import DISCRETE_CONTROLS, controls
 from azgym.nav.estimator import TrackerFeed, is_tracker, resolve_estimator
@@ -180,10 +179,6 @@ class NavigateEnv(gym.Env):
         render_mode: str | None = None,
     ) -> None:
         self.scenario = load_scenario(scenario)
-        if self.scenario.differential_drive:
-            raise InvalidInputError(
-                f"scenario {self.scenario.name!r}: its vehicle is a differential-drive robot; "
-                "Navigate drives a forklift (give a scenario whose [vehicle] is a forklift)")
         check_camera_rate(camera_rate_hz)
         self.spots = spots_of(self.scenario)
         self._headings = aisle_headings(self.scenario, self.spots)

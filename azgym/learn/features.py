@@ -24,7 +24,8 @@ an injected outlier:
 - ``beacons_in_view``: distinct usable beacons / 16, clipped to 1: how much a frame has to spare
   (with many beacons, one measurement's doubtful features matter less).
 - ``consensus_residual``: the measurement's azimuth residual under the frame's consensus pose,
-  log(1 + |r| / τ) / log(1 + π / τ) with τ = ``CONSENSUS_TOLERANCE`` (0.5 when no pose was
+  log(1 + |r| / τ) / log(1 + π / τ) with τ = ``CONSENSUS_TOLERANCE`` at the training noise,
+  scaled with a camera's Δα_d when served (:func:`consensus_tolerance`) (0.5 when no pose was
   found). The consensus pose is the best supported of the triplet solutions (Sec. 2.5, eq. 7-20)
   among at most ``CONSENSUS_CANDIDATES`` measurements of distinct beacons (the brightest of each
   id by quality, or spread evenly in azimuth without quality). It is the only feature that sees
@@ -90,13 +91,15 @@ CONSENSUS_DEGENERACY = 1e-4
 """Triplets whose normalised determinant is below this are not solved (see ``solve_triplet``)."""
 
 
-def measurement_features(problem: Problem, quality: FloatArray | None) -> FloatArray:
+def measurement_features(problem: Problem, quality: FloatArray | None,
+                         tolerance: float = CONSENSUS_TOLERANCE) -> FloatArray:
     """The features of every usable measurement of a frame, (K, N_FEATURES) float64.
 
     Args:
         problem: The frame's usable measurements (:meth:`Problem.from_frame`).
         quality: The frame's ``Measurements.quality``, (M,) or (M, Q), or None; indexed through
             ``problem.ints[ROW_SOURCE]``; only its first column is used.
+        tolerance: τ, the consensus tolerance [rad] (:func:`consensus_tolerance`).
 
     Raises:
         InvalidInputError: ``quality`` has another number of rows than the frame has
@@ -112,8 +115,21 @@ def measurement_features(problem: Problem, quality: FloatArray | None) -> FloatA
     out = np.empty((problem.size, N_FEATURES))
     # Contiguous arrays (no copy when they are already): one compiled signature serves all.
     frame_features(np.ascontiguousarray(problem.floats), np.ascontiguousarray(problem.ints),
-                   problem.n_distinct, column, has_quality, out)
+                   problem.n_distinct, column, has_quality, tolerance, out)
     return out
+
+
+def consensus_tolerance(delta_alpha_d: float, trained_delta_alpha_d: float) -> float:
+    """τ for a camera of noise Δα_d, served by a model trained at ``trained_delta_alpha_d``.
+
+    The consensus features measure residuals in units of τ; scaling τ with the camera's noise
+    keeps them in the units the model was trained in (a 2° camera's good azimuths are as far
+    off as a 0.4° camera's are, in units of their noise). At the training noise it is
+    ``CONSENSUS_TOLERANCE`` exactly.
+    """
+    if delta_alpha_d == trained_delta_alpha_d:
+        return CONSENSUS_TOLERANCE
+    return CONSENSUS_TOLERANCE * delta_alpha_d / trained_delta_alpha_d
 
 
 def first_quality_column(quality: FloatArray | None, count: int) -> tuple[FloatArray, bool]:
@@ -131,18 +147,18 @@ def first_quality_column(quality: FloatArray | None, count: int) -> tuple[FloatA
 
 
 @jit
-def frame_features(floats, ints, n_distinct, quality, has_quality, out):
+def frame_features(floats, ints, n_distinct, quality, has_quality, tolerance, out):
     """Fill ``out`` (K, N_FEATURES) with the features of one frame (rows of ``Problem``).
 
     ``quality`` is the first quality column of all M measurements (read through the source
-    row); ``has_quality`` False ignores it.
+    row); ``has_quality`` False ignores it; ``tolerance`` is τ [rad].
     """
-    q, support, pose = consensus_of(floats, ints, quality, has_quality)
-    fill_features(floats, ints, n_distinct, q, has_quality, support, pose, out)
+    q, support, pose = consensus_of(floats, ints, quality, has_quality, tolerance)
+    fill_features(floats, ints, n_distinct, q, has_quality, support, pose, tolerance, out)
 
 
 @jit
-def consensus_of(floats, ints, quality, has_quality):
+def consensus_of(floats, ints, quality, has_quality, tolerance):
     """The frame's consensus pose, the one step of the features that solves triplets.
 
     Returns (q, support, pose): the usable measurements' quality (K,) (zeros without quality),
@@ -154,18 +170,18 @@ def consensus_of(floats, ints, quality, has_quality):
     q = np.empty(k)
     for u in range(k):
         q[u] = quality[ints[ROW_SOURCE, u]] if has_quality else 0.0
-    support, pose = _consensus(floats, ints[ROW_BEACON_INDEX], q, has_quality)
+    support, pose = _consensus(floats, ints[ROW_BEACON_INDEX], q, has_quality, tolerance)
     return q, support, pose
 
 
 @jit
-def fill_features(floats, ints, n_distinct, q, has_quality, support, pose, out):
+def fill_features(floats, ints, n_distinct, q, has_quality, support, pose, tolerance, out):
     """Fill ``out`` (K, N_FEATURES) from the frame and its consensus (:func:`consensus_of`)."""
     k = floats.shape[1]
     _quality_features(q, ints[ROW_BEACON_INDEX], has_quality, out)
     bx, by = floats[ROW_BX], floats[ROW_BY]
     ca, sa = floats[ROW_COS_AZ], floats[ROW_SIN_AZ]
-    scale_residual = 1.0 / math.log1p(math.pi / CONSENSUS_TOLERANCE)
+    scale_residual = 1.0 / math.log1p(math.pi / tolerance)
     for u in range(k):
         out[u, BEACONS_IN_VIEW] = min(n_distinct / BEACONS_FULL_VIEW, 1.0)
         out[u, CONSENSUS_SUPPORT] = support / k
@@ -174,7 +190,7 @@ def fill_features(floats, ints, n_distinct, q, has_quality, support, pose, out):
             continue
         cross, dot = _turn(bx[u] - pose[0], by[u] - pose[1], pose[2], pose[3], ca[u], sa[u])
         residual = abs(math.atan2(cross, dot))
-        out[u, CONSENSUS_RESIDUAL] = math.log1p(residual / CONSENSUS_TOLERANCE) * scale_residual
+        out[u, CONSENSUS_RESIDUAL] = math.log1p(residual / tolerance) * scale_residual
 
 
 @jit(inline="always")
@@ -254,7 +270,7 @@ def _stable_order(values, descending):
 
 
 @jit(inline="always")
-def _consensus(floats, beacon, q, has_quality):
+def _consensus(floats, beacon, q, has_quality, tolerance):
     """The best supported triplet pose among the candidates: (support, pose)."""
     k = floats.shape[1]
     bx, by = floats[ROW_BX], floats[ROW_BY]
@@ -265,7 +281,7 @@ def _consensus(floats, beacon, q, has_quality):
     if n >= 3:
         cbx, cby, cca, csa = bx[chosen], by[chosen], ca[chosen], sa[chosen]
         rows, ox, oy, scale = pair_table(cbx, cby, cca, csa)
-        tan_tol = math.tan(CONSENSUS_TOLERANCE)
+        tan_tol = math.tan(tolerance)
         for i in range(n):
             for j in range(i + 1, n):
                 for m in range(j + 1, n):

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from azgym.files import write_file
+from azgym.learn.distribution import card_section
 from azgym.learn.regression import PoseRegressor
 from azgym.learn.train_report import bullets, show
 
@@ -86,7 +87,7 @@ def write_regression_card(result: Any, seeds: list[int], frames: int, seed: int)
         "usable measurement, with a trust logit per token; the `learned` localizer takes the "
         "heading in closed form and, by default, refines the pose on the trusted measurements "
         "(azgym/localize/learned.py).", "",
-        "## Data", "", *bullets(data, ("train", "held_out")),
+        "## Data", "", *bullets(data, ("train", "held_out", "distribution")),
         *[f"- {name}: {data[key]['frames']} frames, {data[key]['measurements']} measurements, "
           f"inlier share {show(data[key]['inlier_share'])}"
           for key, name in (("train", "training set"), ("held_out", "held-out set"))],
@@ -109,6 +110,7 @@ def write_regression_card(result: Any, seeds: list[int], frames: int, seed: int)
           for key, row in figures.items() if isinstance(row, dict)],
         "", *[f"- {key}: {value:.3f}" for key, value in figures.items()
               if key.endswith("training p75")], "",
+        *card_section(data.get("distribution")),
         "## Files", "",
         f"- `{result.weights.name}` (SHA-256 `{digest}`): load with "
         "`azgym.learn.regression.PoseRegressor.load`",

@@ -121,15 +121,19 @@ def build_data(layouts: Sequence[int], frames_per_layout: int, seed: int
 
     Returns:
         The training FrameBatch, the held-out one (every held-out layout), and what the model
-        card says of them.
+        card says of them (with the training frames' distribution, which the served model
+        checks its frames against: :mod:`azgym.learn.distribution`).
     """
     from azgym.learn.dataset import HELD_OUT_LAYOUTS, make_frames
+    from azgym.learn.distribution import batch_distribution
 
     train = make_frames(layouts, frames_per_layout, seed)
     held_out = make_frames(HELD_OUT_LAYOUTS, frames_per_layout, seed)
     info = {"train_layouts": list(layouts),
             "held_out_layouts": [int(x) for x in HELD_OUT_LAYOUTS],
-            "frames_per_layout": frames_per_layout, "data_seed": seed}
+            "frames_per_layout": frames_per_layout, "data_seed": seed,
+            "distribution": batch_distribution(train.floats, train.beacon_index,
+                                               train.mask).to_manifest()}
     return train, held_out, info
 
 

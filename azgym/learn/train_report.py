@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from azgym.files import write_file
+from azgym.learn.distribution import card_section
 
 FIGURES = (("held_out_accuracy", "accuracy"), ("held_out_auc", "AUC"),
            ("held_out_top3", "top-3 all inliers"))
@@ -107,7 +108,7 @@ def write_card(path: Path, info: dict[str, Any], weights: Path, figure: Path) ->
              "Scores each measurement of a frame with the logit of its being an inlier; the "
              "ng-ransac localizer tries triplets in that order.", "",
              "## Data", "",
-             *bullets(data, ("train", "held_out")),
+             *bullets(data, ("train", "held_out", "distribution")),
              *[f"- {name}: {data[key]['frames']} frames, {data[key]['measurements']} "
                f"measurements, inlier share {show(data[key]['inlier_share'])}"
                for key, name in (("train", "training set"), ("held_out", "held-out set"))],
@@ -122,6 +123,7 @@ def write_card(path: Path, info: dict[str, Any], weights: Path, figure: Path) ->
                f"| " + " | ".join(show(row[key]) for key, _ in FIGURES) + " |"
                for row in info["history"]],
              "", f"![learning curve]({figure.name})", "",
+             *card_section(data.get("distribution")),
              "## Files", "",
              f"- `{weights.name}` (SHA-256 `{digest}`): load with "
              "`azgym.learn.network.InlierScorer.load`", f"- `{figure.name}`: the learning curve",

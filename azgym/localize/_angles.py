@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from azgym.jit import jit
 
 HALF_PI = 0.5 * math.pi
@@ -84,3 +86,20 @@ def small_angle(cross: float, dot: float) -> float:
         return u * (1.0 + z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (
             1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0 + z / 17.0))))))))
     return fast_atan2(cross, dot)
+
+
+@jit
+def azimuth_spread(azimuth):
+    """The narrowest arc holding every azimuth [rad]: 2π minus the widest gap between them.
+
+    A camera sees beacons on every side (a spread of π or more) only from inside their convex
+    hull; a narrower spread is a view to one side, from inside or outside it.
+    """
+    k = azimuth.size
+    if k < 2:
+        return 0.0
+    wrapped = np.sort(np.mod(azimuth, 2.0 * math.pi))
+    widest = wrapped[0] + 2.0 * math.pi - wrapped[k - 1]
+    for u in range(1, k):
+        widest = max(widest, wrapped[u] - wrapped[u - 1])
+    return 2.0 * math.pi - widest

@@ -18,7 +18,13 @@ import numpy as np
 
 from azgym.core import FloatArray
 from azgym.jit import jit
-from azgym.learn.features import CONSENSUS_CANDIDATES, N_FEATURES, consensus_of, fill_features
+from azgym.learn.features import (
+    CONSENSUS_CANDIDATES,
+    CONSENSUS_TOLERANCE,
+    N_FEATURES,
+    consensus_of,
+    fill_features,
+)
 from azgym.learn.network import inlier_logits
 from azgym.localize import _kernels as K
 from azgym.localize._circles import write_ascending
@@ -79,7 +85,9 @@ SEARCH_CONFIDENT_SHARE = N_SETTINGS + 3
 SEARCH_CONSENSUS_SLACK = N_SETTINGS + 4
 """Slot of the guided settings: most distinct beacons that may not support a consensus pose the
 search stops at."""
-GUIDED_SETTINGS_SIZE = N_SETTINGS + 5
+SEARCH_TOLERANCE = N_SETTINGS + 5
+"""Slot of the guided settings: τ, the features' consensus tolerance [rad]."""
+GUIDED_SETTINGS_SIZE = N_SETTINGS + 6
 """Length of the guided settings."""
 CONSENSUS_HYPOTHESES = tuple(math.comb(n, 3) for n in range(CONSENSUS_CANDIDATES + 1))
 """Triplets the features' consensus solves, by the number of its candidates."""
@@ -140,7 +148,9 @@ def ng_ransac_search(floats, ints, distinct, quality, has_quality, params, hidde
     none). Returns (triplets the guided search tried, beyond the consensus's; the supporters'
     summed inlier probability, NaN when the network was not consulted).
     """
-    q, consensus_support, consensus_pose = consensus_of(floats, ints, quality, has_quality)
+    tolerance = settings[SEARCH_TOLERANCE]
+    q, consensus_support, consensus_pose = consensus_of(floats, ints, quality, has_quality,
+                                                        tolerance)
     pose = consensus_pose.copy()
     support = np.zeros(floats.shape[1], dtype=np.bool_)
     n_support, mean_sq = 0, np.inf
@@ -155,7 +165,7 @@ def ng_ransac_search(floats, ints, distinct, quality, has_quality, params, hidde
             return 0, np.nan
     features = np.empty((floats.shape[1], N_FEATURES))
     fill_features(floats, ints, distinct, q, has_quality, consensus_support, consensus_pose,
-                  features)
+                  tolerance, features)
     logits = inlier_logits(features, params, hidden)
     if consensus_support > 0 and floats.shape[1] == MIN_MEASUREMENTS:
         # Three measurements make one triplet, the consensus's, already scored: the network
@@ -202,7 +212,8 @@ def support_weight(logits, ints, mask):
 
 def guided_settings(settings: FloatArray, max_ranked: int = 8, max_hypotheses: int = 10,
                     fallback_ranked: int = 12, confident_share: float = 0.5,
-                    consensus_slack: int = 0) -> FloatArray:
+                    consensus_slack: int = 0,
+                    tolerance: float = CONSENSUS_TOLERANCE) -> FloatArray:
     """The guided settings: ransac's ``settings``, then the search's (``SEARCH_*`` slots)."""
     guided = np.empty(GUIDED_SETTINGS_SIZE)
     guided[:N_SETTINGS] = settings
@@ -211,4 +222,5 @@ def guided_settings(settings: FloatArray, max_ranked: int = 8, max_hypotheses: i
     guided[SEARCH_FALLBACK_RANKED] = fallback_ranked
     guided[SEARCH_CONFIDENT_SHARE] = confident_share
     guided[SEARCH_CONSENSUS_SLACK] = consensus_slack
+    guided[SEARCH_TOLERANCE] = tolerance
     return guided

@@ -19,24 +19,28 @@ position's seen from the trusted beacons (σ²_pos / d_i², averaged) plus the s
 Optionally (``refine_rounds`` > 0, the default), a short robust refinement finishes, the paper's
 refinement (eq. 28-33, with its error-model covariance:
 :func:`azgym.localize.refinement.refine_with_covariance`) on a chosen set per round: the first
-round, from the regressed pose, takes every measurement whose trust logit is at least
-``min_trust`` (all of them if those see fewer than three beacons); each later round those of
-them whose residual at the current pose is within a gate, the gates shrinking by ``GATE_GROWTH``
-per round down to ``gate`` (iteratively trimmed least squares, the hard form of IRLS). The
-defaults (3 rounds, 1°, −2) were chosen with the shipped weights on frames of the held-out
-generated layouts (data seed 7, 1,200 frames; never a suite's): p75 3.2 cm there, 6.8 % beyond 1
-m; ``min_trust`` −4 let the measurements the network doubts in (p75 11 cm), 0 left out good
+round, from the regressed pose, takes every measurement whose trust logit is at least ``min_trust``
+(all of them if those see fewer than three beacons); each later round those of them whose residual
+at the current pose is within a gate, the gates shrinking by ``GATE_GROWTH`` per round down to
+``gate`` (iteratively trimmed least squares, the hard form of IRLS); by default the last gate is the
+features' consensus tolerance, 1° at the training noise, so it scales with the camera's noise as the
+features do. The defaults (3 rounds, 1°, −2) were chosen with the shipped weights on frames of the
+held-out generated layouts (data seed 7, 1,200 frames; never a suite's): p75 3.2 cm there, 6.8 %
+beyond 1 m; ``min_trust`` −4 let the measurements the network doubts in (p75 11 cm), 0 left out good
 views it doubted (8.5 % beyond 1 m); a fourth round or another last gate (0.5°, 2°) moved p75 by
-under 0.3 cm. A round that keeps fewer than three beacons, or whose refinement does not
-converge, ends the refinement with the pose before it. ``refine_rounds=0`` is the pure
-regression; the model card and the report give both variants' figures. The default is the
-refinement because the pure regression is metres off in large warehouses, where a centimetre
-azimuth fit is cheap once a start in the right basin is known (the network's job).
+under 0.3 cm. A round that keeps fewer than three beacons, or whose refinement does not converge,
+ends the refinement with the pose before it. ``refine_rounds=0`` is the pure regression; the model
+card and the report give both variants' figures. The default is the refinement because the pure
+regression is metres off in large warehouses, where a centimetre azimuth fit is cheap once a start
+in the right basin is known (the network's job).
 
-A frame is always answered when it has three distinct beacons (the regression cannot fail), so
-availability is the share of such frames; the covariance says how far to trust it. Everything
-runs in one compiled call (id lookup, features, tokens, network, heading, refinement); this
-module never imports torch.
+A frame of three distinct beacons like the training frames is always answered (the regression
+cannot fail); the covariance says how far to trust it. A frame unlike them is refused with the
+reason: a noise, ``field_of_view``, azimuth spread or number of beacons the weights' training
+distribution does not hold (:mod:`azgym.learn.distribution`); the features' consensus tolerance
+scales with ``delta_alpha_d`` (the network reads residuals in units of the camera's noise).
+Everything runs in one compiled call (id lookup, features, tokens, network, heading,
+refinement); this module never imports torch.
 """
 
 from __future__ import annotations
@@ -49,9 +53,12 @@ import numpy as np
 from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
 from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
+from azgym.learn.distribution import TrainingDistribution
 from azgym.learn.features import (
+    CONSENSUS_TOLERANCE,
     FEATURE_LAYOUT,
     N_FEATURES,
+    consensus_tolerance,
     first_quality_column,
     frame_features,
     measurement_features,
@@ -83,7 +90,8 @@ GATE_GROWTH = 3.0
 """Each refinement round's gate is this times the next one's (the last is ``gate``)."""
 
 # The settings array the compiled frame reads (one array, not six arguments).
-SET_ROUNDS, SET_GATE, SET_MIN_TRUST, SET_DELTA_D, SET_COVERAGE, SET_MAX_ITER, SET_SIZE = range(7)
+(SET_ROUNDS, SET_GATE, SET_MIN_TRUST, SET_DELTA_D, SET_COVERAGE, SET_MAX_ITER, SET_TOLERANCE,
+ SET_SIZE) = range(8)
 # The output array: the final pose (K.POSE_* slots), then what the diagnostics report.
 OUT_REGRESSED_X = K.POSE_SIZE
 OUT_REGRESSED_Y = K.POSE_SIZE + 1
@@ -207,7 +215,8 @@ def _learned_frame(ids, azimuth, quality, has_quality, sorted_ids, sorted_order,
     if distinct < MIN_MEASUREMENTS:
         return distinct, 0
     features = np.empty((floats.shape[1], N_FEATURES))
-    frame_features(floats, ints, distinct, quality, has_quality, features)
+    frame_features(floats, ints, distinct, quality, has_quality, settings[SET_TOLERANCE],
+                   features)
     return distinct, solve_regressed(floats, ints, features, params, hidden, settings, out,
                                      cov, inliers)
 
@@ -220,40 +229,55 @@ class Learned(Localizer):
             None for the weights shipped with azgym.
         refine_rounds: Gated refinement rounds after the regression (0: the pure regression).
         gate: The last round's residual gate [rad]; earlier rounds' grow by ``GATE_GROWTH``.
+            None: the features' consensus tolerance, 1° at the training noise and scaled with
+            ``delta_alpha_d`` like it (:func:`azgym.learn.features.consensus_tolerance`).
         min_trust: Least trust logit of a measurement the refinement may use.
         delta_alpha_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1), for the
             refinement's covariance.
         coverage: Whether the covariance includes the coverage term Δα_c,i (eq. 2).
+        field_of_view: The camera's full horizontal view [rad]; None: not stated. A view
+            narrower than the training frames' azimuth spread is refused.
         max_iter: Iteration limit of each refinement round.
     """
 
     name = "learned"
 
     def __init__(self, *, weights: str | None = None, refine_rounds: int = 3,
-                 gate: float = math.radians(1.0), min_trust: float = -2.0,
+                 gate: float | None = None, min_trust: float = -2.0,
                  delta_alpha_d: float = math.radians(0.4), coverage: bool = True,
-                 max_iter: int = 50) -> None:
+                 field_of_view: float | None = None, max_iter: int = 50) -> None:
         self.weights = weights
         self.refine_rounds = refine_rounds
         self.gate = gate
         self.min_trust = min_trust
         self.delta_alpha_d = delta_alpha_d
         self.coverage = coverage
+        self.field_of_view = field_of_view
         self.max_iter = max_iter
         self._validate_once()
 
     def _check_params(self) -> None:
         name = type(self).__name__
         check_range(name, "refine_rounds", self.refine_rounds, low=0, high=10, integer=True)
-        check_range(name, "gate", self.gate, low=0.0, high=math.pi, low_open=True)
+        if self.gate is not None:
+            check_range(name, "gate", self.gate, low=0.0, high=math.pi, low_open=True)
         check_range(name, "min_trust", self.min_trust, low=-50.0, high=50.0)
         check_range(name, "delta_alpha_d", self.delta_alpha_d, low=0.0, high=math.pi / 2,
                     high_open=True)
         check_range(name, "max_iter", self.max_iter, low=1, integer=True)
         check_flag(name, "coverage", self.coverage)
+        if self.field_of_view is not None:
+            check_range(name, "field_of_view", self.field_of_view, low=0.0, high=2 * math.pi,
+                        low_open=True)
         self._load_model()
-        self._settings = settings_array(self.refine_rounds, self.gate, self.min_trust,
-                                        self.delta_alpha_d, bool(self.coverage), self.max_iter)
+        self._tolerance = consensus_tolerance(self.delta_alpha_d,
+                                              self._distribution.trained_delta_alpha_d)
+        gate = self._tolerance if self.gate is None else self.gate
+        self._settings = settings_array(self.refine_rounds, gate, self.min_trust,
+                                        self.delta_alpha_d, bool(self.coverage), self.max_iter,
+                                        self._tolerance)
+        self._off_distribution = self._distribution.settings_reason(self.delta_alpha_d,
+                                                                    self.field_of_view)
 
     def _load_model(self) -> None:
         """Load the weights (once per path)."""
@@ -262,9 +286,13 @@ class Learned(Localizer):
             return
         arrays, manifest = load_weights(path, MODEL_NAME, feature_layout=FEATURE_LAYOUT)
         self._regressor = PoseRegressor(arrays, manifest)
+        self._distribution = TrainingDistribution.of_manifest(manifest)
         self._loaded_from = path
 
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        refused = self._distribution.refusal(self._off_distribution, measurements, beacons)
+        if refused is not None:
+            return refused
         column, has_quality = first_quality_column(measurements.quality, len(measurements))
         out, cov = np.empty(OUT_SIZE), np.empty((3, 3))
         inliers = np.zeros(len(measurements), dtype=np.bool_)
@@ -281,20 +309,23 @@ class Learned(Localizer):
         out, cov = np.empty(OUT_SIZE), np.empty((3, 3))
         inliers = np.zeros(problem.n_measurements, dtype=np.bool_)
         rounds = solve_regressed(problem.floats, problem.ints,
-                                 measurement_features(problem, None), self._regressor.params,
+                                 measurement_features(problem, None, self._tolerance),
+                                 self._regressor.params,
                                  self._regressor.hidden, self._settings, out, cov, inliers)
         return _answer(rounds, out, cov, inliers)
 
 
 def settings_array(refine_rounds: int = 3, gate: float = math.radians(1.0),
                    min_trust: float = -2.0, delta_alpha_d: float = math.radians(0.4),
-                   coverage: bool = True, max_iter: int = 50) -> FloatArray:
+                   coverage: bool = True, max_iter: int = 50,
+                   tolerance: float = CONSENSUS_TOLERANCE) -> FloatArray:
     """The compiled frame's settings (``SET_*`` slots), the localizer's defaults unless told."""
     settings = np.empty(SET_SIZE)
     settings[SET_ROUNDS], settings[SET_GATE], settings[SET_MIN_TRUST] = \
         refine_rounds, gate, min_trust
     settings[SET_DELTA_D], settings[SET_COVERAGE], settings[SET_MAX_ITER] = \
         delta_alpha_d, float(coverage), max_iter
+    settings[SET_TOLERANCE] = tolerance
     return settings
 
 

@@ -6,14 +6,14 @@ import math
 
 import numpy as np
 
-from azgym.core import Estimate, FloatArray
+from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_range
 from azgym.jit import jit
 from azgym.localize import _kernels as K
-from azgym.localize._angles import fast_atan2
+from azgym.localize._angles import azimuth_spread, fast_atan2
 from azgym.localize._levenberg_marquardt import singular_at
-from azgym.localize.base import Localizer, Problem
+from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem
 
 CANCELLED = 1e-18
 """|Σ unit vectors|² below this times n² leaves a grid point's heading (and E_ref) undefined.
@@ -45,6 +45,11 @@ MAX_COARSE_RATIO = 1000
 MAX_AXIS_POINTS = 2**31
 """Most fine-grid points along one axis of a coarse-to-fine search (whose fine grid is never
 evaluated whole): grid indices stay exact integers and exact in floating point."""
+SEEN_BOX = "the measured beacons' bounding box"
+"""How messages name the first area searched without ``bounds``."""
+DEFAULT_MARGIN = 5.0
+"""How far beyond the map's outermost beacons mex searches by default [m]: a camera sees beacons
+from a few metres away (MRCLAM's robots drive up to 4.8 m outside its landmarks' box)."""
 STEP_RESOLUTION = 2.0**-40
 """The step must be at least this times the grid's largest |coordinate| (about 1e-12): finer,
 neighbouring grid points would round to the same coordinate."""
@@ -154,6 +159,12 @@ def _falls_outside(args: tuple[FloatArray, ...], x0: float, y0: float, step: flo
     return False
 
 
+def _box(problem: Problem) -> tuple[float, float, float, float]:
+    """The measured beacons' bounding box (x_min, y_min, x_max, y_max) [m]."""
+    return (float(problem.bx.min()), float(problem.by.min()), float(problem.bx.max()),
+            float(problem.by.max()))
+
+
 class Mex(Localizer):
     """Method of exhaustion: the grid point with the smallest mean squared azimuth error (eq. 34).
 
@@ -168,13 +179,22 @@ class Mex(Localizer):
     ``n_candidates`` lowest coarse local minima and from every beacon. The exhaustive grid stays
     the default.
 
+    Without ``bounds`` the search covers the map's extent in two stages: first the measured
+    beacons' bounding box (the cheapest grid, and the whole answer for a camera that sees
+    beacons on every side, azimuths spread over π or more: it can only be inside their hull),
+    then, for a narrower view whose cost keeps falling beyond that box's edge, the map's
+    beacons' bounding box grown by ``margin`` on every side. A forward camera sees the beacons
+    ahead of it, so it is never inside the box of those it sees; the second stage finds it.
+
     Args:
         step: Grid spacing [m] (the paper: 1 cm).
-        bounds: (x_min, y_min, x_max, y_max) [m]; None uses the measured beacons' bounding box.
-            The grid may hold at most MAX_GRID_POINTS points (the coarse grid, with
-            ``coarse_step``).
+        bounds: (x_min, y_min, x_max, y_max) [m], the area searched; None: the map's extent
+            (above). The grid may hold at most MAX_GRID_POINTS points (the coarse grid, with
+            ``coarse_step``). In a spec: ``mex:bounds=x_min,y_min,x_max,y_max``.
         coarse_step: Spacing of the coarse pass [m], a multiple of ``step``; None: exhaustive.
         n_candidates: Coarse local minima refined on the fine grid.
+        margin: How far beyond the map's outermost beacons the camera may be [m] (without
+            ``bounds``): a camera sees beacons from metres away.
     """
 
     name = "mex"
@@ -186,17 +206,20 @@ class Mex(Localizer):
         bounds: tuple[float, float, float, float] | None = None,
         coarse_step: float | None = None,
         n_candidates: int = 8,
+        margin: float = DEFAULT_MARGIN,
     ) -> None:
         self.step = step
         self.bounds = bounds
         self.coarse_step = coarse_step
         self.n_candidates = n_candidates
+        self.margin = margin
         self._validate_once()
 
     def _check_params(self) -> None:
         name = type(self).__name__
         check_range(name, "step", self.step, low=0.0, low_open=True)
         check_range(name, "n_candidates", self.n_candidates, low=1, integer=True)
+        check_range(name, "margin", self.margin, low=0.0)
         if self.coarse_step is not None:
             check_range(name, "coarse_step", self.coarse_step, low=self.step)
             ratio = self.coarse_step / self.step
@@ -214,7 +237,8 @@ class Mex(Localizer):
             bounds = self.bounds
             if not isinstance(bounds, (tuple, list, np.ndarray)) or len(bounds) != 4:
                 raise InvalidInputError(
-                    f"{name}.bounds must be (x_min, y_min, x_max, y_max), got {bounds!r}"
+                    f"{name}.bounds must be (x_min, y_min, x_max, y_max) (in a spec: "
+                    f"bounds=x_min,y_min,x_max,y_max), got {bounds!r}"
                 )
             for value in bounds:
                 check_range(name, "bounds", value)
@@ -232,9 +256,8 @@ class Mex(Localizer):
             x_min, y_min, x_max, y_max = (float(v) for v in self.bounds)
             where = "bounds"
         else:
-            x_min, x_max = float(problem.bx.min()), float(problem.bx.max())
-            y_min, y_max = float(problem.by.min()), float(problem.by.max())
-            where = "the measured beacons' bounding box"
+            x_min, y_min, x_max, y_max = _box(problem)
+            where = SEEN_BOX
         nx, ny = self._grid_shape(x_min, y_min, x_max, y_max, where)
         return x_min, y_min, nx, ny
 
@@ -274,9 +297,47 @@ class Mex(Localizer):
                 "smaller bounds or coarse_step")
         return int(counts[0]), int(counts[1])
 
+    def extent(self, box: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+        """The area searched without ``bounds``: the map's beacons' ``box`` grown by ``margin``."""
+        x_min, y_min, x_max, y_max = box
+        m = float(self.margin)
+        return x_min - m, y_min - m, x_max + m, y_max + m
+
+    def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        problem = Problem.from_frame(measurements, beacons)
+        if problem.n_distinct < MIN_MEASUREMENTS:
+            return super()._localize_frame(measurements, beacons)  # the standard refusal
+        return self._search(problem, beacons.bounds())
+
     def _localize(self, problem: Problem) -> Estimate:
+        """A :class:`Problem` without its map: the map's beacons are the measured ones."""
+        return self._search(problem, _box(problem))
+
+    def _search(self, problem: Problem, map_box: tuple[float, float, float, float]) -> Estimate:
+        """``bounds``, or the measured beacons' box, then the map's extent (class docstring)."""
+        estimate = self._solve(problem, *self.grid(problem),
+                               "bounds" if self.bounds is not None else SEEN_BOX)
+        if self.bounds is not None or "grid_point" not in estimate.diagnostics or \
+                azimuth_spread(problem.azimuth) >= math.pi:
+            return estimate  # beacons on every side: the camera is inside their hull
+        extent = self.extent(map_box)
+        if extent == _box(problem):
+            return estimate  # the map's extent is the box just searched
+        where = f"the map's extent (its beacons' box and margin={self.margin:g} m)"
+        try:
+            nx, ny = self._grid_shape(*extent, where)
+        except InvalidInputError as exc:
+            return Estimate.failure(f"{estimate.reason}; {exc}", problem.n_measurements,
+                                    estimate.diagnostics)
+        return self._solve(problem, extent[0], extent[1], nx, ny, where)
+
+    def _solve(self, problem: Problem, x0: float, y0: float, nx: int, ny: int,
+               where: str) -> Estimate:
+        """The minimum of the nx × ny grid from (x0, y0), or a refusal if it is only the edge's.
+
+        ``where`` names the area searched in the refusal's message.
+        """
         args = (problem.bx, problem.by, problem.cos_az, problem.sin_az)
-        x0, y0, nx, ny = self.grid(problem)
         step = float(self.step)
         no_store = np.empty((0, 0))
         if self.coarse_step is None:
@@ -291,8 +352,8 @@ class Mex(Localizer):
         if on_edge and _falls_outside(args, x0, y0, step, (i, j), (nx, ny)):
             return Estimate.failure(
                 f"the best grid point ({x:.6g}, {y:.6g}) is on the edge of the grid and the cost "
-                "keeps falling outside it: the camera is outside the searched area (give bounds "
-                "that contain it)", problem.n_measurements,
+                f"keeps falling outside it: the camera is outside the searched area ({where}; "
+                "give bounds that contain it)", problem.n_measurements,
                 {"cost": float(cost), "grid_point": (float(x), float(y))},
             )
         if singular_at(problem.bx, problem.by, np.ones(problem.size, dtype=np.bool_), x, y):

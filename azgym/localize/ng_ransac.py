@@ -24,6 +24,11 @@ azimuths, the minimal set is the paper's triplet (Rátosi & Simon 2021, eq. 7-20
    ``min_support_weight``: three supporters that the network takes for ghosts are a pose no
    frame can confirm, and the frame is refused rather than answered metres off.
 
+The features' consensus tolerance scales with ``delta_alpha_d`` (the network reads residuals
+in units of the camera's noise), and frames unlike the training frames are refused with the
+reason before any of this: a noise, ``field_of_view``, azimuth spread or number of beacons the
+weights' training distribution does not hold (:mod:`azgym.learn.distribution`).
+
 The order is deterministic (the best triplets first, not a random draw), so the same frame gets
 the same answer. The network is trained in PyTorch (``azgym train localizer``) and served here
 in compiled numpy; this module never imports torch.
@@ -40,9 +45,11 @@ from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
+from azgym.learn.distribution import TrainingDistribution
 from azgym.learn.features import (
     CONSENSUS_CANDIDATES,
     FEATURE_LAYOUT,
+    consensus_tolerance,
     first_quality_column,
     measurement_features,
 )
@@ -112,6 +119,8 @@ class NgRansac(Localizer):
             answer; None for the value calibrated with the weights (in their manifest).
         delta_alpha_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1).
         coverage: Whether the tolerance includes the coverage term Δα_c,i (eq. 2).
+        field_of_view: The camera's full horizontal view [rad]; None: not stated. A view
+            narrower than the training frames' azimuth spread is refused.
         weighted: Weight the refinement by the error model's variances.
         degeneracy_tol: Triplets whose normalised determinant is below this are skipped.
         max_iter: Iteration limit of the refinement.
@@ -123,8 +132,8 @@ class NgRansac(Localizer):
                  max_ranked: int = 8, fallback_ranked: int = 12, confident_share: float = 0.5,
                  consensus_slack: int = 0, min_support_weight: float | None = None,
                  delta_alpha_d: float = math.radians(0.4), coverage: bool = True,
-                 weighted: bool = False, degeneracy_tol: float = 1e-9,
-                 max_iter: int = 50) -> None:
+                 field_of_view: float | None = None, weighted: bool = False,
+                 degeneracy_tol: float = 1e-9, max_iter: int = 50) -> None:
         self.weights = weights
         self.max_hypotheses = max_hypotheses
         self.max_ranked = max_ranked
@@ -134,6 +143,7 @@ class NgRansac(Localizer):
         self.min_support_weight = min_support_weight
         self.delta_alpha_d = delta_alpha_d
         self.coverage = coverage
+        self.field_of_view = field_of_view
         self.weighted = weighted
         self.degeneracy_tol = degeneracy_tol
         self.max_iter = max_iter
@@ -158,12 +168,19 @@ class NgRansac(Localizer):
         check_flag(name, "weighted", self.weighted)
         if self.min_support_weight is not None:
             check_range(name, "min_support_weight", self.min_support_weight, low=0.0)
+        if self.field_of_view is not None:
+            check_range(name, "field_of_view", self.field_of_view, low=0.0, high=2 * math.pi,
+                        low_open=True)
         self._load_model()
+        self._tolerance = consensus_tolerance(self.delta_alpha_d,
+                                              self._distribution.trained_delta_alpha_d)
         self._settings = guided_settings(
             settings_array(self.delta_alpha_d, bool(self.coverage), self.degeneracy_tol,
                            bool(self.weighted), self.max_iter),
             self.max_ranked, self.max_hypotheses, self.fallback_ranked, self.confident_share,
-            self.consensus_slack)
+            self.consensus_slack, self._tolerance)
+        self._off_distribution = self._distribution.settings_reason(self.delta_alpha_d,
+                                                                    self.field_of_view)
         self._threshold = self.support_threshold()
 
     def _load_model(self) -> None:
@@ -175,6 +192,7 @@ class NgRansac(Localizer):
         self._scorer = InlierScorer(arrays, manifest)
         self._calibrated_weight = float(manifest.get("calibration", {}).get(
             "min_support_weight", 0.0))
+        self._distribution = TrainingDistribution.of_manifest(manifest)
         self._loaded_from = path
 
     def support_threshold(self) -> float:
@@ -185,9 +203,12 @@ class NgRansac(Localizer):
 
     def inlier_logits(self, problem: Problem, quality: FloatArray | None) -> FloatArray:
         """The network's logit of each usable measurement of ``problem`` being an inlier."""
-        return self._scorer.logits(measurement_features(problem, quality))
+        return self._scorer.logits(measurement_features(problem, quality, self._tolerance))
 
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        refused = self._distribution.refusal(self._off_distribution, measurements, beacons)
+        if refused is not None:
+            return refused
         column, has_quality = first_quality_column(measurements.quality, len(measurements))
         out = np.empty(OUT_SIZE)
         mask = np.zeros(len(measurements), dtype=np.bool_)

@@ -10,8 +10,10 @@ hyperparameters, listed in ``PRESETS``), an importable ``package.module:Class`` 
 ``NAME=``, which a target's own colon (``file.py:Class``, ``C:/dir``) never is:
 ``ransac:weighted=true``, ``path/mine.py:Mine:max_iter=50,tag=fast``. A value is read as a JSON
 scalar (``true``, ``false``, ``null``, a number, a ``"quoted string"``; Python's ``True``,
-``False`` and ``None`` too); any other word is a string (``tag=fast``). :func:`spec_label` writes
-the one canonical spec of a target and its hyperparameters, which :func:`parse_spec` reads back.
+``False`` and ``None`` too); any other word is a string (``tag=fast``). A list of numbers is
+written with commas, the pieces up to the next ``NAME=``: ``mex:bounds=0,-2.5,12,8,step=0.05``
+gives ``bounds=[0, -2.5, 12, 8]``. :func:`spec_label` writes the one canonical spec of a target
+and its hyperparameters, which :func:`parse_spec` reads back.
 
 Third-party packages register a name by declaring, in their pyproject.toml::
 
@@ -202,7 +204,9 @@ def resolve(name: str) -> Factory:
 
 
 _PARAMS_START = re.compile(r":(?=\s*[A-Za-z_]\w*\s*=)")
-_PARAM = re.compile(r'\s*([A-Za-z_]\w*)\s*=\s*("(?:[^"\\]|\\.)*"|[^,]*?)\s*(?:,|$)')
+_PARAM = re.compile(r'\s*([A-Za-z_]\w*)\s*=\s*("(?:[^"\\]|\\.)*"'
+                    r'|[^,]*?(?:,(?!\s*[A-Za-z_]\w*\s*=)[^,]*?)*)\s*(?:,|$)')
+"""A NAME=VALUE pair; the value runs over commas up to the next NAME= (a list of numbers)."""
 _PYTHON_WORDS = {"True": True, "False": False, "None": None}
 
 
@@ -217,6 +221,8 @@ def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
         raise InvalidInputError(f"localizer name must be a string, got {type(spec).__name__}")
     start = _PARAMS_START.search(spec)
     target, text = (spec, "") if start is None else (spec[:start.start()], spec[start.end():])
+    if text.rstrip().endswith(","):
+        raise InvalidInputError(f"localizer spec {spec!r}: a comma with nothing after it")
     params: dict[str, Any] = {}
     position = 0
     while position < len(text):
@@ -230,8 +236,6 @@ def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
             raise InvalidInputError(f"localizer spec {spec!r}: hyperparameter {name!r} twice")
         params[name] = _scalar(spec, name, pair.group(2))
         position = pair.end()
-    if text.rstrip().endswith(","):
-        raise InvalidInputError(f"localizer spec {spec!r}: a comma with nothing after it")
     if target in PRESETS:
         target, params = PRESETS[target][0], {**PRESETS[target][1], **params}
     return target, params
@@ -243,7 +247,10 @@ def _scalar(spec: str, name: str, text: str) -> Any:
         return _PYTHON_WORDS[text]
     if text.startswith(("[", "{")):
         raise InvalidInputError(f"localizer spec {spec!r}: {name} must be a scalar (true, false, "
-                                f"null, a number or a string), got {text}")
+                                f"null, a number or a string) or numbers separated by commas "
+                                f"({name}=1,2,3), got {text}")
+    if "," in text and not text.startswith('"'):
+        return _numbers(spec, name, text)
     try:
         return json.loads(text)
     except ValueError:
@@ -251,6 +258,22 @@ def _scalar(spec: str, name: str, text: str) -> Any:
             raise InvalidInputError(
                 f"localizer spec {spec!r}: {name}={text} is not a valid quoted string") from None
         return text
+
+
+def _numbers(spec: str, name: str, text: str) -> list[float | int]:
+    """A list value, ``1,2.5,-3``: JSON numbers separated by commas."""
+    values = []
+    for piece in text.split(","):
+        try:
+            value = json.loads(piece)
+        except ValueError:
+            value = None
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise InvalidInputError(
+                f"localizer spec {spec!r}: {name}={text} is not a list of numbers separated by "
+                f"commas ({piece.strip()!r} is not a number; quote a string that has commas)")
+        values.append(value)
+    return values
 
 
 def spec_label(target: str, params: dict[str, Any]) -> str:
@@ -271,7 +294,13 @@ def _canonical(target: str, params: dict[str, Any]) -> str:
 
 
 def _written(value: Any) -> str:
-    """A value as a spec writes it: a plain word bare if it reads back as itself, else JSON."""
+    """A value as a spec writes it: a word bare if it reads back as itself, numbers with commas.
+
+    Anything else as JSON.
+    """
+    if isinstance(value, list | tuple) and value and all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        return ",".join(json.dumps(v) for v in value)
     if isinstance(value, str):
         try:
             if parse_spec(f"x:v={value}") == ("x", {"v": value}):

@@ -21,8 +21,13 @@ def spots_of(scenario: Scenario) -> FloatArray:
 
     Raises:
         InvalidInputError: The scenario has no routes, or no two spots are
-            :data:`MIN_GOAL_DISTANCE` apart, so no episode can start.
+            :data:`MIN_GOAL_DISTANCE` apart, so no episode can start; or a differential-drive
+            robot drives it (navigation drives a forklift).
     """
+    if scenario.differential_drive:
+        raise InvalidInputError(
+            f"scenario {scenario.name!r}: its vehicle is a differential-drive robot; navigation "
+            "drives a forklift (give a scenario whose [vehicle] is a forklift)")
     if not scenario.routes:
         raise InvalidInputError(
             f"scenario {scenario.name!r} has no routes, whose waypoints are the navigation "

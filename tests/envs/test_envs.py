@@ -363,6 +363,6 @@ def test_navigate_refuses_a_differential_drive_scenario() -> None:
 
     assert "azgym/Localize-RobotArena-v1" in azgym.ENV_IDS
     assert not any("Navigate" in i and "RobotArena" in i for i in azgym.ENV_IDS)
-    with pytest.raises(InvalidInputError, match="differential-drive robot; Navigate drives a "
+    with pytest.raises(InvalidInputError, match="differential-drive robot; navigation drives a "
                                                 "forklift"):
         gym.make("azgym/Navigate-WarehouseSmall-v2", scenario="robot-arena")

@@ -187,3 +187,15 @@ def test_a_small_run_on_generated_warehouses(tmp_path):
     result = T.train_ng_ransac(tmp_path, layouts=2, frames=30, epochs=2, progress=False)
     assert len(result.history) == 2
     assert InlierScorer.load(result.weights).inputs > 0
+
+
+def test_the_training_data_records_its_distribution_for_the_served_model():
+    from azgym.learn.distribution import SERVED_NOISE, TrainingDistribution
+
+    train, _, info = T.build_data([0, 1], 20, 0)
+    record = info["distribution"]
+    served = TrainingDistribution.of_manifest({"training": {"data": info}})
+    assert served.to_manifest() == record
+    assert served.delta_alpha_d == SERVED_NOISE
+    assert served.min_beacons >= 3
+    assert 0.0 < served.min_azimuth_spread <= served.view_spread <= 2 * np.pi

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from helpers import beacon_map, ideal_frame, pose_error_of
 
+import azgym
 from azgym import InvalidInputError, Measurements
 from azgym.localize.base import Problem
 from azgym.localize.mex import Mex
@@ -94,14 +95,72 @@ OUTSIDE = [(9.0, 2.0, 0.3), (-3.0, -4.0, 2.0), (2.0, 12.0, -1.0), (4.6, 4.6, 3.0
 @pytest.mark.parametrize(("x", "y", "heading"), OUTSIDE)
 def test_camera_outside_the_grid_is_refused_not_answered_from_the_edge(x, y, heading,
                                                                        coarse_step):
-    # The default grid is the measured beacons' bounding box, (0, 0)-(4, 5); the camera is
-    # outside it. The old answer was the edge point nearest the cost's slope, metres off, ok=True.
+    # The map's extent is its beacons' box, (0, 0)-(4, 5), grown by the margin of 0.3 m; the
+    # camera is outside it. The old answer was the edge point nearest the cost's slope, metres
+    # off, ok=True.
     beacons = beacon_map([(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0), (2.0, 5.0)])
-    estimate = Mex(step=0.05, coarse_step=coarse_step).localize(
+    estimate = Mex(step=0.05, coarse_step=coarse_step, margin=0.3).localize(
         ideal_frame(x, y, heading, beacons), beacons)
     assert not estimate.ok
-    assert "the camera is outside the searched area" in estimate.reason
+    assert "the camera is outside the searched area (the map's extent" in estimate.reason
     assert math.isnan(estimate.x)
+
+
+FORWARD = [(-2.0, 2.0, 0.0), (12.0, 3.0, math.pi), (4.0, -3.0, math.pi / 2)]
+
+
+@pytest.mark.parametrize("coarse_step", [None, 0.5])
+@pytest.mark.parametrize(("x", "y", "heading"), FORWARD)
+def test_a_forward_camera_outside_the_seen_beacons_box_is_found_in_the_maps_extent(
+        x, y, heading, coarse_step):
+    # A forward camera (a 70° view) sees only the beacons ahead: never inside their box. mex
+    # used to refuse every such frame ("outside the searched area"); the map's extent holds it.
+    beacons = beacon_map([(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0), (2.0, 2.0),
+                          (8.0, 2.0), (8.0, 5.0)])
+    frame = ideal_frame(x, y, heading, beacons)
+    ahead = np.abs(frame.azimuth) < math.radians(35.0)
+    seen = Measurements(frame.ids[ahead], frame.azimuth[ahead])
+    box = beacons.xy[beacons.index_of(seen.ids)]
+    assert len(seen) >= 3
+    assert not ((box.min(axis=0) <= (x, y)) & ((x, y) <= box.max(axis=0))).all()
+    estimate = Mex(step=0.05, coarse_step=coarse_step).localize(seen, beacons)
+    assert estimate.ok, estimate.reason
+    assert pose_error_of(estimate, x, y, heading)[0] <= 0.05
+    assert "the camera is outside the searched area" in Mex(
+        step=0.05, coarse_step=coarse_step, margin=0.0).localize(seen, beacons).reason
+
+
+def test_the_maps_extent_too_large_to_search_is_a_refusal_not_an_error():
+    beacons = beacon_map([(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0), (2.0, 5.0)])
+    estimate = Mex(step=0.05, margin=1e4).localize(ideal_frame(9.0, 2.0, 0.3, beacons), beacons)
+    assert not estimate.ok
+    assert "outside the searched area" in estimate.reason
+    assert "more than 1e+08" in estimate.reason
+
+
+def test_bounds_from_a_spec_are_the_area_searched():
+    beacons = beacon_map([(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0), (2.0, 5.0)])
+    mex = azgym.make_localizer("mex:bounds=8,1,10,3,step=0.05")
+    assert mex.get_params()["bounds"] == [8, 1, 10, 3]
+    estimate = mex.localize(ideal_frame(9.0, 2.0, 0.3, beacons), beacons)
+    assert estimate.ok and pose_error_of(estimate, 9.0, 2.0, 0.3)[0] < 1e-9
+    assert estimate.diagnostics["grid_shape"] == (41, 41)
+    outside = mex.localize(ideal_frame(2.0, 2.0, 0.3, beacons), beacons)
+    assert "outside the searched area (bounds;" in outside.reason
+
+
+@pytest.mark.parametrize(("spec", "message"), [
+    ("mex:bounds=0,0,5", "Mex.bounds must be (x_min, y_min, x_max, y_max) (in a spec: "
+                         "bounds=x_min,y_min,x_max,y_max), got [0, 0, 5]"),
+    ("mex:bounds=5,0,0,5", "Mex.bounds has max < min: [5, 0, 0, 5]"),
+    ("mex:bounds=0,0,five,5", "bounds=0,0,five,5 is not a list of numbers separated by commas "
+                              "('five' is not a number"),
+    ("mex:bounds=0,0,5,5,", "a comma with nothing after it"),
+    ("mex:margin=-1", "Mex.margin must be in [0.0, inf], got -1"),
+])
+def test_bad_bounds_in_a_spec_name_the_field(spec, message):
+    with pytest.raises(InvalidInputError, match=re.escape(message)):
+        azgym.make_localizer(spec)
 
 
 @pytest.mark.parametrize(("x", "y"), [(0.01, 2.0), (3.98, 0.52), (1.0, 4.0), (0.0, 1.5)])

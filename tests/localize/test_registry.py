@@ -214,6 +214,15 @@ def test_a_label_is_canonical_and_a_preset_name_where_one_matches():
         'm.py:M:n="3",s="a,b",tag=fast'
 
 
+def test_a_list_of_numbers_is_written_with_commas_and_read_back():
+    target, params = registry.parse_spec("mex:bounds=0,-2.5,12,8e0,step=0.05")
+    assert (target, params) == ("mex", {"bounds": [0, -2.5, 12, 8.0], "step": 0.05})
+    label = registry.spec_label(target, params)
+    assert label == "mex:bounds=0,-2.5,12,8.0,step=0.05"
+    assert registry.parse_spec(label) == (target, params)
+    assert registry.spec_label("m.py:M", {"s": "a,b"}) == 'm.py:M:s="a,b"'  # a string: quoted
+
+
 @pytest.mark.parametrize(("spec", "message"), [
     ("ransac:weighted", "'ransac' is a registered name; its hyperparameters are written "
                         "ransac:NAME=VALUE"),
@@ -297,7 +306,7 @@ def test_get_params_lists_every_keyword_unchanged():
     bounds = (0.0, 0.0, 1.0, 1.0)
     mex = Mex(step=0.5, bounds=bounds)
     assert mex.get_params() == {"step": 0.5, "bounds": bounds, "coarse_step": None,
-                                "n_candidates": 8}
+                                "n_candidates": 8, "margin": 5.0}
     assert mex.get_params()["bounds"] is bounds  # stored as given, not converted
     assert repr(Triplet()) == "Triplet(degeneracy_tol=0.01)"
 

@@ -94,6 +94,10 @@ class Suite:
         vehicle: The kind of vehicle that drives its routes (a profile of another kind is
             refused); None: any (frames on their own).
         profile: The profile it is drawn with (:meth:`profiled`); None: as shipped.
+        defaults: The profile its contenders take their defaults from as shipped, as a log's
+            manifest gives its own: the vehicle and camera its scenario declares and the
+            simulator's motion errors (a tracker's defaults are the forklift's otherwise);
+            None: the contenders' own defaults (they fit the forklift suites' simulator).
     """
 
     name: str
@@ -105,6 +109,13 @@ class Suite:
     simulates: tuple[str, ...] = ()
     vehicle: str | None = None
     profile: Profile | None = None
+    defaults: Callable[[], Profile] | None = None
+
+    def contender_profile(self) -> Profile | None:
+        """What the contenders take their defaults from: the run's profile over ``defaults``."""
+        if self.defaults is None:
+            return self.profile
+        return self.defaults() if self.profile is None else self.profile.over(self.defaults())
 
     def check_profile(self, profile: Profile) -> None:
         """Refuse a profile the suite cannot be drawn with (:meth:`profiled` says why)."""

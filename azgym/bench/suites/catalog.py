@@ -30,7 +30,7 @@ SUITES: dict[str, Suite] = {suite.name: suite for suite in (
           "robot, a forward camera of 1.2 rad seeing 1-2 of 15 landmarks, odometry of speed and "
           "turn rate stamped irregularly (5 Hz frames; for trackers)", 23, robot.routes,
           routes=True, simulates=SENSOR_NOISE + DIFFERENTIAL_MOTION_NOISE,
-          vehicle=DIFFERENTIAL_DRIVE),
+          vehicle=DIFFERENTIAL_DRIVE, defaults=robot.contender_defaults),
 )}
 
 

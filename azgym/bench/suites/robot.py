@@ -10,15 +10,29 @@ from __future__ import annotations
 
 from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, keep_every, route_cases
+from azgym.profile import Profile
 from azgym.site import load_scenario
 from azgym.world.drive import motion_models, simulate
 
-__all__ = ["ROUTES", "SCENARIO", "routes"]
+__all__ = ["ROUTES", "SCENARIO", "contender_defaults", "routes"]
 
 SCENARIO = "robot-arena"
 """The scenario the suite drives."""
 ROUTES = ("wander-1", "wander-2", "wander-3", "wander-4")
 """The routes it scores (about 2.6 min each)."""
+
+
+def contender_defaults() -> Profile:
+    """The contenders' defaults: robot-arena's vehicle and camera, and its odometry's errors.
+
+    What a tracker on the forklift suites gets from its own defaults (they are the forklift
+    simulator's models), a robot's tracker gets from these: the scenario's declared profile and
+    the simulated odometry's :meth:`~azgym.sensing.motion.DifferentialOdometryModel.motion_profile`.
+    """
+    scenario = load_scenario(SCENARIO)
+    odometry, _ = motion_models(scenario)
+    motion = odometry.motion_profile()  # type: ignore[union-attr]  # a robot's model
+    return Profile(scenario.profile.vehicle, scenario.profile.sensor, motion)
 
 
 def routes(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[Case]:

@@ -1,0 +1,224 @@
+"""What a learned model was trained on, and the frames unlike it, which it refuses.
+
+A network answers anything it is given, and far from its training data it answers wrongly with
+confidence: the shipped models, trained on all-round cameras in generated warehouses, put a
+fifth of the frames of a 68° forward camera more than 1 m off. So a weight file records its
+training distribution (the manifest's ``distribution``, :func:`distribution_of` computes it
+from the training frames) and ``learned`` and ``ng-ransac`` refuse, with the reason, what lies
+outside it (:meth:`TrainingDistribution.settings_reason`, :meth:`TrainingDistribution.
+frame_reason`):
+
+- **noise**: the features measure azimuth residuals in units of the consensus tolerance, which
+  scales with the camera's Δα_d (:func:`azgym.learn.features.consensus_tolerance`); a
+  ``delta_alpha_d`` outside ``delta_alpha_d`` (:data:`SERVED_NOISE`, the range the normalised
+  models were checked on) is refused;
+- **field of view**: a camera whose ``field_of_view`` is narrower than ``view_spread`` (the
+  azimuth spread that all but ``SPREAD_QUANTILE`` of the training frames exceed) makes only
+  frames that training saw rarely or never: every frame is refused;
+- **each frame**: an azimuth spread (the narrowest arc holding its usable azimuths) below
+  ``min_azimuth_spread`` (narrower than any training frame's), or fewer distinct beacons than
+  ``min_beacons``.
+
+A frame's own spread cannot tell a narrow camera from an all-round one that sees few beacons
+(1 % of the training frames span under 120°, and are answered as well as the rest), so the
+per-frame test stops only what training never saw; the camera's ``field_of_view`` (a profile's
+``[sensor]`` field) says the rest.
+
+The record is the manifest's ``training.data.distribution`` (``azgym train localizer`` writes
+it, :func:`batch_distribution`). A weight file without one (written before it existed) was
+trained on the same generated warehouses: :data:`GENERATED_WAREHOUSES` stands for it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
+from azgym.errors import ModelFileError
+from azgym.localize._angles import azimuth_spread
+from azgym.localize.base import MIN_MEASUREMENTS, ROW_AZIMUTH
+
+__all__ = ["GENERATED_WAREHOUSES", "SERVED_NOISE", "SPREAD_QUANTILE", "TrainingDistribution",
+           "batch_distribution", "card_section", "distribution_of"]
+
+SPREAD_QUANTILE = 0.01
+"""Share of the training frames whose azimuth spread may lie below ``view_spread``."""
+SERVED_NOISE = (math.radians(0.1), math.radians(12.0))
+"""The Δα_d [rad] a model trained on azgym's generated warehouses serves, its features scaled.
+
+Measured with the shipped weights on the held-out layouts, 800 frames a level, the camera's and
+the localizer's Δα_d both set to 0.1°, 0.4° (training), 1°, 2°, 4°, 6°, 8° and 12°: the share of
+frames more than 1 m off stayed within 1.3 times ransac's at the same noise at every level
+(ng-ransac 0.4-0.96 times, learned 1.09-1.53; 1.29 at the training noise). Outside the levels
+measured a model is not trusted (docs/learned.md)."""
+
+
+@dataclass(frozen=True)
+class TrainingDistribution:
+    """The frames a model was trained on, as the manifest's ``distribution`` records them.
+
+    Attributes:
+        trained_delta_alpha_d: Δα_d of the training frames' camera [rad]; the consensus
+            tolerance scales from it.
+        delta_alpha_d: (low, high), the Δα_d [rad] the model serves, its features normalised.
+        view_spread: The azimuth spread [rad] all but SPREAD_QUANTILE of the training frames
+            exceed.
+        min_azimuth_spread: The narrowest azimuth spread of a training frame [rad].
+        min_beacons: The fewest distinct usable beacons of a training frame.
+    """
+
+    trained_delta_alpha_d: float
+    delta_alpha_d: tuple[float, float]
+    view_spread: float
+    min_azimuth_spread: float
+    min_beacons: int
+
+    @classmethod
+    def of_manifest(cls, manifest: dict[str, Any]) -> TrainingDistribution:
+        """The manifest's record; :data:`GENERATED_WAREHOUSES` for a file without one.
+
+        Raises:
+            ModelFileError: A record that is not what :meth:`to_manifest` writes.
+        """
+        record = manifest.get("training", {}).get("data", {}).get("distribution")
+        if record is None:
+            return GENERATED_WAREHOUSES
+        try:
+            low, high = (float(v) for v in record["delta_alpha_d"])
+            made = cls(float(record["trained_delta_alpha_d"]), (low, high),
+                       float(record["view_spread"]), float(record["min_azimuth_spread"]),
+                       int(record["min_beacons"]))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ModelFileError(f"manifest field 'distribution' is not a training distribution "
+                                 f"({type(exc).__name__}: {exc})") from None
+        numbers = (made.trained_delta_alpha_d, low, high, made.view_spread,
+                   made.min_azimuth_spread)
+        if not all(math.isfinite(v) and v >= 0.0 for v in numbers) or low > high or \
+                made.trained_delta_alpha_d <= 0.0:
+            raise ModelFileError(f"manifest field 'distribution' holds impossible values: "
+                                 f"{record!r}")
+        return made
+
+    def to_manifest(self) -> dict[str, Any]:
+        """The manifest's ``distribution`` record (JSON values)."""
+        record = asdict(self)
+        record["delta_alpha_d"] = list(self.delta_alpha_d)
+        return record
+
+    def settings_reason(self, delta_alpha_d: float, field_of_view: float | None) -> str:
+        """Why no frame of a camera with this noise and view is like the training frames ('')."""
+        low, high = self.delta_alpha_d
+        if not low <= delta_alpha_d <= high:
+            return (f"delta_alpha_d {math.degrees(delta_alpha_d):.3g}° is outside the noise the "
+                    f"model was trained for ({math.degrees(low):.3g}°-"
+                    f"{math.degrees(high):.3g}°)")
+        if field_of_view is not None and field_of_view < self.view_spread:
+            return (f"field_of_view {math.degrees(field_of_view):.3g}° is narrower than the "
+                    f"azimuth spread of {1 - SPREAD_QUANTILE:.0%} of the training frames "
+                    f"({math.degrees(self.view_spread):.3g}°)")
+        return ""
+
+    def frame_reason(self, azimuth: FloatArray, distinct: int) -> str:
+        """Why a frame is unlike the training frames ('' when it is like them).
+
+        Args:
+            azimuth: The frame's usable azimuths (ids in the map) [rad].
+            distinct: The distinct beacons they measure.
+        """
+        if distinct < self.min_beacons:
+            return (f"{distinct} beacons in view, fewer than any training frame had "
+                    f"({self.min_beacons})")
+        spread = azimuth_spread(np.ascontiguousarray(azimuth, dtype=np.float64))
+        if spread < self.min_azimuth_spread:
+            return (f"the azimuths span {math.degrees(spread):.3g}°, narrower than any "
+                    f"training frame's ({math.degrees(self.min_azimuth_spread):.3g}°)")
+        return ""
+
+    def refusal(self, settings_reason: str, measurements: Measurements, beacons: BeaconMap
+                ) -> Estimate | None:
+        """The refusal of a frame off the distribution; None for a frame like the training ones.
+
+        A frame of fewer than MIN_MEASUREMENTS distinct beacons is left to the standard refusal
+        (None). ``settings_reason`` is :meth:`settings_reason`'s for the localizer's settings.
+        The refusal's diagnostics say ``off_distribution``.
+        """
+        rows = beacons.index_of(measurements.ids)
+        known = rows >= 0
+        distinct = int(np.unique(rows[known]).size)
+        if distinct < MIN_MEASUREMENTS:
+            return None
+        reason = settings_reason or self.frame_reason(measurements.azimuth[known], distinct)
+        if not reason:
+            return None
+        return Estimate.failure(f"off the model's training distribution: {reason}",
+                                len(measurements), {"off_distribution": True})
+
+
+GENERATED_WAREHOUSES = TrainingDistribution(
+    trained_delta_alpha_d=math.radians(0.4), delta_alpha_d=SERVED_NOISE,
+    view_spread=math.radians(120.0), min_azimuth_spread=math.radians(7.0), min_beacons=3)
+"""The distribution of a weight file without a record: ``azgym train localizer``'s generated
+warehouses (:mod:`azgym.learn.dataset`), rounded down from the shipped models' records."""
+
+
+def card_section(record: dict[str, Any] | None) -> list[str]:
+    """A model card's account of the manifest's ``distribution`` record (markdown lines).
+
+    None (data without the record, e.g. :func:`azgym.learn.train.fit` on frames of one's own)
+    says which distribution stands for it.
+    """
+    if record is None:
+        return ["## Training distribution (the frames it answers)", "",
+                "Not recorded with the training data: the generated warehouses' stands for it "
+                "(`azgym.learn.distribution.GENERATED_WAREHOUSES`).", ""]
+    made = TrainingDistribution.of_manifest({"training": {"data": {"distribution": record}}})
+    low, high = made.delta_alpha_d
+    return [
+        "## Training distribution (the frames it answers)", "",
+        "Recorded in the manifest (`training.data.distribution`, `azgym.learn.distribution`); "
+        "the localizer refuses, with the reason, a frame or a camera outside it:", "",
+        f"- camera noise trained on: Δα_d {math.degrees(made.trained_delta_alpha_d):.2f}°; "
+        f"served for Δα_d {math.degrees(low):.1f}°-{math.degrees(high):.0f}° (the consensus "
+        "tolerance scales with the given `delta_alpha_d`; range measured on the held-out "
+        "layouts, docs/learned.md)",
+        f"- azimuth spread exceeded by {1 - SPREAD_QUANTILE:.0%} of the training frames: "
+        f"{math.degrees(made.view_spread):.1f}° (a `field_of_view` narrower than this is "
+        "refused)",
+        f"- narrowest azimuth spread of a training frame: "
+        f"{math.degrees(made.min_azimuth_spread):.1f}° (a narrower frame is refused)",
+        f"- fewest distinct beacons in a training frame: {made.min_beacons}", ""]
+
+
+def batch_distribution(floats: FloatArray, beacon_index: np.ndarray, mask: np.ndarray
+                       ) -> TrainingDistribution:
+    """The distribution of a FrameBatch's frames (:mod:`azgym.learn.dataset`, its arrays).
+
+    The generated warehouses' camera has the simulator's default Δα_d (ErrorModel's).
+    """
+    from azgym.site.error_model import ErrorModel
+
+    azimuths = [floats[n, ROW_AZIMUTH][mask[n]] for n in range(mask.shape[0])]
+    distinct = [int(np.unique(beacon_index[n][mask[n]]).size) for n in range(mask.shape[0])]
+    return distribution_of(azimuths, distinct, ErrorModel().delta_alpha_d, SERVED_NOISE)
+
+
+def distribution_of(azimuths: list[FloatArray], distinct: list[int],
+                    trained_delta_alpha_d: float, delta_alpha_d: tuple[float, float]
+                    ) -> TrainingDistribution:
+    """The training distribution of frames (each frame's usable azimuths and distinct beacons).
+
+    Args:
+        azimuths: Each training frame's usable azimuths [rad].
+        distinct: Each training frame's distinct usable beacons.
+        trained_delta_alpha_d: Δα_d of the training frames' camera [rad].
+        delta_alpha_d: The Δα_d range [rad] the model is served for.
+    """
+    spreads = np.array([azimuth_spread(np.asarray(a, dtype=np.float64)) for a in azimuths])
+    return TrainingDistribution(float(trained_delta_alpha_d),
+                                (float(delta_alpha_d[0]), float(delta_alpha_d[1])),
+                                float(np.quantile(spreads, SPREAD_QUANTILE)),
+                                float(spreads.min()), int(min(distinct)))
