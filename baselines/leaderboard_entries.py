@@ -3,9 +3,12 @@
 The default built-in localizers and the learned ones run on every suite, and every built-in
 tracker on the suites of driven routes (dev split, full size). ``--data NAME`` runs them on a
 log instead (a shipped log's name, or a folder ``leaderboard/datasets/NAME/``; the trackers
-too when it has odometry or IMU), and then only the suites named by ``--suite``.
+too when it has odometry or IMU), each contender with its defaults from the log's profile (its
+``[vehicle]``, ``[sensor]`` and ``[motion]`` sections), and then only the suites named by
+``--suite``; ``--real`` runs them on every shipped log of real data (docs/datasets.md).
 
     python baselines/leaderboard_entries.py [--workers 2] [--suite NAME ...] [--data NAME ...]
+        [--real]
 
 Writes ``leaderboard/entries/<localizer>-<suite>.json`` (``<localizer>-data-<dataset>.json`` for
 a log) and the per-frame results beside each, then (unless ``--no-board``) rebuilds
@@ -29,6 +32,9 @@ from azgym.bench.table import ranked_table
 from azgym.localize.registry import list_trackers
 from azgym.logs import read_log
 from azgym.logs.bench import run_log_benchmark, write_log_results
+from azgym.logs.manifest import read_manifest
+from azgym.logs.problems import Problems
+from azgym.logs.read import shipped_logs
 
 ROOT = Path(__file__).resolve().parent.parent
 LEARNED = ("ng-ransac", "learned")
@@ -41,18 +47,21 @@ def main() -> None:
     parser.add_argument("--suite", action="append", choices=sorted(SUITES))
     parser.add_argument("--data", action="append", metavar="NAME",
                         help="a log: a shipped log's name or a log folder")
+    parser.add_argument("--real", action="store_true",
+                        help="every shipped log of real data (as if each were given by --data)")
     parser.add_argument("--no-board", action="store_true",
                         help="write the entries only (azgym leaderboard build writes the board)")
     args = parser.parse_args()
     entries = ROOT / "leaderboard" / "entries"
-    for name in args.suite or ([] if args.data else list(SUITES)):
+    logs = (args.data or []) + (real_logs() if args.real else [])
+    for name in args.suite or ([] if logs else list(SUITES)):
         suite = SUITES[name]
         result = run_benchmark(suite, _contenders(suite.routes), workers=args.workers,
                                progress=lambda line: print(line, flush=True))
         out = ROOT / "results" / f"bench-{name}"
         result.write(out)
         _submit(result.summary, out, entries, name)
-    for folder in args.data or []:
+    for folder in logs:
         log = read_log(folder)
         result = run_log_benchmark(log, _contenders(log.odometry is not None or
                                                     log.imu is not None),
@@ -65,6 +74,14 @@ def main() -> None:
         return
     for path in board.build(entries, ROOT / "leaderboard", ROOT / "leaderboard" / "navigation"):
         print(f"wrote {path}")
+
+
+def real_logs() -> list[str]:
+    """The names of the shipped logs of real data (their manifests say ``simulated = false``)."""
+    manifests = {name: read_manifest(folder, Problems(str(folder)))
+                 for name, folder in shipped_logs().items()}
+    return [name for name, manifest in manifests.items()
+            if manifest is not None and not manifest.simulated]
 
 
 def _contenders(routes: bool) -> list[Contender]:

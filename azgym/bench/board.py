@@ -1,7 +1,10 @@
 """The published board: ranked Markdown tables (``leaderboard/README.md``) and a sortable page.
 
-A suite of driven routes adds track columns (:data:`TRACK_COLUMNS`) after the accuracy ones, and
-one with events (an outage, a kidnapping) the worst recovery (:data:`RECOVERY_COLUMN`).
+The board has parts: the suites' tables and the simulated logs', then the real data's (logs of
+real sensors, :data:`REAL_PART`), then the navigation suites'. The page is drawn by
+:mod:`azgym.bench.board_page`. A suite of driven routes adds track columns
+(:data:`TRACK_COLUMNS`) after the accuracy ones, and one with events (an outage, a kidnapping)
+the worst recovery (:data:`RECOVERY_COLUMN`).
 
 Everything an entry's submitter wrote (name, version, authors, link) is escaped where it is
 shown: in Markdown, ``|``, backslashes, line breaks and HTML cannot forge a row or a tag; on the
@@ -10,17 +13,12 @@ page, HTML is escaped; a link is shown only when it is an ``http://`` or ``https
 
 from __future__ import annotations
 
-import base64
-import csv
 import html
-import importlib.util
-import io
 from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-import numpy as np
-
+from azgym.bench.board_page import NAME_COLUMN, Section, cdf_png, page
 from azgym.bench.leaderboard import DatasetUnavailable, LeaderboardError, load_available
 from azgym.bench.suites import SUITES, get_suite
 from azgym.bench.table import LEGEND, RANK_BY, rank_key
@@ -51,8 +49,21 @@ KINDS = (("dev", False, "dev split, full size: the ranking"),
 """The tables of a suite: runs of different splits or sizes are never ranked together."""
 DATA_TITLE = "the log's frames: the ranking"
 """The title of a dataset's one table."""
+REAL = "real"
+"""What the board calls data recorded by real sensors (a log whose manifest says
+``simulated = false``)."""
+REAL_PART = f"{REAL} — logs recorded by real sensors"
+"""The heading of the board's part that holds the real data's tables, after the suites' and the
+simulated logs' tables."""
+REAL_NOTE = (
+    "Each table is one log of a real sensor's data (its manifest says `simulated = false`): the "
+    "frames as they were recorded, scored against the truth the dataset's authors measured. A "
+    "log's `[sensor]` section gives every contender its azimuth noise and view. The logs "
+    "shipped with azgym, their sources and licences are described in docs/datasets.md.")
 
 
+NAVIGATION_PART = "Navigation: localizers scored by where they get the forklift"
+"""The heading of the board's navigation part."""
 NAVIGATION_NOTE = (
     "A navigator (the scripted pure pursuit, or the shipped PPO policy) drives from spot to spot "
     "on the pose each localizer gives it, in closed loop. Ranked by SPL (success weighted by the "
@@ -97,8 +108,6 @@ COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
            ("answered p75 cm", "p75_cm"), ("answered p95 cm", "p95_cm"),
            ("answered mean cm", "mean_cm"), ("µs", None), ("× ransac", None), ("split", None),
            ("azgym", None)]
-NAME_COLUMN = 1
-"""The column of the entry's name, which links to its web link."""
 TRACK_COLUMNS = ("track avail. %", "track max cm")
 """A route suite's track figures: availability after the first fix, the largest error outside
 kidnapping windows (:mod:`azgym.bench.tracking`)."""
@@ -162,9 +171,9 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
     """Write the board: README.md (tables) and index.html (sortable, self-contained).
 
     Each suite has one table per split and size (:data:`KINDS`); only the dev split's full
-    size is the suite's ranking. Each dataset (a log, ``data:NAME``) has one table, after the
-    suites'. The navigation suites' tables follow, from the results files in
-    ``navigation_dir`` (:mod:`azgym.nav.board`).
+    size is the suite's ranking. Each dataset (a log, ``data:NAME``) has one table: a simulated
+    log's after the suites', a real one's in the part headed :data:`REAL_PART`. The navigation
+    suites' tables follow, from the results files in ``navigation_dir`` (:mod:`azgym.nav.board`).
 
     Args:
         entries_dir: The entries.
@@ -186,15 +195,7 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
     loaded, unavailable = load_available(entries_dir, datasets)
     if unavailable and not skip_unavailable:
         raise unavailable[0]
-    lines = ["# azgym leaderboard", "",
-             f"Ranked by the 75th percentile of the position error over every frame, a frame "
-             f"without an answer counting as infinitely wrong (EvAAL's rule). Generated "
-             f"by `azgym leaderboard build` from {len(loaded)} entries in `entries/`; every "
-             "entry's figures are recomputed from its per-frame results when it is read, and "
-             "its frames are checked to be the suite's (or the log's). Runs of the dev split at "
-             "full size are the ranking; quick runs and the test split have tables of their "
-             "own; each dataset (a log) has one table.", "",
-             f"Columns: {BOARD_LEGEND}", "", TRACKS_NOTE, ""]
+    lines = _intro(len(loaded))
     sections: list[Section] = []
     for suite in SUITES:
         tables = [(split, quick, title, _ranked(loaded, suite, split, quick))
@@ -207,43 +208,66 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
         for split, quick, title, ranked in tables:
             table_id = f"board-{suite}" if (split, quick) == ("dev", False) else \
                 f"board-{suite}-{split}-{'quick' if quick else 'full'}"
-            _add_table(lines, sections, (suite, description, title, table_id), ranked)
-    lines += _dataset_tables(loaded, sections) + _unchecked_note(unavailable)
+            _add_table(lines, sections, ("", suite, description, title, table_id), ranked)
+    lines += _dataset_tables(loaded, sections, real=False)
+    real = _dataset_tables(loaded, sections, real=True)
+    lines += ([f"# {REAL_PART}", "", REAL_NOTE, "", *real] if real else []) + \
+        _unchecked_note(unavailable)
     if navigation_dir is not None:
         lines += _navigation_section(navigation_dir, sections)
     prepare_folder(out_dir)
     readme = write_file(out_dir / "README.md", "\n".join(lines))
-    page = write_file(out_dir / "index.html", _html(sections, len(loaded)))
-    return [readme, page]
+    text = page(sections, len(loaded), [f"Columns: {BOARD_LEGEND}", TRACKS_NOTE],
+                {REAL_PART: REAL_NOTE, NAVIGATION_PART: NAVIGATION_NOTE})
+    return [readme, write_file(out_dir / "index.html", text)]
 
 
-def _add_table(lines: list[str], sections: list[Section], heading: tuple[str, str, str, str],
+def _intro(count: int) -> list[str]:
+    """The board's heading and opening paragraphs, for ``count`` entries."""
+    return ["# azgym leaderboard", "",
+            f"Ranked by the 75th percentile of the position error over every frame, a frame "
+            f"without an answer counting as infinitely wrong (EvAAL's rule). Generated "
+            f"by `azgym leaderboard build` from {count} entries in `entries/`; every "
+            "entry's figures are recomputed from its per-frame results when it is read, and "
+            "its frames are checked to be the suite's (or the log's). Runs of the dev split at "
+            "full size are the ranking; quick runs and the test split have tables of their "
+            "own; each dataset (a log) has one table, and those of real sensors' logs are a "
+            f"part of their own, *{REAL}*.", "",
+            f"Columns: {BOARD_LEGEND}", "", TRACKS_NOTE, ""]
+
+
+def _add_table(lines: list[str], sections: list[Section],
+               heading: tuple[str, str, str, str, str],
                ranked: list[tuple[dict[str, Any], str]]) -> None:
-    """One ranked table's Markdown lines and page section (heading: suite, text, title, id)."""
-    suite, description, title, table_id = heading
+    """A ranked table's Markdown lines and page section (heading: part, suite, text, title, id)."""
+    part, suite, description, title, table_id = heading
     header, tracks = _header([entry for entry, _ in ranked])
     rows = [_cells(rank, entry, tracks) for rank, (entry, _) in enumerate(ranked, 1)]
     lines += [f"### {title}", "", *_markdown_table(header, rows, [e for e, _ in ranked]), ""]
-    sections.append((suite, description, title, table_id, header, rows,
-                     [web_link(entry["link"]) for entry, _ in ranked], _cdf_png(ranked)))
+    sections.append((part, suite, description, title, table_id, header, rows,
+                     [web_link(entry["link"]) for entry, _ in ranked], cdf_png(ranked)))
 
 
-def _dataset_tables(loaded: list[tuple[dict[str, Any], str]],
-                    sections: list[Section]) -> list[str]:
-    """One ranked table per dataset (its name and SHA-256; "simulated" when its log says so)."""
+def _dataset_tables(loaded: list[tuple[dict[str, Any], str]], sections: list[Section],
+                    real: bool) -> list[str]:
+    """One ranked table per dataset of real data, or of simulated data (its name and SHA-256).
+
+    The simulated logs' tables go with the suites', the real ones' in :data:`REAL_PART`.
+    """
+    part = REAL_PART if real else ""
     lines: list[str] = []
     datasets = {(e["dataset"]["name"], e["dataset"]["sha256"]): e["dataset"]
-                for e, _ in loaded if "dataset" in e}
+                for e, _ in loaded if "dataset" in e and e["dataset"]["simulated"] != real}
     for (name, sha256), dataset in sorted(datasets.items()):
         suite = f"data:{name}"
-        kind = "simulated data" if dataset["simulated"] else "a real camera's data"
+        kind = "simulated data" if dataset["simulated"] else "real data"
         description = (f"the log {name}: {kind} (log format {dataset['format']}, sha256 "
                        f"{sha256[:12]})")
         ranked = [(e, frames) for e, frames in _ranked(loaded, suite, "data", False)
                   if e["dataset"]["sha256"] == sha256]
         lines += [f"## {suite} — {description}", ""]
-        _add_table(lines, sections, (suite, description, DATA_TITLE, f"board-data-{name}"),
-                   ranked)
+        _add_table(lines, sections,
+                   (part, suite, description, DATA_TITLE, f"board-data-{name}"), ranked)
     return lines
 
 
@@ -261,8 +285,7 @@ def _navigation_section(directory: Path, sections: list[Section]) -> list[str]:
     """The navigation tables' Markdown lines; their page sections are added to ``sections``."""
     from azgym.nav.board import navigation_tables
 
-    lines = ["# Navigation: localizers scored by where they get the forklift", "",
-             NAVIGATION_NOTE, ""]
+    lines = [f"# {NAVIGATION_PART}", "", NAVIGATION_NOTE, ""]
     previous = None
     for suite, description, title, table_id, header, rows in navigation_tables(directory):
         if suite != previous:
@@ -271,7 +294,7 @@ def _navigation_section(directory: Path, sections: list[Section]) -> list[str]:
         lines += [f"### {title}", "", "| " + " | ".join(header) + " |",
                   "|" + "---|" * len(header),
                   *("| " + " | ".join(map(markdown_cell, row)) + " |" for row in rows), ""]
-        sections.append((suite, description, title, table_id, header, rows,
+        sections.append((NAVIGATION_PART, suite, description, title, table_id, header, rows,
                          [None] * len(rows), None))
     return lines
 
@@ -284,58 +307,6 @@ def _markdown_table(header: list[str], rows: list[list[str]],
               for row, entry in zip(rows, entries, strict=True))]
 
 
-_SORT_SCRIPT = """
-document.querySelectorAll("table.board th").forEach(function (th) {
-  th.addEventListener("click", function () {
-    var table = th.closest("table"), body = table.tBodies[0], column = th.cellIndex;
-    var ascending = th.getAttribute("data-order") !== "ascending";
-    table.querySelectorAll("th").forEach(function (h) { h.removeAttribute("data-order"); });
-    th.setAttribute("data-order", ascending ? "ascending" : "descending");
-    var rows = Array.prototype.slice.call(body.rows);
-    rows.sort(function (a, b) {
-      var x = a.cells[column].textContent, y = b.cells[column].textContent;
-      var nx = x === "∞" ? Infinity : parseFloat(x), ny = y === "∞" ? Infinity : parseFloat(y);
-      var order = (isNaN(nx) || isNaN(ny)) ? x.localeCompare(y) : nx - ny;
-      return ascending ? order : -order;
-    });
-    rows.forEach(function (row) { body.appendChild(row); });
-  });
-});
-"""
-
-
-def _cdf_png(ranked: list[tuple[dict[str, Any], str]]) -> str | None:
-    """A table's error CDFs, each from its entry's own per-frame results, as a base64 PNG.
-
-    None without matplotlib.
-    """
-    if importlib.util.find_spec("matplotlib") is None:
-        return None
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
-    for entry, frames in ranked:
-        rows = list(csv.DictReader(io.StringIO(frames)))
-        # A missing estimate is a failure: it sits at +inf, never at zero error.
-        errors = np.sort([float(r["position_error_m"]) * 100 if r["ok"] == "1" else np.inf
-                          for r in rows])
-        axes.step(errors, np.arange(1, errors.size + 1) / errors.size, where="post",
-                  label=entry["name"])
-    axes.set_xscale("log")
-    axes.set_xlim(left=0.1)
-    axes.set_xlabel("position error [cm]")
-    axes.set_ylabel("share of frames")
-    axes.grid(True, which="both", alpha=0.3)
-    axes.legend(fontsize=7, loc="lower right")
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=90)
-    plt.close(figure)
-    return base64.b64encode(buffer.getvalue()).decode("ascii")
-
-
 def _markdown_row(row: list[str], entry: dict[str, Any]) -> list[str]:
     """A table row's cells escaped for Markdown; the name links to the entry's web link."""
     cells = [markdown_cell(cell) for cell in row]
@@ -344,47 +315,3 @@ def _markdown_row(row: list[str], entry: dict[str, Any]) -> list[str]:
         target = link.replace("(", "%28").replace(")", "%29")
         cells[NAME_COLUMN] = f"[{cells[NAME_COLUMN]}]({target})"
     return cells
-
-
-def _html_cells(row: list[str], link: str | None) -> str:
-    """A table row's cells as HTML; the name links to the entry's web link."""
-    cells = [html.escape(cell) for cell in row]
-    if link is not None:
-        cells[NAME_COLUMN] = f'<a href="{html.escape(link)}">{cells[NAME_COLUMN]}</a>'
-    return "".join(f"<td>{cell}</td>" for cell in cells)
-
-
-Section = tuple[str, str, str, str, list[str], list[list[str]], list[str | None], str | None]
-"""A table of the page: suite, its description, the table's title and id, its column names,
-rows, each row's link, the CDF image."""
-
-
-def _html(sections: list[Section], count: int) -> str:
-    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-             "<title>azgym leaderboard</title><style>",
-             "body{font-family:sans-serif;margin:2em}table{border-collapse:collapse;margin:1em 0}",
-             "th,td{border:1px solid #bbb;padding:4px 8px;text-align:right}",
-             "th{cursor:pointer;background:#eee}th[data-order=ascending]::after{content:' ▲'}",
-             "th[data-order=descending]::after{content:' ▼'}</style></head><body>",
-             "<h1>azgym leaderboard</h1>",
-             f"<p>{count} entries, ranked by the p75 position error over every frame, a frame "
-             "without an answer counting as infinitely wrong. Click a column to sort.</p>",
-             f"<p>Columns: {html.escape(BOARD_LEGEND)}</p>",
-             f"<p>{html.escape(TRACKS_NOTE.replace('*', ''))}</p>"]
-    previous = None
-    for suite, description, title, table_id, header, rows, links, cdf in sections:
-        if suite != previous:
-            parts.append(f'<h2>{html.escape(suite)}</h2><p>{html.escape(description)}</p>')
-            previous = suite
-        parts.append(f"<h3>{html.escape(title)}</h3>")
-        if cdf is not None:
-            parts.append(f'<img alt="error CDFs, {html.escape(suite)}" '
-                         f'src="data:image/png;base64,{cdf}">')
-        parts.append(f'<table class="board" id="{html.escape(table_id)}"><thead><tr>')
-        parts += [f"<th>{html.escape(cell)}</th>" for cell in header]
-        parts.append("</tr></thead><tbody>")
-        for row, link in zip(rows, links, strict=True):
-            parts.append("<tr>" + _html_cells(row, link) + "</tr>")
-        parts.append("</tbody></table>")
-    parts += [f"<script>{_SORT_SCRIPT}</script>", "</body></html>"]
-    return "\n".join(parts)

@@ -41,7 +41,7 @@ from azgym._version import __version__
 from azgym.bench.entry_data import check_data_run, dataset_cases, is_data_entry
 from azgym.bench.entry_files import FrameTable, LeaderboardError, parse_frames
 from azgym.bench.plugin_files import is_portable, plugin_path
-from azgym.bench.results import cases_digest, contender_metrics
+from azgym.bench.results import cases_digest, contender_metrics, frame_number
 from azgym.bench.suites import NO_TEST_SPLIT, SUITES, Case
 
 ENTRY_FORMAT = 4
@@ -94,8 +94,9 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
     if digest != entry["results_sha256"]:
         raise LeaderboardError(f"{origin}: results_sha256: the per-frame results file does not "
                                f"match (its SHA-256 is {digest})")
-    table = parse_frames(frames_text, origin)
-    cases = _check_coverage(entry, table, origin, datasets)
+    cases = _entry_cases(entry, origin, datasets)
+    table = parse_frames(frames_text, origin, cases)
+    _check_coverage(entry, table, cases, origin)
     _check_figures(entry, table, cases, origin)
 
 
@@ -205,23 +206,35 @@ def suite_cases(name: str, version: int, seed: int, quick: bool
     return cases_digest(cases), tuple(cases)
 
 
-def _check_coverage(entry: dict[str, Any], table: FrameTable, origin: str,
-                    datasets: Path | None) -> tuple[Case, ...]:
-    """The per-frame results hold exactly the entry's frames (the suite's draw, or the log's)."""
+def _entry_cases(entry: dict[str, Any], origin: str, datasets: Path | None
+                 ) -> tuple[Case, ...]:
+    """The entry's frames (the suite's draw, or the log's), their digest the entry's."""
     if is_data_entry(entry):
         digest, cases = dataset_cases(entry, origin, datasets)
-        source = f"the log {entry['dataset']['name']}"
-        other, rerun, has = f"{source} holds (", "rerun it with azgym bench --data", f"{source} has"
+        other = f"the log {entry['dataset']['name']} holds ("
+        rerun = "rerun it with azgym bench --data"
     else:
         digest, cases = suite_cases(entry["suite"], entry["suite_version"], entry["seed"],
                                     entry["quick"])
-        run = f"seed {entry['seed']}, {'quick' if entry['quick'] else 'full'}"
-        other = f"{entry['suite']} v{entry['suite_version']} draws now ({run}; "
-        rerun, has = "rerun it on the current suite", f"{entry['suite']} ({run}) has"
+        other = f"{entry['suite']} v{entry['suite_version']} draws now ({_run(entry)}; "
+        rerun = "rerun it on the current suite"
     if entry["cases_sha256"] != digest:
         raise LeaderboardError(
             f"{origin}: cases_sha256: the entry was scored on other frames than {other}their "
             f"digest is {digest}); {rerun}")
+    return cases
+
+
+def _run(entry: dict[str, Any]) -> str:
+    """A suite entry's draw, in words."""
+    return f"seed {entry['seed']}, {'quick' if entry['quick'] else 'full'}"
+
+
+def _check_coverage(entry: dict[str, Any], table: FrameTable, cases: tuple[Case, ...],
+                    origin: str) -> None:
+    """The per-frame results hold exactly the entry's frames, each its scenario/group/cause."""
+    has = f"the log {entry['dataset']['name']} has" if is_data_entry(entry) else \
+        f"{entry['suite']} ({_run(entry)}) has"
     frames = [(c.scenario, c.group, c.cause) for c in cases]
     if len(table.cause) != len(frames):
         raise LeaderboardError(f"{origin}: per-frame results: {len(table.cause)} frames, but "
@@ -230,12 +243,12 @@ def _check_coverage(entry: dict[str, Any], table: FrameTable, origin: str,
     for index, (row, drawn) in enumerate(zip(rows, frames, strict=True)):
         if row != drawn:
             raise LeaderboardError(
-                f"{origin}: per-frame results: line {index + 2}: frame {index} is "
+                f"{origin}: per-frame results: line {index + 2}: frame "
+                f"{frame_number(cases[index], index)} is "
                 f"{'/'.join(drawn)} (scenario/group/cause), the file says {'/'.join(row)}")
     if entry["n_frames"] != len(frames):
         raise LeaderboardError(f"{origin}: n_frames: the entry says {entry['n_frames']}, its "
                                f"per-frame results hold {len(frames)}")
-    return cases
 
 
 def _check_figures(entry: dict[str, Any], table: FrameTable, cases: tuple[Case, ...],

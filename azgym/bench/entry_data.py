@@ -22,7 +22,7 @@ from azgym.bench.results import cases_digest
 from azgym.bench.suites import Case
 from azgym.logs.bench import SPLIT
 from azgym.logs.cases import log_cases
-from azgym.logs.manifest import FORMAT_VERSION, MANIFEST
+from azgym.logs.manifest import FORMATS, MANIFEST
 from azgym.logs.problems import LogError
 from azgym.logs.read import Log, read_log, shipped_logs
 
@@ -91,9 +91,9 @@ def check_data_run(entry: dict[str, Any], origin: str) -> None:
         raise LeaderboardError(f"{origin}: seed: a log's frames are fixed: seed 0 at full size, "
                                f"the entry says seed {entry['seed']}"
                                f"{', quick' if entry['quick'] else ''}")
-    if dataset["format"] > FORMAT_VERSION:
+    if dataset["format"] not in FORMATS:
         raise LeaderboardError(f"{origin}: dataset/format: log format {dataset['format']}, this "
-                               f"azgym reads format {FORMAT_VERSION} (a newer azgym made it)")
+                               f"azgym reads formats {', '.join(map(str, FORMATS))}")
     if entry["suite_version"] != dataset["format"]:
         raise LeaderboardError(f"{origin}: suite_version: a log's suite is at its log format "
                                f"({dataset['format']}), the entry says {entry['suite_version']}")

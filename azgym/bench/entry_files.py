@@ -14,15 +14,19 @@ import io
 import json
 import math
 import zlib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from azgym.bench.outcome import Outcome
-from azgym.bench.results import FRAME_COLUMNS
+from azgym.bench.results import FRAME_COLUMNS, frame_number
 from azgym.errors import AzgymError
+
+if TYPE_CHECKING:
+    from azgym.bench.suites import Case
 
 MAX_JSON_BYTES = 16 * 2**20
 """An entry or results.json larger than this is refused (a real one is a few kB)."""
@@ -129,13 +133,16 @@ class FrameTable:
     outcome: Outcome
 
 
-def parse_frames(text: str, origin: str) -> FrameTable:
+def parse_frames(text: str, origin: str, cases: Sequence[Case] | None = None) -> FrameTable:
     """Read per-frame results (:data:`FRAME_COLUMNS`), refusing any row the runner cannot write.
 
-    Frames are numbered 0, 1, … in order; an estimate (``ok`` 1) has finite errors, the
-    position's non-negative and the heading's in [0, π]; a frame without one (``ok`` 0) has NaN
-    errors; a runtime is NaN (the call raised) or finite and non-negative; a frame that raised
-    has no estimate.
+    Frames are in order, numbered as the results number them
+    (:func:`~azgym.bench.results.frame_number`): by the recording's numbers of ``cases`` (a
+    log's frames), else 0, 1, …; an estimate (``ok`` 1) has finite errors, the position's
+    non-negative and the heading's in [0, π] (NaN where the case's truth has no heading); a
+    frame without one (``ok`` 0) has NaN errors; a runtime is NaN (the call raised) or finite
+    and non-negative; a frame that raised has no estimate. Rows beyond ``cases`` are checked as
+    numbered from 0 (the count is the coverage check's).
     """
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
@@ -147,8 +154,9 @@ def parse_frames(text: str, origin: str) -> FrameTable:
         values: list[tuple[bool, float, float, float]] = []
         errors: list[str] = []
         for row in reader:
-            ok, position, heading, micros = _frame_row(row, reader.line_num, len(values),
-                                                       origin, table)
+            case = cases[len(values)] if cases is not None and len(values) < len(cases) else None
+            ok, position, heading, micros = _frame_row(row, (reader.line_num, len(values)),
+                                                       case, origin, table)
             values.append((ok, position, heading, micros))
             errors.append(row[-1])
     except csv.Error as exc:
@@ -160,9 +168,13 @@ def parse_frames(text: str, origin: str) -> FrameTable:
     return table
 
 
-def _frame_row(row: list[str], line: int, index: int, origin: str,
+def _frame_row(row: list[str], place: tuple[int, int], case: Case | None, origin: str,
                table: FrameTable) -> tuple[bool, float, float, float]:
-    """One row's checked values; the row's labels are added to ``table``."""
+    """One row's checked values (place: its line and index); its labels are added to ``table``.
+
+    ``case`` is the frame the row must be (None: a frame numbered by its place, with a heading).
+    """
+    line, index = place
     where = f"{origin}: per-frame results: line {line}"
     if len(row) != len(FRAME_COLUMNS):
         raise LeaderboardError(f"{where}: {len(row)} columns, expected {len(FRAME_COLUMNS)} "
@@ -173,15 +185,18 @@ def _frame_row(row: list[str], line: int, index: int, origin: str,
     elif label != table.label:
         raise LeaderboardError(f"{where}, column localizer: {label!r}, but the first row's is "
                                f"{table.label!r} (one localizer a file)")
-    if frame != str(index):
-        raise LeaderboardError(f"{where}, column frame: expected {index} (frames in order, "
-                               f"from 0), got {frame!r}")
+    expected = index if case is None else frame_number(case, index)
+    if frame != str(expected):
+        numbered = "from 0" if case is None or case.frame is None else "as the log numbers them"
+        raise LeaderboardError(f"{where}, column frame: expected {expected} (frames in order, "
+                               f"{numbered}), got {frame!r}")
     if ok not in ("0", "1"):
         raise LeaderboardError(f"{where}, column ok: must be 0 or 1, got {ok!r}")
     numbers = [_number(text, name, where) for text, name in
                ((position, "position_error_m"), (heading, "heading_error_rad"),
                 (micros, "micros"))]
-    _check_errors(ok == "1", numbers[0], numbers[1], where)
+    _check_errors(ok == "1", numbers[0], numbers[1], where,
+                  case is None or not math.isnan(case.pose[2]))
     if not (math.isnan(numbers[2]) or 0.0 <= numbers[2] < math.inf):
         raise LeaderboardError(f"{where}, column micros: must be NaN or finite and >= 0, got "
                                f"{micros!r}")
@@ -203,8 +218,12 @@ def _number(text: str, column: str, where: str) -> float:
         raise LeaderboardError(f"{where}, column {column}: not a number: {text!r}") from None
 
 
-def _check_errors(ok: bool, position: float, heading: float, where: str) -> None:
-    """An estimate's errors are finite and in range; a missing estimate's are NaN."""
+def _check_errors(ok: bool, position: float, heading: float, where: str,
+                  has_heading: bool) -> None:
+    """An estimate's errors are finite and in range; a missing estimate's are NaN.
+
+    Without a true heading (position-only truth) an estimate's heading error is NaN.
+    """
     if not ok:
         for value, column in ((position, "position_error_m"), (heading, "heading_error_rad")):
             if not math.isnan(value):
@@ -214,6 +233,9 @@ def _check_errors(ok: bool, position: float, heading: float, where: str) -> None
     if not 0.0 <= position < math.inf:
         raise LeaderboardError(f"{where}, column position_error_m: must be finite and >= 0, "
                                f"got {position!r}")
-    if not 0.0 <= heading <= HEADING_LIMIT:
+    if not has_heading and not math.isnan(heading):
+        raise LeaderboardError(f"{where}, column heading_error_rad: must be NaN (the truth has "
+                               f"no heading), got {heading!r}")
+    if has_heading and not 0.0 <= heading <= HEADING_LIMIT:
         raise LeaderboardError(f"{where}, column heading_error_rad: must be in [0, π], got "
                                f"{heading!r}")

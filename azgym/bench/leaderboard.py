@@ -77,6 +77,11 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
     if label not in localizers:
         raise LeaderboardError(f"{results_dir}: no localizer {label!r} in the results; there "
                                f"are: {', '.join(localizers)}")
+    if summary.get("profile_given"):
+        raise LeaderboardError(
+            f"{results_dir / 'results.json'}: profile_given: the run was given a profile "
+            f"({summary['profile_given']}); an entry is scored with the suite's or the log's own "
+            "defaults (rerun without --profile)")
     row = localizers[label]
     figures = schema()["properties"]["metrics"]["required"]  # all, ci95, …, tracking
     try:

@@ -8,7 +8,8 @@ identity beside it: its name, format, whether it is simulated, and the SHA-256 o
 
 Every contender takes its defaults from the log's profile (its manifest's ``[vehicle]``,
 ``[sensor]`` and ``[motion]``), with a profile given to the run over it; the summary records
-the profile applied (``profile``).
+the profile applied (``profile``) and the one given to the run (``profile_given``, empty when
+none was: a leaderboard entry is a run with the log's own).
 """
 
 from __future__ import annotations
@@ -79,6 +80,7 @@ def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *
                           "simulated": log.manifest.simulated, "sha256": log.sha256,
                           "description": log.manifest.description}
     summary["profile"] = profile_toml(applied)
+    summary["profile_given"] = profile_toml(profile or Profile())
     return BenchResult(summary, cases, outcomes)
 
 

@@ -231,6 +231,13 @@ def test_a_profiled_run_records_its_profile_and_is_not_the_plain_suite(tmp_path,
     assert "  profile: sensor.delta_alpha_d=0.05 (simulated, and the contenders' defaults)" \
         in shown
     result.write(tmp_path / "run", figures=False)
+    with pytest.raises(LeaderboardError, match="profile_given: the run was given a profile"):
+        submit(tmp_path / "run", "lsq", tmp_path / "entries", name="wide", version="1",
+               authors=["A. B."])
+    # A forged results.json that hides the profile is caught by its frames.
+    summary = json.loads((tmp_path / "run" / "results.json").read_text())
+    summary["profile_given"] = {}
+    (tmp_path / "run" / "results.json").write_text(json.dumps(summary))
     with pytest.raises(LeaderboardError, match="cases_sha256: the entry was scored on other "
                                                "frames"):
         submit(tmp_path / "run", "lsq", tmp_path / "entries", name="wide", version="1",
@@ -298,7 +305,7 @@ def test_bench_on_a_log_applies_the_file_over_the_log_s_own_profile(sensed_log, 
     (["--profile", "{good}", "--navigator", "ppo"], "a navigation suite .--navigator. takes none"),
     (["--profile", "{robot}", "--suite", "warehouse-routes"], "vehicle.kind is "
                                                                "'differential-drive'"),
-    (["--profile", "{edge}"], r"cannot build ransac: Ransac\.delta_alpha_d must be in "),
+    (["--profile", "{edge}"], r"sensor\.delta_alpha_d: must be in \[0, 1\.5708\) rad"),
 ])
 def test_bench_refuses_a_bad_profile_by_file_and_field(argv, message, tmp_path, capsys):
     files = {"bad": "[sensor]\ndelta_alpha_d = \"wide\"\n", "good": "[sensor]\ncoverage = true\n",
@@ -319,3 +326,25 @@ def test_bench_refuses_an_empty_profile_name(capsys):
         main(["bench", "--profile", ""])
     assert stopped.value.code == 2
     assert "argument --profile: is empty: give a profile file" in capsys.readouterr().err
+
+
+def test_a_run_given_a_profile_is_no_leaderboard_entry(tmp_path) -> None:
+    """A run with --profile is scored with other defaults than the suite's: submit refuses it,
+    even where the profile sets nothing the simulator draws (the frames would match)."""
+    from azgym.bench.leaderboard import make_entry
+
+    (tmp_path / "results.json").write_text(json.dumps({
+        "localizers": {"ransac": {}}, "profile_given": {"sensor": {"field_of_view": 1.0}}}))
+    with pytest.raises(LeaderboardError, match="profile_given: the run was given a profile"):
+        make_entry(tmp_path, "ransac", tmp_path, name="x", version="1", authors=["a"], link="")
+
+
+def test_the_summary_says_which_profile_was_given(tmp_path) -> None:
+    """profile_given is empty on a plain run, even where the suite gives its own defaults."""
+    plain = run_benchmark(SUITES["robot-routes"], [contender("ransac")], quick=True)
+    assert plain.summary["profile_given"] == {}
+    assert plain.summary["profile"]["vehicle"]["kind"] == "differential-drive"
+    given = run_benchmark(SUITES["robot-routes"], [contender("ransac")], quick=True,
+                          profile=Profile(sensor=SensorProfile(field_of_view=1.0)))
+    assert given.summary["profile_given"] == {"sensor": {"field_of_view": 1.0}}
+    assert given.summary["profile"]["sensor"]["field_of_view"] == 1.0
