@@ -79,7 +79,7 @@ def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: flo
     The one rule for them: the runner's summary and a leaderboard entry's check (which
     recomputes them from the entry's per-frame results and the suite's cases, drawn again) both
     call this. ``tracking`` is :func:`~azgym.bench.tracking.tracking_metrics` (None for cases
-    without sequences).
+    without driven sequences).
 
     Args:
         outcome: Its outcome on each case.

@@ -32,8 +32,12 @@ FAILED_CM = 100.0
 
 
 def tracking_metrics(cases: Sequence[Case], outcome: Outcome) -> dict[str, Any] | None:
-    """The track figures of one contender (module docstring); None without sequences."""
-    if not any(case.sequence for case in cases):
+    """The track figures of one contender (module docstring); None without driven sequences.
+
+    A sequence is driven when its frames carry motion samples: frames of a static recording
+    (a log without odometry or IMU, whose positions are sequences) have no track to follow.
+    """
+    if not any(case.sequence and case.motion is not None for case in cases):
         return None
     error_cm = np.where(outcome.ok, outcome.position * 100.0, np.inf)
     after_fix = np.zeros(len(cases), dtype=bool)

@@ -11,18 +11,35 @@ from azgym.bench.outcome import Outcome
 from azgym.bench.suites import get_suite
 from azgym.bench.suites.base import Case
 from azgym.bench.tracking import tracking_metrics
+from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 
 
-def track(errors_cm, events=None, sequence="route"):
+def still(time):
+    """A driven frame's motion: no sample (the vehicle's sensors said nothing new)."""
+    empty = np.zeros(0)
+    return Motion(time, OdometrySamples(empty, empty, empty),
+                  ImuSamples(empty, empty, np.zeros((0, 2)), empty))
+
+
+def track(errors_cm, events=None, sequence="route", driven=True):
     """Cases at 10 Hz and an outcome with these errors (None: no estimate)."""
     events = events or {}
     cases = [Case("s", None, (0.0, 0.0, 0.0), "clean", "g", sequence=sequence, time=k / 10,
-                  event=events.get(k, "")) for k in range(len(errors_cm))]
+                  event=events.get(k, ""), motion=still(k / 10) if driven else None)
+             for k in range(len(errors_cm))]
     outcome = Outcome.empty(len(errors_cm))
     for k, error in enumerate(errors_cm):
         if error is not None:
             outcome.ok[k], outcome.position[k], outcome.heading[k] = True, error / 100, 0.0
     return cases, outcome
+
+
+def test_a_static_recording_has_no_track_figures():
+    """Sequences without motion (a log's static positions) are no track: no figures."""
+    cases, outcome = track([5, 5, None, 5], driven=False)
+    assert tracking_metrics(cases, outcome) is None
+    cases, outcome = track([5, 5, None, 5])
+    assert tracking_metrics(cases, outcome) is not None
 
 
 def test_availability_counts_from_the_first_fix():
