@@ -13,6 +13,17 @@ from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize._angles import azimuth_spread, fast_atan2
 from azgym.localize._levenberg_marquardt import singular_at
+from azgym.localize._mex_area import (
+    DEFAULT_MARGIN,
+    SEEN_BOX,
+    STEP_ROUNDING,
+    Box,
+    as_box,
+    check_bounds,
+    grid_shape,
+    grown,
+    seen_box,
+)
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem
 
 CANCELLED = 1e-18
@@ -21,38 +32,14 @@ CANCELLED = 1e-18
 The n unit vectors along β_b − α_b then cancel to within 1e-9 of their count: their mean
 direction is rounding noise.
 """
-STEP_ROUNDING = 1e-9
-"""A length divided by the grid step within this of an integer counts as that integer.
-
-So a bound that lies on a grid line up to rounding is inside the grid, and a coarse step that is
-a multiple of the step up to rounding is accepted.
-"""
 SEED_MOVES = 64
 """Most moves of a coarse minimum's window on the fine grid: a cap on the descent's run time (a
 descent normally stops after a few moves of one coarse step)."""
 BEACON_SEED_MOVES = 1
 """Moves of a beacon's window: one. It is there for a basin at the beacon, and a descent that
 leaves the window is heading for a minimum that a coarse seed covers."""
-MAX_GRID_POINTS = 100_000_000
-"""Most points mex evaluates exhaustively in one frame: the whole grid, or the coarse grid.
-
-1e8 is the 1 cm grid of a 100 m × 100 m hall, minutes a frame; beyond it a run would not end in
-useful time (and a tiny step or huge bounds would ask for more points than memory or an integer
-holds), so it is refused with a named error before any work.
-"""
 MAX_COARSE_RATIO = 1000
 """Largest coarse_step / step: each descent window has (2·ratio + 1)² fine points (4e6 here)."""
-MAX_AXIS_POINTS = 2**31
-"""Most fine-grid points along one axis of a coarse-to-fine search (whose fine grid is never
-evaluated whole): grid indices stay exact integers and exact in floating point."""
-SEEN_BOX = "the measured beacons' bounding box"
-"""How messages name the first area searched without ``bounds``."""
-DEFAULT_MARGIN = 5.0
-"""How far beyond the map's outermost beacons mex searches by default [m]: a camera sees beacons
-from a few metres away (MRCLAM's robots drive up to 4.8 m outside its landmarks' box)."""
-STEP_RESOLUTION = 2.0**-40
-"""The step must be at least this times the grid's largest |coordinate| (about 1e-12): finer,
-neighbouring grid points would round to the same coordinate."""
 
 
 @jit(fastmath=K.VECTOR_MATH)
@@ -159,12 +146,6 @@ def _falls_outside(args: tuple[FloatArray, ...], x0: float, y0: float, step: flo
     return False
 
 
-def _box(problem: Problem) -> tuple[float, float, float, float]:
-    """The measured beacons' bounding box (x_min, y_min, x_max, y_max) [m]."""
-    return (float(problem.bx.min()), float(problem.by.min()), float(problem.bx.max()),
-            float(problem.by.max()))
-
-
 class Mex(Localizer):
     """Method of exhaustion: the grid point with the smallest mean squared azimuth error (eq. 34).
 
@@ -189,8 +170,8 @@ class Mex(Localizer):
     Args:
         step: Grid spacing [m] (the paper: 1 cm).
         bounds: (x_min, y_min, x_max, y_max) [m], the area searched; None: the map's extent
-            (above). The grid may hold at most MAX_GRID_POINTS points (the coarse grid, with
-            ``coarse_step``). In a spec: ``mex:bounds=x_min,y_min,x_max,y_max``.
+            (above). The grid may hold at most ``_mex_area.MAX_GRID_POINTS`` points (the coarse
+            grid, with ``coarse_step``). In a spec: ``mex:bounds=x_min,y_min,x_max,y_max``.
         coarse_step: Spacing of the coarse pass [m], a multiple of ``step``; None: exhaustive.
         n_candidates: Coarse local minima refined on the fine grid.
         margin: How far beyond the map's outermost beacons the camera may be [m] (without
@@ -234,17 +215,8 @@ class Mex(Localizer):
                     f"{self.coarse_step} = {round(ratio)} × step"
                 )
         if self.bounds is not None:
-            bounds = self.bounds
-            if not isinstance(bounds, (tuple, list, np.ndarray)) or len(bounds) != 4:
-                raise InvalidInputError(
-                    f"{name}.bounds must be (x_min, y_min, x_max, y_max) (in a spec: "
-                    f"bounds=x_min,y_min,x_max,y_max), got {bounds!r}"
-                )
-            for value in bounds:
-                check_range(name, "bounds", value)
-            if bounds[2] < bounds[0] or bounds[3] < bounds[1]:
-                raise InvalidInputError(f"{name}.bounds has max < min: {bounds!r}")
-            self._grid_shape(*(float(v) for v in bounds), "bounds")
+            check_bounds(name, self.bounds)
+            self._grid_shape(as_box(self.bounds), "bounds")
 
     def grid(self, problem: Problem) -> tuple[float, float, int, int]:
         """(x0, y0, nx, ny) of the fine grid for this frame.
@@ -253,55 +225,23 @@ class Mex(Localizer):
             InvalidInputError: The grid is too large to search (see ``_grid_shape``).
         """
         if self.bounds is not None:
-            x_min, y_min, x_max, y_max = (float(v) for v in self.bounds)
-            where = "bounds"
+            box, where = as_box(self.bounds), "bounds"
         else:
-            x_min, y_min, x_max, y_max = _box(problem)
-            where = SEEN_BOX
-        nx, ny = self._grid_shape(x_min, y_min, x_max, y_max, where)
-        return x_min, y_min, nx, ny
+            box, where = seen_box(problem), SEEN_BOX
+        nx, ny = self._grid_shape(box, where)
+        return box[0], box[1], nx, ny
 
-    def _grid_shape(self, x_min: float, y_min: float, x_max: float, y_max: float,
-                    where: str) -> tuple[int, int]:
-        """(nx, ny) of the fine grid over a box, refusing a grid that cannot be searched.
-
-        Counted in floating point before any integer or array is made, so huge coordinates or a
-        tiny step give a named error instead of an overflow or an allocation failure.
+    def _grid_shape(self, box: Box, where: str) -> tuple[int, int]:
+        """(nx, ny) of the fine grid over ``box`` (:func:`~azgym.localize._mex_area.grid_shape`).
 
         Raises:
-            InvalidInputError: More than MAX_GRID_POINTS points to evaluate exhaustively, a
-                coarse-to-fine lattice beyond MAX_AXIS_POINTS a side, or a step below the
-                floating-point resolution of the coordinates.
+            InvalidInputError: The grid cannot be searched.
         """
-        name, step = type(self).__name__, float(self.step)
-        box = f"({x_min:g}, {y_min:g}, {x_max:g}, {y_max:g})"
-        if step < STEP_RESOLUTION * max(abs(x_min), abs(y_min), abs(x_max), abs(y_max)):
-            raise InvalidInputError(
-                f"{name}.step={self.step} is below the floating-point resolution of the grid "
-                f"over {where} {box}")
-        spans = [(high - low) / step for low, high in ((x_min, x_max), (y_min, y_max))]
-        counts = [math.floor(span + STEP_ROUNDING) + 1 if math.isfinite(span) else math.inf
-                  for span in spans]
-        evaluated = counts
-        if self.coarse_step is not None:
-            if max(counts) > MAX_AXIS_POINTS:
-                raise InvalidInputError(
-                    f"{name}: the grid over {where} {box} at step={self.step} has more than "
-                    f"{MAX_AXIS_POINTS} points a side; use a larger step or smaller bounds")
-            ratio = round(self.coarse_step / self.step)
-            evaluated = [(count - 1) // ratio + 1 for count in counts]
-        if evaluated[0] * evaluated[1] > MAX_GRID_POINTS:
-            raise InvalidInputError(
-                f"{name}: the grid over {where} {box} would have {evaluated[0] * evaluated[1]:.3g}"
-                f" points to evaluate, more than {MAX_GRID_POINTS:.0e}; use a larger step, "
-                "smaller bounds or coarse_step")
-        return int(counts[0]), int(counts[1])
+        return grid_shape(type(self).__name__, self.step, self.coarse_step, box, where)
 
-    def extent(self, box: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    def extent(self, box: Box) -> Box:
         """The area searched without ``bounds``: the map's beacons' ``box`` grown by ``margin``."""
-        x_min, y_min, x_max, y_max = box
-        m = float(self.margin)
-        return x_min - m, y_min - m, x_max + m, y_max + m
+        return grown(box, self.margin)
 
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         problem = Problem.from_frame(measurements, beacons)
@@ -311,9 +251,9 @@ class Mex(Localizer):
 
     def _localize(self, problem: Problem) -> Estimate:
         """A :class:`Problem` without its map: the map's beacons are the measured ones."""
-        return self._search(problem, _box(problem))
+        return self._search(problem, seen_box(problem))
 
-    def _search(self, problem: Problem, map_box: tuple[float, float, float, float]) -> Estimate:
+    def _search(self, problem: Problem, map_box: Box) -> Estimate:
         """``bounds``, or the measured beacons' box, then the map's extent (class docstring)."""
         estimate = self._solve(problem, *self.grid(problem),
                                "bounds" if self.bounds is not None else SEEN_BOX)
@@ -321,11 +261,11 @@ class Mex(Localizer):
                 azimuth_spread(problem.azimuth) >= math.pi:
             return estimate  # beacons on every side: the camera is inside their hull
         extent = self.extent(map_box)
-        if extent == _box(problem):
+        if extent == seen_box(problem):
             return estimate  # the map's extent is the box just searched
         where = f"the map's extent (its beacons' box and margin={self.margin:g} m)"
         try:
-            nx, ny = self._grid_shape(*extent, where)
+            nx, ny = self._grid_shape(extent, where)
         except InvalidInputError as exc:
             return Estimate.failure(f"{estimate.reason}; {exc}", problem.n_measurements,
                                     estimate.diagnostics)

@@ -185,6 +185,26 @@ def _checked_spec(scenario: Scenario, spec: ForkliftSpec | RobotSpec | None) -> 
                                 f"got {type(spec).__name__}")
 
 
+def _checked_odometry(scenario: Scenario,
+                      odometry: OdometryModel | DifferentialOdometryModel | None) -> None:
+    """Refuse an odometry model of the other kind than the scenario's vehicle's."""
+    wanted = DifferentialOdometryModel if scenario.differential_drive else OdometryModel
+    if odometry is not None and not isinstance(odometry, wanted):
+        raise InvalidInputError(f"odometry: scenario {scenario.name!r} is driven by a "
+                                f"{scenario.vehicle.kind}, whose odometry model is a "
+                                f"{wanted.__name__}, got {type(odometry).__name__}")
+
+
+def _checked_sensor(scenario: Scenario, sensor: Sensor | None) -> Sensor:
+    """The camera model: ``sensor``, or the scenario's geometry sensor; refusing a non-Sensor."""
+    sensor = GeometrySensor(scenario) if sensor is None else sensor
+    if not isinstance(sensor, Sensor):
+        raise InvalidInputError(f"sensor must be an azgym Sensor (reset and observe), got "
+                                f"{type(sensor).__name__}; make one with "
+                                f"azgym.sensing.catalog.make_sensor")
+    return sensor
+
+
 def _defaults(scenario: Scenario, dt: float | None, max_time: float | None
               ) -> tuple[float, float]:
     """The physics step and time limit [s]: the given ones, else the vehicle's defaults."""
@@ -311,17 +331,9 @@ def simulate(
     """
     scenario = load_scenario(scenario)
     chosen = _route(scenario, route)
-    sensor = GeometrySensor(scenario) if sensor is None else sensor
-    if not isinstance(sensor, Sensor):
-        raise InvalidInputError(f"sensor must be an azgym Sensor (reset and observe), got "
-                                f"{type(sensor).__name__}; make one with "
-                                f"azgym.sensing.catalog.make_sensor")
+    sensor = _checked_sensor(scenario, sensor)
     _checked_spec(scenario, spec)
-    wanted = DifferentialOdometryModel if scenario.differential_drive else OdometryModel
-    if odometry is not None and not isinstance(odometry, wanted):
-        raise InvalidInputError(f"odometry: scenario {scenario.name!r} is driven by a "
-                                f"{scenario.vehicle.kind}, whose odometry model is a "
-                                f"{wanted.__name__}, got {type(odometry).__name__}")
+    _checked_odometry(scenario, odometry)
     dt, max_time = _defaults(scenario, dt, max_time)
     camera_rate_hz = checked_camera_rate(
         sensor.frame_rate_hz if camera_rate_hz is None else camera_rate_hz)
