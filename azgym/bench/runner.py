@@ -211,9 +211,7 @@ def run_benchmark(
     Raises:
         InvalidInputError: A bad split, or a profile the suite cannot take.
     """
-    given = profile
-    if profile is not None:
-        suite = suite.profiled(profile)
+    suite = suite if profile is None else suite.profiled(profile)
     profile = suite.contender_profile()  # a suite profiled already: its profile is the run's
     contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
@@ -229,7 +227,7 @@ def run_benchmark(
     reference = next(c.label for c in contenders if c.is_reference)
     summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference)
     summary["profile"] = profile_toml(profile or Profile())
-    summary["profile_given"] = profile_toml(given or suite.profile or Profile())
+    summary["profile_given"] = profile_toml(suite.profile or Profile())
     return BenchResult(summary, cases, outcomes)
 
 
