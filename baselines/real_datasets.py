@@ -34,6 +34,7 @@ from azgym.errors import AzgymError, InvalidInputError
 from azgym.files import prepare_folder, write_file
 from azgym.logs import Log, read_log
 from azgym.logs.calibrate import Calibration, calibrate
+from azgym.logs.export import csv_text
 from azgym.logs.manifest import MANIFEST
 from azgym.profile import Profile, SensorProfile, VehicleProfile, profile_toml
 from azgym.site.toml_writer import to_toml
@@ -258,10 +259,10 @@ def _tables(data: Converted) -> dict[str, str]:
         frame_columns.append(data.frame_sequence)
         frame_header.append("sequence")
     return {
-        "beacons.csv": _csv(["id", "x", "y"], zip(data.beacons.ids, *data.beacons.xy.T,
+        "beacons.csv": csv_text(["id", "x", "y"], zip(data.beacons.ids, *data.beacons.xy.T,
                                                   strict=True)),
-        "frames.csv": _csv(frame_header, zip(*frame_columns, strict=True)),
-        "detections.csv": _csv(["frame", "id", "azimuth"], zip(
+        "frames.csv": csv_text(frame_header, zip(*frame_columns, strict=True)),
+        "detections.csv": csv_text(["frame", "id", "azimuth"], zip(
             data.frame[data.row], data.ids, data.azimuth, strict=True)),
     }
 
@@ -292,21 +293,6 @@ def _numbers(path: Path, columns: int) -> np.ndarray:
     if values.ndim != 2 or values.shape[1] != columns:
         raise InvalidInputError(f"{path}: expected {columns} columns of numbers")
     return values
-
-
-def _cell(value: object) -> str:
-    """A cell: a float by ``repr`` (it reads back exactly), anything else as text."""
-    if isinstance(value, (float, np.floating)):
-        return repr(float(value))
-    return str(value)
-
-
-def _csv(header: list[str], rows: Iterable[Iterable[object]]) -> str:
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows([_cell(value) for value in row] for row in rows)
-    return buffer.getvalue()
 
 
 _FILES_FIT = """\

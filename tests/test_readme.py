@@ -178,8 +178,29 @@ def test_the_logged_data_section_scores_the_shipped_log(tmp_path, monkeypatch, c
     monkeypatch.chdir(tmp_path)
     argv = shlex.split(command)[1:]
     assert main([*argv, "--localizer", "ransac", "--workers", "1", "--out", "out"]) == 0
-    assert re.search(r"^ *1 ransac ", capsys.readouterr().out, re.M)
+    row = re.search(r"^ *1 ransac +(.*)$", capsys.readouterr().out, re.M).group(1).split()
     assert (tmp_path / "out" / "results.json").is_file()
+    said = re.search(r"ransac's answered\s+median is ([0-9.]+) cm at ([0-9.]+) % availability",
+                     section)
+    assert (row[4], row[2]) == (said.group(1), f"{float(said.group(2)):.1f}%"), row
+
+
+def test_the_robot_recipe_prints_the_figures_the_readme_gives(tmp_path, monkeypatch, capsys):
+    """Calibrated on robot-arena's long route, the trackers on wander-2: the README's figures."""
+    section = README.read_text(encoding="utf-8").split("## Logged data", 1)[1]
+    section = section.split("\n## ", 1)[0]
+    shell = re.search(r"```bash\n(.*?)```", section, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    for line in shell.splitlines():
+        assert main(shlex.split(line)[1:]) == 0, line
+    table = capsys.readouterr().out
+    p95 = re.search(r"with a p95 of ([0-9.]+) cm; ransac, frame by\s+frame, answers "
+                    r"([0-9.]+) %", section)
+    for tracker in ("gated-ekf", "robust"):
+        row = re.search(rf"^ *[0-9]+ {tracker} +(.*)$", table, re.M).group(1).split()
+        assert row[2] == "100.0%" and row[6] == p95.group(1), row
+    ransac = re.search(r"^ *[0-9]+ ransac +(.*)$", table, re.M).group(1).split()
+    assert ransac[2] == f"{p95.group(2)}%", ransac
 
 
 def test_the_layout_section_analyzes_and_optimizes(tmp_path, monkeypatch):

@@ -77,7 +77,7 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
         "truth": {"source": "simulation: the camera's true pose"},
         **profile_toml(scenario.profile)}
     write_file(out / MANIFEST, to_toml(manifest, "An azgym log (docs/logs.md): SIMULATED."))
-    write_file(out / "frames.csv", _csv(["frame", "time", "x", "y", "heading"],
+    write_file(out / "frames.csv", csv_text(["frame", "time", "x", "y", "heading"],
                                         ([f.index, f.time, *f.pose] for f in frames)))
     write_file(out / "detections.csv", _detections(frames, sensor.quality_names))
     write_file(out / "odometry.csv", _odometry(frames))
@@ -119,7 +119,8 @@ def _cell(value: object) -> str:
     return str(value)
 
 
-def _csv(header: list[str], rows: Iterable[Iterable[object]]) -> str:
+def csv_text(header: list[str], rows: Iterable[Iterable[object]]) -> str:
+    """A log table as CSV text: floats by ``repr`` (they read back exactly), NaN as empty."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(header)
@@ -138,13 +139,13 @@ def _detections(frames: list[Frame], quality_names: tuple[str, ...]) -> str:
         for k in range(len(m)):
             rows.append([frame.index, int(m.ids[k]), float(m.azimuth[k]),
                          *(float(q) for q in quality[k]), LABEL_NAMES[int(frame.truth.label[k])]])
-    return _csv(header, rows)
+    return csv_text(header, rows)
 
 
 def _odometry(frames: list[Frame]) -> str:
     """odometry.csv: time, speed and the turn rate (if the odometry reports it) or steer."""
     turn = "yaw_rate" if any(f.odometry.reports_yaw_rate for f in frames) else "steer"
-    return _csv(["time", "speed", turn], (
+    return csv_text(["time", "speed", turn], (
         row for f in frames for row in zip(f.odometry.time, f.odometry.speed,
                                            getattr(f.odometry, turn), strict=True)))
 
@@ -154,7 +155,7 @@ def _imu(frames: list[Frame]) -> str:
     samples = [f.imu for f in frames]
     with_heading = any(np.isfinite(s.heading).any() for s in samples)
     header = ["time", "yaw_rate", "ax", "ay", *(["heading"] if with_heading else [])]
-    return _csv(header, (
+    return csv_text(header, (
         [s.time[k], s.yaw_rate[k], s.accel[k, 0], s.accel[k, 1],
          *([s.heading[k]] if with_heading else [])]
         for s in samples for k in range(s.time.size)))

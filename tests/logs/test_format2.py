@@ -66,12 +66,12 @@ _CLOCKWISE = "\n".join(
          line.split(",") for line in mini_files_2()["detections.csv"].splitlines()[1:]))]) + "\n"
 MALFORMED_2 = {
     "sensor huge": (_manifest("delta_alpha_d = 0.01", "delta_alpha_d = 1e300"),
-                    r"log.toml: sensor.delta_alpha_d: must be in \[0, 1.5708\] rad, got 1e\+300"),
+                    r"log.toml: sensor.delta_alpha_d: must be in \[0, 1.5708\) rad, got 1e\+300"),
     "sensor not a number": (_manifest("field_of_view = 6.0", 'field_of_view = "wide"'),
                             r"log.toml: sensor.field_of_view: must be a number \[rad\], got "
                             r"'wide'"),
     "sensor negative": (_manifest("delta_alpha_d = 0.01", "delta_alpha_d = -0.01"),
-                        r"sensor.delta_alpha_d: must be in \[0, 1.5708\] rad, got -0.01"),
+                        r"sensor.delta_alpha_d: must be in \[0, 1.5708\) rad, got -0.01"),
     "sensor typo": (_manifest("field_of_view", "field_of_veiw"),
                     r"log.toml: sensor.field_of_veiw: unknown field"),
     "sensor not a table": (lambda f: f.update({"log.toml": MANIFEST_2.replace(
