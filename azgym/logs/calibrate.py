@@ -30,6 +30,11 @@ Each fit prints its value, a 95 % interval, the samples it used and how it was m
   when the slide the turn leaves unexplained exceeds :data:`MAX_SLIP` of the forward motion
   (snapshots far apart in time, noisy truth).
 
+A frame whose time stamp repeated the one before (moved on by the reader,
+:func:`azgym.logs.clocks.nudged`) has no known time: the intervals on either side of it are not
+used. A speed factor beyond :data:`UNIT_FACTOR` either way is a unit mistake, not a fit, and is
+not written. A log of one bootstrap block (under 5 s) gives its bootstrap fits no interval.
+
 A fit needs what the log holds: no odometry, no speed fits; a log whose truth has no heading
 gets the speed fits from the path length between frames (which takes the camera to sit on the
 turning axis: a camera off it travels further in turns, and the factor reads high), and no
@@ -53,6 +58,7 @@ from azgym.core import FloatArray, wrap_angle
 from azgym.errors import InvalidInputError
 from azgym.logs.calibrate_motion import GROSS, fit_walk, integrate, not_gross
 from azgym.logs.calibrate_sensor import MIN_DETECTIONS, block_interval, fit_azimuth
+from azgym.logs.clocks import nudged
 from azgym.logs.read import Log
 from azgym.profile import (
     DIFFERENTIAL_DRIVE,
@@ -63,7 +69,7 @@ from azgym.profile import (
     profile_toml,
 )
 
-__all__ = ["MAX_SLIP", "TURN_RATE_SOURCES", "Calibration", "Fit", "calibrate"]
+__all__ = ["MAX_SLIP", "TURN_RATE_SOURCES", "UNIT_FACTOR", "Calibration", "Fit", "calibrate"]
 
 TURN_RATE_SOURCES = ("auto", "odometry", "imu")
 """Where the turn rate is fitted from: ``auto`` takes the odometry's ``yaw_rate`` when it reports
@@ -75,6 +81,12 @@ SENSOR_FIELDS = ("sensor.delta_alpha_d", "sensor.coverage", "sensor.field_of_vie
 MAX_SLIP = 0.25
 """camera_ahead is not fitted when what the turn leaves of the sideways slide (RMS) exceeds this
 share of the forward distance (RMS): the frames do not move like one vehicle's arcs."""
+UNIT_FACTOR = 2.0
+"""A speed factor beyond this either way is not written: wear and tyres change an odometry's
+scale by a few per cent, while times in milliseconds, or speeds in km/h or mm/s, change it by
+1000, 3.6 or 1000."""
+NO_INTERVAL = "; no interval: the log is one bootstrap block (under 5 s)"
+"""The method's note of a bootstrap fit without an interval (:func:`block_interval`)."""
 
 
 @dataclass(frozen=True)
@@ -85,7 +97,8 @@ class Fit:
         name: The profile's ``section.field`` it sets, or a name in brackets for a value the
             profile has no field for (printed, not written).
         value: The fit [the field's unit].
-        interval: The 95 % interval, or None (a choice, not an estimate).
+        interval: The 95 % interval, or None (a choice, not an estimate; or an estimate the
+            log is too short to bound, as ``method`` says).
         samples: How many samples (detections, frame intervals) it used.
         method: How it was made, in a few words.
     """
@@ -231,9 +244,10 @@ def _sensor(log: Log, rng: np.random.Generator, skipped: list[tuple[str, str]],
         return []
     residuals["azimuth"] = fit.residuals
     notes.append(fit.note)
-    delta, fov = fit.delta_alpha_d, fit.field_of_view
-    return [Fit("sensor.delta_alpha_d", delta[0], delta[1:], fit.inliers,
-                "eq. 3's variance, quasi-likelihood on eq. 25's inliers; block bootstrap"),
+    fov = fit.field_of_view
+    return [Fit("sensor.delta_alpha_d", fit.delta_alpha_d, fit.delta_interval, fit.inliers,
+                "eq. 3's variance, quasi-likelihood on eq. 25's inliers; block bootstrap"
+                + ("" if fit.delta_interval else NO_INTERVAL)),
             Fit("sensor.coverage", fit.coverage, None, fit.inliers,
                 f"Gaussian quasi-likelihood, coverage − none: {fit.coverage_gain:+.1f}"),
             Fit("sensor.field_of_view", fov[0], fov[1:], fit.inliers,
@@ -241,11 +255,16 @@ def _sensor(log: Log, rng: np.random.Generator, skipped: list[tuple[str, str]],
 
 
 def _intervals(log: Log, heading: FloatArray) -> _Intervals:
-    """Each interval between consecutive frames: its true motion in the frame of its heading."""
+    """Each interval between consecutive frames: its true motion in the frame of its heading.
+
+    An interval is usable between consecutive frames of a sequence, with no kidnap, and with
+    neither end a frame whose time stamp repeated the one before (:func:`nudged`).
+    """
     frames = log.frames
     time, x, y = frames["time"], frames["x"], frames["y"]
     sequence, event = np.asarray(frames["sequence"]), np.asarray(frames["event"])
-    usable = (sequence[1:] == sequence[:-1]) & (event[1:] != "kidnap")
+    moved = nudged(time)
+    usable = (sequence[1:] == sequence[:-1]) & (event[1:] != "kidnap") & ~moved[1:] & ~moved[:-1]
     dx, dy = np.diff(x), np.diff(y)
     turn = wrap_angle(np.diff(heading))
     middle = heading[:-1] + 0.5 * turn
@@ -297,6 +316,10 @@ def _speed(log: Log, intervals: _Intervals, with_heading: bool, fits: list[Fit],
     fit = fit_walk(read.total[used], intervals.forward[used], read.squares[used],
                    _walk_seconds(used, first, intervals), first)
     scale, low, high = fit.start
+    if not 1.0 / UNIT_FACTOR <= 1.0 / scale <= UNIT_FACTOR:
+        skipped += [(name, f"the odometry reads {scale:.4g} × the true distance: another unit "
+                     "(times in ms? speed in km/h or mm/s?)") for name in names]
+        return
     how = "" if with_heading else " (no heading: path length, camera taken on the turning axis)"
     method = f"{MOTION_METHOD}{_dropped(gross)}{how}"
     fits += [Fit(names[0], 1.0 / scale, (1.0 / high, 1.0 / low), fit.samples, method),
@@ -318,6 +341,7 @@ def _turn_rate(log: Log, intervals: _Intervals, source: str, fits: list[Fit],
     stream = (log.odometry if has_odometry else None) if source == "odometry" else log.imu
     if stream is None:
         why = "the odometry reports no yaw_rate" if source == "odometry" else \
+            "the log has no IMU and no odometry" if log.odometry is None else \
             "the log has no IMU and its odometry reports no turn rate"
         skipped += [(name, why) for name in names]
         return
@@ -359,7 +383,10 @@ def _camera_ahead(intervals: _Intervals, rng: np.random.Generator, fits: list[Fi
     gross -= int(used.sum())
     chord = 2.0 * np.sin(0.5 * intervals.turn[used])
     side = intervals.side[used]
-    if used.sum() < 10 or np.abs(chord).max(initial=0.0) < 1e-4:
+    if used.sum() < 10:
+        skipped.append(("vehicle.camera_ahead", "fewer than 10 usable frame intervals"))
+        return
+    if np.abs(chord).max() < 1e-4:
         skipped.append(("vehicle.camera_ahead", "the truth hardly turns"))
         return
     value = float(side @ chord / (chord @ chord))
@@ -377,5 +404,5 @@ def _camera_ahead(intervals: _Intervals, rng: np.random.Generator, fits: list[Fi
                               cross.size, value, rng)
     fits.append(Fit("vehicle.camera_ahead", value, interval, int(used.sum()),
                     "least squares of sideways slide on 2 sin(Δφ/2); block bootstrap"
-                    + _dropped(gross)))
+                    + _dropped(gross) + ("" if interval else NO_INTERVAL)))
     residuals["camera"] = (chord, side)

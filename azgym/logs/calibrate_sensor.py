@@ -40,7 +40,9 @@ class AzimuthFit:
     """What the detections say about the camera.
 
     Attributes:
-        delta_alpha_d: Δα_d [rad] and its 95 % interval.
+        delta_alpha_d: Δα_d [rad].
+        delta_interval: Its 95 % interval, or None when the frames make fewer than two
+            bootstrap blocks (:func:`block_interval`).
         coverage: Whether eq. 2's coverage term applies.
         coverage_gain: Log quasi-likelihood of coverage true minus false, on the same inliers.
         field_of_view: The full view [rad] and its 95 % interval.
@@ -49,7 +51,8 @@ class AzimuthFit:
         residuals: Each mapped detection's distance [m], residual [rad] and whether kept.
     """
 
-    delta_alpha_d: tuple[float, float, float]
+    delta_alpha_d: float
+    delta_interval: tuple[float, float] | None
     coverage: bool
     coverage_gain: float
     field_of_view: tuple[float, float, float]
@@ -101,7 +104,7 @@ def fit_azimuth(log: Log, frame_blocks: np.ndarray, rng: np.random.Generator
             f"{int((~kept).sum())}; inliers: {int(kept.sum())}")
     reach = delta + cover
     tight = reach <= np.median(reach)
-    return AzimuthFit((delta, *interval), coverage, float(gain),
+    return AzimuthFit(delta, interval, coverage, float(gain),
                       _field_of_view(azimuth[kept][tight], reach[tight]), int(kept.sum()), note,
                       (distance, residual, kept))
 
@@ -173,18 +176,22 @@ def _field_of_view(azimuth: FloatArray, reach: FloatArray) -> tuple[float, float
 
 
 def block_interval(statistic: Callable[[np.ndarray], np.ndarray], blocks: int, value: float,
-                   rng: np.random.Generator) -> tuple[float, float]:
+                   rng: np.random.Generator) -> tuple[float, float] | None:
     """A 95 % BCa bootstrap interval resampling whole blocks.
 
     Args:
         statistic: The estimate from picked block numbers, an int array (..., B) → (...).
         blocks: How many blocks there are.
-        value: The estimate on the data, returned as both ends when there is no spread (fewer
-            than two blocks, or exact data).
+        value: The estimate on the data, returned as both ends when the data are exact (no
+            spread among the resamples).
         rng: The generator.
+
+    Returns:
+        The interval, or None with fewer than two blocks: one block cannot be resampled, and
+        its spread is unknown, not zero.
     """
     if blocks < 2:
-        return value, value
+        return None
     with warnings.catch_warnings():  # a degenerate (exact) distribution is handled below
         warnings.simplefilter("ignore")
         low, high = scipy.stats.bootstrap(

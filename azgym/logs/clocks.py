@@ -43,6 +43,19 @@ Columns = dict[str, np.ndarray]
 """A table's number columns, by name."""
 
 
+def nudged(time: np.ndarray) -> np.ndarray:
+    """Whether each settled frame was moved after the one before (:func:`settle_frames`).
+
+    Such a frame's stamp repeated the one before: its true time is unknown, so the intervals on
+    either side of it say nothing of how fast the vehicle moved.
+
+    Args:
+        time: Settled frame times, strictly increasing.
+    """
+    step = np.maximum(FRAME_NUDGE, np.spacing(np.abs(time[:-1])))
+    return np.concatenate([[False], np.diff(time) <= 2.0 * step])
+
+
 def settle_frames(table: Table, time: np.ndarray, notes: list[str]) -> np.ndarray:
     """Frame times strictly increasing: each repeated one moved just after the one before.
 
@@ -61,10 +74,13 @@ def settle_frames(table: Table, time: np.ndarray, notes: list[str]) -> np.ndarra
             moved.append(k)
     if moved:
         first = moved[0]
+        overtaken = [k for k in moved if time[k] > time[k - 1]]
+        late = f"; {len(overtaken)} of them ({_where(table, overtaken)}) stamped later but " \
+            "overtaken by the frames moved before them" if overtaken else ""
         notes.append(f"{table.file}: {len(moved)} frame(s) ({_where(table, moved)}) had the time "
                      f"of the frame before: each moved {FRAME_NUDGE:g} s after it (frame times "
                      f"must increase; the first from {seconds(time[first])} to "
-                     f"{seconds(settled[first])})")
+                     f"{seconds(settled[first])}){late}")
     return settled
 
 
