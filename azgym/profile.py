@@ -208,7 +208,8 @@ def parse_profile(data: dict[str, Any], report: Callable[[str], None]) -> Profil
 def _number_problem(value: Any, rule: _Rule) -> str | None:
     """What is wrong with a profile number, or None."""
     unit, low, high, low_open, high_open = rule
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+            (isinstance(value, float) and not math.isfinite(value)):  # a big int compares exactly
         return f"must be a number{f' [{unit}]' if unit else ''}, got {value!r}"
     if value > high or value < low or (low_open and value == low) or \
             (high_open and value == high):

@@ -126,3 +126,9 @@ def test_delta_alpha_d_of_a_right_angle_is_refused() -> None:
     """Eq. 1's half-width is below π/2 (the error model and ransac need it so)."""
     _, problems = _parse(f"[sensor]\ndelta_alpha_d = {math.pi / 2!r}")
     assert problems and problems[0].startswith("sensor.delta_alpha_d: must be in [0, 1.5708)")
+
+
+def test_a_huge_whole_number_is_out_of_range_not_a_crash() -> None:
+    """TOML integers are unbounded: 10**400 compares exactly with the bounds (no OverflowError)."""
+    _, problems = _parse("[motion]\nspeed_factor = 1" + "0" * 400)
+    assert len(problems) == 1 and problems[0].startswith("motion.speed_factor: must be in (0, 10]")

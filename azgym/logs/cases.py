@@ -4,7 +4,8 @@ Each frame becomes a :class:`~azgym.bench.suites.Case` as a driven route's frame
 (:func:`~azgym.bench.suites.base.route_cases`), keeping its number (``Case.frame``): its group
 and sequence are the frame's sequence (a tracker is reset at the start of each), the first frame
 of a sequence carries its true pose as the known start (none with position-only truth: a start
-needs a heading), and with odometry or IMU samples each frame's ``motion`` holds the samples
+needs a heading; none in a log without odometry or IMU: a static recording's positions are its
+truth), and with odometry or IMU samples each frame's ``motion`` holds the samples
 timed after the previous frame and up to its own time (a sequence's first frame: those up to
 :data:`~azgym.logs.clocks.MOTION_LEAD` before it, the reader having trimmed earlier ones). An
 odometry reporting ``yaw_rate`` gives turning samples (``OdometrySamples.turning``); an IMU
@@ -58,6 +59,7 @@ def log_cases(log: Log) -> list[Case]:
     frames = log.frames
     times = frames["time"]
     motions = _motions(log, times)
+    driven = log.odometry is not None or log.imu is not None
     labels = log.detections["label"]
     bounds = np.searchsorted(log.detections["frame"], np.arange(len(times) + 1))
     cases = []
@@ -68,7 +70,9 @@ def log_cases(log: Log) -> list[Case]:
         cause = frame_cause(frame_labels) if log.detections["labelled"] else UNLABELLED
         pose = log.pose(k)
         assert pose is not None
-        start = first and not math.isnan(pose[2])
+        # A known start is a driven sequence's (its dock): a static recording's positions are
+        # its truth, which no contender may be handed.
+        start = first and driven and not math.isnan(pose[2])
         cases.append(Case(log.map_name, measurements, pose, cause, sequence, sequence=sequence,
                           motion=motions[k], initial=pose if start else None,
                           time=float(times[k]), event=frames["event"][k],

@@ -80,7 +80,8 @@ def read_manifest(folder: Path, problems: Problems) -> Manifest | None:
     if not path.is_file():
         problems.add(MANIFEST, "missing: a log folder holds log.toml (docs/logs.md)")
         return None
-    raw = path.open("rb").read(MAX_MANIFEST_BYTES + 1)
+    with path.open("rb") as stream:
+        raw = stream.read(MAX_MANIFEST_BYTES + 1)
     if len(raw) > MAX_MANIFEST_BYTES:
         problems.add(MANIFEST, f"too large: a manifest has at most {MAX_MANIFEST_BYTES} bytes")
         return None
@@ -124,8 +125,9 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
         problems.add(MANIFEST, "simulated: must be true or false (is the data from a real "
                                "camera?)")
     rate = camera.get("rate_hz")
-    if rate is not None and (isinstance(rate, bool) or not isinstance(rate, (int, float))
-                             or not 0 < rate < 1e4):
+    rate_ok = rate is None or (not isinstance(rate, bool) and isinstance(rate, (int, float))
+                               and 0 < rate < 1e4)
+    if not rate_ok:
         problems.add(MANIFEST, f"camera.rate_hz: must be a number of frames per second > 0, "
                                f"got {shown(rate)}")
     maps = [key for key in ("scenario", "beacons") if key in where]
@@ -138,7 +140,7 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
         format=given, name=name, description=_text(data, "description", problems, True),
         simulated=bool(simulated), sequence=_text(data, "sequence", problems) or name,
         camera=_text(camera, "description", problems, where="camera."),
-        camera_rate_hz=float(rate) if isinstance(rate, (int, float)) else None,
+        camera_rate_hz=float(rate) if rate is not None and rate_ok else None,
         scenario=_text(where, "scenario", problems, where="map.") or None,
         beacons=_text(where, "beacons", problems, where="map.") or None,
         truth=_text(truth, "source", problems, where="truth."), profile=profile)

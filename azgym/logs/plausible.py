@@ -149,8 +149,10 @@ def _azimuths_agree(table: Table | None, detections: object, frames: object,
             return
     predicted = bearing - heading
     residual = np.abs(wrap_angle(measured - predicted))
+    if not np.isfinite(residual).any():  # every cell bad: each reported already
+        return
     median = float(np.nanmedian(residual))
-    if not median > MAX_AZIMUTH_RESIDUAL:  # NaN (a bad cell, already reported) passes
+    if not median > MAX_AZIMUTH_RESIDUAL:
         return
     if "heading" not in frames.values:  # type: ignore[attr-defined]
         hint = "measured clockwise, in degrees, or scaled?"

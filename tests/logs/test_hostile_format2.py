@@ -137,3 +137,29 @@ def test_no_odometry_and_no_imu_is_said_as_such(tmp_path):
     del files["odometry.csv"]
     _, skipped = _fits(tmp_path, files)
     assert skipped["motion.turn_rate_noise"] == "the log has no IMU and no odometry"
+
+
+def test_a_static_recording_hands_no_contender_its_truth() -> None:
+    """Roh's sequences are fixed positions: a start pose would be every frame's truth, so a
+    tracker that holds it (dead reckoning) would score 0 cm. A log without motion has none."""
+    from azgym.logs import log_cases, read_log
+
+    cases = log_cases(read_log("roh"))
+    assert all(case.initial is None for case in cases)
+    assert all(case.motion is None for case in cases)
+
+
+def test_a_huge_whole_camera_rate_is_named_not_a_crash(tmp_path) -> None:
+    """camera.rate_hz = 10**400 is reported by field, not converted to a float (OverflowError)."""
+    import shutil
+
+    from azgym.logs import LogError, read_log
+    from azgym.logs.read import shipped_logs
+
+    folder = tmp_path / "roh"
+    shutil.copytree(shipped_logs()["roh"], folder)
+    manifest = folder / "log.toml"
+    manifest.write_text(manifest.read_text().replace(
+        "[camera]\n", "[camera]\nrate_hz = 1" + "0" * 400 + "\n"))
+    with pytest.raises(LogError, match="camera.rate_hz: must be a number of frames per second"):
+        read_log(folder)
