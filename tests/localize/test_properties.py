@@ -167,7 +167,8 @@ def mex_tolerance(beacons: BeaconMap, pose: tuple[float, float, float],
 def test_mex_ok_means_the_grid_point_of_the_true_pose(scene, coarse):
     beacons, pose, size = scene
     step = size / MEX_CELLS
-    mex = Mex(step=step, coarse_step=4 * step if coarse else None)
+    # The map's extent grown by the scene's size holds the camera: its grid point is searched.
+    mex = Mex(step=step, coarse_step=4 * step if coarse else None, margin=size)
     estimate = mex.localize(ideal_frame(*pose, beacons), beacons)
     position_tol, heading_tol = mex_tolerance(beacons, pose, step)
     # The bound is a quadratic model of the cost around the truth: it holds over a few grid
