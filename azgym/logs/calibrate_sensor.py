@@ -1,7 +1,27 @@
 """The azimuth fits of ``azgym calibrate``: eq. 1-3's noise and the field of view.
 
-The rules are :mod:`azgym.logs.calibrate`'s docstring; this module holds their arithmetic and
-the block bootstrap every bootstrap interval of the calibration comes from.
+This module holds their rules and arithmetic, and the block bootstrap every bootstrap
+interval of the calibration (:mod:`azgym.logs.calibrate`) comes from:
+
+* **Azimuth noise** (eq. 1-3). A detection's residual is its azimuth minus the one predicted from
+  the true pose and the map; ids not in the map are left out. Gross outliers (misread ids,
+  ghosts) are trimmed by eq. 25's rule: a residual beyond RANSAC's inlier tolerance
+  2 (Δα_d + Δα_c,i) is no inlier, Δα_d refitted on the inliers until they stop changing (Δα_d
+  starts at twice the median |residual|). On the inliers, the two uniforms of eq. 3 give
+  E[r²] = v_i = (Δα_d² + Δα_c,i²) / 3 with the coverage term (Δα_d² / 3 without), and Δα_d solves
+  the quasi-likelihood equation Σ (r_i² − v_i) / v_i² = 0: unbiased whatever the noise's shape
+  (uniform, or a real camera's bell), and weighing each detection by how sharp its bound is, so
+  that a near beacon's wide coverage bound (and an outlier it hides) counts little. ``coverage``
+  is the variance model with the larger Gaussian quasi-likelihood on the inliers of the wider
+  rule (a tie, as when beacon widths are zero, is false). Δα_d's interval: a BCa bootstrap (one
+  Newton step of the equation per resample) over 5 s blocks of frames
+  (:func:`azgym.bench.metrics.bootstrap_blocks`), so that correlated frames move together.
+* **Field of view**: twice the largest |azimuth| among the half of the inliers with the tighter
+  bound Δα_d + Δα_c,i (there eq. 25 trims best: an outlier cannot widen the view); all round
+  (2π) when that reaches :data:`ALL_ROUND`. Its interval runs from
+  twice the largest (|azimuth| − its bound), where the noise may have carried an inlier from, to
+  twice (largest + ε), ε = ln 20 / (inliers per radian in the outer tenth of the view): the
+  edge a further inlier would push it to with probability 5 %.
 """
 
 from __future__ import annotations
