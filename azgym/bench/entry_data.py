@@ -14,6 +14,7 @@ it out only when told to (``--skip-unavailable``).
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import Any
 
@@ -102,11 +103,18 @@ def check_data_run(entry: dict[str, Any], origin: str) -> None:
 def dataset_cases(entry: dict[str, Any], origin: str, datasets: Path | None
                   ) -> tuple[str, tuple[Case, ...]]:
     """The cases of the entry's log (found, and checked unchanged) and their digest."""
+    log = checked_log(entry, origin, datasets)
     try:
-        cases = log_cases(checked_log(entry, origin, datasets))
+        return _cases_of(log)
     except LogError as exc:  # a log without truth
         raise LeaderboardError(f"{origin}: dataset: {exc}") from None
-    return cases_digest(cases), tuple(cases)
+
+
+@functools.lru_cache(maxsize=16)
+def _cases_of(log: Log) -> tuple[str, tuple[Case, ...]]:
+    """A log's cases and their digest, once per log read (a board checks every entry on it)."""
+    cases = tuple(log_cases(log))
+    return cases_digest(cases), cases
 
 
 def checked_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Log:
@@ -131,6 +139,19 @@ def checked_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Lo
     return log
 
 
+def _stamp(folder: Path) -> tuple[tuple[str, int, int], ...]:
+    """The folder's files as (name, size, modification time): a changed file changes it."""
+    return tuple((path.name, stat.st_size, stat.st_mtime_ns)
+                 for path in sorted(folder.iterdir()) for stat in [path.stat()])
+
+
+@functools.lru_cache(maxsize=16)
+def _read(folder: Path, stamp: tuple[tuple[str, int, int], ...]) -> Log:
+    """A log read once while its files stay as ``stamp`` says (every entry on it is checked)."""
+    del stamp  # the cache's key only
+    return read_log(folder)
+
+
 def _found_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Log:
     """The entry's log read and checked (not yet compared with the entry)."""
     name = entry["dataset"]["name"]
@@ -143,7 +164,7 @@ def _found_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Log
             "folder as NAME/ (--datasets DIR, default datasets/ beside the entries), or pass "
             "--skip-unavailable to leave such entries off the board", entry)
     try:
-        return read_log(folder)
+        return _read(folder.resolve(), _stamp(folder))
     except LogError as exc:
         raise LeaderboardError(f"{origin}: dataset: the log {name!r} cannot be read: "
                                f"{exc}") from None
