@@ -179,8 +179,12 @@ def test_the_board_refuses_an_unsound_navigation_file(run, tmp_path):
     data = json.loads(run.read_text())
     data["contenders"][0]["localizer"] = "evil.py:Cheat"
     (navigation / "x.json").write_text(json.dumps(data))
+    entries = tmp_path / "entries"  # the navigation file is what is refused: one frame entry
+    entries.mkdir()
+    for name in ("ransac-paper.json", "ransac-paper.frames.csv.gz"):
+        (entries / name).write_bytes((SHIPPED_ENTRIES / name).read_bytes())
     with pytest.raises(LeaderboardError, match="evil.py:Cheat"):
-        board.build(SHIPPED_ENTRIES, tmp_path / "out", navigation)
+        board.build(entries, tmp_path / "out", navigation)
 
 
 def test_wilson_interval_matches_hand_worked_values():
