@@ -40,7 +40,8 @@ from typing import Any
 from azgym.errors import InvalidInputError
 
 __all__ = ["VEHICLE_KINDS", "MotionProfile", "Profile", "SensorProfile", "VehicleProfile",
-           "parse_profile", "profile_defaults", "profile_toml", "read_profile"]
+           "field_texts", "parse_profile", "profile_defaults", "profile_toml",
+           "read_profile"]
 
 FORKLIFT = "forklift"
 """A steered vehicle: odometry reports speed and steering angle (the bicycle model)."""
@@ -259,6 +260,20 @@ def profile_toml(profile: Profile) -> dict[str, dict[str, Any]]:
         if given:
             data[name] = given
     return data
+
+
+def field_texts(data: dict[str, dict[str, Any]]) -> dict[str, str]:
+    """Each field of a profile's TOML data (:func:`profile_toml`) as ``section.field=value``.
+
+    Keyed by ``section.field``; a flag is written ``true``/``false``, a number to 6 digits.
+    """
+    def written(value: Any) -> str:
+        if isinstance(value, bool):
+            return str(value).lower()
+        return f"{value:g}" if isinstance(value, float) else str(value)
+
+    return {f"{section}.{name}": f"{section}.{name}={written(value)}"
+            for section, values in data.items() for name, value in values.items()}
 
 
 def profile_defaults(accepted: tuple[str, ...], profile: Profile, given: dict[str, Any]

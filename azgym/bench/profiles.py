@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from azgym.localize.registry import parse_spec, resolve
-from azgym.profile import Profile, profile_defaults, profile_toml
+from azgym.profile import Profile, field_texts, profile_defaults, profile_toml
 from azgym.sensing.motion import ImuModel, Motion, OdometryModel
 from azgym.site import Scenario
 from azgym.site.error_model import ErrorModel
@@ -99,11 +99,9 @@ def describe_profile(profile: Profile, simulated: Collection[str] | None = None)
         profile: The profile.
         simulated: The fields a suite's simulator takes (None: no simulator, a log's run).
     """
-    given = [(f"{section}.{name}", value) for section, values in profile_toml(profile).items()
-             for name, value in values.items()]
-    if not given:
+    written = field_texts(profile_toml(profile))
+    if not written:
         return "profile: empty (every default as shipped)"
-    written = {key: f"{key}={_written(value)}" for key, value in given}
     if simulated is None:
         return f"profile: {', '.join(written.values())} (the contenders' defaults)"
     parts = []
@@ -114,13 +112,6 @@ def describe_profile(profile: Profile, simulated: Collection[str] | None = None)
     if only:
         parts.append(f"{', '.join(only)} (the contenders' defaults only: not simulated)")
     return f"profile: {'; '.join(parts)}"
-
-
-def _written(value: Any) -> str:
-    """A profile value as its TOML file writes it (a flag ``true``, a number to 6 digits)."""
-    if isinstance(value, bool):
-        return str(value).lower()
-    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 @dataclass(frozen=True)

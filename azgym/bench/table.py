@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import math
 import textwrap
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 from azgym.bench.metrics import BLOCK_SECONDS, FAILURE_DISTANCE, HEADLINE
+from azgym.profile import field_texts
 
 RANK_BY = HEADLINE
 """Boards rank by the p75 position error over every frame, a refusal infinite (EvAAL's rule)."""
@@ -113,9 +113,7 @@ def ranked_table(summary: dict[str, Any]) -> str:
 
 def profile_lines(summary: dict[str, Any]) -> list[str]:
     """The profile a run applied (``summary["profile"]``), wrapped: [] when none was."""
-    given = [f"{section}.{name}={json.dumps(value)}"
-             for section, values in (summary.get("profile") or {}).items()
-             for name, value in values.items()]
+    given = list(field_texts(summary.get("profile") or {}).values())
     return textwrap.wrap(f"profile (the contenders' defaults): {', '.join(given)}", 100) \
         if given else []
 

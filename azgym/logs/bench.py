@@ -37,7 +37,7 @@ def data_suite(log: Log, cases: Sequence[Case]) -> Suite:
     frozen = list(cases)
     return Suite(f"data:{log.manifest.name}", log.manifest.format, log.manifest.description, 0,
                  lambda _seed, _quick: list(frozen),
-                 routes=log.odometry is not None or log.imu is not None)
+                 routes=log.driven)
 
 
 def log_profile(log: Log, profile: Profile | None = None) -> Profile:

@@ -59,7 +59,6 @@ def log_cases(log: Log) -> list[Case]:
     frames = log.frames
     times = frames["time"]
     motions = _motions(log, times)
-    driven = log.odometry is not None or log.imu is not None
     labels = log.detections["label"]
     bounds = np.searchsorted(log.detections["frame"], np.arange(len(times) + 1))
     cases = []
@@ -72,7 +71,7 @@ def log_cases(log: Log) -> list[Case]:
         assert pose is not None
         # A known start is a driven sequence's (its dock): a static recording's positions are
         # its truth, which no contender may be handed.
-        start = first and driven and not math.isnan(pose[2])
+        start = first and log.driven and not math.isnan(pose[2])
         cases.append(Case(log.map_name, measurements, pose, cause, sequence, sequence=sequence,
                           motion=motions[k], initial=pose if start else None,
                           time=float(times[k]), event=frames["event"][k],
@@ -82,7 +81,7 @@ def log_cases(log: Log) -> list[Case]:
 
 def _motions(log: Log, times: np.ndarray) -> list[Motion | None]:
     """Each frame's motion samples: after the previous frame's time, up to its own."""
-    if log.odometry is None and log.imu is None:
+    if not log.driven:
         return [None] * len(times)
     odometry, imu = log.odometry, log.imu
     odometry_time = np.zeros(0) if odometry is None else odometry["time"]

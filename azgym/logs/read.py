@@ -105,6 +105,11 @@ class Log:
     notes: tuple[str, ...] = ()
 
     @property
+    def driven(self) -> bool:
+        """Whether it has motion samples (odometry or IMU): its sequences are driven tracks."""
+        return self.odometry is not None or self.imu is not None
+
+    @property
     def has_truth(self) -> bool:
         """Whether every frame has its true position."""
         return "x" in self.frames.values
