@@ -6,9 +6,12 @@ log instead (a shipped log's name, or a folder ``leaderboard/datasets/NAME/``; t
 too when it has odometry or IMU), each contender with its defaults from the log's profile (its
 ``[vehicle]``, ``[sensor]`` and ``[motion]`` sections), and then only the suites named by
 ``--suite``; ``--real`` runs them on every shipped log of real data (docs/datasets.md).
+``--localizer SPEC`` runs only the contenders named (with ``ransac``, the runtime reference)
+and rewrites only their entries: after a change to one method, its entries are brought up to
+date without the others'.
 
     python baselines/leaderboard_entries.py [--workers 2] [--suite NAME ...] [--data NAME ...]
-        [--real]
+        [--real] [--localizer SPEC ...]
 
 Writes ``leaderboard/entries/<localizer>-<suite>.json`` (``<localizer>-data-<dataset>.json`` for
 a log) and the per-frame results beside each, then (unless ``--no-board``) rebuilds
@@ -49,27 +52,35 @@ def main() -> None:
                         help="a log: a shipped log's name or a log folder")
     parser.add_argument("--real", action="store_true",
                         help="every shipped log of real data (as if each were given by --data)")
+    parser.add_argument("--localizer", action="append", metavar="SPEC",
+                        help="only this contender's entries (repeatable; default: every one)")
     parser.add_argument("--no-board", action="store_true",
                         help="write the entries only (azgym leaderboard build writes the board)")
     args = parser.parse_args()
+    known = {c.label for c in _contenders(True, None)}
+    for spec in args.localizer or []:
+        if spec not in known:
+            parser.error(f"--localizer {spec}: not a contender of the board; one of "
+                         f"{', '.join(sorted(known))}")
     entries = ROOT / "leaderboard" / "entries"
     logs = (args.data or []) + (real_logs() if args.real else [])
     for name in args.suite or ([] if logs else list(SUITES)):
         suite = SUITES[name]
-        result = run_benchmark(suite, _contenders(suite.routes), workers=args.workers,
+        result = run_benchmark(suite, _contenders(suite.routes, args.localizer),
+                               workers=args.workers,
                                progress=lambda line: print(line, flush=True))
         out = ROOT / "results" / f"bench-{name}"
         result.write(out)
-        _submit(result.summary, out, entries, name)
+        _submit(result.summary, out, entries, name, args.localizer)
     for folder in logs:
         log = read_log(folder)
         result = run_log_benchmark(log, _contenders(log.odometry is not None or
-                                                    log.imu is not None),
+                                                    log.imu is not None, args.localizer),
                                    workers=args.workers,
                                    progress=lambda line: print(line, flush=True))
         out = ROOT / "results" / f"bench-data-{log.manifest.name}"
         write_log_results(result, log, out)
-        _submit(result.summary, out, entries, f"data-{log.manifest.name}")
+        _submit(result.summary, out, entries, f"data-{log.manifest.name}", args.localizer)
     if args.no_board:
         return
     for path in board.build(entries, ROOT / "leaderboard", ROOT / "leaderboard" / "navigation"):
@@ -84,16 +95,25 @@ def real_logs() -> list[str]:
             if manifest is not None and not manifest.simulated]
 
 
-def _contenders(routes: bool) -> list[Contender]:
-    """The default built-in localizers, the learned ones, and the trackers on driven routes."""
-    return default_contenders() + [contender(spec) for spec in LEARNED] + (
+def _contenders(routes: bool, only: list[str] | None) -> list[Contender]:
+    """The default built-in localizers, the learned ones, and the trackers on driven routes.
+
+    ``only``: just these specs (those that run on the suite: a tracker only on driven routes).
+    """
+    every = default_contenders() + [contender(spec) for spec in LEARNED] + (
         [contender(spec) for spec in list_trackers()] if routes else [])
+    if only is None:
+        return every
+    return [c for c in every if c.label in only]
 
 
-def _submit(summary: dict[str, Any], out: Path, entries: Path, suffix: str) -> None:
-    """An entry ``<localizer>-<suffix>`` of every localizer of a run."""
+def _submit(summary: dict[str, Any], out: Path, entries: Path, suffix: str,
+            only: list[str] | None) -> None:
+    """An entry ``<localizer>-<suffix>`` of every localizer of a run (of those in ``only``)."""
     print(ranked_table(summary), flush=True)
     for label in summary["localizers"]:
+        if only is not None and label not in only:
+            continue
         path = leaderboard.submit(out, label, entries, name=f"{label}-{suffix}",
                                   version=azgym.__version__, authors=["azgym developers"],
                                   link="", overwrite=True)

@@ -37,10 +37,10 @@ from typing import Any
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
+from azgym.core import Estimate, FloatArray
 from azgym.errors import ModelFileError
 from azgym.localize._angles import azimuth_spread
-from azgym.localize.base import MIN_MEASUREMENTS, ROW_AZIMUTH
+from azgym.localize.base import ROW_AZIMUTH
 
 __all__ = ["GENERATED_WAREHOUSES", "SERVED_NOISE", "SPREAD_QUANTILE", "TrainingDistribution",
            "batch_distribution", "card_section", "distribution_of"]
@@ -122,40 +122,27 @@ class TrainingDistribution:
                     f"({math.degrees(self.view_spread):.3g}°)")
         return ""
 
-    def frame_reason(self, azimuth: FloatArray, distinct: int) -> str:
+    def frame_reason(self, distinct: int, spread: float) -> str:
         """Why a frame is unlike the training frames ('' when it is like them).
 
         Args:
-            azimuth: The frame's usable azimuths (ids in the map) [rad].
-            distinct: The distinct beacons they measure.
+            distinct: The distinct beacons its usable measurements (ids in the map) measure.
+            spread: Their azimuth spread [rad] (:func:`azgym.localize._angles.azimuth_spread`),
+                which the localizers' compiled frame computes.
         """
         if distinct < self.min_beacons:
             return (f"{distinct} beacons in view, fewer than any training frame had "
                     f"({self.min_beacons})")
-        spread = azimuth_spread(np.ascontiguousarray(azimuth, dtype=np.float64))
         if spread < self.min_azimuth_spread:
             return (f"the azimuths span {math.degrees(spread):.3g}°, narrower than any "
                     f"training frame's ({math.degrees(self.min_azimuth_spread):.3g}°)")
         return ""
 
-    def refusal(self, settings_reason: str, measurements: Measurements, beacons: BeaconMap
-                ) -> Estimate | None:
-        """The refusal of a frame off the distribution; None for a frame like the training ones.
-
-        A frame of fewer than MIN_MEASUREMENTS distinct beacons is left to the standard refusal
-        (None). ``settings_reason`` is :meth:`settings_reason`'s for the localizer's settings.
-        The refusal's diagnostics say ``off_distribution``.
-        """
-        rows = beacons.index_of(measurements.ids)
-        known = rows >= 0
-        distinct = int(np.unique(rows[known]).size)
-        if distinct < MIN_MEASUREMENTS:
-            return None
-        reason = settings_reason or self.frame_reason(measurements.azimuth[known], distinct)
-        if not reason:
-            return None
+    @staticmethod
+    def refusal(reason: str, n_measurements: int) -> Estimate:
+        """The refusal of a frame off the distribution for ``reason``: ``off_distribution``."""
         return Estimate.failure(f"off the model's training distribution: {reason}",
-                                len(measurements), {"off_distribution": True})
+                                n_measurements, {"off_distribution": True})
 
 
 GENERATED_WAREHOUSES = TrainingDistribution(

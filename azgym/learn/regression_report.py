@@ -29,12 +29,16 @@ VARIANTS = (("regression", 0), ("refined", 3))
 """The localizer's variants reported: name and ``refine_rounds``."""
 
 
-def localize_frames(batch: Any, regressor: PoseRegressor, refine_rounds: int) -> np.ndarray:
-    """Each frame's position error [m] under the localizer (its other settings the defaults)."""
+def localize_frames(batch: Any, regressor: PoseRegressor, refine_rounds: int,
+                    **settings_given: float) -> np.ndarray:
+    """Each frame's position error [m] under the localizer (its other settings the defaults).
+
+    ``settings_given``: other settings of :func:`azgym.localize.learned.settings_array`.
+    """
     from azgym.localize.base import INT_ROWS, ROW_BEACON_INDEX, ROW_SOURCE
     from azgym.localize.learned import OUT_SIZE, settings_array, solve_regressed
 
-    settings = settings_array(refine_rounds=refine_rounds)
+    settings = settings_array(refine_rounds=refine_rounds, **settings_given)
     errors = np.empty(len(batch))
     out, cov = np.empty(OUT_SIZE), np.empty((3, 3))
     for n in range(len(batch)):

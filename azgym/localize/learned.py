@@ -20,19 +20,21 @@ Optionally (``refine_rounds`` > 0, the default), a short robust refinement finis
 refinement (eq. 28-33, with its error-model covariance:
 :func:`azgym.localize.refinement.refine_with_covariance`) on a chosen set per round: the first
 round, from the regressed pose, takes every measurement whose trust logit is at least ``min_trust``
-(all of them if those see fewer than three beacons); each later round those of them whose residual
-at the current pose is within a gate, the gates shrinking by ``GATE_GROWTH`` per round down to
-``gate`` (iteratively trimmed least squares, the hard form of IRLS); by default the last gate is the
+(all of them if those see fewer than three beacons); each later round every measurement whose
+residual at the current pose is within a gate, trusted or not, the gates shrinking by
+``GATE_GROWTH`` per round down to ``gate`` (iteratively trimmed least squares, the hard form of
+IRLS): the network chooses the basin, the error model the inliers. By default the last gate is the
 features' consensus tolerance, 1° at the training noise, so it scales with the camera's noise as the
 features do. The defaults (3 rounds, 1°, −2) were chosen with the shipped weights on frames of the
-held-out generated layouts (data seed 7, 1,200 frames; never a suite's): p75 3.2 cm there, 6.8 %
-beyond 1 m; ``min_trust`` −4 let the measurements the network doubts in (p75 11 cm), 0 left out good
-views it doubted (8.5 % beyond 1 m); a fourth round or another last gate (0.5°, 2°) moved p75 by
-under 0.3 cm. A round that keeps fewer than three beacons, or whose refinement does not converge,
-ends the refinement with the pose before it. ``refine_rounds=0`` is the pure regression; the model
-card and the report give both variants' figures. The default is the refinement because the pure
-regression is metres off in large warehouses, where a centimetre azimuth fit is cheap once a start
-in the right basin is known (the network's job).
+held-out generated layouts (data seed 7, 1,200 frames; never a suite's; ``python
+baselines/learned_defaults.py`` prints the table): p75 3.47 cm there, 7.8 % beyond 1 m;
+``min_trust`` −4 lets the measurements the network doubts into the first round (p75 12.2 cm), 0
+leaves out good views it doubted (9.3 % beyond 1 m); a fourth round or another last gate (0.5°, 2°)
+moved p75 by at most 0.35 cm. A round that keeps fewer than three beacons, or whose refinement does
+not converge, ends the refinement with the pose before it. ``refine_rounds=0`` is the pure
+regression; the model card and the report give both variants' figures. The default is the refinement
+because the pure regression is metres off in large warehouses, where a centimetre azimuth fit is
+cheap once a start in the right basin is known (the network's job).
 
 A frame of three distinct beacons like the training frames is always answered (the regression
 cannot fail); the covariance says how far to trust it. A frame unlike them is refused with the
@@ -66,8 +68,10 @@ from azgym.learn.features import (
 from azgym.learn.regression import N_TOKENS, OUTPUTS, PoseRegressor, frame_tokens, regress
 from azgym.learn.weights import load_weights, model_path
 from azgym.localize import _kernels as K
+from azgym.localize._angles import azimuth_spread
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
+    ROW_AZIMUTH,
     ROW_BEACON_INDEX,
     ROW_BX,
     ROW_BY,
@@ -162,9 +166,11 @@ def _refine_rounds(floats, ints, trust, settings, out, cov, use):
     done = 0
     for r in range(rounds):
         gate = settings[SET_GATE] * GATE_GROWTH ** (rounds - 1 - r)
-        keep = trust >= settings[SET_MIN_TRUST]
-        for u in range(k):
-            if r > 0 and keep[u]:
+        if r == 0:
+            keep = trust >= settings[SET_MIN_TRUST]
+        else:
+            keep = np.empty(k, dtype=np.bool_)
+            for u in range(k):
                 keep[u] = abs(_residual(bx[u] - out[K.POSE_X], by[u] - out[K.POSE_Y],
                                         out[K.POSE_COS], out[K.POSE_SIN], ca[u], sa[u])) <= gate
         if _distinct(ints[ROW_BEACON_INDEX], keep) < MIN_MEASUREMENTS:
@@ -210,15 +216,19 @@ def _distinct(beacon, keep):
 @jit
 def _learned_frame(ids, azimuth, quality, has_quality, sorted_ids, sorted_order, xyz, width,
                    params, hidden, settings, out, cov, inliers):
-    """The whole frame in one compiled call; returns (distinct beacons, rounds refined)."""
+    """The whole frame in one compiled call.
+
+    Returns (distinct beacons, their azimuth spread, rounds refined); with fewer than
+    MIN_MEASUREMENTS distinct beacons nothing else is done.
+    """
     floats, ints, distinct = gather(ids, azimuth, sorted_ids, sorted_order, xyz, width)
     if distinct < MIN_MEASUREMENTS:
-        return distinct, 0
+        return distinct, 0.0, 0
     features = np.empty((floats.shape[1], N_FEATURES))
     frame_features(floats, ints, distinct, quality, has_quality, settings[SET_TOLERANCE],
                    features)
-    return distinct, solve_regressed(floats, ints, features, params, hidden, settings, out,
-                                     cov, inliers)
+    return distinct, azimuth_spread(floats[ROW_AZIMUTH]), solve_regressed(
+        floats, ints, features, params, hidden, settings, out, cov, inliers)
 
 
 class Learned(Localizer):
@@ -231,7 +241,7 @@ class Learned(Localizer):
         gate: The last round's residual gate [rad]; earlier rounds' grow by ``GATE_GROWTH``.
             None: the features' consensus tolerance, 1° at the training noise and scaled with
             ``delta_alpha_d`` like it (:func:`azgym.learn.features.consensus_tolerance`).
-        min_trust: Least trust logit of a measurement the refinement may use.
+        min_trust: Least trust logit of a measurement the first refinement round starts from.
         delta_alpha_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1), for the
             refinement's covariance.
         coverage: Whether the covariance includes the coverage term Δα_c,i (eq. 2).
@@ -290,18 +300,20 @@ class Learned(Localizer):
         self._loaded_from = path
 
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
-        refused = self._distribution.refusal(self._off_distribution, measurements, beacons)
-        if refused is not None:
-            return refused
+        if self._off_distribution:
+            return self._distribution.refusal(self._off_distribution, len(measurements))
         column, has_quality = first_quality_column(measurements.quality, len(measurements))
         out, cov = np.empty(OUT_SIZE), np.empty((3, 3))
         inliers = np.zeros(len(measurements), dtype=np.bool_)
-        distinct, rounds = _learned_frame(
+        distinct, spread, rounds = _learned_frame(
             measurements.ids, measurements.azimuth, column, has_quality,
             *beacons.lookup_tables(), self._regressor.params, self._regressor.hidden,
             self._settings, out, cov, inliers)
         if distinct < MIN_MEASUREMENTS:
             return super()._localize_frame(measurements, beacons)  # the standard refusal
+        reason = self._distribution.frame_reason(distinct, spread)
+        if reason:
+            return self._distribution.refusal(reason, len(measurements))
         return _answer(rounds, out, cov, inliers)
 
     def _localize(self, problem: Problem) -> Estimate:

@@ -55,6 +55,7 @@ from azgym.learn.features import (
 )
 from azgym.learn.network import InlierScorer
 from azgym.learn.weights import load_weights, model_path
+from azgym.localize._angles import azimuth_spread
 from azgym.localize._ng_search import (
     CONSENSUS_HYPOTHESES,
     guided_settings,
@@ -62,6 +63,7 @@ from azgym.localize._ng_search import (
 )
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
+    ROW_AZIMUTH,
     Localizer,
     Problem,
     gather,
@@ -89,15 +91,16 @@ def _ng_ransac_frame(ids, azimuth, quality, sorted_ids, sorted_order, xyz, width
     """The whole frame in one compiled call: the id lookup, then :func:`ng_ransac_search`.
 
     ``quality`` is the first quality column, empty when the frame has none. Returns (distinct
-    beacons, triplets tried, the supporters' summed inlier probability); with fewer than
-    MIN_MEASUREMENTS distinct beacons nothing else is done.
+    beacons, their azimuth spread, triplets tried, the supporters' summed inlier probability);
+    with fewer than MIN_MEASUREMENTS distinct beacons nothing else is done.
     """
     floats, ints, distinct = gather(ids, azimuth, sorted_ids, sorted_order, xyz, width)
     if distinct < MIN_MEASUREMENTS:
-        return distinct, 0, np.nan
+        return distinct, 0.0, 0, np.nan
+    spread = azimuth_spread(floats[ROW_AZIMUTH])
     tried, weight = ng_ransac_search(floats, ints, distinct, quality, quality.size > 0, params,
                                      hidden, settings, out, mask, cov)
-    return distinct, tried, weight
+    return distinct, spread, tried, weight
 
 
 class NgRansac(Localizer):
@@ -206,19 +209,21 @@ class NgRansac(Localizer):
         return self._scorer.logits(measurement_features(problem, quality, self._tolerance))
 
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
-        refused = self._distribution.refusal(self._off_distribution, measurements, beacons)
-        if refused is not None:
-            return refused
+        if self._off_distribution:
+            return self._distribution.refusal(self._off_distribution, len(measurements))
         column, has_quality = first_quality_column(measurements.quality, len(measurements))
         out = np.empty(OUT_SIZE)
         mask = np.zeros(len(measurements), dtype=np.bool_)
         cov = np.empty((3, 3))
-        distinct, tried, weight = _ng_ransac_frame(
+        distinct, spread, tried, weight = _ng_ransac_frame(
             measurements.ids, measurements.azimuth, column if has_quality else NO_QUALITY,
             *beacons.lookup_tables(),
             self._scorer.params, self._scorer.hidden, self._settings, out, mask, cov)
         if distinct < MIN_MEASUREMENTS:
             return super()._localize_frame(measurements, beacons)  # the standard refusal
+        reason = self._distribution.frame_reason(distinct, spread)
+        if reason:
+            return self._distribution.refusal(reason, len(measurements))
         return self._answer(distinct, tried, weight, out, mask, cov)
 
     def _localize(self, problem: Problem) -> Estimate:

@@ -76,3 +76,35 @@ def test_the_shipped_weights_are_small_and_their_card_names_them():
     assert SHIPPED_WEIGHTS.stat().st_size <= 2 * 1024 * 1024
     assert "![learning curve](learned-learning-curve.png)" in card
     assert (SHIPPED_WEIGHTS.parent / "learned-learning-curve.png").is_file()
+
+
+def _refined_set(trust: list[float], error_deg: float = 0.0) -> tuple[np.ndarray, int]:
+    """The measurements the refinement rounds end with, from a start 5 cm off, for given trust
+    logits (the last measurement ``error_deg`` off its true azimuth)."""
+    from azgym.localize import _kernels as K
+    from azgym.localize.base import gather
+    from azgym.localize.learned import OUT_ITERATIONS, OUT_SIZE, _refine_rounds, settings_array
+
+    room = beacon_map([(0.0, 0.0), (6.0, 0.0), (6.0, 6.0), (0.0, 6.0), (3.0, 7.0)])
+    frame = ideal_frame(2.0, 2.5, 0.4, room)
+    azimuth = frame.azimuth.copy()
+    azimuth[-1] += math.radians(error_deg)
+    floats, ints, _ = gather(frame.ids, azimuth, *room.lookup_tables())
+    out, cov = np.zeros(OUT_SIZE), np.zeros((3, 3))
+    out[K.POSE_X], out[K.POSE_Y] = 2.05, 2.5
+    out[K.POSE_COS], out[K.POSE_SIN] = math.cos(0.4), math.sin(0.4)
+    out[OUT_ITERATIONS] = 0.0
+    use = np.ones(len(trust), dtype=np.bool_)
+    rounds = _refine_rounds(floats, ints, np.array(trust), settings_array(), out, cov, use)
+    return use, rounds
+
+
+def test_a_good_measurement_the_network_doubted_comes_back_after_the_first_round():
+    # A real camera's biased beacon (Roh's data): the network doubts it, the residuals do not.
+    use, rounds = _refined_set([3.0, 3.0, 3.0, 3.0, -10.0])
+    assert rounds == 3 and use.all()
+
+
+def test_a_doubted_measurement_far_off_stays_out_by_its_residual():
+    use, rounds = _refined_set([3.0, 3.0, 3.0, 3.0, -10.0], error_deg=20.0)
+    assert rounds == 3 and use.tolist() == [True, True, True, True, False]

@@ -8,6 +8,7 @@ Roh's frames).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -89,14 +90,16 @@ def test_a_noise_outside_the_served_range_is_refused(name, degrees):
            "(0.1°-12°)" in estimate.reason
 
 
-def test_fewer_beacons_than_training_had_is_refused():
-    distribution = TrainingDistribution(math.radians(0.4), (0.0, 1.0), 0.0, 0.0, 5)
-    few = ideal_frame(1.5, 1.5, 0.3, ROOM)
-    assert distribution.refusal("", few, ROOM) is None  # all eight in view
-    four = Measurements(few.ids[:4], few.azimuth[:4])
-    refused = distribution.refusal("", four, ROOM)
-    assert refused is not None and "4 beacons in view, fewer than any training frame had (5)" \
-        in refused.reason
+@pytest.mark.parametrize("name", LEARNED)
+def test_fewer_beacons_than_training_had_is_refused(name):
+    localizer = azgym.make_localizer(name)
+    localizer._distribution = dataclasses.replace(localizer._distribution, min_beacons=5)
+    every = ideal_frame(1.5, 1.5, 0.3, ROOM)
+    assert localizer.localize(every, ROOM).ok  # all eight in view
+    four = Measurements(every.ids[:4], every.azimuth[:4])
+    refused = localizer.localize(four, ROOM)
+    assert not refused.ok and refused.diagnostics["off_distribution"]
+    assert "4 beacons in view, fewer than any training frame had (5)" in refused.reason
 
 
 @pytest.mark.parametrize("name", LEARNED)
