@@ -67,12 +67,12 @@ DEFAULT_SUITE = "warehouse-static"
 
 
 def _bench(args: argparse.Namespace) -> int:
+    from azgym.bench.navigation.suites import NAVIGATION_SUITES
     from azgym.bench.runner import run_benchmark
     from azgym.bench.suites import SUITES
     from azgym.bench.table import run_report
     from azgym.errors import unknown_name
     from azgym.files import prepare_folder
-    from azgym.nav.suites import NAVIGATION_SUITES
 
     check_backend(args)
     profile = read_profile_option(args)

@@ -1,10 +1,10 @@
 """The command that scores a navigator: ``azgym evaluate navigator POLICY``.
 
-A policy (the scripted ``pure-pursuit`` or a stable-baselines3 zip) drives the same episodes of
-a Navigate environment once per localizer, and each localizer gets a row of the navigation
-scores of :mod:`azgym.nav.scoring`. Every argument is checked, every environment built and the
-policy loaded and matched against them before the first episode, so a typo, a missing extra or
-a policy trained for another observation costs nothing; :mod:`azgym.cli` adds the parser to the
+A policy (the scripted ``pure-pursuit`` or a stable-baselines3 zip) drives the same episodes of a
+Navigate environment once per localizer, and each localizer gets a row of the navigation scores of
+:mod:`azgym.bench.navigation.scoring`. Every argument is checked, every environment built and the
+policy loaded and matched against them before the first episode, so a typo, a missing extra or a
+policy trained for another observation costs nothing; :mod:`azgym.cli` adds the parser to the
 ``azgym`` command.
 """
 
@@ -31,11 +31,11 @@ tuned on, and the same ones on every run."""
 def _evaluate_navigator(args: argparse.Namespace) -> int:
     import gymnasium as gym
 
+    from azgym.bench.navigation.benchmark import episode_rows
+    from azgym.bench.navigation.report import score_table
+    from azgym.bench.navigation.scoring import drive
     from azgym.files import prepare_folder, write_file
-    from azgym.nav.benchmark import episode_rows
     from azgym.nav.policy_file import load_policy
-    from azgym.nav.report import score_table
-    from azgym.nav.scoring import drive
     from azgym.nav.train import navigation_spec
 
     episodes = whole_number("--episodes", args.episodes, 1)

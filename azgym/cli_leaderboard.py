@@ -51,8 +51,8 @@ def add_leaderboard(commands: argparse._SubParsersAction) -> None:
 
 def _leaderboard(args: argparse.Namespace) -> int:
     from azgym.bench import board, leaderboard
-    from azgym.nav.board import verify_navigation
-    from azgym.nav.results_file import is_navigation_file
+    from azgym.bench.navigation.board import verify_navigation
+    from azgym.bench.navigation.results_file import is_navigation_file
 
     if args.action == "submit":
         path = leaderboard.submit(Path(args.results), args.localizer, Path(args.entries),

@@ -107,13 +107,14 @@ def bench_data(args: argparse.Namespace, progress: Progress, profile: Profile | 
     Each takes its defaults from the log's profile, with ``profile``'s fields over it.
     """
     from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+    from azgym.bench.runner import run_log_benchmark, write_log_results
+    from azgym.bench.suites.data import log_cases, log_profile
     from azgym.bench.table import run_report
     from azgym.cli import _contenders
     from azgym.cli_options import resolve_workers
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
-    from azgym.logs import log_cases, read_log
-    from azgym.logs.bench import log_profile, run_log_benchmark, write_log_results
+    from azgym.logs import read_log
 
     if (args.suite is not None or args.navigator or args.quick or args.split != "dev"
             or args.backend != "local" or args.address is not None):

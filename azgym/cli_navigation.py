@@ -1,9 +1,9 @@
 """``azgym bench --suite navigation``: the closed-loop suites, run from the bench command.
 
-A navigation suite (:mod:`azgym.nav.suites`) is run like a frame suite — ``--localizer``,
-``--with-builtins``, ``--split``, ``--quick``, ``--workers``, ``--out`` mean the same — with
-``--navigator`` naming who drives. :mod:`azgym.cli` hands the run over here when the suite is a
-navigation suite.
+A navigation suite (:mod:`azgym.bench.navigation.suites`) is run like a frame suite —
+``--localizer``, ``--with-builtins``, ``--split``, ``--quick``, ``--workers``, ``--out`` mean the
+same — with ``--navigator`` naming who drives. :mod:`azgym.cli` hands the run over here when the
+suite is a navigation suite.
 """
 
 from __future__ import annotations
@@ -18,11 +18,11 @@ from azgym.errors import InvalidInputError
 
 def bench_navigation(args: argparse.Namespace, progress) -> int:
     """Run the navigation suite ``args.suite``; print the table and write ``navigation.json``."""
+    from azgym.bench.navigation.benchmark import check_contenders, contenders_of, run_navigation
+    from azgym.bench.navigation.report import score_table
+    from azgym.bench.navigation.suites import NAVIGATORS, get_navigation_suite
     from azgym.cli_options import resolve_workers
     from azgym.files import prepare_folder, write_file
-    from azgym.nav.benchmark import check_contenders, contenders_of, run_navigation
-    from azgym.nav.report import score_table
-    from azgym.nav.suites import NAVIGATORS, get_navigation_suite
 
     if args.time_limit is not None or args.backend != "local" or args.address is not None:
         raise InvalidInputError("--time-limit, --backend and --address are for the frame "

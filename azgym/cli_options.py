@@ -65,7 +65,7 @@ def read_profile_option(args: argparse.Namespace) -> Profile | None:
         InvalidInputError: With a navigation suite or ``--navigator``; a profile file that
             cannot be read or holds a bad field (naming the file and the field).
     """
-    from azgym.nav.suites import NAVIGATION_SUITES
+    from azgym.bench.navigation.suites import NAVIGATION_SUITES
     from azgym.profile import read_profile
 
     if args.profile is None:

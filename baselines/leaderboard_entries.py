@@ -29,12 +29,16 @@ from typing import Any
 import azgym
 from azgym.bench import board, leaderboard
 from azgym.bench.contenders import Contender, contender
-from azgym.bench.runner import default_contenders, run_benchmark
+from azgym.bench.runner import (
+    default_contenders,
+    run_benchmark,
+    run_log_benchmark,
+    write_log_results,
+)
 from azgym.bench.suites import SUITES
 from azgym.bench.table import ranked_table
 from azgym.localize.registry import list_trackers
 from azgym.logs import read_log
-from azgym.logs.bench import run_log_benchmark, write_log_results
 from azgym.logs.manifest import read_manifest
 from azgym.logs.problems import Problems
 from azgym.logs.read import shipped_logs

@@ -19,9 +19,9 @@ import time
 from pathlib import Path
 
 from azgym.bench import board
-from azgym.nav.benchmark import check_contenders, contenders_of, run_navigation
-from azgym.nav.report import score_table
-from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS
+from azgym.bench.navigation.benchmark import check_contenders, contenders_of, run_navigation
+from azgym.bench.navigation.report import score_table
+from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS
 
 ROOT = Path(__file__).resolve().parent.parent
 

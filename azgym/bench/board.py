@@ -170,10 +170,10 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
           datasets: Path | None = None, skip_unavailable: bool = False) -> list[Path]:
     """Write the board: README.md (tables) and index.html (sortable, self-contained).
 
-    Each suite has one table per split and size (:data:`KINDS`); only the dev split's full
-    size is the suite's ranking. Each dataset (a log, ``data:NAME``) has one table: a simulated
-    log's after the suites', a real one's in the part headed :data:`REAL_PART`. The navigation
-    suites' tables follow, from the results files in ``navigation_dir`` (:mod:`azgym.nav.board`).
+    Each suite has one table per split and size (:data:`KINDS`); only the dev split's full size is
+    the suite's ranking. Each dataset (a log, ``data:NAME``) has one table: a simulated log's after
+    the suites', a real one's in the part headed :data:`REAL_PART`. The navigation suites' tables
+    follow, from the results files in ``navigation_dir`` (:mod:`azgym.bench.navigation.board`).
 
     Args:
         entries_dir: The entries.
@@ -283,7 +283,7 @@ def _unchecked_note(unavailable: list[DatasetUnavailable]) -> list[str]:
 
 def _navigation_section(directory: Path, sections: list[Section]) -> list[str]:
     """The navigation tables' Markdown lines; their page sections are added to ``sections``."""
-    from azgym.nav.board import navigation_tables
+    from azgym.bench.navigation.board import navigation_tables
 
     lines = [f"# {NAVIGATION_PART}", "", NAVIGATION_NOTE, ""]
     previous = None

@@ -7,7 +7,7 @@ the log is looked for among the logs shipped with azgym and then in the datasets
 (``DATASETS/NAME/``; a folder there of a shipped log's name is refused); its digest must be the
 entry's (a log edited since the entry was made is refused), its format one this azgym reads,
 its name and ``simulated`` the entry's; the entry's cases are then the log's frames
-(:func:`~azgym.logs.cases.log_cases`), checked and recomputed as a suite's. A log that cannot
+(:func:`~azgym.bench.suites.data.log_cases`), checked and recomputed as a suite's. A log that cannot
 be found raises :class:`DatasetUnavailable`: the entry cannot be checked, and the board leaves
 it out only when told to (``--skip-unavailable``).
 """
@@ -21,8 +21,7 @@ from typing import Any
 from azgym.bench.entry_files import LeaderboardError
 from azgym.bench.results import cases_digest
 from azgym.bench.suites import Case
-from azgym.logs.bench import SPLIT
-from azgym.logs.cases import log_cases
+from azgym.bench.suites.data import SPLIT, log_cases
 from azgym.logs.manifest import FORMATS, MANIFEST
 from azgym.logs.problems import LogError
 from azgym.logs.read import Log, read_log, shipped_logs

@@ -40,10 +40,9 @@ from azgym.bench.entry_files import (
 )
 from azgym.bench.plugin_files import file_sha256, plugin_path, relative_spec, resolve_spec
 from azgym.bench.results import FRAME_COLUMNS
-from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.runner import Contender, run_benchmark, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
-from azgym.logs.bench import run_log_benchmark
 
 __all__ = ["ENTRY_FORMAT", "SUITES", "DatasetUnavailable", "LeaderboardError",
            "frames_file_text", "load_all", "load_available", "load_entries", "load_entry",

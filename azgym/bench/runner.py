@@ -6,16 +6,20 @@ A localizer that raises, hangs or crashes on a case is scored as unavailable on 
 reason is kept), never taking the run down. Each frame is localized on its own, so the figures
 do not depend on ``workers``. Runtimes are measured per call,
 and reported beside ``ransac``'s median from the same run, so runs on different machines compare.
+A log is scored through the same loop (:func:`run_log_benchmark`): its frames are the cases of
+its data suite (:mod:`azgym.bench.suites.data`), on its own map and with its own profile.
 """
 
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import math
 import os
 import secrets
 import time
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -36,11 +40,14 @@ from azgym.bench.processes import start_fork_server
 from azgym.bench.profiles import describe_profile
 from azgym.bench.results import BenchResult, summarize
 from azgym.bench.suites import NO_TEST_SPLIT, Case, Suite
+from azgym.bench.suites.data import SPLIT as DATA_SPLIT
+from azgym.bench.suites.data import data_suite, log_cases, log_profile
 from azgym.bench.wire import pack, pack_map
 from azgym.bench.worker import hide_process
 from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.jit import localizers_compiled
+from azgym.logs.read import Log
 from azgym.profile import Profile, profile_toml
 from azgym.site import load_scenario
 
@@ -229,6 +236,59 @@ def run_benchmark(
     summary["profile"] = profile_toml(profile or Profile())
     summary["profile_given"] = profile_toml(suite.profile or Profile())
     return BenchResult(summary, cases, outcomes)
+
+
+def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *,
+                      workers: int = 1, time_limit: float = DEFAULT_TIME_LIMIT,
+                      progress: Progress | None = None, profile: Profile | None = None
+                      ) -> BenchResult:
+    """Score every contender on the log's frames (``ransac`` added as the runtime reference).
+
+    Args:
+        log: The log.
+        contenders: The localizers and trackers (default: the built-in localizers).
+        workers: Worker processes per contender at a time.
+        time_limit: Seconds a contender may take on one frame (or to be built).
+        progress: Called with text as the run advances.
+        profile: Fields over the log's own profile (:func:`log_profile`), whose
+            hyperparameters are every contender's defaults; None: the log's own.
+
+    Raises:
+        LogError: The log has no truth to score against.
+    """
+    cases = log_cases(log)
+    contenders = with_reference(contenders or default_contenders())
+    applied = log_profile(log, profile)
+    say = progress or (lambda _line: None)
+    say(f"data:{log.manifest.name} ({'simulated' if log.manifest.simulated else 'real'}, "
+        f"sha256 {log.sha256[:12]}…): {len(cases)} frames")
+    say(f"  {describe_profile(applied)}")
+    outcomes = run_contenders(cases, contenders, workers=workers,
+                              maps={log.map_name: log.beacons}, time_limit=time_limit,
+                              progress=progress, profile=applied)
+    reference = next(c.label for c in contenders if c.is_reference)
+    summary = summarize(data_suite(log, cases), DATA_SPLIT, 0, False, contenders, cases, outcomes,
+                        reference)
+    summary["dataset"] = {"name": log.manifest.name, "format": log.manifest.format,
+                          "simulated": log.manifest.simulated, "sha256": log.sha256,
+                          "description": log.manifest.description}
+    summary["profile"] = profile_toml(applied)
+    summary["profile_given"] = profile_toml(profile or Profile())
+    return BenchResult(summary, cases, outcomes)
+
+
+def write_log_results(result: BenchResult, log: Log, out: Path) -> list[Path]:
+    """results.json, frames.csv and, with matplotlib, the figures, on the log's own map.
+
+    A map that is no shipped scenario (``beacons.csv``) is drawn from its beacons (no racks).
+    """
+    written = result.write(out, figures=False)
+    if importlib.util.find_spec("matplotlib") is not None:
+        from azgym.bench.plots import write_figures
+
+        maps = {} if log.shipped_map else {log.map_name: log.beacons}
+        written += write_figures(result.summary, result.cases, result.outcomes, out, maps)
+    return written
 
 
 def _start(backend: str, say: Progress) -> bool:

@@ -1,8 +1,12 @@
-"""The navigator's actions: (throttle, steer) in [−1, 1], or one of 15 discrete commands."""
+"""The navigator's actions and what chooses them.
+
+An action is (throttle, steer) in [−1, 1], or one of 15 discrete commands; a :class:`Policy`
+chooses it from an observation.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -45,3 +49,13 @@ def nearest_discrete(throttle: float, steer: float) -> int:
     """The discrete action nearest to (throttle, steer)."""
     return int(np.argmin((DISCRETE_CONTROLS[:, 0] - throttle) ** 2
                          + (DISCRETE_CONTROLS[:, 1] - steer) ** 2))
+
+
+class Policy(Protocol):
+    """What drives: ``act(observation)`` gives an action; ``reset()`` starts an episode."""
+
+    def act(self, observation: np.ndarray) -> Any:
+        """The action for one observation."""
+
+    def reset(self) -> None:
+        """Start an episode (forget the last one)."""

@@ -1,12 +1,12 @@
 """The geodesic shortest path: the least distance the forklift can drive from a start to a goal.
 
-SPL (:mod:`azgym.nav.scoring`) divides the length l of the shortest path by the length p of the
-path driven. l must be a true lower bound of every drive the forklift can make, or a driver
+SPL (:mod:`azgym.bench.navigation.scoring`) divides the length l of the shortest path by the length
+p of the path driven. l must be a true lower bound of every drive the forklift can make, or a driver
 scores 1 by cutting corners the reference path went round. So l is not the planner's path
 (:mod:`azgym.nav.planner` keeps 0.8 m from the racks and to the middle of the aisles, and a grid
-path is up to 2.7 % longer than the straight line): it is the exact shortest path of the
-forklift's reference point, the body's centre whose path ``travelled`` measures, through the
-free space, to the goal region.
+path is up to 2.7 % longer than the straight line): it is the exact shortest path of the forklift's
+reference point, the body's centre whose path ``travelled`` measures, through the free space, to the
+goal region.
 
 - **Free space.** Whatever its heading, the 1.2 m wide body holds a disc of radius 0.6 m round
   its centre, so the centre stays that far from every rack and wall, less what the physics lets

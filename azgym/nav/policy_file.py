@@ -24,8 +24,8 @@ import gymnasium as gym
 import numpy as np
 
 from azgym.errors import DependencyNotInstalled, ModelFileError
+from azgym.nav.controls import Policy
 from azgym.nav.pursuit import PurePursuit
-from azgym.nav.scoring import Policy
 
 PURE_PURSUIT = "pure-pursuit"
 """The name of the scripted baseline (:class:`azgym.nav.pursuit.PurePursuit`)."""
@@ -45,7 +45,7 @@ ACTOR_CRITIC = "stable_baselines3.common.policies"
 
 
 class SB3Policy:
-    """A stable-baselines3 model as a :class:`azgym.nav.scoring.Policy`: its deterministic action.
+    """A stable-baselines3 model as a :class:`azgym.nav.controls.Policy`: its deterministic action.
 
     Args:
         model: A loaded SB3 model (anything with ``predict(observation, deterministic=...)``).

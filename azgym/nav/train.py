@@ -10,7 +10,7 @@ the same ``eval_episodes`` episodes (seeds :data:`EVAL_SEED`, :data:`EVAL_SEED` 
 training never draws), keeps checkpoints, and leaves in the output folder the final policy
 (``policy.zip``: the reproducible artefact, not the best evaluation's), ``evaluations.npz``,
 the learning curve and the model card (:mod:`azgym.nav.train_card`), with the final policy
-scored by :func:`azgym.nav.scoring.drive`.
+scored by :func:`azgym.bench.navigation.scoring.drive`.
 
 torch, stable-baselines3 and PyYAML (the ``rl`` extra) are imported inside the functions, so
 importing this module needs none of them.
@@ -33,7 +33,7 @@ from azgym.arguments import whole_number
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
 from azgym.nav import policy_file
-from azgym.nav.scoring import Policy
+from azgym.nav.controls import Policy
 
 ALGORITHMS = ("ppo", "sac")
 """The algorithms ``--algo`` names (stable-baselines3's PPO and SAC)."""
@@ -223,7 +223,7 @@ def train_navigator(env_id: str, algo: str, steps: int | None, out: Path | str, 
         eval_every: Steps between evaluations (None: a 25th of the run).
         checkpoint_every: Steps between checkpoints (None: a tenth of the run).
         score_episodes: Episodes the final policy is scored on with
-            :func:`azgym.nav.scoring.drive` (seeds from :data:`EVAL_SEED`).
+            :func:`azgym.bench.navigation.scoring.drive` (seeds from :data:`EVAL_SEED`).
         overrides: Hyperparameters of the algorithm replacing the entry's.
         verbose: Print each evaluation (and a progress bar when tqdm and rich are installed).
     """
@@ -344,7 +344,7 @@ def _can_draw_a_bar() -> bool:
 
 def _score(request: Request, navigator: Policy) -> dict[str, float]:
     """The final policy's navigation scores on the evaluation seeds."""
-    from azgym.nav.scoring import drive
+    from azgym.bench.navigation.scoring import drive
 
     env = gym.make(request.env_id, **request.env_kwargs)
     try:

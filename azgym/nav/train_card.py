@@ -103,7 +103,8 @@ def write_card(request: Request, path: Path, *, wall_time: float,
         f"{request.eval_episodes} episodes (seeds {EVAL_SEED} … "
         f"{EVAL_SEED + request.eval_episodes - 1}); see `evaluations.npz` and "
         "`learning-curve.png`. The final policy (`policy.zip`, not the best evaluation's), "
-        f"scored by `azgym.nav.scoring.drive` on {request.score_episodes} episodes (seeds "
+        "scored by `azgym.bench.navigation.scoring.drive` on "
+        f"{request.score_episodes} episodes (seeds "
         f"{EVAL_SEED} … {EVAL_SEED + request.score_episodes - 1}):", "",
         "| figure | value |", "|---|---:|", *[f"| {name} | {value} |" for name, value in scores],
         ""]

@@ -20,14 +20,14 @@ from azgym.bench import board as B
 from azgym.bench import leaderboard as L
 from azgym.bench.entries import clean, suite_cases
 from azgym.bench.entry_files import parse_frames
+from azgym.bench.navigation.benchmark import contenders_of
+from azgym.bench.navigation.results_file import load_navigation
+from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS
 from azgym.bench.results import contender_metrics
 from azgym.bench.runner import Contender, run_benchmark
 from azgym.bench.suites import get_suite
 from azgym.cli import main
 from azgym.localize.registry import list_trackers
-from azgym.nav.benchmark import contenders_of
-from azgym.nav.results_file import load_navigation
-from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS
 
 NAVIGATION = L.Path(__file__).parents[2] / "leaderboard" / "navigation"
 

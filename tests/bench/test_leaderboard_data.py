@@ -14,10 +14,9 @@ from logs.mini_log import mini_files, write_log
 
 from azgym.bench import board as B
 from azgym.bench import leaderboard as L
-from azgym.bench.runner import Contender
+from azgym.bench.runner import Contender, run_log_benchmark, write_log_results
 from azgym.cli import main
 from azgym.logs import read_log
-from azgym.logs.bench import run_log_benchmark, write_log_results
 
 
 @pytest.fixture(scope="module")

@@ -16,13 +16,13 @@ import pytest
 from azgym.bench.contenders import Contender, contender
 from azgym.bench.leaderboard import LeaderboardError, submit
 from azgym.bench.profiles import SimulatedNoise, contender_params
-from azgym.bench.runner import run_benchmark, run_contenders
+from azgym.bench.runner import run_benchmark, run_contenders, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
+from azgym.bench.suites.data import log_profile
 from azgym.bench.suites.warehouse import scenario_suite
 from azgym.cli import main
 from azgym.errors import InvalidInputError
 from azgym.logs import read_log
-from azgym.logs.bench import log_profile, run_log_benchmark
 from azgym.profile import MotionProfile, Profile, SensorProfile, VehicleProfile
 from azgym.sensing.motion import DifferentialOdometryModel, ImuSamples, Motion, OdometrySamples
 from azgym.site import load_scenario

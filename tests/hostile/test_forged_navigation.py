@@ -18,7 +18,7 @@ import pytest
 from helpers import quick_navigation_run
 
 from azgym import cli
-from azgym.nav.scoring import wilson_interval
+from azgym.bench.navigation.scoring import wilson_interval
 
 SHIPPED_ENTRIES = Path(__file__).resolve().parents[2] / "leaderboard" / "entries"
 
@@ -147,7 +147,7 @@ def test_a_test_run_made_of_the_dev_splits_episodes_is_refused(genuine, tmp_path
 def test_two_test_runs_sharing_episodes_are_refused(genuine, tmp_path, monkeypatch):
     # Each file alone is sound (the per-file checks are stood in for): the board's own rule.
     from azgym.bench.entry_files import LeaderboardError
-    from azgym.nav import board
+    from azgym.bench.navigation import board
 
     for name, seed in (("t1.json", 900_000), ("t2.json", 900_003)):
         (tmp_path / name).write_text(json.dumps(_shifted(genuine, "test", seed)))

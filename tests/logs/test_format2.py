@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 from logs.mini_log import MANIFEST_2, mini_files, mini_files_2, write_log
 
+from azgym.bench.suites.data import log_cases
 from azgym.cli import main
-from azgym.logs import LogError, export_route, log_cases, read_log
+from azgym.logs import LogError, export_route, read_log
 from azgym.logs import export as export_module
 from azgym.sensing.motion import OdometrySamples
 from azgym.sensing.protocol import Observation

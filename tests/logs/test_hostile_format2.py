@@ -142,7 +142,8 @@ def test_no_odometry_and_no_imu_is_said_as_such(tmp_path):
 def test_a_static_recording_hands_no_contender_its_truth() -> None:
     """Roh's sequences are fixed positions: a start pose would be every frame's truth, so a
     tracker that holds it (dead reckoning) would score 0 cm. A log without motion has none."""
-    from azgym.logs import log_cases, read_log
+    from azgym.bench.suites.data import log_cases
+    from azgym.logs import read_log
 
     cases = log_cases(read_log("roh"))
     assert all(case.initial is None for case in cases)

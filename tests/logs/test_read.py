@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from logs.mini_log import mini_files, write_log
 
+from azgym.bench.suites.data import UNLABELLED, log_cases
 from azgym.errors import DependencyNotInstalled
-from azgym.logs import LogError, log_cases, read_log
-from azgym.logs.cases import UNLABELLED, frame_measurements
+from azgym.logs import LogError, frame_measurements, read_log
 from azgym.logs.files import MAX_TABLE_BYTES
 from azgym.logs.problems import MAX_PROBLEMS
 

@@ -27,10 +27,10 @@ from logs.mini_log import mini_files_2, write_log
 from azgym.bench import board as B
 from azgym.bench import leaderboard as L
 from azgym.bench.contenders import Contender
+from azgym.bench.runner import run_log_benchmark
 from azgym.cli import main
 from azgym.errors import InvalidInputError
 from azgym.logs import Log, read_log
-from azgym.logs.bench import run_log_benchmark
 from azgym.logs.calibrate import calibrate
 from azgym.logs.read import log_digest, shipped_logs
 from azgym.profile import Profile, profile_toml

@@ -14,8 +14,9 @@ from azgym.bench.contenders import Contender
 from azgym.bench.results import cases_digest
 from azgym.bench.runner import run_contenders
 from azgym.bench.suites.base import route_cases
+from azgym.bench.suites.data import log_cases
 from azgym.cli import main
-from azgym.logs import export_route, log_cases, read_log
+from azgym.logs import export_route, read_log
 from azgym.logs.manifest import FORMAT_VERSION
 from azgym.logs.read import shipped_logs
 from azgym.profile import SECTIONS

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from azgym import cli, cli_evaluate
+from azgym.bench.navigation import scoring
 from azgym.errors import DependencyNotInstalled, ModelFileError
-from azgym.nav import scoring
 from azgym.nav.policy_file import SB3Policy, load_policy
 
 ENV_ID = "azgym/Navigate-WarehouseSmall-v2"

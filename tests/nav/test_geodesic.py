@@ -12,11 +12,11 @@ import pytest
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from azgym.bench.navigation.results_file import FORKLIFT
+from azgym.bench.navigation.scoring import drive
 from azgym.errors import InvalidInputError
 from azgym.nav import geodesic as G
 from azgym.nav.policy_file import load_policy
-from azgym.nav.results_file import FORKLIFT
-from azgym.nav.scoring import drive
 from azgym.nav.spots import spots_of
 from azgym.site import load_scenario
 from azgym.world.world import World

@@ -14,11 +14,11 @@ from helpers import quick_navigation_run
 from azgym import cli
 from azgym.bench import board
 from azgym.bench.entry_files import LeaderboardError
-from azgym.nav.benchmark import drive_all
-from azgym.nav.board import verify_navigation
-from azgym.nav.results_file import load_navigation
-from azgym.nav.scoring import wilson_interval
-from azgym.nav.suites import NAVIGATION_SUITES, get_navigation_suite
+from azgym.bench.navigation.benchmark import drive_all
+from azgym.bench.navigation.board import verify_navigation
+from azgym.bench.navigation.results_file import load_navigation
+from azgym.bench.navigation.scoring import wilson_interval
+from azgym.bench.navigation.suites import NAVIGATION_SUITES, get_navigation_suite
 
 SUITE = NAVIGATION_SUITES["navigation"]
 SHIPPED_ENTRIES = Path(__file__).parents[2] / "leaderboard" / "entries"
@@ -212,8 +212,8 @@ def test_bad_navigation_bench_arguments_are_refused_by_name(argv, message, tmp_p
                                     "azgym/NavigateDiscrete-WarehouseSmall-v2"])
 def test_the_shipped_ppo_drives_to_the_goal(env_id):
     pytest.importorskip("stable_baselines3")
+    from azgym.bench.navigation.scoring import drive
     from azgym.nav.policy_file import load_policy
-    from azgym.nav.scoring import drive
 
     env = gym.make(env_id, localizer="truth")
     result = drive(env, load_policy("ppo", env), 10, get_navigation_suite("navigation").dev_seed)
@@ -222,7 +222,7 @@ def test_the_shipped_ppo_drives_to_the_goal(env_id):
 
 
 def test_a_contender_that_never_arrives_nor_answers_prints_dashes():
-    from azgym.nav.report import score_table
+    from azgym.bench.navigation.report import score_table
 
     summary = {"success": 0.0, "spl": 0.0, "collisions": 1.0, "collided": 1.0,
                "time_to_goal": None, "answered": 0.0, "error_median_cm": None,

@@ -11,12 +11,12 @@ import pytest
 
 import azgym  # noqa: F401  (registers the environments)
 from azgym import InvalidInputError
+from azgym.bench.navigation.scoring import drive, summarize
 from azgym.nav._descent import follow, points_at
 from azgym.nav.grid import INFLATION, RESOLUTION, build_grid
 from azgym.nav.planner import planner_for
 from azgym.nav.pose_keeper import JUMP_MARGIN, LOST_AFTER, PoseKeeper
 from azgym.nav.pursuit import PurePursuit
-from azgym.nav.scoring import drive, summarize
 from azgym.nav.spots import aisle_headings, spots_of
 from azgym.site import load_scenario
 from azgym.world.forklift import ForkliftSpec

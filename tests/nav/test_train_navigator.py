@@ -202,7 +202,7 @@ def test_evaluation_episodes_are_the_same_each_time_and_report_their_success():
 @pytest.mark.slow
 def test_a_tiny_run_writes_a_policy_that_loads_and_drives(tmp_path):
     needs_rl()
-    from azgym.nav.scoring import drive
+    from azgym.bench.navigation.scoring import drive
 
     result = train.train_navigator(SMALL, "ppo", 2048, tmp_path, **TINY)
     assert {path.name for path in tmp_path.iterdir()} == {

@@ -1,8 +1,8 @@
 """The navigation scores as a text table: one row per contender, the way both commands print them.
 
-``azgym evaluate navigator`` prints a row per localizer, ``azgym bench`` on a navigation suite a
-row per (navigator, localizer); the columns are the scores of :func:`azgym.nav.scoring.summarize`
-and the wall time.
+``azgym evaluate navigator`` prints a row per localizer, ``azgym bench`` on a navigation suite a row
+per (navigator, localizer); the columns are the scores of
+:func:`azgym.bench.navigation.scoring.summarize` and the wall time.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""A log as the benchmark's cases: each frame's measurements, truth, motion and sequence.
+"""A log as a suite, ``data:NAME``: each frame's measurements, truth, motion and sequence as a case.
 
 Each frame becomes a :class:`~azgym.bench.suites.Case` as a driven route's frame does
 (:func:`~azgym.bench.suites.base.route_cases`), keeping its number (``Case.frame``): its group
@@ -12,37 +12,46 @@ odometry reporting ``yaw_rate`` gives turning samples (``OdometrySamples.turning
 without accelerations gives NaN ones. Its cause is the worst of its detections' labels, or
 ``"unlabelled"`` without labels (a real camera's detections have none), which no cause
 breakdown lists.
+
+The suite (:func:`data_suite`) holds those cases fixed (a log has no seed, no size and no test
+split: its ``split`` is :data:`SPLIT`), and every contender takes its defaults from the log's
+profile (:func:`log_profile`: its manifest's ``[vehicle]``, ``[sensor]`` and ``[motion]``,
+with a profile given to the run over it).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
-from azgym.bench.suites import Case
-from azgym.bench.suites.base import frame_cause
-from azgym.core import Measurements
+from azgym.bench.suites.base import Case, Suite, frame_cause
+from azgym.logs.frames import frame_measurements
 from azgym.logs.problems import LogError
 from azgym.logs.read import Columns, Log
+from azgym.profile import Profile
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
+
+__all__ = ["SPLIT", "UNLABELLED", "data_suite", "log_cases", "log_profile"]
 
 UNLABELLED = "unlabelled"
 """The cause of a frame whose detections carry no labels."""
+SPLIT = "data"
+"""The ``split`` of a log's results: a log has neither a dev nor a test split."""
 
 
-def frame_measurements(log: Log) -> list[Measurements]:
-    """Each frame's detections, in the log's order; one quality column is a 1-D quality."""
-    detections = log.detections
-    bounds = np.searchsorted(detections["frame"], np.arange(len(log.frames["frame"]) + 1))
-    quality = detections["quality"]
-    found = []
-    for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
-        rows = quality[start:stop]
-        found.append(Measurements(detections["id"][start:stop], detections["azimuth"][start:stop],
-                                  None if rows.shape[1] == 0 else
-                                  rows[:, 0] if rows.shape[1] == 1 else rows))
-    return found
+def data_suite(log: Log, cases: Sequence[Case]) -> Suite:
+    """The log as a suite named ``data:NAME`` (its cases fixed: seed and size mean nothing)."""
+    frozen = list(cases)
+    return Suite(f"data:{log.manifest.name}", log.manifest.format, log.manifest.description, 0,
+                 lambda _seed, _quick: list(frozen),
+                 routes=log.driven)
+
+
+def log_profile(log: Log, profile: Profile | None = None) -> Profile:
+    """The profile a log's contenders take: ``profile``'s fields over the log's own."""
+    return log.manifest.profile if profile is None else profile.over(log.manifest.profile)
 
 
 def log_cases(log: Log) -> list[Case]:

@@ -17,23 +17,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 from azgym.envs.navigate import CONTROL_STEPS, PHYSICS_DT, NavigateEnv
 from azgym.errors import InvalidInputError
-
-
-class Policy(Protocol):
-    """What drives: ``act(observation)`` gives an action; ``reset()`` starts an episode."""
-
-    def act(self, observation: np.ndarray) -> Any:
-        """The action for one observation."""
-
-    def reset(self) -> None:
-        """Start an episode (forget the last one)."""
+from azgym.nav.controls import Policy
 
 
 def drive(env: gym.Env, policy: Policy, episodes: int, seed: int,

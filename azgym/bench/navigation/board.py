@@ -1,10 +1,10 @@
 """The navigation section of the leaderboard: its tables, and reruns of its files.
 
-The board's navigation tables come from ``navigation.json`` files written by ``azgym bench`` on
-a navigation suite (:mod:`azgym.nav.benchmark`), kept in ``leaderboard/navigation/``. Each file
-is checked when read (:mod:`azgym.nav.results_file`), and the board has one table per suite,
-split and seed; :func:`verify_navigation` reruns a file's episodes and compares every figure,
-the pooled error quantiles included.
+The board's navigation tables come from ``navigation.json`` files written by ``azgym bench`` on a
+navigation suite (:mod:`azgym.bench.navigation.benchmark`), kept in ``leaderboard/navigation/``.
+Each file is checked when read (:mod:`azgym.bench.navigation.results_file`), and the board has one
+table per suite, split and seed; :func:`verify_navigation` reruns a file's episodes and compares
+every figure, the pooled error quantiles included.
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from typing import Any
 from azgym.bench.entries import clean
 from azgym.bench.entry_files import LeaderboardError
 from azgym.bench.leaderboard import differences
-from azgym.nav.benchmark import drive_all
-from azgym.nav.report import figure
-from azgym.nav.results_file import episode_seeds, load_navigation
-from azgym.nav.suites import NAVIGATION_SUITES, overlap
+from azgym.bench.navigation.benchmark import drive_all
+from azgym.bench.navigation.report import figure
+from azgym.bench.navigation.results_file import episode_seeds, load_navigation
+from azgym.bench.navigation.suites import NAVIGATION_SUITES, overlap
 
 HEADER = ["#", "navigator", "localizer", "success % [95 % CI]", "SPL", "collisions/ep",
           "collided %", "time to goal s", "answered %", "error median cm", "error p95 cm"]

@@ -2,7 +2,7 @@
 
 A frame suite (:mod:`azgym.bench.suites`) scores each estimate against the truth. A navigation
 suite scores what the estimates are for: a navigator drives a Navigate environment on the pose
-a localizer gives it, and the drive is scored (:mod:`azgym.nav.scoring`: success, SPL,
+a localizer gives it, and the drive is scored (:mod:`azgym.bench.navigation.scoring`: success, SPL,
 collisions, time to goal, and the localization error along the way). Every answer moves the
 forklift, so the localizer's next frame depends on its last answer: no two localizers see the
 same frames, and the suite is defined by its episodes, not by frames drawn in advance.

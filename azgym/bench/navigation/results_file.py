@@ -1,7 +1,7 @@
 """A navigation results file read as an adversary's edit: every field of its kind, range and rule.
 
-``navigation.json`` (:mod:`azgym.nav.benchmark`) is what the board's navigation tables show,
-so :func:`load_navigation` trusts nothing in it:
+``navigation.json`` (:mod:`azgym.bench.navigation.benchmark`) is what the board's navigation tables
+show, so :func:`load_navigation` trusts nothing in it:
 
 - its layout: the keys of the file, of each contender, summary and episode are exactly the
   ones azgym writes (an unknown or missing key is refused), at most :data:`MAX_CONTENDERS`
@@ -9,8 +9,9 @@ so :func:`load_navigation` trusts nothing in it:
 - its suite exists at the version it was run on, with the suite's environment; its seed is the
   dev seed exactly when the split is ``dev``; every contender drove the suite's episodes (their
   count, and seeds seed, seed + 1, ...);
-- its contenders are azgym's own: a built-in navigator (:data:`azgym.nav.suites.NAVIGATORS`)
-  and a built-in localizer or tracker whose hyperparameters build, or ``truth``. A plug-in
+- its contenders are azgym's own: a built-in navigator
+  (:data:`azgym.bench.navigation.suites.NAVIGATORS`) and a built-in localizer or tracker whose
+  hyperparameters build, or ``truth``. A plug-in
   localizer runs in the loop that simulates the world, and a policy file is unpickled: neither
   is run from a board's file;
 - each episode obeys the environment's rules: it lasted ``steps`` control periods of 0.1 s
@@ -41,12 +42,12 @@ from typing import Any
 from azgym import arguments
 from azgym.bench.entries import clean, close
 from azgym.bench.entry_files import LeaderboardError, read_json
+from azgym.bench.navigation.benchmark import KIND, RESULTS_FORMAT
+from azgym.bench.navigation.scoring import wilson_interval
+from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite, overlap
 from azgym.envs.navigate import CONTROL_STEPS, MAX_STEPS, PHYSICS_DT
 from azgym.errors import AzgymError, InvalidInputError
 from azgym.localize.registry import is_builtin
-from azgym.nav.benchmark import KIND, RESULTS_FORMAT
-from azgym.nav.scoring import wilson_interval
-from azgym.nav.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite, overlap
 from azgym.world.forklift import ForkliftSpec
 
 MAX_CONTENDERS = 64
@@ -161,7 +162,7 @@ def episode_seeds(data: dict[str, Any]) -> range:
 
 def _shortest_paths(suite: NavigationSuite, data: dict[str, Any]) -> dict[int, float]:
     """The geodesic shortest path of each of the file's episodes, by seed [m]."""
-    from azgym.nav.benchmark import make_env
+    from azgym.bench.navigation.benchmark import make_env
 
     env = make_env(suite, "truth")
     try:

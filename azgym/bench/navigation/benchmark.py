@@ -11,10 +11,11 @@ forklift every step), so it is not kept from the truth the way the frame suites'
 workers keep it. Run only localizers you trust here; the published navigation board runs
 azgym's own.
 
-The result (:func:`run_navigation`) is what ``navigation.json`` holds: the run's identity,
-then per contender the summary of :func:`azgym.nav.scoring.summarize`, the wall time, and each
+The result (:func:`run_navigation`) is what ``navigation.json`` holds: the run's identity, then per
+contender the summary of :func:`azgym.bench.navigation.scoring.summarize`, the wall time, and each
 episode's figures (:func:`episode_rows`), from which the board recomputes the summary
-(:mod:`azgym.nav.results_file`). A figure that does not exist (no answer, no success) is null.
+(:mod:`azgym.bench.navigation.results_file`). A figure that does not exist (no answer, no success)
+is null.
 """
 
 from __future__ import annotations
@@ -32,8 +33,8 @@ import gymnasium as gym
 from azgym._version import __version__
 from azgym.arguments import whole_number
 from azgym.bench.entries import clean
+from azgym.bench.navigation.suites import NavigationSuite, get_navigation_suite
 from azgym.errors import InvalidInputError
-from azgym.nav.suites import NavigationSuite, get_navigation_suite
 
 RESULTS_FORMAT = 2
 """The layout of ``navigation.json`` (``format``). 2: an episode's ``shortest_path_m`` (the
@@ -125,8 +126,8 @@ def drive_all(suite: NavigationSuite, contenders: Sequence[Contender], seed: int
 def drive_contender(suite_name: str, navigator: str, localizer: str, seed: int,
                     episodes: int) -> dict[str, Any]:
     """One contender on episodes seed, seed + 1, ...: its summary, wall time and episodes."""
+    from azgym.bench.navigation.scoring import drive
     from azgym.nav.policy_file import load_policy
-    from azgym.nav.scoring import drive
 
     suite = get_navigation_suite(suite_name)
     env = make_env(suite, localizer)
@@ -146,9 +147,9 @@ def episode_rows(records: list[dict[str, Any]], seed: int) -> list[dict[str, Any
 
     ``steps`` and ``answered_steps`` let the whole run's answered share be recomputed; an
     episode's errors are summarized (median and 95th percentile, cm) by the rule of the run's,
-    :func:`azgym.nav.scoring.summarize`.
+    :func:`azgym.bench.navigation.scoring.summarize`.
     """
-    from azgym.nav.scoring import summarize
+    from azgym.bench.navigation.scoring import summarize
 
     rows = []
     for k, record in enumerate(records):
