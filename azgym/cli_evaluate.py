@@ -34,9 +34,9 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     from azgym.bench.navigation.benchmark import episode_rows
     from azgym.bench.navigation.report import score_table
     from azgym.bench.navigation.scoring import drive
+    from azgym.envs.registration import navigation_spec
     from azgym.files import prepare_folder, write_file
     from azgym.nav.policy_file import load_policy
-    from azgym.nav.train import navigation_spec
 
     episodes = whole_number("--episodes", args.episodes, 1)
     seed = whole_number("--seed", args.seed, 0)

@@ -20,9 +20,9 @@ import time
 import numpy as np
 
 from azgym.bench.contenders import contender
-from azgym.bench.metrics import BLOCK_SECONDS, bootstrap_blocks, confidence_intervals, quantile
 from azgym.bench.runner import run_contenders
 from azgym.bench.suites import get_suite
+from azgym.metrics import BLOCK_SECONDS, bootstrap_blocks, confidence_intervals, quantile
 
 FIRST_SEED = 1000
 """The seeds drawn are FIRST_SEED, FIRST_SEED + 1, ... (not the dev seed)."""

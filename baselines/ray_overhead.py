@@ -17,7 +17,8 @@ import time
 
 import numpy as np
 
-from azgym.bench.runner import default_workers, run_benchmark
+from azgym.bench.isolation import default_workers
+from azgym.bench.runner import run_benchmark
 from azgym.bench.suites import get_suite
 
 

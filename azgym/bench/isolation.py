@@ -62,6 +62,11 @@ BACKENDS = ("local", "ray")
 (:mod:`azgym.bench.ray_backend`, imported only when asked for)."""
 
 
+def default_workers() -> int:
+    """One worker process per core."""
+    return max(1, os.cpu_count() or 1)
+
+
 @dataclass
 class _Batch:
     """Frames [start, stop) of the run, given to one worker, and the step it is answering.

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.metrics import summarize_errors
+from azgym.metrics import summarize_errors
 
 
 @dataclass
@@ -55,5 +55,5 @@ class Outcome:
                        None if self.estimate is None else self.estimate[index])
 
     def stats(self) -> dict[str, Any]:
-        """The error statistics (:func:`~azgym.bench.metrics.summarize_errors`)."""
+        """The error statistics (:func:`~azgym.metrics.summarize_errors`)."""
         return summarize_errors(self.position, self.heading, self.ok)

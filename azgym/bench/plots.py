@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from azgym.bench.metrics import HEADLINE
 from azgym.bench.suites import CAUSES, Case
 from azgym.core import BeaconMap
 from azgym.files import write_file
+from azgym.metrics import HEADLINE
 from azgym.site import load_scenario
 
 if TYPE_CHECKING:
@@ -77,7 +77,7 @@ def _error_cdfs(plt: Any, summary: dict[str, Any], outcomes: dict[str, Outcome],
 def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
     """Bars of each localizer's headline per fault cause that occurs.
 
-    The headline (:data:`~azgym.bench.metrics.HEADLINE`) counts a refusal as infinitely wrong;
+    The headline (:data:`~azgym.metrics.HEADLINE`) counts a refusal as infinitely wrong;
     an infinite one is drawn as a hatched bar up to the top of the axis, marked ∞.
     """
     labels = list(summary["localizers"])

@@ -48,6 +48,7 @@ from azgym.bench.answers import (
     overrun_reason,
     record_answers,
 )
+from azgym.bench.isolation import default_workers
 from azgym.bench.wire import MapData, Packed
 from azgym.errors import InvalidInputError, require
 from azgym.profile import Profile
@@ -103,8 +104,6 @@ def ray_session(address: str | None, workers: int) -> Iterator[int]:
 def _connect(ray: Any, address: str | None, workers: int) -> None:
     """``ray.init`` on the cluster at ``address`` (checked to answer first), else locally."""
     if address is None:
-        from azgym.bench.runner import default_workers
-
         ray.init(num_cpus=workers or default_workers(), include_dashboard=False,
                  logging_level=logging.ERROR)
         return

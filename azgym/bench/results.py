@@ -25,12 +25,12 @@ import numpy as np
 
 from azgym._version import __version__
 from azgym.bench.contenders import Contender
-from azgym.bench.metrics import bootstrap_blocks, confidence_intervals
 from azgym.bench.outcome import Outcome
 from azgym.bench.plugin_files import plugin_record
 from azgym.bench.suites import CAUSES, Case, Suite
 from azgym.bench.tracking import tracking_metrics
 from azgym.files import prepare_folder, write_file
+from azgym.metrics import bootstrap_blocks, confidence_intervals
 
 FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
                  "heading_error_rad", "micros", "error"]
@@ -74,7 +74,7 @@ def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: flo
     """One contender's figures: overall, 95 % intervals, by cause, by group, runtimes, tracks.
 
     The intervals resample a route's frames in blocks of a few seconds, frames on their own
-    one by one (:func:`~azgym.bench.metrics.bootstrap_blocks`).
+    one by one (:func:`~azgym.metrics.bootstrap_blocks`).
 
     The one rule for them: the runner's summary and a leaderboard entry's check (which
     recomputes them from the entry's per-frame results and the suite's cases, drawn again) both

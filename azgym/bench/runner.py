@@ -15,7 +15,6 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import math
-import os
 import secrets
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -57,11 +56,6 @@ does not leave the other workers idle for long."""
 
 Progress = Callable[[str], None]
 """Called with text as a run advances; text starting with a carriage return redraws the line."""
-
-
-def default_workers() -> int:
-    """One worker process per core."""
-    return max(1, os.cpu_count() or 1)
 
 
 def run_contenders(

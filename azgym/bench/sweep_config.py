@@ -35,11 +35,11 @@ from azgym import arguments
 from azgym.arguments import time_limit as checked_time_limit
 from azgym.bench.contenders import Contender, check_buildable
 from azgym.bench.isolation import DEFAULT_TIME_LIMIT
-from azgym.bench.metrics import HEADLINE
 from azgym.bench.suites import Suite
 from azgym.bench.suites.warehouse import scenario_suite
 from azgym.core import BeaconMap
 from azgym.errors import AzgymError, InvalidInputError, unknown_name
+from azgym.metrics import HEADLINE
 from azgym.site import Scenario, load_scenario
 
 MAX_RUNS = 1000

@@ -7,7 +7,7 @@ import textwrap
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from azgym.bench.metrics import BLOCK_SECONDS, FAILURE_DISTANCE, HEADLINE
+from azgym.metrics import BLOCK_SECONDS, FAILURE_DISTANCE, HEADLINE
 from azgym.profile import field_texts
 
 RANK_BY = HEADLINE
@@ -31,7 +31,7 @@ POSITION_ONLY = ("position-only truth: heading not scored (the truth has no head
 def heading_scored(summary: Mapping[str, Any]) -> bool:
     """Whether a run's heading was scored: False when an answered frame's heading figure is None.
 
-    :func:`~azgym.bench.metrics.summarize_errors` leaves a heading figure out (None) only when
+    :func:`~azgym.metrics.summarize_errors` leaves a heading figure out (None) only when
     estimates were given and the truth had no heading to score them against.
     """
     return all(row["all"].get("heading_median_deg", 0.0) is not None
@@ -42,9 +42,9 @@ def rank_key(stats: Mapping[str, Any], name: str
              ) -> tuple[bool, float, float, float, float, str]:
     """Sort key of a contender: the headline, then failures, answered p75, availability, name.
 
-    The headline (:data:`~azgym.bench.metrics.HEADLINE`) charges every refusal, so a contender
+    The headline (:data:`~azgym.metrics.HEADLINE`) charges every refusal, so a contender
     that refuses the frames it would get wrong ranks below one that answers them. A headline
-    over :data:`~azgym.bench.metrics.FAILURE_DISTANCE` (infinite included) says that more than
+    over :data:`~azgym.metrics.FAILURE_DISTANCE` (infinite included) says that more than
     a quarter of the frames failed: no answer, or an answer more than that far off. Such
     contenders rank after every other, ordered by their failure rate (lower first), then by the
     p75 of their answered frames, so that a wild guess is worth no more than a refusal: both

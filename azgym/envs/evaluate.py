@@ -8,11 +8,11 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from azgym.bench.metrics import summarize_errors
 from azgym.core import Measurements, estimated_pose, pose_error
 from azgym.envs.localize import LocalizeEnv
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
+from azgym.metrics import summarize_errors
 
 
 def measurements_from_observation(observation: dict[str, np.ndarray]) -> Measurements:
@@ -41,7 +41,7 @@ def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episode
         seed: Seed of the first episode (then seed + 1, ...); None: unseeded.
 
     Returns:
-        The statistics of :func:`azgym.bench.metrics.summarize_errors` over every frame, and the
+        The statistics of :func:`azgym.metrics.summarize_errors` over every frame, and the
         episodes' total reward.
     """
     inner = env.unwrapped

@@ -14,7 +14,7 @@ from azgym.arguments import positive_number, whole_number
 from azgym.core import estimated_pose, pose_error, wrap_scalar
 from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
 from azgym.localize.registry import SupportsLocalize
-from azgym.nav.controls import DISCRETE_CONTROLS, controls
+from azgym.nav.controls import CONTROL_STEPS, DISCRETE_CONTROLS, controls
 from azgym.nav.estimator import TrackerFeed, is_tracker, resolve_estimator
 from azgym.nav.geodesic import shortest_paths_for
 from azgym.nav.guidance import SUPPORT_SCALE, Guidance
@@ -32,8 +32,6 @@ from azgym.world.world import World
 
 PHYSICS_DT = 0.02
 """The world's physics step [s]."""
-CONTROL_STEPS = 5
-"""Physics steps per control period: the navigator acts and the camera looks every 0.1 s."""
 MAX_STEPS = 600
 """Control steps before an episode is truncated (``max_steps``'s default: 60 s)."""
 

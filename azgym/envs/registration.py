@@ -19,7 +19,12 @@ import importlib.machinery
 import sys
 from collections.abc import Sequence
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+from azgym.errors import InvalidInputError, unknown_name
+
+if TYPE_CHECKING:
+    from gymnasium.envs.registration import EnvSpec
 
 NAMESPACE = "azgym"
 VERSIONS = {"Localize": 1, "Navigate": 2, "NavigateDiscrete": 2}
@@ -96,3 +101,37 @@ def __getattr__(name: str) -> Any:
     if name == "ENV_IDS":
         return list(register_environments())
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def navigation_spec(env_id: str) -> EnvSpec:
+    """The registered spec of a Navigate id; refuses unknown ids and other environments."""
+    import gymnasium as gym
+
+    from azgym.envs.navigate import NavigateEnv
+
+    if env_id not in gym.registry:
+        navigate = [name for name in gym.registry if _is_navigation(gym.registry[name])]
+        raise unknown_name("navigation environment", env_id, navigate)
+    spec = gym.registry[env_id]
+    if not _is_navigation(spec):
+        raise InvalidInputError(
+            f"env {env_id!r} has no planner's map: it is not a navigation environment (a "
+            f"{NavigateEnv.__name__} id: azgym/Navigate-... or azgym/NavigateDiscrete-...)")
+    return spec
+
+
+def _is_navigation(spec: EnvSpec) -> bool:
+    """Whether an id's environment is a :class:`~azgym.envs.navigate.NavigateEnv`.
+
+    An entry point of another package is never loaded to find out: loading it runs its code.
+    """
+    import gymnasium as gym
+
+    from azgym.envs.navigate import NavigateEnv
+
+    entry = spec.entry_point
+    if isinstance(entry, str):
+        if not entry.startswith("azgym."):  # loading another package's entry point runs it
+            return False
+        entry = gym.envs.registration.load_env_creator(entry)
+    return isinstance(entry, type) and issubclass(entry, NavigateEnv)

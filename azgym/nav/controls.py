@@ -12,6 +12,8 @@ import numpy as np
 
 from azgym.errors import InvalidInputError
 
+CONTROL_STEPS = 5
+"""Physics steps per control period: the navigator acts and the camera looks every 0.1 s."""
 DISCRETE_THROTTLES = (1.0, 0.0, -1.0)
 """Throttle of the discrete actions: accelerate, hold the speed, brake (or reverse)."""
 DISCRETE_STEERS = (0.0, 0.35, -0.35, 1.0, -1.0)

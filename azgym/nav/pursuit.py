@@ -22,8 +22,8 @@ import math
 
 import numpy as np
 
-from azgym.envs.navigate import CONTROL_STEPS, PHYSICS_DT
-from azgym.nav.controls import nearest_discrete
+from azgym.envs.navigate import PHYSICS_DT
+from azgym.nav.controls import CONTROL_STEPS, nearest_discrete
 from azgym.nav.guidance import AHEAD_SCALE, FIX_AGE_SCALE, fields
 from azgym.world.forklift import ForkliftSpec
 

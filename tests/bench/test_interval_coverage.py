@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from azgym.bench.contenders import contender
-from azgym.bench.metrics import bootstrap_blocks, confidence_intervals, quantile
 from azgym.bench.runner import run_contenders
 from azgym.bench.suites import get_suite
+from azgym.metrics import bootstrap_blocks, confidence_intervals, quantile
 
 SEEDS = range(1000, 1020)
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from azgym.bench.metrics import (
+from azgym.metrics import (
     FAILURE_DISTANCE,
     bootstrap_blocks,
     confidence_intervals,

@@ -13,7 +13,8 @@ import pytest
 
 from azgym import cli, cli_train
 from azgym.errors import AzgymError, DependencyNotInstalled
-from azgym.nav import train, train_card
+from azgym.learn.navigator import card as train_card
+from azgym.learn.navigator import train
 from azgym.nav.policy_file import load_policy
 
 SMALL = "azgym/Navigate-WarehouseSmall-v2"
@@ -256,7 +257,7 @@ def test_the_command_and_the_training_module_import_neither_torch_nor_stable_bas
     import subprocess
     import sys
 
-    code = ("import sys, azgym.cli, azgym.nav.train, azgym.nav.train_card; "
+    code = ("import sys, azgym.cli, azgym.learn.navigator.train, azgym.learn.navigator.card; "
             "print(sorted(m for m in ('torch', 'stable_baselines3', 'matplotlib') "
             "if m in sys.modules))")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

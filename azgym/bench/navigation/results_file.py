@@ -45,9 +45,10 @@ from azgym.bench.entry_files import LeaderboardError, read_json
 from azgym.bench.navigation.benchmark import KIND, RESULTS_FORMAT
 from azgym.bench.navigation.scoring import wilson_interval
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite, overlap
-from azgym.envs.navigate import CONTROL_STEPS, MAX_STEPS, PHYSICS_DT
+from azgym.envs.navigate import MAX_STEPS, PHYSICS_DT
 from azgym.errors import AzgymError, InvalidInputError
 from azgym.localize.registry import is_builtin
+from azgym.nav.controls import CONTROL_STEPS
 from azgym.world.forklift import ForkliftSpec
 
 MAX_CONTENDERS = 64

@@ -22,9 +22,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from azgym.envs.navigate import CONTROL_STEPS, PHYSICS_DT, NavigateEnv
+from azgym.envs.navigate import PHYSICS_DT, NavigateEnv
 from azgym.errors import InvalidInputError
-from azgym.nav.controls import Policy
+from azgym.nav.controls import CONTROL_STEPS, Policy
 
 
 def drive(env: gym.Env, policy: Policy, episodes: int, seed: int,

@@ -9,7 +9,7 @@ typo costs nothing. :func:`train_navigator` then trains on ``n_envs`` copies of 
 the same ``eval_episodes`` episodes (seeds :data:`EVAL_SEED`, :data:`EVAL_SEED` + 1, ..., which
 training never draws), keeps checkpoints, and leaves in the output folder the final policy
 (``policy.zip``: the reproducible artefact, not the best evaluation's), ``evaluations.npz``,
-the learning curve and the model card (:mod:`azgym.nav.train_card`), with the final policy
+the learning curve and the model card (:mod:`azgym.learn.navigator.card`), with the final policy
 scored by :func:`azgym.bench.navigation.scoring.drive`.
 
 torch, stable-baselines3 and PyYAML (the ``rl`` extra) are imported inside the functions, so
@@ -22,7 +22,7 @@ import importlib.util
 import inspect
 import io
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -30,8 +30,11 @@ import gymnasium as gym
 import numpy as np
 
 from azgym.arguments import whole_number
+from azgym.envs.registration import navigation_spec
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
+from azgym.learn.navigator.card import write_card, write_learning_curve
+from azgym.learn.navigator.request import EVAL_SEED, Request
 from azgym.nav import policy_file
 from azgym.nav.controls import Policy
 
@@ -41,43 +44,6 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 """Each id's hyperparameters per algorithm, and the ``default`` entry."""
 SETTINGS = ("n_envs", "n_timesteps", "policy", "policy_kwargs", "env_kwargs")
 """The keys of a hyperparameter entry that are not arguments of the algorithm itself."""
-EVAL_SEED = 1_000_000
-"""The first seed of the evaluation episodes (and of the final scoring); training starts its
-environments at the run's seed, which stays far below."""
-
-
-@dataclass(frozen=True)
-class Request:
-    """A training run, every argument checked: what :func:`run` trains."""
-
-    env_id: str
-    algo: str
-    steps: int
-    out: Path
-    seed: int
-    n_envs: int
-    threads: int
-    policy: str
-    policy_kwargs: dict[str, Any]
-    env_kwargs: dict[str, Any]
-    algo_kwargs: dict[str, Any]
-    eval_episodes: int
-    eval_every: int
-    checkpoint_every: int
-    score_episodes: int
-    overrides: dict[str, Any] = field(default_factory=dict)
-
-    def command(self) -> str:
-        """The ``azgym train navigator`` line that repeats this run."""
-        line = (f"azgym train navigator --env {self.env_id} --algo {self.algo} "
-                f"--steps {self.steps} --out {self.out} --seed {self.seed} "
-                f"--localizer {self.env_kwargs['localizer']} --envs {self.n_envs} "
-                f"--threads {self.threads}")
-        if self.overrides:  # not on the command line: the Python call's extras
-            line += f"  # plus train_navigator(..., overrides={self.overrides!r})"
-        return line
-
-
 @dataclass(frozen=True)
 class TrainingResult:
     """What a run leaves behind, and its figures."""
@@ -93,32 +59,6 @@ class TrainingResult:
 def require_rl() -> None:
     """Raise :class:`DependencyNotInstalled` unless what training needs can be imported."""
     policy_file.require_rl(also=(("yaml", "PyYAML"), ("matplotlib", "matplotlib")))
-
-
-def navigation_spec(env_id: str) -> gym.envs.registration.EnvSpec:
-    """The registered spec of a Navigate id; refuses unknown ids and other environments."""
-    from azgym.envs.navigate import NavigateEnv
-
-    if env_id not in gym.registry:
-        navigate = [name for name in gym.registry if _is_navigation(gym.registry[name])]
-        raise unknown_name("navigation environment", env_id, navigate)
-    spec = gym.registry[env_id]
-    if not _is_navigation(spec):
-        raise InvalidInputError(
-            f"env {env_id!r} has no planner's map: it is not a navigation environment (a "
-            f"{NavigateEnv.__name__} id: azgym/Navigate-... or azgym/NavigateDiscrete-...)")
-    return spec
-
-
-def _is_navigation(spec: gym.envs.registration.EnvSpec) -> bool:
-    from azgym.envs.navigate import NavigateEnv
-
-    entry = spec.entry_point
-    if isinstance(entry, str):
-        if not entry.startswith("azgym."):  # loading another package's entry point runs it
-            return False
-        entry = gym.envs.registration.load_env_creator(entry)
-    return isinstance(entry, type) and issubclass(entry, NavigateEnv)
 
 
 def hyperparameters(env_id: str, algo: str) -> dict[str, Any]:
@@ -273,7 +213,6 @@ def run(request: Request, verbose: bool = True) -> TrainingResult:
     import torch
     from stable_baselines3.common.env_util import make_vec_env
 
-    from azgym.nav.train_card import write_card, write_learning_curve
 
     torch.set_num_threads(request.threads)
     envs = make_vec_env(request.env_id, n_envs=request.n_envs, seed=request.seed,

@@ -13,14 +13,12 @@ import hashlib
 import math
 import platform
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from azgym._version import __version__
 from azgym.files import write_file
-
-if TYPE_CHECKING:
-    from azgym.nav.train import Request
+from azgym.learn.navigator.request import EVAL_SEED, Request
 
 REPRODUCIBILITY = (
     "Runs are repeatable on one machine: the same command, with the same versions of azgym, "
@@ -69,8 +67,6 @@ def write_card(request: Request, path: Path, *, wall_time: float,
     import torch
     import yaml
 
-    from azgym import __version__
-    from azgym.nav.train import EVAL_SEED
 
     digest = hashlib.sha256((request.out / "policy.zip").read_bytes()).hexdigest()
     settings = {"n_envs": request.n_envs, "policy": request.policy,
