@@ -63,7 +63,7 @@ def _train_localizer(args: argparse.Namespace) -> int:
 
 
 def _train_navigator(args: argparse.Namespace) -> int:
-    from azgym.nav.train import prepare, run
+    from azgym.learn.navigator.train import prepare, run
 
     request = prepare(args.env, args.algo, args.steps, Path(args.out), seed=args.seed,
                       localizer=args.localizer, n_envs=args.envs, threads=args.threads)
@@ -94,7 +94,7 @@ def _add_navigator(targets: argparse._SubParsersAction) -> None:
     navigator.add_argument("--out", required=True, metavar="DIR", help="output folder")
     navigator.add_argument("--steps", type=_whole(1), metavar="N",
                            help="environment steps (default: n_timesteps of the id's entry in "
-                                "azgym/nav/hyperparams.yml)")
+                                "azgym/learn/navigator/hyperparams.yml)")
     navigator.add_argument("--seed", type=_whole(0), default=0, metavar="S",
                            help="seed of the training environments and the algorithm "
                                 "(default: 0)")

@@ -26,14 +26,18 @@ from numba.misc.appdirs import AppDirs
 
 from azgym.core import wrap_scalar
 
+__all__ = ["KERNEL_MODULES", "PACKAGE_DIR", "STAMP_NAME", "drop_stale_cache", "jit",
+           "localizers_compiled", "numba_subfolder", "sources_digest", "wrap_compiled"]
+
 PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
-    "core.py", "errors.py", "hyperparameters.py", "jit.py", "learn/features.py",
-    "learn/distribution.py", "learn/network.py", "learn/regression.py", "learn/weights.py",
-    "localize/learned.py",
-    "localize/ng_ransac.py", "localize/_angles.py", "localize/_circles.py",
-    "localize/_kernels.py", "localize/_levenberg_marquardt.py", "localize/_mex_area.py",
-    "localize/_ng_search.py", "localize/_ransac_search.py",
+    "core.py", "errors.py", "hyperparameters.py", "jit.py", "localize/_angles.py",
+    "localize/_circles.py", "localize/_kernels.py", "localize/_levenberg_marquardt.py",
+    "localize/_mex_area.py", "localize/_ransac_search.py",
+    "localize/learned/_ng_search.py", "localize/learned/distribution.py",
+    "localize/learned/features.py", "localize/learned/inlier_network.py",
+    "localize/learned/ng_ransac.py", "localize/learned/pose_network.py",
+    "localize/learned/pose_regression.py", "localize/learned/weights.py",
     "localize/base.py", "localize/loo.py", "localize/lsq.py", "localize/mex.py",
     "localize/ransac.py", "localize/refinement.py", "localize/triplet.py", "nav/_descent.py",
     "sensing/geometry/detections.py", "sensing/geometry/direct.py", "sensing/geometry/frame.py",

@@ -34,8 +34,7 @@ from azgym.bench.suites import SUITES  # noqa: E402
 from azgym.core import pose_error  # noqa: E402
 from azgym.learn.calibrate import RIGHT_M, guided_runs  # noqa: E402
 from azgym.learn.dataset import HELD_OUT_LAYOUTS, TRAIN_LAYOUTS, make_frames  # noqa: E402
-from azgym.learn.network import InlierScorer  # noqa: E402
-from azgym.localize.ng_ransac import SHIPPED_WEIGHTS  # noqa: E402
+from azgym.localize.learned import NG_RANSAC_WEIGHTS, InlierScorer  # noqa: E402
 from azgym.site import load_scenario  # noqa: E402
 
 CONTENDERS = ("ransac", "ng-ransac", "learned", "learned:refine_rounds=0")
@@ -124,7 +123,7 @@ def figures(row: dict, reference_us: float) -> dict:
 
 
 def generalization() -> dict:
-    scorer = InlierScorer.load(SHIPPED_WEIGHTS)
+    scorer = InlierScorer.load(NG_RANSAC_WEIGHTS)
     threshold = scorer.manifest["calibration"]["min_support_weight"]
     result = {"min_support_weight": threshold, "data_seed": GENERALIZATION_SEED}
     for label, layouts in (("training layouts", list(TRAIN_LAYOUTS[:20])),

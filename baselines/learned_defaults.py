@@ -20,9 +20,8 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from azgym.learn.dataset import HELD_OUT_LAYOUTS, make_frames  # noqa: E402
-from azgym.learn.regression import PoseRegressor  # noqa: E402
 from azgym.learn.regression_report import localize_frames  # noqa: E402
-from azgym.localize.learned import SHIPPED_WEIGHTS  # noqa: E402
+from azgym.localize.learned import LEARNED_WEIGHTS, PoseRegressor  # noqa: E402
 
 DATA_SEED = 7
 LAYOUTS = 12
@@ -39,7 +38,7 @@ VARIANTS: tuple[tuple[str, int, dict[str, float]], ...] = (
 
 def main() -> None:
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
-    regressor = PoseRegressor.load(SHIPPED_WEIGHTS)
+    regressor = PoseRegressor.load(LEARNED_WEIGHTS)
     batch = make_frames(list(HELD_OUT_LAYOUTS[:LAYOUTS]), FRAMES_PER_LAYOUT, DATA_SEED)
     print(f"learned, shipped weights, {len(batch)} frames of {LAYOUTS} held-out layouts "
           f"(data seed {DATA_SEED})")

@@ -12,7 +12,7 @@ import pytest
 
 import azgym
 from azgym.cli import _contenders, main
-from azgym.localize.ng_ransac import SHIPPED_WEIGHTS
+from azgym.localize.learned import NG_RANSAC_WEIGHTS as SHIPPED_WEIGHTS
 
 README = Path(__file__).parent.parent / "README.md"
 
@@ -139,7 +139,7 @@ def test_the_navigator_section_scores_the_shipped_policy_trains_and_quotes_its_c
     """The commands run as written (training stopped at its checked request: a full run is the
     model card's), and the figures quoted are the shipped policy's card's."""
     pytest.importorskip("stable_baselines3", reason="needs the rl extra")
-    from azgym.nav import train
+    from azgym.learn.navigator import train
     from azgym.nav.policy_file import MODELS, SHIPPED_FILES
 
     section = README.read_text(encoding="utf-8").split("## Train a navigator", 1)[1]

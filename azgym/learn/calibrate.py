@@ -1,11 +1,11 @@
 """Calibrating ng-ransac's answer test: how much inlier probability an answer's supporters need.
 
-ng-ransac (:mod:`azgym.localize.ng_ransac`) answers only when the summed inlier probability of
-its winning pose's supporters reaches ``min_support_weight``. Too low a threshold keeps the wrong
+ng-ransac (:mod:`azgym.localize.learned.ng_ransac`) answers only when the summed inlier probability
+of its winning pose's supporters reaches ``min_support_weight``. Too low a threshold keeps the wrong
 answers that three ghosts agree on; too high a one drops right answers. The threshold shipped with
-the weights is the largest that gives up at most ``max_right_lost`` of the right answers (within
-1 m) on frames of held-out generated warehouses: the test should refuse what cannot be known, not
-what can.
+the weights is the largest that gives up at most ``max_right_lost`` of the right answers
+(within 1 m) on frames of held-out generated warehouses: the test should refuse what cannot be
+known, not what can.
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ from typing import Any
 import numpy as np
 
 from azgym.learn.dataset import FrameBatch
-from azgym.learn.network import InlierScorer
-from azgym.learn.weights import load_weights, save_weights
 from azgym.localize import _kernels as K
-from azgym.localize._ng_search import guided_settings, ng_ransac_search
 from azgym.localize.base import INT_ROWS, ROW_BEACON_INDEX, ROW_SOURCE
-from azgym.localize.ng_ransac import MODEL_NAME
+from azgym.localize.learned._ng_search import guided_settings, ng_ransac_search
+from azgym.localize.learned.inlier_network import InlierScorer
+from azgym.localize.learned.ng_ransac import MODEL_NAME
+from azgym.localize.learned.weights import load_weights, save_weights
 from azgym.localize.ransac import OUT_SIZE, OUT_SUPPORT, settings_array
 
 RIGHT_M = 1.0

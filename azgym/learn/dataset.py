@@ -41,13 +41,13 @@ from azgym.bench.suites.warehouse import fault_levels
 from azgym.core import BeaconMap, BoolArray, IntArray, Measurements, Pose
 from azgym.errors import InvalidInputError, ScenarioError
 from azgym.files import write_file
-from azgym.learn.features import (
+from azgym.localize.base import FLOAT_ROWS, MIN_MEASUREMENTS, Problem
+from azgym.localize.learned.features import (
     FEATURE_LAYOUT,
     N_FEATURES,
     first_quality_column,
     measurement_features,
 )
-from azgym.localize.base import FLOAT_ROWS, MIN_MEASUREMENTS, Problem
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import DIRECT, PARTIAL
 from azgym.sensing.protocol import Observation

@@ -1,10 +1,10 @@
 """The ``learned`` model's card, and the figures it reports: the localizer on generated frames.
 
-:func:`localize_frames` runs the localizer's compiled solver (:func:`azgym.localize.learned.
-solve_regressed`, the very code that serves) on every frame of a
-:class:`~azgym.learn.dataset.FrameBatch`; :func:`generalization` does so on frames of training
-layouts and of held-out layouts, both drawn with a data seed no training run uses by default,
-for the pure regression and for the refined variant: the held-out p75 within 20 % of the
+:func:`localize_frames` runs the localizer's compiled solver
+(:func:`azgym.localize.learned.pose_regression.solve_regressed`, the very code that serves) on every
+frame of a :class:`~azgym.learn.dataset.FrameBatch`; :func:`generalization` does so on frames of
+training layouts and of held-out layouts, both drawn with a data seed no training run uses by
+default, for the pure regression and for the refined variant: the held-out p75 within 20 % of the
 training layouts' says the network learned warehouses, not these warehouses.
 """
 
@@ -12,14 +12,14 @@ from __future__ import annotations
 
 import hashlib
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 
 from azgym.files import write_file
 from azgym.learn.distribution import card_section
-from azgym.learn.regression import PoseRegressor
 from azgym.learn.train_report import bullets, show
+from azgym.localize.learned.pose_network import PoseRegressor
 
 GENERALIZATION_SEED = 99
 """The data seed of the generalization frames (training uses 0 unless told)."""
@@ -29,14 +29,25 @@ VARIANTS = (("regression", 0), ("refined", 3))
 """The localizer's variants reported: name and ``refine_rounds``."""
 
 
-def localize_frames(batch: Any, regressor: PoseRegressor, refine_rounds: int,
-                    **settings_given: float) -> np.ndarray:
-    """Each frame's position error [m] under the localizer (its other settings the defaults).
+class SolverSettings(TypedDict, total=False):
+    """Settings of the localizer's compiled solver besides ``refine_rounds`` (defaults if left out).
 
-    ``settings_given``: other settings of :func:`azgym.localize.learned.settings_array`.
+    The keyword arguments of :func:`azgym.localize.learned.pose_regression.settings_array`.
     """
+
+    gate: float
+    min_trust: float
+    delta_alpha_d: float
+    coverage: bool
+    max_iter: int
+    tolerance: float
+
+
+def localize_frames(batch: Any, regressor: PoseRegressor, refine_rounds: int,
+                    **settings_given: Unpack[SolverSettings]) -> np.ndarray:
+    """Each frame's position error [m] under the localizer (its other settings the defaults)."""
     from azgym.localize.base import INT_ROWS, ROW_BEACON_INDEX, ROW_SOURCE
-    from azgym.localize.learned import OUT_SIZE, settings_array, solve_regressed
+    from azgym.localize.learned.pose_regression import OUT_SIZE, settings_array, solve_regressed
 
     settings = settings_array(refine_rounds=refine_rounds, **settings_given)
     errors = np.empty(len(batch))
@@ -79,7 +90,7 @@ def generalization(weights: Path, frames: int = 100,
 
 def write_regression_card(result: Any, seeds: list[int], frames: int, seed: int) -> Path:
     """The model card of a run (:class:`azgym.learn.train.TrainResult`), with its figures."""
-    from azgym.learn.weights import load_weights
+    from azgym.localize.learned.weights import load_weights
 
     info = load_weights(result.weights, "learned")[1]["training"]
     data, settings = info["data"], info["hyperparameters"]
@@ -90,7 +101,7 @@ def write_regression_card(result: Any, seeds: list[int], frames: int, seed: int)
         "A set network regresses the camera's position (and its variance) from one token per "
         "usable measurement, with a trust logit per token; the `learned` localizer takes the "
         "heading in closed form and, by default, refines the pose on the trusted measurements "
-        "(azgym/localize/learned.py).", "",
+        "(azgym/localize/learned/pose_regression.py).", "",
         "## Data", "", *bullets(data, ("train", "held_out", "distribution")),
         *[f"- {name}: {data[key]['frames']} frames, {data[key]['measurements']} measurements, "
           f"inlier share {show(data[key]['inlier_share'])}"
@@ -117,6 +128,6 @@ def write_regression_card(result: Any, seeds: list[int], frames: int, seed: int)
         *card_section(data.get("distribution")),
         "## Files", "",
         f"- `{result.weights.name}` (SHA-256 `{digest}`): load with "
-        "`azgym.learn.regression.PoseRegressor.load`",
+        "`azgym.localize.learned.pose_network.PoseRegressor.load`",
         f"- `{result.figure.name}`: the learning curve", ""]
     return write_file(result.card, "\n".join(lines))

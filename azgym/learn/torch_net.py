@@ -1,10 +1,10 @@
-"""The inlier scorer in torch, for training: the network of :mod:`azgym.learn.network`, batched.
+"""The inlier scorer in torch, for training: the served network, batched.
 
-Frames come padded to the longest one (:class:`azgym.learn.dataset.FrameBatch`), so the
-context pools over each frame's real measurements only: padding is set to 0 (whatever it held,
-NaN included) before the first layer and after it, where it cannot win the max (h1 ≥ 0; a
-frame without measurements pools to 0, as the numpy forward does), and the mean divides by
-the number of real ones. With that,
+The network is :mod:`azgym.localize.learned.inlier_network`'s. Frames come padded to the
+longest one (:class:`azgym.learn.dataset.FrameBatch`), so the context pools over each frame's
+real measurements only: padding is set to 0 (whatever it held, NaN included) before the first
+layer and after it, where it cannot win the max (h1 ≥ 0; a frame without measurements pools to
+0, as the numpy forward does), and the mean divides by the number of real ones. With that,
 a frame's logits do not depend on how much padding it got, and :func:`export` writes weights
 that give the numpy forward the same logits (``tests/learn/test_network.py`` checks it).
 
@@ -20,8 +20,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from azgym.learn.network import ARCHITECTURE
-from azgym.learn.weights import save_weights
+from azgym.localize.learned.inlier_network import ARCHITECTURE
+from azgym.localize.learned.weights import save_weights
 
 
 class TorchInlierScorer(nn.Module):
@@ -55,7 +55,7 @@ class TorchInlierScorer(nn.Module):
         return self.head(h2).squeeze(-1)
 
     def architecture(self) -> dict[str, Any]:
-        """The manifest's ``architecture``: what :func:`azgym.learn.weights.array_shapes` reads."""
+        """The manifest's ``architecture``: what ``weights.array_shapes`` reads."""
         return {"kind": ARCHITECTURE, "inputs": self.inputs, "hidden": self.hidden}
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -70,7 +70,7 @@ class TorchInlierScorer(nn.Module):
 
 def export(model: TorchInlierScorer, path: Path | str, training_info: dict[str, Any], *,
            feature_layout: str | None = None, name: str = "ng-ransac") -> Path:
-    """Write the model's weight file (:func:`azgym.learn.weights.save_weights`).
+    """Write the model's weight file (:func:`azgym.localize.learned.weights.save_weights`).
 
     Args:
         model: The trained network.
@@ -78,11 +78,11 @@ def export(model: TorchInlierScorer, path: Path | str, training_info: dict[str, 
         training_info: The manifest's ``training`` (data seeds, hyperparameters, time,
             figures): JSON values.
         feature_layout: The features it was trained on (default: the running azgym's
-            :data:`azgym.learn.features.FEATURE_LAYOUT`).
+            :data:`azgym.localize.learned.features.FEATURE_LAYOUT`).
         name: The model's name.
     """
     if feature_layout is None:
-        from azgym.learn.features import FEATURE_LAYOUT as feature_layout
+        from azgym.localize.learned.features import FEATURE_LAYOUT as feature_layout
     manifest = {"architecture": model.architecture(), "feature_layout": feature_layout,
                 "training": training_info}
     return save_weights(path, name, model.arrays(), manifest)

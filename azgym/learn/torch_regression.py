@@ -1,7 +1,8 @@
-"""The pose regressor in torch, for training: the network of :mod:`azgym.learn.regression`, batched.
+"""The pose regressor in torch, for training: the served network, batched.
 
-Frames come padded to the longest one, so every pooling runs over a frame's real tokens only,
-as :class:`~azgym.learn.torch_net.TorchInlierScorer` does it: padding is set to 0 before the
+The network is :mod:`azgym.localize.learned.pose_network`'s. Frames come padded to the longest
+one, so every pooling runs over a frame's real tokens only, as
+:class:`~azgym.learn.torch_net.TorchInlierScorer` does it: padding is set to 0 before the
 first layer and after each (where it cannot win a max over relu outputs), means divide by the
 number of real tokens, and the trust softmax gives padding no weight. :func:`export` writes
 weights that give the numpy forward the same outputs (``tests/learn/test_regression.py``).
@@ -18,15 +19,15 @@ import numpy as np
 import torch
 from torch import nn
 
-from azgym.learn.regression import ARCHITECTURE, LOG_VARIANCE_RANGE, OUTPUTS
-from azgym.learn.weights import save_weights
+from azgym.localize.learned.pose_network import ARCHITECTURE, LOG_VARIANCE_RANGE, OUTPUTS
+from azgym.localize.learned.weights import save_weights
 
 
 class TorchPoseRegressor(nn.Module):
     """Tokens to trust logits and (u, v, log σ_u², log σ_v²) (the module docstring's network).
 
     Args:
-        inputs: Token columns (:data:`azgym.learn.regression.N_TOKENS`).
+        inputs: Token columns (:data:`azgym.localize.learned.pose_network.N_TOKENS`).
         hidden: Width H of every hidden layer.
     """
 
@@ -63,7 +64,7 @@ class TorchPoseRegressor(nn.Module):
         return trust, head
 
     def architecture(self) -> dict[str, Any]:
-        """The manifest's ``architecture``: what :func:`azgym.learn.weights.array_shapes` reads."""
+        """The manifest's ``architecture``: what ``weights.array_shapes`` reads."""
         return {"kind": ARCHITECTURE, "inputs": self.inputs, "hidden": self.hidden}
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -81,7 +82,7 @@ class TorchPoseRegressor(nn.Module):
 
 def export(model: TorchPoseRegressor, path: Path | str, training_info: dict[str, Any], *,
            feature_layout: str, name: str = "learned") -> Path:
-    """Write the model's weight file (:func:`azgym.learn.weights.save_weights`)."""
+    """Write the model's weight file (:func:`azgym.localize.learned.weights.save_weights`)."""
     manifest = {"architecture": model.architecture(), "feature_layout": feature_layout,
                 "training": training_info}
     return save_weights(path, name, model.arrays(), manifest)

@@ -122,7 +122,7 @@ def build_data(layouts: Sequence[int], frames_per_layout: int, seed: int
     Returns:
         The training FrameBatch, the held-out one (every held-out layout), and what the model
         card says of them (with the training frames' distribution, which the served model
-        checks its frames against: :mod:`azgym.learn.distribution`).
+        checks its frames against: :mod:`azgym.localize.learned.distribution`).
     """
     from azgym.learn.dataset import HELD_OUT_LAYOUTS, make_frames
     from azgym.learn.distribution import batch_distribution
@@ -146,7 +146,7 @@ def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = 64,
     ``frames`` is per layout. See :class:`TrainConfig` for the others.
     """
     from azgym.learn.calibrate import calibrate_weights, card_section
-    from azgym.learn.features import FEATURE_LAYOUT
+    from azgym.localize.learned.features import FEATURE_LAYOUT
 
     config = TrainConfig(epochs=epochs, seed=seed, hidden=hidden, threads=threads)
     out, train, held_out, info = prepared_data(out_dir, layouts, frames, seed)

@@ -1,7 +1,7 @@
 """Training the ``learned`` pose regressor: Gaussian NLL on the position, BCE on the trust.
 
-Each frame of generated warehouses (:func:`azgym.learn.dataset.make_frames`, the frames
-ng-ransac trains on) becomes its tokens (:func:`azgym.learn.regression.frame_tokens`) and its
+Each frame of generated warehouses (:func:`azgym.learn.dataset.make_frames`, the frames ng-ransac
+trains on) becomes its tokens (:func:`azgym.localize.learned.pose_network.frame_tokens`) and its
 target, the true position in the frame's normalised coordinates. The loss is
 
     ½ Σ_axis (log σ² + (u − û)² / σ²)  +  trust_weight · BCE(t, inlier)
@@ -36,7 +36,6 @@ import torch
 from azgym.arguments import positive_number, whole_number
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder
-from azgym.learn.regression import N_TOKENS, frame_tokens
 from azgym.learn.torch_regression import TorchPoseRegressor, export
 from azgym.learn.train import (
     EVAL_BATCH,
@@ -49,6 +48,7 @@ from azgym.learn.train import (
 )
 from azgym.learn.train import fingerprint as run_fingerprint
 from azgym.learn.train_report import progress_bar
+from azgym.localize.learned.pose_network import N_TOKENS, frame_tokens
 
 MODEL = "learned"
 """The model this module trains (the name in its weight file)."""
@@ -129,8 +129,8 @@ def train_learned(out_dir: Path | str, *, layouts: int | Sequence[int] = 1000,
     Every argument is checked, and the folder made writable, before any frame is drawn.
     ``frames`` is per layout. See :class:`RegressionConfig` for the others.
     """
-    from azgym.learn.features import FEATURE_LAYOUT
     from azgym.learn.regression_report import write_regression_card
+    from azgym.localize.learned.features import FEATURE_LAYOUT
 
     config = RegressionConfig(epochs=epochs, seed=seed, hidden=hidden, threads=threads)
     out, train, held_out, info = prepared_data(out_dir, layouts, frames, seed)

@@ -126,8 +126,8 @@ def write_card(path: Path, info: dict[str, Any], weights: Path, figure: Path) ->
              *card_section(data.get("distribution")),
              "## Files", "",
              f"- `{weights.name}` (SHA-256 `{digest}`): load with "
-             "`azgym.learn.network.InlierScorer.load`", f"- `{figure.name}`: the learning curve",
-             ""]
+             "`azgym.localize.learned.inlier_network.InlierScorer.load`",
+             f"- `{figure.name}`: the learning curve", ""]
     return write_file(path, "\n".join(lines))
 
 

@@ -129,8 +129,9 @@ class Problem:
     @classmethod
     def from_frame(cls, measurements: Measurements, beacons: BeaconMap) -> Problem:
         """Look up every measurement's beacon; drop (and remember) ids the map does not know."""
-        return cls(*gather(measurements.ids, measurements.azimuth, *beacons.lookup_tables()),
-                   n_measurements=len(measurements))
+        floats, ints, distinct = gather(measurements.ids, measurements.azimuth,
+                                        *beacons.lookup_tables())
+        return cls(floats, ints, distinct, len(measurements))
 
     @property
     def size(self) -> int:

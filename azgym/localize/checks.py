@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -83,8 +84,8 @@ def check_localizer(
                "permutation invariance", "rotation/translation invariance",
                "ids not in the map never inliers", "too few measurements give ok=False"]
     if isinstance(localizer, Localizer):
-        _expect_raises(lambda: localizer.localize((frame.ids, frame.azimuth), beacons),
-                       "wrong argument type")
+        wrong: Any = (frame.ids, frame.azimuth)  # not a Measurements, on purpose
+        _expect_raises(lambda: localizer.localize(wrong, beacons), "wrong argument type")
         checked.append("a wrong argument type raises an azgym error")
     if verbose:
         print(f"check_localizer: {type(localizer).__name__} passed all {len(checked)} checks:"

@@ -283,7 +283,7 @@ class Mex(Localizer):
         if self.coarse_step is None:
             i, j, cost = grid_search(*args, x0, y0, step, nx, ny, no_store)
         else:
-            i, j, cost = self._coarse_to_fine(args, x0, y0, nx, ny, no_store)
+            i, j, cost = self._coarse_to_fine(args, self.coarse_step, x0, y0, nx, ny, no_store)
         if i < 0:
             return Estimate.failure("no grid point has a finite cost", problem.n_measurements)
         x = x0 + i * step
@@ -316,10 +316,10 @@ class Mex(Localizer):
         )
 
     def _coarse_to_fine(
-        self, args: tuple[FloatArray, ...], x0: float, y0: float, nx: int, ny: int,
-        no_store: FloatArray,
+        self, args: tuple[FloatArray, ...], coarse_step: float, x0: float, y0: float, nx: int,
+        ny: int, no_store: FloatArray,
     ) -> tuple[int, int, float]:
-        """Coarse grid, then a descent on the fine grid from each seed.
+        """Coarse grid (``coarse_step`` apart), then a descent on the fine grid from each seed.
 
         The seeds are the best coarse local minima and the beacons' positions. Around each seed
         the fine grid is searched in a window of ± one coarse step; while the window's best point
@@ -327,11 +327,11 @@ class Mex(Localizer):
         So each seed ends in a fine-grid local minimum, and the answer is the exhaustive argmin
         unless the coarse grid misses the global minimum's basin entirely.
         """
-        ratio = int(round(self.coarse_step / self.step))
+        ratio = int(round(coarse_step / self.step))
         cnx = (nx - 1) // ratio + 1
         cny = (ny - 1) // ratio + 1
         coarse = np.empty((cny, cnx))
-        grid_search(*args, x0, y0, float(self.coarse_step), cnx, cny, coarse)
+        grid_search(*args, x0, y0, float(coarse_step), cnx, cny, coarse)
         # Seeds on the fine grid: the best coarse local minima, and every beacon inside the grid.
         # Near a beacon E_ref is singular (its direction turns arbitrarily fast), so a camera at
         # or next to a beacon has its minimum in a basin narrower than the coarse step.

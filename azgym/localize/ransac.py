@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 from itertools import combinations
+from typing import Any
 
 import numpy as np
 
@@ -305,7 +306,8 @@ class Ransac(Localizer):
 
     @staticmethod
     def _estimate(out: FloatArray, mask: BoolArray, cov: FloatArray, n_triplets: int) -> Estimate:
-        diagnostics = {"n_triplets": n_triplets, "n_valid_triplets": int(out[OUT_VALID_TRIPLETS])}
+        diagnostics: dict[str, Any] = {"n_triplets": n_triplets,
+                                       "n_valid_triplets": int(out[OUT_VALID_TRIPLETS])}
         if out[OUT_SUPPORT] < MIN_MEASUREMENTS:
             return Estimate.failure(
                 "no non-degenerate triplet with at least 3 supporters", mask.size, diagnostics

@@ -59,7 +59,7 @@ _BUILTIN: dict[str, str] = {
     "mex": "azgym.localize.mex:Mex",
     "lsq": "azgym.localize.lsq:LeastSquares",
     "loo": "azgym.localize.loo:LeaveOneOut",
-    "ng-ransac": "azgym.localize.ng_ransac:NgRansac",
+    "ng-ransac": "azgym.localize.learned:NgRansac",
     "learned": "azgym.localize.learned:Learned",
 }
 _BUILTIN_TRACKERS: dict[str, str] = {

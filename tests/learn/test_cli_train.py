@@ -8,7 +8,7 @@ import hashlib
 import pytest
 
 from azgym import cli, cli_train
-from azgym.learn.weights import load_weights
+from azgym.localize.learned.weights import load_weights
 
 
 def test_the_command_parses_to_its_handler_with_its_defaults():

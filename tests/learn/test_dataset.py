@@ -21,8 +21,8 @@ from azgym.learn.dataset import (
     make_frames,
     observed_frame,
 )
-from azgym.learn.features import FEATURE_LAYOUT, N_FEATURES, measurement_features
 from azgym.localize.base import FLOAT_ROWS, ROW_AZIMUTH, ROW_BX, ROW_BY, Problem
+from azgym.localize.learned.features import FEATURE_LAYOUT, N_FEATURES, measurement_features
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import DIRECT, GHOST, MISIDENTIFIED, MOVED, PARTIAL
 from azgym.site import parse_scenario

@@ -10,14 +10,14 @@ import pytest
 from azgym.core import BeaconMap, Measurements
 from azgym.errors import InvalidInputError
 from azgym.learn.dataset import layout_frames
-from azgym.learn.features import (
+from azgym.localize.base import Problem
+from azgym.localize.learned.features import (
     CONSENSUS_TOLERANCE,
     FEATURE_NAMES,
     N_FEATURES,
     _stable_order,
     measurement_features,
 )
-from azgym.localize.base import Problem
 from azgym.sensing.synthetic import ideal_azimuths
 
 SQUARE = BeaconMap([1, 2, 3, 4], [[10.0, 0.0, 3.0], [0.0, 10.0, 3.0], [-10.0, 0.0, 3.0],

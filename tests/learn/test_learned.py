@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from azgym.errors import ModelFileError
-from azgym.learn.features import N_FEATURES
-from azgym.learn.regression import (
+from azgym.localize.base import FLOAT_ROWS, ROW_BX, ROW_BY, ROW_COS_AZ, ROW_SIN_AZ
+from azgym.localize.learned.features import N_FEATURES
+from azgym.localize.learned.pose_network import (
     LOG_VARIANCE_RANGE,
     N_TOKENS,
     OUTPUTS,
@@ -19,8 +20,7 @@ from azgym.learn.regression import (
     pack,
     regress,
 )
-from azgym.learn.weights import array_shapes, load_weights, save_weights
-from azgym.localize.base import FLOAT_ROWS, ROW_BX, ROW_BY, ROW_COS_AZ, ROW_SIN_AZ
+from azgym.localize.learned.weights import array_shapes, load_weights, save_weights
 
 LAYOUT = "test-features-1"
 

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from azgym.errors import InvalidInputError, ModelFileError
-from azgym.learn.network import InlierScorer, inlier_logits, pack
-from azgym.learn.weights import array_shapes, save_weights
+from azgym.localize.learned.inlier_network import InlierScorer, inlier_logits, pack
+from azgym.localize.learned.weights import array_shapes, save_weights
 
 LAYOUT = "test-features-1"
 
@@ -109,7 +109,7 @@ def test_serving_a_model_file_imports_no_torch(tmp_path):
         import sys
         import numpy as np
         import azgym
-        from azgym.learn.network import InlierScorer
+        from azgym.localize.learned.inlier_network import InlierScorer
         scorer = InlierScorer.load({str(path)!r}, feature_layout={LAYOUT!r})
         scorer.logits(np.zeros((5, 4)))
         print(sorted(m for m in ("torch", "tqdm", "matplotlib") if m in sys.modules))

@@ -14,8 +14,8 @@ pytest.importorskip("torch", reason="training needs pip install torch==2.13.0 (e
 
 from azgym.errors import InvalidInputError  # noqa: E402
 from azgym.learn import train as T  # noqa: E402
-from azgym.learn.network import InlierScorer  # noqa: E402
-from azgym.learn.weights import load_weights  # noqa: E402
+from azgym.localize.learned.inlier_network import InlierScorer  # noqa: E402
+from azgym.localize.learned.weights import load_weights  # noqa: E402
 
 LAYOUT = "test-features-1"
 FEATURES = 6
@@ -190,7 +190,7 @@ def test_a_small_run_on_generated_warehouses(tmp_path):
 
 
 def test_the_training_data_records_its_distribution_for_the_served_model():
-    from azgym.learn.distribution import SERVED_NOISE, TrainingDistribution
+    from azgym.localize.learned.distribution import SERVED_NOISE, TrainingDistribution
 
     train, _, info = T.build_data([0, 1], 20, 0)
     record = info["distribution"]

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from azgym.errors import InvalidInputError, ModelFileError
-from azgym.learn.weights import FORMAT, array_shapes, load_weights, save_weights
+from azgym.localize.learned.weights import FORMAT, array_shapes, load_weights, save_weights
 
 LAYOUT = "test-features-1"
 ARCHITECTURE = {"kind": "deepsets-context-1", "inputs": 5, "hidden": 4}
@@ -244,9 +244,9 @@ def test_the_running_feature_layout_is_the_default(tmp_path, monkeypatch):
     import sys
     import types
 
-    features = types.ModuleType("azgym.learn.features")
+    features = types.ModuleType("azgym.localize.learned.features")
     features.FEATURE_LAYOUT = "running-layout-7"
-    monkeypatch.setitem(sys.modules, "azgym.learn.features", features)
+    monkeypatch.setitem(sys.modules, "azgym.localize.learned.features", features)
     path = sound(tmp_path / "model.npz")
     with pytest.raises(ModelFileError, match="but this azgym computes 'running-layout-7'"):
         load_weights(path, "ng-ransac")

@@ -13,8 +13,8 @@ from helpers import beacon_map, ideal_frame
 import azgym
 from azgym import InvalidInputError, Measurements
 from azgym.localize.checks import check_localizer
-from azgym.localize.learned import SHIPPED_WEIGHTS, Learned
-from azgym.localize.ng_ransac import SHIPPED_WEIGHTS as NG_RANSAC_WEIGHTS
+from azgym.localize.learned.ng_ransac import SHIPPED_WEIGHTS as NG_RANSAC_WEIGHTS
+from azgym.localize.learned.pose_regression import SHIPPED_WEIGHTS, Learned
 
 BEACONS = beacon_map([(0, 0), (10, 0), (10, 10), (0, 10), (5, 12), (12, 5), (-2, 6), (7, -3)])
 POSE = (4.0, 3.0, 0.3)
@@ -83,7 +83,12 @@ def _refined_set(trust: list[float], error_deg: float = 0.0) -> tuple[np.ndarray
     logits (the last measurement ``error_deg`` off its true azimuth)."""
     from azgym.localize import _kernels as K
     from azgym.localize.base import gather
-    from azgym.localize.learned import OUT_ITERATIONS, OUT_SIZE, _refine_rounds, settings_array
+    from azgym.localize.learned.pose_regression import (
+        OUT_ITERATIONS,
+        OUT_SIZE,
+        _refine_rounds,
+        settings_array,
+    )
 
     room = beacon_map([(0.0, 0.0), (6.0, 0.0), (6.0, 6.0), (0.0, 6.0), (3.0, 7.0)])
     frame = ideal_frame(2.0, 2.5, 0.4, room)

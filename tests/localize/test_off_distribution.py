@@ -18,12 +18,12 @@ from helpers import beacon_map, ideal_frame, pose_error_of
 import azgym
 from azgym import Measurements
 from azgym.errors import ModelFileError
-from azgym.learn.distribution import GENERATED_WAREHOUSES, TrainingDistribution
-from azgym.learn.features import CONSENSUS_TOLERANCE
-from azgym.learn.weights import load_weights
-from azgym.localize.learned import SET_GATE, Learned
-from azgym.localize.learned import SHIPPED_WEIGHTS as LEARNED_WEIGHTS
-from azgym.localize.ng_ransac import SHIPPED_WEIGHTS as NG_WEIGHTS
+from azgym.localize.learned.distribution import GENERATED_WAREHOUSES, TrainingDistribution
+from azgym.localize.learned.features import CONSENSUS_TOLERANCE
+from azgym.localize.learned.ng_ransac import SHIPPED_WEIGHTS as NG_WEIGHTS
+from azgym.localize.learned.pose_regression import SET_GATE, Learned
+from azgym.localize.learned.pose_regression import SHIPPED_WEIGHTS as LEARNED_WEIGHTS
+from azgym.localize.learned.weights import load_weights
 
 LEARNED = ("learned", "ng-ransac")
 ROOM = beacon_map([(0.0, 0.0), (6.0, 0.0), (6.0, 6.0), (0.0, 6.0), (3.0, 7.0), (7.0, 3.0),

@@ -25,10 +25,10 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from azgym import BeaconMap, Estimate
+from azgym.localize.learned.ng_ransac import NgRansac
 from azgym.localize.loo import LeaveOneOut
 from azgym.localize.lsq import LeastSquares
 from azgym.localize.mex import Mex
-from azgym.localize.ng_ransac import NgRansac
 from azgym.localize.ransac import Ransac
 from azgym.localize.triplet import Triplet
 

@@ -24,7 +24,7 @@ import io
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -200,7 +200,7 @@ class EpisodeEnds(gym.Wrapper):
         """Start the fixed seeds over."""
         self.episodes = 0
 
-    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
+    def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict]:
         """Step; mark the last step of an episode with ``is_success``."""
         observation, reward, terminated, truncated, info = self.env.step(action)
         if terminated or truncated:

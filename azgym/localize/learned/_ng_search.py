@@ -7,7 +7,7 @@ measurements and :func:`guided_search` tries the triplets in the order of their 
 probability (:func:`guided_triplets`), then, if no winner is confident, every triplet of the
 most probable measurements. The hyperparameters travel in one float array, ransac's
 ``SETTING_*`` slots followed by the ``SEARCH_*`` slots here (:func:`guided_settings`). The
-localizer class, its answer test and its weights are in :mod:`azgym.localize.ng_ransac`.
+localizer class, its answer test and its weights are in :mod:`azgym.localize.learned.ng_ransac`.
 """
 
 from __future__ import annotations
@@ -18,17 +18,17 @@ import numpy as np
 
 from azgym.core import FloatArray
 from azgym.jit import jit
-from azgym.learn.features import (
+from azgym.localize import _kernels as K
+from azgym.localize._circles import write_ascending
+from azgym.localize.base import MIN_MEASUREMENTS, ROW_BEACON_INDEX, ROW_SOURCE
+from azgym.localize.learned.features import (
     CONSENSUS_CANDIDATES,
     CONSENSUS_TOLERANCE,
     N_FEATURES,
     consensus_of,
     fill_features,
 )
-from azgym.learn.network import inlier_logits
-from azgym.localize import _kernels as K
-from azgym.localize._circles import write_ascending
-from azgym.localize.base import MIN_MEASUREMENTS, ROW_BEACON_INDEX, ROW_SOURCE
+from azgym.localize.learned.inlier_network import inlier_logits
 from azgym.localize.ransac import (
     N_SETTINGS,
     refine_winner,

@@ -3,13 +3,13 @@
 A network answers anything it is given, and far from its training data it answers wrongly with
 confidence: the shipped models, trained on all-round cameras in generated warehouses, put a
 fifth of the frames of a 68° forward camera more than 1 m off. So a weight file records its
-training distribution (the manifest's ``distribution``, :func:`distribution_of` computes it
-from the training frames) and ``learned`` and ``ng-ransac`` refuse, with the reason, what lies
-outside it (:meth:`TrainingDistribution.settings_reason`, :meth:`TrainingDistribution.
-frame_reason`):
+training distribution (the manifest's ``distribution``, which
+:func:`azgym.learn.distribution.distribution_of` computes from the training frames) and
+``learned`` and ``ng-ransac`` refuse, with the reason, what lies outside it
+(:meth:`TrainingDistribution.settings_reason`, :meth:`TrainingDistribution.frame_reason`):
 
 - **noise**: the features measure azimuth residuals in units of the consensus tolerance, which
-  scales with the camera's Δα_d (:func:`azgym.learn.features.consensus_tolerance`); a
+  scales with the camera's Δα_d (:func:`azgym.localize.learned.features.consensus_tolerance`); a
   ``delta_alpha_d`` outside ``delta_alpha_d`` (:data:`SERVED_NOISE`, the range the normalised
   models were checked on) is refused;
 - **field of view**: a camera whose ``field_of_view`` is narrower than ``view_spread`` (the
@@ -25,8 +25,9 @@ per-frame test stops only what training never saw; the camera's ``field_of_view`
 ``[sensor]`` field) says the rest.
 
 The record is the manifest's ``training.data.distribution`` (``azgym train localizer`` writes
-it, :func:`batch_distribution`). A weight file without one (written before it existed) was
-trained on the same generated warehouses: :data:`GENERATED_WAREHOUSES` stands for it.
+it, :func:`azgym.learn.distribution.batch_distribution`). A weight file without one (written
+before it existed) was trained on the same generated warehouses: :data:`GENERATED_WAREHOUSES`
+stands for it.
 """
 
 from __future__ import annotations
@@ -35,15 +36,10 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
-import numpy as np
-
-from azgym.core import Estimate, FloatArray
+from azgym.core import Estimate
 from azgym.errors import ModelFileError
-from azgym.localize._angles import azimuth_spread
-from azgym.localize.base import ROW_AZIMUTH
 
-__all__ = ["GENERATED_WAREHOUSES", "SERVED_NOISE", "SPREAD_QUANTILE", "TrainingDistribution",
-           "batch_distribution", "card_section", "distribution_of"]
+__all__ = ["GENERATED_WAREHOUSES", "SERVED_NOISE", "SPREAD_QUANTILE", "TrainingDistribution"]
 
 SPREAD_QUANTILE = 0.01
 """Share of the training frames whose azimuth spread may lie below ``view_spread``."""
@@ -150,62 +146,3 @@ GENERATED_WAREHOUSES = TrainingDistribution(
     view_spread=math.radians(120.0), min_azimuth_spread=math.radians(7.0), min_beacons=3)
 """The distribution of a weight file without a record: ``azgym train localizer``'s generated
 warehouses (:mod:`azgym.learn.dataset`), rounded down from the shipped models' records."""
-
-
-def card_section(record: dict[str, Any] | None) -> list[str]:
-    """A model card's account of the manifest's ``distribution`` record (markdown lines).
-
-    None (data without the record, e.g. :func:`azgym.learn.train.fit` on frames of one's own)
-    says which distribution stands for it.
-    """
-    if record is None:
-        return ["## Training distribution (the frames it answers)", "",
-                "Not recorded with the training data: the generated warehouses' stands for it "
-                "(`azgym.learn.distribution.GENERATED_WAREHOUSES`).", ""]
-    made = TrainingDistribution.of_manifest({"training": {"data": {"distribution": record}}})
-    low, high = made.delta_alpha_d
-    return [
-        "## Training distribution (the frames it answers)", "",
-        "Recorded in the manifest (`training.data.distribution`, `azgym.learn.distribution`); "
-        "the localizer refuses, with the reason, a frame or a camera outside it:", "",
-        f"- camera noise trained on: Δα_d {math.degrees(made.trained_delta_alpha_d):.2f}°; "
-        f"served for Δα_d {math.degrees(low):.1f}°-{math.degrees(high):.0f}° (the consensus "
-        "tolerance scales with the given `delta_alpha_d`; range measured on the held-out "
-        "layouts, docs/learned.md)",
-        f"- azimuth spread exceeded by {1 - SPREAD_QUANTILE:.0%} of the training frames: "
-        f"{math.degrees(made.view_spread):.1f}° (a `field_of_view` narrower than this is "
-        "refused)",
-        f"- narrowest azimuth spread of a training frame: "
-        f"{math.degrees(made.min_azimuth_spread):.1f}° (a narrower frame is refused)",
-        f"- fewest distinct beacons in a training frame: {made.min_beacons}", ""]
-
-
-def batch_distribution(floats: FloatArray, beacon_index: np.ndarray, mask: np.ndarray
-                       ) -> TrainingDistribution:
-    """The distribution of a FrameBatch's frames (:mod:`azgym.learn.dataset`, its arrays).
-
-    The generated warehouses' camera has the simulator's default Δα_d (ErrorModel's).
-    """
-    from azgym.site.error_model import ErrorModel
-
-    azimuths = [floats[n, ROW_AZIMUTH][mask[n]] for n in range(mask.shape[0])]
-    distinct = [int(np.unique(beacon_index[n][mask[n]]).size) for n in range(mask.shape[0])]
-    return distribution_of(azimuths, distinct, ErrorModel().delta_alpha_d, SERVED_NOISE)
-
-
-def distribution_of(azimuths: list[FloatArray], distinct: list[int],
-                    trained_delta_alpha_d: float, delta_alpha_d: tuple[float, float]
-                    ) -> TrainingDistribution:
-    """The training distribution of frames (each frame's usable azimuths and distinct beacons).
-
-    Args:
-        azimuths: Each training frame's usable azimuths [rad].
-        distinct: Each training frame's distinct usable beacons.
-        trained_delta_alpha_d: Δα_d of the training frames' camera [rad].
-        delta_alpha_d: The Δα_d range [rad] the model is served for.
-    """
-    spreads = np.array([azimuth_spread(np.asarray(a, dtype=np.float64)) for a in azimuths])
-    return TrainingDistribution(float(trained_delta_alpha_d),
-                                (float(delta_alpha_d[0]), float(delta_alpha_d[1])),
-                                float(np.quantile(spreads, SPREAD_QUANTILE)),
-                                float(spreads.min()), int(min(distinct)))

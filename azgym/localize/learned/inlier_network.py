@@ -29,7 +29,8 @@ from azgym.errors import InvalidInputError
 from azgym.jit import jit
 
 ARCHITECTURE = "deepsets-context-1"
-"""The ``kind`` of architecture this module computes (:func:`azgym.learn.weights.array_shapes`)."""
+"""The ``kind`` of architecture this module computes
+(:func:`azgym.localize.learned.weights.array_shapes`)."""
 ORDER = ("W1", "b1", "W2", "b2", "w3", "b3")
 """The order the weight arrays are packed in, row-major, for the compiled forward."""
 
@@ -122,12 +123,13 @@ class InlierScorer:
     """Scores each measurement of a frame: the logit of its being an inlier.
 
     Args:
-        arrays: The weight arrays, as :func:`azgym.learn.weights.load_weights` returns them.
+        arrays: The weight arrays, as :func:`azgym.localize.learned.weights.load_weights`
+            returns them.
         manifest: The model file's manifest (its ``architecture`` sizes the network).
     """
 
     def __init__(self, arrays: dict[str, np.ndarray], manifest: dict[str, Any]) -> None:
-        from azgym.learn.weights import served
+        from azgym.localize.learned.weights import served
 
         architecture, self.params = served(arrays, manifest, ARCHITECTURE, "inlier scorer",
                                            ORDER)
@@ -138,8 +140,8 @@ class InlierScorer:
     @classmethod
     def load(cls, path: Path | str, *, model: str = "ng-ransac",
              feature_layout: str | None = None) -> InlierScorer:
-        """The scorer of a model file, checked by :func:`azgym.learn.weights.load_weights`."""
-        from azgym.learn.weights import load_weights
+        """The scorer of a model file, read and checked by ``weights.load_weights``."""
+        from azgym.localize.learned.weights import load_weights
 
         return cls(*load_weights(path, model, feature_layout=feature_layout))
 

@@ -5,21 +5,21 @@ Brachmann & Rother's Neural-Guided RANSAC ("Learning Where to Sample Model Hypot
 sets by it, so that few hypotheses find the model. Here the correspondences are a frame's
 azimuths, the minimal set is the paper's triplet (Rátosi & Simon 2021, eq. 7-20), and:
 
-1. the features' consensus pose (:mod:`azgym.learn.features`, the best supported triplet of
-   up to six measurements of distinct beacons, already solved to compute the features) is
+1. the features' consensus pose (:mod:`azgym.localize.learned.features`, the best supported
+   triplet of up to six measurements of distinct beacons, already solved to compute the features) is
    scored with the paper's tolerance; when every beacon in view supports it (at most
    ``consensus_slack`` do not) and they are at least max(CONFIDENT_SUPPORT, ``confident_share``
    of the distinct beacons), it is refined, locally optimised once, and final: nothing in the
    frame disagrees, so the network has nothing to sort out;
-2. otherwise a small set network (:mod:`azgym.learn.network`) gives each usable measurement a
-   logit z_i from its features (what sets mirror ghosts, misread ids and moved beacons apart
-   from good views, such as a ghost's dimmer blob);
+2. otherwise a small set network (:mod:`azgym.localize.learned.inlier_network`) gives each
+   usable measurement a logit z_i from its features (what sets mirror ghosts, misread ids and
+   moved beacons apart from good views, such as a ghost's dimmer blob);
 3. the ``max_ranked`` most probable measurements form the candidate triplets, tried in order of
    their joint log-probability Σ log σ(z_i), at most ``max_hypotheses`` of them (a triplet
    with two detections of one beacon is never tried: it cannot be solved), and, when their
    winner is not confident, every triplet of the ``fallback_ranked`` most probable; the
    paper's tolerance scores them and its refinement finishes the winner (ransac's own
-   compiled steps 1-6; the search itself is :mod:`azgym.localize._ng_search`);
+   compiled steps 1-6; the search itself is :mod:`azgym.localize.learned._ng_search`);
 4. a guided answer stands only if its supporters' summed inlier probability reaches
    ``min_support_weight``: three supporters that the network takes for ghosts are a pose no
    frame can confirm, and the frame is refused rather than answered metres off.
@@ -27,7 +27,7 @@ azimuths, the minimal set is the paper's triplet (Rátosi & Simon 2021, eq. 7-20
 The features' consensus tolerance scales with ``delta_alpha_d`` (the network reads residuals
 in units of the camera's noise), and frames unlike the training frames are refused with the
 reason before any of this: a noise, ``field_of_view``, azimuth spread or number of beacons the
-weights' training distribution does not hold (:mod:`azgym.learn.distribution`).
+weights' training distribution does not hold (:mod:`azgym.localize.learned.distribution`).
 
 The order is deterministic (the best triplets first, not a random draw), so the same frame gets
 the same answer. The network is trained in PyTorch (``azgym train localizer``) and served here
@@ -37,7 +37,7 @@ in compiled numpy; this module never imports torch.
 from __future__ import annotations
 
 import math
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -45,22 +45,7 @@ from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
-from azgym.learn.distribution import TrainingDistribution
-from azgym.learn.features import (
-    CONSENSUS_CANDIDATES,
-    FEATURE_LAYOUT,
-    consensus_tolerance,
-    first_quality_column,
-    measurement_features,
-)
-from azgym.learn.network import InlierScorer
-from azgym.learn.weights import load_weights, model_path
 from azgym.localize._angles import azimuth_spread
-from azgym.localize._ng_search import (
-    CONSENSUS_HYPOTHESES,
-    guided_settings,
-    ng_ransac_search,
-)
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
     ROW_AZIMUTH,
@@ -68,6 +53,21 @@ from azgym.localize.base import (
     Problem,
     gather,
 )
+from azgym.localize.learned._ng_search import (
+    CONSENSUS_HYPOTHESES,
+    guided_settings,
+    ng_ransac_search,
+)
+from azgym.localize.learned.distribution import TrainingDistribution
+from azgym.localize.learned.features import (
+    CONSENSUS_CANDIDATES,
+    FEATURE_LAYOUT,
+    consensus_tolerance,
+    first_quality_column,
+    measurement_features,
+)
+from azgym.localize.learned.inlier_network import InlierScorer
+from azgym.localize.learned.weights import MODELS, load_weights, model_path
 from azgym.localize.ransac import (
     OUT_SIZE,
     OUT_SUPPORT,
@@ -79,7 +79,7 @@ from azgym.localize.refinement import package
 
 MODEL_NAME = "ng-ransac"
 """The model name a weight file for this localizer must carry."""
-SHIPPED_WEIGHTS = Path(__file__).resolve().parent.parent / "learn" / "models" / "ng-ransac.npz"
+SHIPPED_WEIGHTS = MODELS / f"{MODEL_NAME}.npz"
 """The trained weights that ship inside the package (model card beside them)."""
 NO_QUALITY = np.zeros(0)
 """The quality column the kernels get for a frame without quality."""
@@ -246,8 +246,9 @@ class NgRansac(Localizer):
         """
         consensus = CONSENSUS_HYPOTHESES[min(CONSENSUS_CANDIDATES, distinct)]
         guided = not math.isnan(weight)
-        diagnostics = {"n_hypotheses": consensus + tried,
-                       "n_valid_triplets": int(out[OUT_VALID_TRIPLETS]), "guided": guided}
+        diagnostics: dict[str, Any] = {"n_hypotheses": consensus + tried,
+                                       "n_valid_triplets": int(out[OUT_VALID_TRIPLETS]),
+                                       "guided": guided}
         if out[OUT_SUPPORT] < MIN_MEASUREMENTS:
             return Estimate.failure("no non-degenerate triplet with at least 3 supporters",
                                     mask.size, diagnostics)

@@ -1,25 +1,26 @@
 """The pose regressor's forward pass in numpy/numba: a frame's measurement tokens to its position.
 
-The ``learned`` localizer (:mod:`azgym.localize.learned`) regresses the camera's position
-directly from the set of a frame's usable measurements. Each measurement is one token
+The ``learned`` localizer (:mod:`azgym.localize.learned.pose_regression`) regresses the camera's
+position directly from the set of a frame's usable measurements. Each measurement is one token
 (:func:`frame_tokens`)::
 
     [cos α, sin α, (b_x − c_x) / s, (b_y − c_y) / s, features…]
 
 α the measured azimuth in the camera frame, b the beacon's mapped position, c the centroid of
 the frame's measured beacons and s their RMS distance to it, and the measurement features of
-:mod:`azgym.learn.features` (quality ranks, duplicates, consensus residual and support: what
-tells a token to trust from one to ignore). Centring and scaling per frame let one network
-serve a 6 m room and a 60 m warehouse alike; the position is predicted in that frame and mapped
-back (x = c + s u). The beacon's height is left out: an azimuth is a horizontal direction that
-the height does not change, so the position follows from the horizontal geometry alone (a
+:mod:`azgym.localize.learned.features` (quality ranks, duplicates, consensus residual and
+support: what tells a token to trust from one to ignore). Centring and scaling per frame let one
+network serve a 6 m room and a 60 m warehouse alike; the position is predicted in that frame and
+mapped back (x = c + s u). The beacon's height is left out: an azimuth is a horizontal direction
+that the height does not change, so the position follows from the horizontal geometry alone (a
 height token was not tried).
 Rotation is not canonicalised (a frame's world heading is unknown): training rotates every
 frame's world at random, so the network learns to compose camera-frame azimuths with world
 positions whatever the map's orientation.
 
 The network is a DeepSets model (Zaheer et al. 2017) with one context round, as the inlier
-scorer's (:mod:`azgym.learn.network`, whose compiled helpers it reuses), and a pooled head::
+scorer's (:mod:`azgym.localize.learned.inlier_network`, whose compiled helpers it reuses), and a
+pooled head::
 
     h1    = relu(x W1 + b1)                              (K, H)  each token alone
     h2    = relu([h1, max_k h1, mean_k h1] W2 + b2)      (K, H)  each token in its frame
@@ -45,12 +46,13 @@ import numpy as np
 from azgym.core import FloatArray
 from azgym.errors import ModelFileError
 from azgym.jit import jit
-from azgym.learn.features import FEATURE_NAMES, N_FEATURES
-from azgym.learn.network import _context, _embed
 from azgym.localize.base import ROW_BX, ROW_BY, ROW_COS_AZ, ROW_SIN_AZ
+from azgym.localize.learned.features import FEATURE_NAMES, N_FEATURES
+from azgym.localize.learned.inlier_network import _context, _embed
 
 ARCHITECTURE = "deepsets-regression-1"
-"""The ``kind`` of architecture this module computes (:func:`azgym.learn.weights.array_shapes`)."""
+"""The ``kind`` of architecture this module computes
+(:func:`azgym.localize.learned.weights.array_shapes`)."""
 ORDER = ("W1", "b1", "W2", "b2", "w3", "b3", "W4", "b4", "W5", "b5", "W6", "b6")
 """The order the weight arrays are packed in, row-major, for the compiled forward."""
 TOKEN_NAMES = ("cos_azimuth", "sin_azimuth", "beacon_u", "beacon_v", *FEATURE_NAMES)
@@ -198,12 +200,13 @@ class PoseRegressor:
     """The regression network of a model file, ready to serve.
 
     Args:
-        arrays: The weight arrays, as :func:`azgym.learn.weights.load_weights` returns them.
+        arrays: The weight arrays, as :func:`azgym.localize.learned.weights.load_weights`
+            returns them.
         manifest: The model file's manifest (its ``architecture`` sizes the network).
     """
 
     def __init__(self, arrays: dict[str, np.ndarray], manifest: dict[str, Any]) -> None:
-        from azgym.learn.weights import served
+        from azgym.localize.learned.weights import served
 
         architecture, self.params = served(arrays, manifest, ARCHITECTURE, "pose regressor",
                                            ORDER)
@@ -216,8 +219,8 @@ class PoseRegressor:
     @classmethod
     def load(cls, path: Path | str, *, model: str = "learned",
              feature_layout: str | None = None) -> PoseRegressor:
-        """The regressor of a model file, checked by :func:`azgym.learn.weights.load_weights`."""
-        from azgym.learn.weights import load_weights
+        """The regressor of a model file, read and checked by ``weights.load_weights``."""
+        from azgym.localize.learned.weights import load_weights
 
         return cls(*load_weights(path, model, feature_layout=feature_layout))
 

@@ -1,9 +1,9 @@
 """``learned``: the pose regressed by a set network from the frame's measurements (PoseNet-style).
 
 The honest baseline of "just learn it": no triplet search, no consensus vote of the pose. A
-small permutation-invariant network (:mod:`azgym.learn.regression`) reads one token per usable
-measurement (its camera-frame azimuth, its beacon's position normalised by the frame's beacons,
-and the measurement features of :mod:`azgym.learn.features`) and answers
+small permutation-invariant network (:mod:`azgym.localize.learned.pose_network`) reads one token
+per usable measurement (its camera-frame azimuth, its beacon's position normalised by the frame's
+beacons, and the measurement features of :mod:`azgym.localize.learned.features`) and answers
 
 1. the camera's position (u, v) in the frame's normalised coordinates, mapped back to the map's
    (x = c + s u), with a log-variance per axis (trained as a Gaussian NLL): the estimate's
@@ -39,34 +39,21 @@ cheap once a start in the right basin is known (the network's job).
 A frame of three distinct beacons like the training frames is always answered (the regression
 cannot fail); the covariance says how far to trust it. A frame unlike them is refused with the
 reason: a noise, ``field_of_view``, azimuth spread or number of beacons the weights' training
-distribution does not hold (:mod:`azgym.learn.distribution`); the features' consensus tolerance
-scales with ``delta_alpha_d`` (the network reads residuals in units of the camera's noise).
-Everything runs in one compiled call (id lookup, features, tokens, network, heading,
+distribution does not hold (:mod:`azgym.localize.learned.distribution`); the features' consensus
+tolerance scales with ``delta_alpha_d`` (the network reads residuals in units of the camera's
+noise). Everything runs in one compiled call (id lookup, features, tokens, network, heading,
 refinement); this module never imports torch.
 """
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from azgym.core import BeaconMap, Estimate, FloatArray, Measurements
 from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
-from azgym.learn.distribution import TrainingDistribution
-from azgym.learn.features import (
-    CONSENSUS_TOLERANCE,
-    FEATURE_LAYOUT,
-    N_FEATURES,
-    consensus_tolerance,
-    first_quality_column,
-    frame_features,
-    measurement_features,
-)
-from azgym.learn.regression import N_TOKENS, OUTPUTS, PoseRegressor, frame_tokens, regress
-from azgym.learn.weights import load_weights, model_path
 from azgym.localize import _kernels as K
 from azgym.localize._angles import azimuth_spread
 from azgym.localize.base import (
@@ -83,12 +70,30 @@ from azgym.localize.base import (
     Problem,
     gather,
 )
+from azgym.localize.learned.distribution import TrainingDistribution
+from azgym.localize.learned.features import (
+    CONSENSUS_TOLERANCE,
+    FEATURE_LAYOUT,
+    N_FEATURES,
+    consensus_tolerance,
+    first_quality_column,
+    frame_features,
+    measurement_features,
+)
+from azgym.localize.learned.pose_network import (
+    N_TOKENS,
+    OUTPUTS,
+    PoseRegressor,
+    frame_tokens,
+    regress,
+)
+from azgym.localize.learned.weights import MODELS, load_weights, model_path
 from azgym.localize.lsq import heading_sum
 from azgym.localize.refinement import refine_with_covariance
 
 MODEL_NAME = "learned"
 """The model name a weight file for this localizer must carry."""
-SHIPPED_WEIGHTS = Path(__file__).resolve().parent.parent / "learn" / "models" / "learned.npz"
+SHIPPED_WEIGHTS = MODELS / f"{MODEL_NAME}.npz"
 """The trained weights that ship inside the package (model card beside them)."""
 GATE_GROWTH = 3.0
 """Each refinement round's gate is this times the next one's (the last is ``gate``)."""
@@ -240,7 +245,7 @@ class Learned(Localizer):
         refine_rounds: Gated refinement rounds after the regression (0: the pure regression).
         gate: The last round's residual gate [rad]; earlier rounds' grow by ``GATE_GROWTH``.
             None: the features' consensus tolerance, 1° at the training noise and scaled with
-            ``delta_alpha_d`` like it (:func:`azgym.learn.features.consensus_tolerance`).
+            ``delta_alpha_d`` like it (:func:`azgym.localize.learned.features.consensus_tolerance`).
         min_trust: Least trust logit of a measurement the first refinement round starts from.
         delta_alpha_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1), for the
             refinement's covariance.

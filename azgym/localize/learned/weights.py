@@ -29,8 +29,11 @@ import numpy as np
 
 from azgym.errors import InvalidInputError, ModelFileError
 
-__all__ = ["FORMAT", "ModelFileError", "array_shapes", "load_weights", "save_weights"]
+__all__ = ["FORMAT", "MODELS", "ModelFileError", "array_shapes", "load_weights", "model_path",
+           "save_weights"]
 
+MODELS = Path(__file__).resolve().parent / "models"
+"""The folder of the weight files that ship with azgym (``<model>.npz``, model cards beside)."""
 FORMAT = 1
 """The model-file format this azgym writes and the newest it reads."""
 MAX_FILE_BYTES = 16 * 2**20
@@ -53,14 +56,14 @@ ARCHITECTURES = ("deepsets-context-1", "deepsets-regression-1")
 def array_shapes(architecture: dict[str, Any]) -> dict[str, tuple[int, ...]]:
     """The arrays an architecture consists of, and their shapes: the one rule for both.
 
-    ``deepsets-context-1`` (the inlier scorer, :mod:`azgym.learn.network`): ``W1`` (inputs,
-    hidden), ``b1`` (hidden,), ``W2`` (3 hidden, hidden) acting on ``[h1, max h1, mean h1]``,
-    ``b2`` (hidden,), ``w3`` (hidden,), ``b3`` (1,).
+    ``deepsets-context-1`` (the inlier scorer, :mod:`azgym.localize.learned.inlier_network`):
+    ``W1`` (inputs, hidden), ``b1`` (hidden,), ``W2`` (3 hidden, hidden) acting on
+    ``[h1, max h1, mean h1]``, ``b2`` (hidden,), ``w3`` (hidden,), ``b3`` (1,).
 
-    ``deepsets-regression-1`` (the pose regressor, :mod:`azgym.learn.regression`): the same
-    six arrays (``w3``, ``b3`` give the trust logits), then the head: ``W4`` (3 hidden, hidden)
-    acting on the pooled ``[max h2, mean h2, trusted mean h2]``, ``b4`` (hidden,), ``W5``
-    (hidden, hidden), ``b5`` (hidden,), ``W6`` (hidden, 4), ``b6`` (4,).
+    ``deepsets-regression-1`` (the pose regressor, :mod:`azgym.localize.learned.pose_network`):
+    the same six arrays (``w3``, ``b3`` give the trust logits), then the head: ``W4``
+    (3 hidden, hidden) acting on the pooled ``[max h2, mean h2, trusted mean h2]``, ``b4``
+    (hidden,), ``W5`` (hidden, hidden), ``b5`` (hidden,), ``W6`` (hidden, 4), ``b6`` (4,).
 
     Raises:
         ModelFileError: Another kind of architecture, or sizes that are not whole numbers in
@@ -156,10 +159,10 @@ def save_weights(path: Path | str, model: str, arrays: dict[str, np.ndarray],
         text = json.dumps(full, allow_nan=False, sort_keys=True)
     except (TypeError, ValueError) as exc:
         raise ModelFileError(f"{path}: the manifest is not plain JSON: {exc}") from None
-    checked = _checked(path, model, _check_fields(path, json.loads(text)), arrays,
-                       full.get("feature_layout"))
+    written = _check_fields(path, json.loads(text))
+    checked = _checked(path, model, written, arrays, written["feature_layout"])
     buffer = io.BytesIO()
-    np.savez(buffer, **checked, **{MANIFEST: np.array(text)})
+    np.savez(buffer, allow_pickle=False, **checked, **{MANIFEST: np.array(text)})
     return write_file(path, buffer.getvalue())
 
 
@@ -171,7 +174,7 @@ def load_weights(path: Path | str, model: str, *, feature_layout: str | None = N
         path: The model file.
         model: The model it must hold, e.g. ``"ng-ransac"``.
         feature_layout: The feature layout it must have been trained on (default: the running
-            azgym's, :data:`azgym.learn.features.FEATURE_LAYOUT`).
+            azgym's, :data:`azgym.localize.learned.features.FEATURE_LAYOUT`).
 
     Returns:
         The weight arrays (float64, as the architecture shapes them) and the manifest.
@@ -181,7 +184,9 @@ def load_weights(path: Path | str, model: str, *, feature_layout: str | None = N
             model, architecture, feature layout or a newer azgym.
     """
     if feature_layout is None:
-        from azgym.learn.features import FEATURE_LAYOUT as feature_layout
+        from azgym.localize.learned.features import FEATURE_LAYOUT
+
+        feature_layout = FEATURE_LAYOUT
     path = Path(path)
     members = _read_members(path)
     if MANIFEST not in members:
