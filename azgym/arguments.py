@@ -12,6 +12,8 @@ import numbers
 
 from azgym.errors import InvalidInputError
 
+__all__ = ["MAX_SEED", "MIN_TIME_LIMIT", "positive_number", "seed", "time_limit", "whole_number"]
+
 
 def whole_number(name: str, value: object, minimum: int = 1) -> int:
     """``value`` as an int, refusing anything that is not a whole number >= ``minimum``."""
@@ -22,8 +24,8 @@ def whole_number(name: str, value: object, minimum: int = 1) -> int:
 
 def positive_number(name: str, value: object, unit: str) -> float:
     """``value`` as a float, refusing anything that is not a finite number > 0."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
-            math.isfinite(value) and value > 0):
+    if (isinstance(value, bool) or not isinstance(value, numbers.Real)
+            or not math.isfinite(value) or value <= 0):
         raise InvalidInputError(f"{name} must be a finite number > 0 [{unit}], got {value!r}")
     return float(value)
 
@@ -35,8 +37,8 @@ everywhere a seed is given (runs, sweeps, layout analyses, exports, result files
 
 def seed(name: str, value: object) -> int:
     """``value`` as a seed: a whole number in [0, :data:`MAX_SEED`)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not (
-            0 <= value < MAX_SEED):
+    if (isinstance(value, bool) or not isinstance(value, numbers.Integral)
+            or not 0 <= int(value) < MAX_SEED):
         raise InvalidInputError(f"{name} must be a whole number in [0, 2**31), got {value!r}")
     return int(value)
 
@@ -51,8 +53,8 @@ timeouts whatever the localizer."""
 
 def time_limit(name: str, value: object) -> float:
     """``value`` as a time limit in seconds: a finite number >= :data:`MIN_TIME_LIMIT`."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
-            math.isfinite(value) and value >= MIN_TIME_LIMIT):
+    if (isinstance(value, bool) or not isinstance(value, numbers.Real)
+            or not math.isfinite(value) or value < MIN_TIME_LIMIT):
         raise InvalidInputError(f"{name} must be a number of seconds >= {MIN_TIME_LIMIT:g}, "
                                 f"got {value!r}")
     return float(value)

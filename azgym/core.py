@@ -18,6 +18,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from azgym.errors import InvalidInputError
 
+__all__ = ["BeaconMap", "BoolArray", "Estimate", "FloatArray", "IntArray", "Measurements", "Pose",
+           "estimated_pose", "pose_error", "wrap_angle", "wrap_scalar"]
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]

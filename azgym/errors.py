@@ -10,6 +10,9 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterable
 
+__all__ = ["AzgymError", "DependencyNotInstalled", "InvalidInputError", "ModelFileError",
+           "ScenarioError", "UnknownNameError", "require", "unknown_name"]
+
 
 class AzgymError(Exception):
     """Base class of every exception raised by azgym."""

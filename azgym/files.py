@@ -14,6 +14,8 @@ from pathlib import Path
 
 from azgym.errors import InvalidInputError
 
+__all__ = ["prepare_folder", "write_file"]
+
 
 def prepare_folder(folder: Path) -> Path:
     """Create ``folder`` if needed and check it can be written, before any work is done.

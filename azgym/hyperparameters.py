@@ -18,6 +18,8 @@ import numpy as np
 
 from azgym.errors import InvalidInputError
 
+__all__ = ["Hyperparameters", "check_flag", "check_range"]
+
 
 class Hyperparameters:
     """Keyword-only hyperparameters with ``get_params``, ``repr`` and checking on change.
@@ -32,7 +34,8 @@ class Hyperparameters:
     def __setattr__(self, name: str, value: Any) -> None:
         """Set an attribute; setting a hyperparameter has it checked again before the next frame."""
         object.__setattr__(self, name, value)
-        if name in _param_names(type(self)):
+        # mypy#11470: mypy takes no class object for Hashable, which every class is.
+        if name in _param_names(type(self)):  # type: ignore[arg-type]
             object.__setattr__(self, "_params_checked", False)
 
     def _validate_once(self) -> None:
@@ -47,7 +50,8 @@ class Hyperparameters:
 
     def get_params(self) -> dict[str, Any]:
         """The hyperparameters, as given to ``__init__``."""
-        return {name: getattr(self, name) for name in _param_names(type(self))}
+        names = _param_names(type(self))  # type: ignore[arg-type]  # mypy#11470, as above
+        return {name: getattr(self, name) for name in names}
 
     def __repr__(self) -> str:
         params = ", ".join(f"{key}={value!r}" for key, value in self.get_params().items())
@@ -55,7 +59,7 @@ class Hyperparameters:
 
 
 @functools.cache
-def _param_names(cls: type) -> tuple[str, ...]:
+def _param_names(cls: type[Hyperparameters]) -> tuple[str, ...]:
     """Names of the keyword-only ``__init__`` arguments of a class."""
     signature = inspect.signature(cls.__init__)
     return tuple(

@@ -33,6 +33,8 @@ from azgym.sensing.labels import MOVED
 from azgym.site import Scenario, load_scenario
 from azgym.site.sampling import random_free_pose
 
+__all__ = ["measure_detections", "plot", "run", "summarize"]
+
 
 def measure_detections(scenario: Scenario | str, frames: int = 300, noise_sigma: float = 2.0,
                        calibration_px: float = 1.0, seed: int = 0) -> dict[str, FloatArray]:

@@ -20,6 +20,8 @@ from azgym.sensing.image.sensor import ImageSensor
 from azgym.site import Scenario, load_scenario
 from azgym.world.drive import simulate
 
+__all__ = ["IdentificationStats", "measure_identification"]
+
 
 @dataclass(frozen=True)
 class IdentificationStats:
@@ -90,10 +92,10 @@ def measure_identification(scenario: Scenario | str, camera_rate_hz: float = BLI
             row = np.maximum(truth.beacon, 0)  # blobs of no beacon are masked out below
             true_ids = np.where(truth.beacon >= 0, ids[row], -1)
             direct = (truth.beacon >= 0) & ~truth.mirrored
-            eligible = direct & (streak[row] >= needed[row])
-            counts += [1, eligible.sum(), (eligible & (decoded == true_ids)).sum(),
-                       (eligible & (decoded < 0)).sum(),
-                       (eligible & (decoded >= 0) & (decoded != true_ids)).sum(),
+            is_eligible = direct & (streak[row] >= needed[row])
+            counts += [1, is_eligible.sum(), (is_eligible & (decoded == true_ids)).sum(),
+                       (is_eligible & (decoded < 0)).sum(),
+                       (is_eligible & (decoded >= 0) & (decoded != true_ids)).sum(),
                        (decoded >= 0).sum(), ((decoded >= 0) & (decoded != true_ids)).sum()]
     frames, eligible, correct, none, wrong, with_id, bad = (int(c) for c in counts)
     return IdentificationStats(scenario.name, camera_rate_hz, noise_sigma, frames, eligible,

@@ -8,3 +8,6 @@ predicted σ (eq. 1-3); ``objective`` the figures of a σ map and the optimizer'
 ``scenario_file`` the new layout as a scenario file; ``figures`` the heat maps.
 See docs/layout.md.
 """
+
+__all__ = ["analysis", "candidates", "figures", "floor", "information", "monte_carlo", "objective",
+           "optimize", "scenario_file", "visibility"]

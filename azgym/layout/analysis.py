@@ -26,6 +26,8 @@ from azgym.layout.objective import PENALTY_SIGMA, floor_figures
 from azgym.layout.visibility import visible_beacons
 from azgym.site import Scenario
 
+__all__ = ["Prediction", "agreement", "analyze", "predict", "summary", "write_analysis"]
+
 AGREEMENT = 0.10
 """A cell's Monte Carlo RMS agrees with the prediction within this relative difference."""
 MAX_REASONS = 5

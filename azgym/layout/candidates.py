@@ -26,6 +26,8 @@ from azgym.errors import InvalidInputError
 from azgym.site import Scenario
 from azgym.site.generator_beacons import CEILING_GAP, RACK_END_Z
 
+__all__ = ["DEFAULT_SPACING", "MIN_SEPARATION", "Candidates", "candidate_places"]
+
 DEFAULT_SPACING = 2.0
 """Default spacing of the wall candidates [m]."""
 MAX_CANDIDATES = 5_000

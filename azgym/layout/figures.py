@@ -19,6 +19,8 @@ from azgym.layout.floor import Floor
 from azgym.layout.objective import PENALTY_SIGMA
 from azgym.site import Scenario
 
+__all__ = ["analysis_figure", "placement_figure"]
+
 FIGURE_DPI = 110
 """Resolution of the PNG files."""
 

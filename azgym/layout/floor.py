@@ -20,6 +20,8 @@ from azgym.errors import InvalidInputError, ScenarioError
 from azgym.site import Scenario
 from azgym.site.sampling import RACK_CLEARANCE, WALL_CLEARANCE, clear_of_racks
 
+__all__ = ["DEFAULT_STEP", "MAX_CELLS", "Floor", "floor_grid"]
+
 DEFAULT_STEP = 0.5
 """Default spacing of the grid [m]: finer than an aisle (2.8-4 m), coarse enough to be quick."""
 MAX_CELLS = 250_000
@@ -98,4 +100,4 @@ def _count(span: float, step: float) -> float:
 
 def _centred(start: float, span: float, count: int, step: float) -> FloatArray:
     """``count`` points ``step`` apart, centred in [start, start + span]."""
-    return start + 0.5 * (span - (count - 1) * step) + step * np.arange(count)
+    return start + 0.5 * (span - (count - 1) * step) + step * np.arange(count, dtype=np.float64)

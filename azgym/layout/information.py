@@ -25,8 +25,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from azgym.core import BoolArray, FloatArray
+from azgym.core import BoolArray, FloatArray, IntArray
 from azgym.site.error_model import ErrorModel
+
+__all__ = ["MIN_BEACONS", "SINGULAR", "contributions", "position_sigma"]
 
 XX, XY, XH, YY, YH, HH = range(6)
 """Slots of a packed symmetric 3×3 information matrix over (x, y, heading)."""
@@ -69,7 +71,7 @@ def contributions(points: FloatArray, beacon_xy: FloatArray, beacon_width: Float
     return packed
 
 
-def position_sigma(information: FloatArray, beacon_count: FloatArray) -> FloatArray:
+def position_sigma(information: FloatArray, beacon_count: IntArray) -> FloatArray:
     """σ_pos = sqrt(C_xx + C_yy) of packed information matrices (module docstring) [m].
 
     Args:

@@ -39,6 +39,8 @@ from azgym.layout.information import MIN_BEACONS
 from azgym.sensing.synthetic import ideal_azimuths
 from azgym.site import Scenario
 
+__all__ = ["MonteCarlo", "monte_carlo"]
+
 CHUNK_FRAMES = 100_000
 """Frames handed to the runner at once (bounds the memory of a large analysis)."""
 
@@ -99,9 +101,11 @@ def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localiz
                                  maps={scenario.name: scenario.beacons})[runs.label]
         for error in filter(None, outcome.errors):
             problems[error] = problems.get(error, 0) + 1
+        estimate = outcome.estimate
+        assert estimate is not None, "a run's own outcome keeps its estimates"
         for k, p in enumerate(part):
             rows = slice(k * frames, (k + 1) * frames)
-            fixed = outcome.estimate[rows][outcome.ok[rows], :2] - points[p]
+            fixed = estimate[rows][outcome.ok[rows], :2] - points[p]
             figures[:, p] = _figures(fixed, frames)
         if progress is not None:
             progress(start + len(part), len(cells))

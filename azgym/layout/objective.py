@@ -15,6 +15,8 @@ import numpy as np
 
 from azgym.core import FloatArray
 
+__all__ = ["PENALTY_SIGMA", "capped", "floor_figures", "objective"]
+
 PENALTY_SIGMA = 1.0
 """The σ an undetermined or worse cell counts as [m]."""
 PERCENTILE = 95.0
@@ -48,12 +50,12 @@ def floor_figures(sigma: FloatArray, visible: FloatArray | None = None) -> dict[
         visible: Beacons seen per cell, shape (P,); the count under three is left out without.
     """
     values = capped(sigma)
-    figures = {"cells": int(sigma.size),
-               "sigma_median_m": float(np.median(values)),
-               "sigma_p95_m": float(np.percentile(values, PERCENTILE)),
-               "sigma_mean_m": float(values.mean()),
-               "cells_undetermined": int(np.count_nonzero(~np.isfinite(sigma))),
-               "cells_at_penalty": int(np.count_nonzero(sigma >= PENALTY_SIGMA))}
+    figures: dict[str, Any] = {"cells": int(sigma.size),
+                               "sigma_median_m": float(np.median(values)),
+                               "sigma_p95_m": float(np.percentile(values, PERCENTILE)),
+                               "sigma_mean_m": float(values.mean()),
+                               "cells_undetermined": int(np.count_nonzero(~np.isfinite(sigma))),
+                               "cells_at_penalty": int(np.count_nonzero(sigma >= PENALTY_SIGMA))}
     fixed = sigma[sigma < PENALTY_SIGMA]
     figures["sigma_p95_with_fix_m"] = float(np.percentile(fixed, PERCENTILE)) \
         if fixed.size else None

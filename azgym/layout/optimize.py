@@ -29,6 +29,8 @@ from azgym.layout.objective import objective
 from azgym.layout.visibility import visible_beacons
 from azgym.site import Scenario
 
+__all__ = ["MAX_ADD", "Placement", "check_add", "place_beacons"]
+
 MAX_ADD = 100
 """The most beacons one run places."""
 MAX_SWAP_ROUNDS = 10

@@ -25,6 +25,8 @@ from azgym.site.load import SCENARIO_PACKAGE
 from azgym.site.reader import MAX_INTEGER, MAX_NAME, NAME_CHARACTERS
 from azgym.site.toml_writer import to_toml
 
+__all__ = ["file_stem", "fresh_ids", "source_data", "with_new_beacons", "write_scenario"]
+
 
 def source_data(scenario: Scenario) -> dict[str, Any]:
     """The TOML data the scenario was loaded from (its file, or the shipped one of its name).

@@ -21,6 +21,8 @@ from azgym.sensing.geometry.direct import direct_view
 from azgym.site import Scenario
 from azgym.site.elements import occluder_table
 
+__all__ = ["visible_beacons"]
+
 
 def visible_beacons(scenario: Scenario, points: FloatArray, beacon_xyz: FloatArray,
                     beacon_width: FloatArray) -> BoolArray:

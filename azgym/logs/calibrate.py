@@ -37,13 +37,13 @@ from typing import Any
 import numpy as np
 
 from azgym import arguments
-from azgym.bench.metrics import bootstrap_blocks
 from azgym.core import FloatArray, wrap_angle
 from azgym.errors import InvalidInputError
 from azgym.logs.calibrate_motion import GROSS, fit_walk, integrate, not_gross
 from azgym.logs.calibrate_sensor import MIN_DETECTIONS, block_interval, fit_azimuth
 from azgym.logs.clocks import nudged
 from azgym.logs.read import Log
+from azgym.metrics import bootstrap_blocks
 from azgym.profile import (
     DIFFERENTIAL_DRIVE,
     FORKLIFT,

@@ -99,7 +99,8 @@ def integrate(frame_times: FloatArray, times: FloatArray, values: FloatArray) ->
     squares = np.bincount(pair_interval, weights=span**2, minlength=count)
     seconds = np.bincount(pair_interval, weights=span, minlength=count)
     covered = seconds >= np.diff(frame_times) * (1.0 - 1e-9)
-    return Integrated(total, squares, seconds, covered)
+    # numpy's stub types bincount as intp even with weights; these are float64.
+    return Integrated(total, squares, seconds, covered)  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -151,7 +152,7 @@ def fit_walk(y: FloatArray, a: FloatArray, squares: FloatArray, seconds: FloatAr
     ratio = float(y @ a / (a @ a))
     sigma0 = max(math.sqrt(float(np.mean((y - ratio * a) ** 2 / squares))), 1e-12)
     walk0 = 3.0 * sigma0 * math.sqrt(float(np.mean(squares) / np.mean(seconds)
-                                           / max(np.mean(a**2), 1e-300)))
+                                           / max(float(np.mean(a**2)), 1e-300)))
     sigma = sigma0 * np.logspace(-1.5, 0.5, GRID)
     walk = np.concatenate([[0.0], walk0 * np.logspace(-5, 0, GRID - 1)])
     loglik, _, information = _grid(y, a, squares, seconds, first, sigma, walk)  # coarse

@@ -15,7 +15,7 @@ interval of the calibration (:mod:`azgym.logs.calibrate`) comes from:
   is the variance model with the larger Gaussian quasi-likelihood on the inliers of the wider
   rule (a tie, as when beacon widths are zero, is false). Δα_d's interval: a BCa bootstrap (one
   Newton step of the equation per resample) over 5 s blocks of frames
-  (:func:`azgym.bench.metrics.bootstrap_blocks`), so that correlated frames move together.
+  (:func:`azgym.metrics.bootstrap_blocks`), so that correlated frames move together.
 * **Field of view**: twice the largest |azimuth| among the half of the inliers with the tighter
   bound Δα_d + Δα_c,i (there eq. 25 trims best: an outlier cannot widen the view); all round
   (2π) when that reaches :data:`ALL_ROUND`. Its interval runs from
@@ -113,12 +113,14 @@ def fit_azimuth(log: Log, frame_blocks: np.ndarray, rng: np.random.Generator
     cover = bound[kept] if coverage else np.zeros(int(kept.sum()))
     blocks = np.unique(frame_blocks[row[kept]], return_inverse=True)[1]
     score, slope = _score(residual[kept], cover, delta**2)
-    score, slope = np.bincount(blocks, weights=score), np.bincount(blocks, weights=slope)
+    block_score = np.bincount(blocks, weights=score)
+    block_slope = np.bincount(blocks, weights=slope)
 
     def statistic(pick: np.ndarray) -> np.ndarray:  # one Newton step from the fit
-        return np.sqrt(np.maximum(delta**2 - score[pick].sum(-1) / slope[pick].sum(-1), 0.0))
+        return np.sqrt(np.maximum(
+            delta**2 - block_score[pick].sum(-1) / block_slope[pick].sum(-1), 0.0))
 
-    interval = block_interval(statistic, score.size, delta, rng)
+    interval = block_interval(statistic, block_score.size, delta, rng)
     note = (f"detections: {int(detections['id'].size)}; ids not in the map: "
             f"{int((~mapped).sum())}; trimmed as gross outliers (eq. 25): "
             f"{int((~kept).sum())}; inliers: {int(kept.sum())}")

@@ -27,6 +27,8 @@ import numpy as np
 from azgym.logs.problems import Problems, places, seconds, shown
 from azgym.logs.tables import Table
 
+__all__ = ["MOTION_LEAD", "nudged", "settle_frames", "settle_stream"]
+
 MOTION_LEAD = 5.0
 """How long before a sequence's first frame motion samples are kept [s]. Motion loggers are
 started before the camera (a second before it in the recording this was set on, a few seconds

@@ -34,6 +34,8 @@ from azgym.site.scenario import Scenario
 from azgym.site.toml_writer import to_toml
 from azgym.world.drive import Frame, motion_models, simulate
 
+__all__ = ["csv_text", "export_route"]
+
 
 def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Path, *,
                  name: str | None = None, motion_rate_hz: float | None = None) -> Path:

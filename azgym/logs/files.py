@@ -13,6 +13,8 @@ from pathlib import Path
 
 from azgym.logs.problems import Problems
 
+__all__ = ["MAX_TABLE_BYTES", "MAX_TABLE_CELLS", "log_file", "read_limited"]
+
 MAX_TABLE_BYTES = 64 * 1024 * 1024
 """The largest table file read [bytes] (a Parquet table: also its uncompressed size)."""
 MAX_TABLE_CELLS = 4_000_000

@@ -25,6 +25,9 @@ from azgym.logs.tables import check_columns, floats, integers, read_table
 from azgym.profile import SECTIONS, Profile, parse_profile
 from azgym.site.reader import name_problem
 
+__all__ = ["FORMATS", "FORMAT_VERSION", "MANIFEST", "MAX_NAME", "Manifest", "read_manifest",
+           "read_map"]
+
 FORMAT_VERSION = 2
 """The log format this azgym writes (``format`` in ``log.toml``)."""
 FORMATS = (1, 2)
@@ -115,8 +118,7 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
         for key in sorted(set(section) - keys):
             problems.add(MANIFEST, f"{f'{table}.' if table else ''}{key}: unknown field "
                                    f"(known: {', '.join(sorted(keys))})")
-    camera, where, truth = (data.get(k) if isinstance(data.get(k), dict) else {}
-                            for k in ("camera", "map", "truth"))
+    camera, where, truth = (_section(data, key) for key in ("camera", "map", "truth"))
     name = _text(data, "name", problems, required=True)
     if name and (problem := name_problem(name, MAX_NAME)):
         problems.add(MANIFEST, f"name: {problem}")
@@ -144,6 +146,12 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
         scenario=_text(where, "scenario", problems, where="map.") or None,
         beacons=_text(where, "beacons", problems, where="map.") or None,
         truth=_text(truth, "source", problems, where="truth."), profile=profile)
+
+
+def _section(data: dict[str, Any], key: str) -> dict[str, Any]:
+    """The table ``key`` ({} when it is absent or no table: reported with the fields)."""
+    value = data.get(key)
+    return value if isinstance(value, dict) else {}
 
 
 def _text(data: dict[str, Any], key: str, problems: Problems, required: bool = False,

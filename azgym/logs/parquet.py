@@ -16,6 +16,8 @@ from azgym.errors import require
 from azgym.logs.files import MAX_TABLE_BYTES, MAX_TABLE_CELLS
 from azgym.logs.problems import Problems, cut
 
+__all__ = ["parquet_cells"]
+
 
 def parquet_cells(data: bytes, file: str, problems: Problems
                   ) -> tuple[list[str], list[list[str]]] | None:

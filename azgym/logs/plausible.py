@@ -29,7 +29,9 @@ import numpy as np
 
 from azgym.core import BeaconMap, wrap_angle
 from azgym.logs.problems import Problems
-from azgym.logs.tables import Table
+from azgym.logs.tables import Columns, Table
+
+__all__ = ["Extent", "check_plausible"]
 
 MAX_SPEED = 20.0
 """The largest odometry |speed| [m/s] (72 km/h: far beyond an indoor vehicle)."""
@@ -82,10 +84,10 @@ class Extent:
         return cls((x0 - m, y0 - m, x1 + m, y1 + m), f"the beacons' extent and {m:g} m")
 
 
-def check_plausible(tables: dict[str, Table | None], columns: dict[str, object],
+def check_plausible(tables: dict[str, Table | None], columns: dict[str, Columns | None],
                     beacons: BeaconMap | None, extent: Extent | None,
                     rate_hz: float | None, problems: Problems) -> None:
-    """Report the unit and clock mistakes (module docstring); ``columns``: name → Columns."""
+    """Report the unit and clock mistakes (module docstring) of each table's columns."""
     for (name, column), (bound, hint) in BOUNDS.items():
         table, values = tables.get(name), columns.get(name)
         if table is not None and values is not None and column in values.values:
@@ -98,8 +100,9 @@ def check_plausible(tables: dict[str, Table | None], columns: dict[str, object],
     _frame_rate(table, frames["time"], rate_hz, problems)
     if "x" in frames.values and extent is not None:
         _truth_in_extent(table, frames, extent, problems)
-    if "x" in frames.values and beacons is not None and columns.get("detections") is not None:
-        _azimuths_agree(tables["detections"], columns["detections"], frames, beacons, problems)
+    detections = columns.get("detections")
+    if "x" in frames.values and beacons is not None and detections is not None:
+        _azimuths_agree(tables["detections"], detections, frames, beacons, problems)
 
 
 def _frame_rate(table: Table, time: np.ndarray, rate_hz: float | None,
@@ -116,31 +119,31 @@ def _frame_rate(table: Table, time: np.ndarray, rate_hz: float | None,
                                  "seconds? the right rate?)", column="time")
 
 
-def _truth_in_extent(table: Table, frames: object, extent: Extent, problems: Problems) -> None:
+def _truth_in_extent(table: Table, frames: Columns, extent: Extent, problems: Problems) -> None:
     """Each true x, y within the map's extent (a truth in millimetres is far outside)."""
     x0, y0, x1, y1 = extent.box
     for column, lo, hi in (("x", x0, x1), ("y", y0, y1)):
-        values = frames[column]  # type: ignore[index]
+        values = frames[column]
         for k in np.flatnonzero((values < lo) | (values > hi)):
             table.report(problems, f"{float(values[k])!r} is outside the map's extent "
                                    f"[{lo:.6g}, {hi:.6g}] m ({extent.what}; millimetres?)",
                          int(k), column)
 
 
-def _azimuths_agree(table: Table | None, detections: object, frames: object,
+def _azimuths_agree(table: Table | None, detections: Columns, frames: Columns,
                     beacons: BeaconMap, problems: Problems) -> None:
     """The median |azimuth − the truth's prediction| over detections of map beacons is small."""
-    rows = detections["frame"]  # type: ignore[index]
-    index = beacons.index_of(detections["id"])  # type: ignore[index]
+    rows = detections["frame"]
+    index = beacons.index_of(detections["id"])
     used = np.flatnonzero((rows >= 0) & (index >= 0))
     if table is None or not used.size:
         return
-    x, y = (frames[key][rows[used]] for key in ("x", "y"))  # type: ignore[index]
+    x, y = (frames[key][rows[used]] for key in ("x", "y"))
     xy = beacons.xy[index[used]]
     bearing = np.arctan2(xy[:, 1] - y, xy[:, 0] - x)
-    measured = detections["azimuth"][used]  # type: ignore[index]
-    if "heading" in frames.values:  # type: ignore[attr-defined]
-        heading = frames["heading"][rows[used]]  # type: ignore[index]
+    measured = detections["azimuth"][used]
+    if "heading" in frames.values:
+        heading = frames["heading"][rows[used]]
     else:  # position-only truth: each frame's best-fitting heading, from two detections on
         heading = _fitted_headings(rows[used], bearing - measured)
         used, bearing, measured, heading = (values[np.isfinite(heading)] for values in
@@ -154,7 +157,7 @@ def _azimuths_agree(table: Table | None, detections: object, frames: object,
     median = float(np.nanmedian(residual))
     if not median > MAX_AZIMUTH_RESIDUAL:
         return
-    if "heading" not in frames.values:  # type: ignore[attr-defined]
+    if "heading" not in frames.values:
         hint = "measured clockwise, in degrees, or scaled?"
     elif float(np.nanmedian(np.abs(wrap_angle(measured + predicted)))) <= MAX_AZIMUTH_RESIDUAL:
         hint = "they match the predictions negated: measured clockwise?"

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from azgym.errors import InvalidInputError
 
+__all__ = ["MAX_PROBLEMS", "LogError", "Problems", "cut", "places", "seconds", "shown"]
+
 MAX_PROBLEMS = 50
 """Problems listed before the rest are only counted."""
 MAX_SHOWN = 40

@@ -28,10 +28,21 @@ from azgym.logs.clocks import settle_frames, settle_stream
 from azgym.logs.manifest import MANIFEST, Manifest, read_manifest, read_map
 from azgym.logs.plausible import check_plausible
 from azgym.logs.problems import LogError, Problems, shown
-from azgym.logs.tables import Table, check_columns, find_table, floats, integers, read_table
+from azgym.logs.tables import (
+    Columns,
+    Table,
+    check_columns,
+    find_table,
+    floats,
+    integers,
+    read_table,
+)
 from azgym.profile import DIFFERENTIAL_DRIVE
 from azgym.sensing.labels import LABEL_NAMES
 from azgym.site.load import SCENARIO_PACKAGE
+
+__all__ = ["QUALITY_PREFIX", "Columns", "Log", "log_digest", "map_bytes", "read_log",
+           "shipped_logs"]
 
 TRUTH = ("x", "y", "heading")
 """The true camera pose's columns in ``frames.csv`` [m, m, rad] (format 2: heading optional)."""
@@ -55,16 +66,6 @@ _FORMAT_1 = {
     "imu": (("time", "yaw_rate", "ax", "ay"), ("heading",)),
 }
 """Where format 1 differs."""
-
-
-@dataclass(frozen=True, eq=False)
-class Columns:
-    """A checked table's columns, by name (float64 or int64 arrays, or text lists)."""
-
-    values: dict[str, object]
-
-    def __getitem__(self, key: str) -> Any:
-        return self.values[key]
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,8 +124,9 @@ class Log:
         """The true pose of frame row ``k`` (heading NaN: position-only truth), or None."""
         if not self.has_truth:
             return None
-        return tuple(float(self.frames[key][k]) if key in self.frames.values else math.nan
-                     for key in TRUTH)  # type: ignore[return-value]
+        x, y, heading = (float(self.frames[key][k]) if key in self.frames.values else math.nan
+                         for key in TRUTH)
+        return x, y, heading
 
 
 def shipped_logs() -> dict[str, Path]:
@@ -257,7 +259,7 @@ def _frames(table: Table | None, manifest: Manifest, problems: Problems) -> Colu
         problems.add(table.file, "no frames: a log holds at least one")
     number, good = integers(table, "frame", problems)
     _increasing(table, "frame", number, problems, good)
-    values: dict[str, object] = {"frame": number, "time": floats(table, "time", problems)}
+    values: dict[str, Any] = {"frame": number, "time": floats(table, "time", problems)}
     _increasing(table, "time", values["time"], problems, strictly=False)
     if (problem := _truth_problem([key for key in TRUTH if table.has(key)], manifest.format)):
         problems.add(table.file, problem)
@@ -323,12 +325,12 @@ def _detections(table: Table | None, frames: Columns | None, problems: Problems
         if quality_names else np.zeros((len(table), 0))
     label = np.full(len(table), -1, dtype=np.int64)
     if table.has("label"):
-        for k, text in enumerate(table.cells("label")):
+        for index, text in enumerate(table.cells("label")):
             if text not in LABEL_NAMES:
                 table.report(problems, f"{shown(text)} is no label (known: "
-                                       f"{', '.join(LABEL_NAMES)})", k, "label")
+                                       f"{', '.join(LABEL_NAMES)})", index, "label")
             else:
-                label[k] = LABEL_NAMES.index(text)
+                label[index] = LABEL_NAMES.index(text)
     _check_duplicates(table, row, ids, azimuth, problems)
     names = tuple(name.removeprefix(QUALITY_PREFIX) for name in quality_names)
     return Columns({"frame": row, "id": ids, "azimuth": azimuth, "quality": quality,

@@ -17,6 +17,7 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -24,9 +25,22 @@ from azgym.logs.files import MAX_TABLE_CELLS, log_file, read_limited
 from azgym.logs.parquet import parquet_cells
 from azgym.logs.problems import Problems, cut, shown
 
+__all__ = ["Columns", "Table", "check_columns", "find_table", "floats", "integers",
+           "read_table"]
+
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _INTEGER = re.compile(r"[+-]?[0-9]{1,18}")
 _NOT_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+
+
+@dataclass(frozen=True, eq=False)
+class Columns:
+    """A checked table's columns, by name (float64 or int64 arrays, or text lists)."""
+
+    values: dict[str, Any]
+
+    def __getitem__(self, key: str) -> Any:
+        return self.values[key]
 
 
 @dataclass

@@ -1,1 +1,4 @@
 """Sensing."""
+
+__all__ = ["catalog", "geometry", "identities", "image", "labels", "motion", "protocol",
+           "synthetic"]

@@ -7,6 +7,8 @@ from azgym.sensing.identities import ID_MODES
 from azgym.sensing.protocol import Sensor
 from azgym.site import Scenario
 
+__all__ = ["SENSORS", "make_sensor"]
+
 SENSORS = ("geometry", "image")
 """The camera models: the compiled geometry, or rendered and detected fisheye frames."""
 

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from azgym.jit import jit
 
+__all__ = ["ID_MODES", "misread_row"]
+
 ID_MODES = ("oracle", "blink")
 """How detections are identified: by the light that made them, or by decoding its blinking."""
 

@@ -5,6 +5,8 @@ Plain integers, so that compiled kernels and arrays carry them; the most specifi
 its decoded id is wrong).
 """
 
+__all__ = ["DIRECT", "DISTRACTOR", "GHOST", "LABEL_NAMES", "MISIDENTIFIED", "MOVED", "PARTIAL"]
+
 DIRECT = 0
 """A beacon in full view."""
 PARTIAL = 1

@@ -20,12 +20,16 @@ from __future__ import annotations
 import bisect
 import math
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
 from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 from azgym.profile import MotionProfile
+
+__all__ = ["DifferentialOdometer", "DifferentialOdometryModel", "Imu", "ImuModel", "ImuSamples",
+           "Motion", "Odometer", "OdometryModel", "OdometrySamples", "joined"]
 
 
 @dataclass(frozen=True)
@@ -150,7 +154,7 @@ class DifferentialOdometryModel:
                              bias_walk=self.bias_walk)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class OdometrySamples:
     """Odometry samples, K of them, each array of shape (K,).
 
@@ -168,11 +172,15 @@ class OdometrySamples:
     time: FloatArray
     speed: FloatArray
     steer: FloatArray
-    yaw_rate: FloatArray = None  # type: ignore[assignment]  # NaN-filled in __post_init__
+    yaw_rate: FloatArray
 
-    def __post_init__(self) -> None:
-        if self.yaw_rate is None:
-            object.__setattr__(self, "yaw_rate", np.full(np.shape(self.time), math.nan))
+    def __init__(self, time: FloatArray, speed: FloatArray, steer: FloatArray,
+                 yaw_rate: FloatArray | None = None) -> None:
+        object.__setattr__(self, "time", time)
+        object.__setattr__(self, "speed", speed)
+        object.__setattr__(self, "steer", steer)
+        object.__setattr__(self, "yaw_rate", np.full(np.shape(time), math.nan)
+                           if yaw_rate is None else yaw_rate)
 
     @classmethod
     def turning(cls, time: FloatArray, speed: FloatArray, yaw_rate: FloatArray
@@ -349,7 +357,10 @@ class Imu:
                           accel=np.column_stack([ax, ay]), heading=heading.copy())
 
 
-def _taken(rows: list[tuple[float, ...]], until: float) -> list[tuple[float, ...]]:
+_Row = TypeVar("_Row", bound=tuple[float, ...])
+
+
+def _taken(rows: list[_Row], until: float) -> list[_Row]:
     """Remove and return the rows (in time order, time first) taken at or before ``until``.
 
     A camera frame may fall between two physics steps (a 30 Hz camera, a 50 Hz physics): the

@@ -32,6 +32,10 @@ if TYPE_CHECKING:
     from azgym.sensing.image.detect import Blob
     from azgym.site import Scenario
 
+__all__ = ["AZIMUTH", "BEACON", "CAMERA_RATE_HZ", "ID", "LABEL", "LEVEL", "MIRRORED",
+           "TRUE_AZIMUTH", "VISIBLE", "DetectionTruth", "Observation", "Seed", "Sensor", "Tilt",
+           "check_pose"]
+
 Tilt = tuple[float, float]
 """(pitch, roll) of the camera's axis from the vertical [rad]."""
 LEVEL: Tilt = (0.0, 0.0)
@@ -200,16 +204,24 @@ class Sensor(Protocol):
 
     Attributes:
         scenario: The site it sees.
-        quality_names: What each column of ``Measurements.quality`` holds, e.g.
-            ``("log_brightness",)`` or ``("area_px", "peak", "elongation")``.
-        quality_high: The largest value of each quality column (the lowest is 0).
         frame_rate_hz: The frame rate it is made for [Hz].
     """
 
     scenario: Scenario
-    quality_names: tuple[str, ...]
-    quality_high: tuple[float, ...]
     frame_rate_hz: float
+
+    @property
+    def quality_names(self) -> tuple[str, ...]:
+        """What each column of ``Measurements.quality`` holds.
+
+        For example ``("log_brightness",)`` or ``("area_px", "peak", "elongation")``.
+        """
+        ...
+
+    @property
+    def quality_high(self) -> tuple[float, ...]:
+        """The largest value of each quality column (the lowest is 0)."""
+        ...
 
     def reset(self, seed: Seed = None) -> None:
         """Start a new sequence of frames; seed what the sensor keeps across frames."""

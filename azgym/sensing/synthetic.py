@@ -15,6 +15,8 @@ from azgym.core import BeaconMap, BoolArray, FloatArray, Measurements, wrap_angl
 from azgym.errors import InvalidInputError
 from azgym.site.error_model import ErrorModel
 
+__all__ = ["derangement", "ideal_azimuths", "inject_outliers", "noisy_measurements"]
+
 
 def ideal_azimuths(
     x: float, y: float, heading: float, beacons: BeaconMap

@@ -17,6 +17,11 @@ import numpy as np
 from azgym.core import FloatArray, wrap_angle
 from azgym.profile import FORKLIFT
 
+__all__ = ["ALL_ROUND", "CAMERA_RATES_HZ", "CAMERA_RATE_HZ", "ROUTE_CLEARANCE", "SEG_HEIGHT",
+           "SEG_REFLECTIVITY", "SEG_X1", "SEG_X2", "SEG_Y1", "SEG_Y2", "Bump", "Camera", "Faults",
+           "Light", "Rack", "Route", "Vehicle", "Wall", "leg_hits_rack", "leg_wall_distance",
+           "occluder_table"]
+
 
 @dataclass(frozen=True)
 class Rack:
@@ -123,6 +128,11 @@ class Vehicle:
 
     kind: str = FORKLIFT
     camera_ahead: float | None = None
+
+    @property
+    def robot_camera_ahead(self) -> float:
+        """A differential drive's camera offset [m]: ``camera_ahead``, or 0 (on the axis)."""
+        return 0.0 if self.camera_ahead is None else self.camera_ahead
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,8 @@ from numpy.typing import ArrayLike
 from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 
+__all__ = ["ErrorModel"]
+
 
 @dataclass(frozen=True)
 class ErrorModel:

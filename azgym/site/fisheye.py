@@ -19,6 +19,8 @@ from numpy.typing import ArrayLike
 from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 
+__all__ = ["MAX_IMAGE_SIDE", "FisheyeCamera"]
+
 MAX_IMAGE_SIDE = 4096
 """The widest and tallest image the fisheye may have [px]: a 16-megapixel frame. The image
 sensor keeps a bank of noise frames of this size, so a larger one would be refused only once

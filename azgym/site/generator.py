@@ -68,6 +68,8 @@ from azgym.site.reader import name_problem
 from azgym.site.scenario import Scenario
 from azgym.site.toml_writer import to_toml
 
+__all__ = ["SIDE", "generate", "generate_data", "generate_toml", "write_generated"]
+
 GENERATOR_VERSION = 1
 """The generated scenarios' ``version``: bumped whenever a seed's site changes."""
 SIDE = (15.0, 60.0)

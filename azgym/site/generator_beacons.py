@@ -17,6 +17,8 @@ import numpy as np
 
 from azgym.site.generator_layout import Plan, draw
 
+__all__ = ["CEILING_GAP", "RACK_END_Z", "beacons_data", "bumps_data", "lights_data"]
+
 AISLE_END_SHARE = 0.8
 """Share of aisle ends (on the end walls) that carry a beacon."""
 WALL_SPACING = (6.0, 10.0)

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+__all__ = ["AISLE", "Plan", "draw", "draw_plan", "racks_data", "routes_data", "walls_data"]
+
 AISLE = (2.8, 4.0)
 """Width of an aisle between two rack rows [m]."""
 END_AISLE = (3.6, 5.0)
@@ -178,7 +180,8 @@ def routes_data(plan: Plan, rng: np.random.Generator) -> list[dict[str, Any]]:
               ("cross-aisle", _crossing(plan, rng), None), _picking(plan, rng)]
     tables = []
     for name, points, reverse in routes:
-        table = {"name": name, "waypoints": [plan.world(x, y) for x, y in points]}
+        table: dict[str, Any] = {"name": name,
+                                 "waypoints": [plan.world(x, y) for x, y in points]}
         if reverse is not None:
             table["reverse"] = reverse
         tables.append({**table, "speed": draw(rng, SPEED)})

@@ -17,6 +17,8 @@ from azgym.errors import ScenarioError, unknown_name
 from azgym.site.parse import parse_scenario
 from azgym.site.scenario import Scenario
 
+__all__ = ["MAX_FILE_BYTES", "SCENARIO_PACKAGE", "list_scenarios", "load_scenario"]
+
 SCENARIO_PACKAGE = "azgym.site.scenarios"
 """The package the shipped scenario files are installed as (the repository's ``envs/``)."""
 MAX_FILE_BYTES = 4 * 1024 * 1024

@@ -35,6 +35,8 @@ from azgym.site.parse_sensor import parse_camera, parse_error_model, parse_fault
 from azgym.site.reader import Reader, parse_tables, shown
 from azgym.site.scenario import Scenario
 
+__all__ = ["parse_scenario"]
+
 _TOP_KEYS = {"name", "description", "version", "room", "error_model", "beacon_defaults",
              "beacons", "camera", "faults", "racks", "walls", "routes",
              "bumps", "fisheye", "lights", "vehicle", "unmapped"}

@@ -31,6 +31,10 @@ from azgym.site.elements import (
 )
 from azgym.site.reader import MAX_INTEGER, Reader, shown
 
+__all__ = ["MAX_LEG_PAIRS", "ON_WALL_TOLERANCE", "Obstacles", "check_beacons_outside_racks",
+           "check_route_names_unique", "parse_beacons", "parse_bump", "parse_light", "parse_rack",
+           "parse_route", "parse_unmapped", "parse_wall"]
+
 _DEFAULT_KEYS = {"width", "z"}
 _BEACON_KEYS = {"id", "xy", "xyz", "width", "z", "moved_to"}
 _UNMAPPED_KEYS = {"id", "xy", "xyz", "width", "z"}

@@ -18,6 +18,8 @@ from azgym.site.error_model import ErrorModel
 from azgym.site.fisheye import MAX_IMAGE_SIDE, FisheyeCamera
 from azgym.site.reader import Reader, shown
 
+__all__ = ["parse_camera", "parse_error_model", "parse_faults", "parse_fisheye"]
+
 _CAMERA_KEYS = {"height", "min_elevation_deg", "max_range", "field_of_view_deg", "rate_hz"}
 _FISHEYE_KEYS = {"focal_px", "principal_point", "image_size", "distortion"}
 _ERROR_KEYS = {"delta_alpha_d_deg", "center_error_px", "horizon_radius_px", "coverage"}

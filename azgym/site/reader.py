@@ -24,6 +24,9 @@ from typing import Any, TypeVar
 
 from azgym.errors import ScenarioError
 
+__all__ = ["MAX_ENTRIES", "MAX_INTEGER", "MAX_NAME", "NAME_CHARACTERS", "Reader", "name_problem",
+           "parse_tables", "shown"]
+
 _Element = TypeVar("_Element")
 
 MAX_MAGNITUDE = 1e5

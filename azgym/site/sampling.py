@@ -11,6 +11,8 @@ from azgym.core import Pose
 from azgym.errors import ScenarioError
 from azgym.site.scenario import Scenario
 
+__all__ = ["RACK_CLEARANCE", "WALL_CLEARANCE", "clear_of_racks", "random_free_pose"]
+
 WALL_CLEARANCE = 0.5
 """A random pose keeps this far inside the room's bounds [m]."""
 RACK_CLEARANCE = 0.8

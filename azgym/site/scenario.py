@@ -15,6 +15,8 @@ from azgym.site.elements import Bump, Camera, Faults, Light, Rack, Route, Vehicl
 from azgym.site.error_model import ErrorModel
 from azgym.site.fisheye import FisheyeCamera
 
+__all__ = ["Scenario"]
+
 
 @dataclass(frozen=True)
 class Scenario:

@@ -15,6 +15,8 @@ from typing import Any
 
 from azgym.errors import InvalidInputError
 
+__all__ = ["to_toml"]
+
 
 def to_toml(data: dict[str, Any], comment: str = "") -> str:
     """``data`` (parsed-TOML form of a scenario) as TOML text, ``comment`` lines on top.

@@ -48,6 +48,8 @@ from azgym.jit import jit, wrap_compiled
 from azgym.localize.base import ROW_AZIMUTH, ROW_BX, ROW_BY, ROW_WIDTH
 from azgym.track.unicycle import IPHI, IX, IY
 
+__all__ = ["gated_update"]
+
 
 def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_index: IntArray,
                  delta_d: float, coverage: bool, extra_sigma: float, threshold: float

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -28,11 +28,35 @@ from azgym.localize.registry import SupportsLocalize, build
 from azgym.sensing.motion import Motion
 from azgym.track._motion_check import NOT_FINITE, OUT_OF_ORDER, PARTLY_GIVEN, stream_fault
 
+__all__ = ["COLUMNS", "FrameByFrame", "SupportsTrack", "Tracker", "check_choice", "check_motion",
+           "make_tracker"]
+
 COLUMNS = {"odometry": ("speed", "steer", "yaw_rate"), "imu": ("yaw_rate", "ax", "ay")}
 """The value columns of each motion stream that :func:`check_motion` checks."""
 OPTIONAL = {"odometry": np.array([False, True, True]), "imu": np.array([False, True, True])}
 """Which of them a stream may leave out (NaN throughout): a steered vehicle's odometry reports
 no yaw rate, a differential drive's no steering angle, a log's IMU may give no accelerations."""
+
+
+@runtime_checkable
+class SupportsTrack(Protocol):
+    """What azgym needs of a tracker: three methods. :class:`Tracker` adds validation on top.
+
+    A plug-in tracker need not derive from :class:`Tracker`: any object with these methods runs
+    in the benchmark and the environments.
+    """
+
+    def reset(self, seed: int | None = None, initial: Pose | None = None) -> None:
+        """Start a new sequence, from the pose ``initial`` (x, y, heading) if it is known."""
+        ...
+
+    def predict(self, motion: Motion) -> None:
+        """Move the state with the motion samples since the previous frame."""
+        ...
+
+    def update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        """The frame's estimate, after correcting the state with its measurements."""
+        ...
 
 
 class Tracker(Hyperparameters, ABC):
@@ -212,7 +236,7 @@ class FrameByFrame(Tracker):
         return self.localizer.localize(measurements, beacons)
 
 
-def make_tracker(name: str, **params: Any) -> Tracker:
+def make_tracker(name: str, **params: Any) -> SupportsTrack:
     """Build a tracker from a name or spec; a localizer's comes wrapped in :class:`FrameByFrame`.
 
     Example:

@@ -19,6 +19,8 @@ from azgym.core import Estimate, estimated_pose, pose_error
 from azgym.errors import AzgymError
 from azgym.track.base import Tracker
 
+__all__ = ["TrackerCheckError", "check_tracker"]
+
 ROUTE_SECONDS = 8.0
 """How much of the route the checks drive."""
 

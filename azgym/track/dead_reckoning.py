@@ -21,6 +21,8 @@ from azgym.track.base import Tracker, check_choice
 from azgym.track.kinematics import WHEELBASE, advance, held_spans, odometry_yaw_rates
 from azgym.track.unicycle import VEHICLE_DEFAULTS, YAW_SOURCES
 
+__all__ = ["DeadReckoning"]
+
 
 class DeadReckoning(Tracker):
     """Integrate wheel odometry from the start pose (module docstring).
@@ -58,7 +60,7 @@ class DeadReckoning(Tracker):
         check_range("DeadReckoning", "speed_factor", self.speed_factor, low=0.0, low_open=True)
         lever = VEHICLE_DEFAULTS[self.vehicle][1] if self.camera_ahead is None \
             else self.camera_ahead
-        object.__setattr__(self, "_lever", float(lever))
+        self._lever = float(lever)
 
     def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:
         self._pose = initial

@@ -20,7 +20,7 @@ from statistics import NormalDist
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, Measurements, Pose, wrap_scalar
+from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose, wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
 from azgym.localize.base import ROW_BEACON_INDEX, ROW_SOURCE, Problem
@@ -43,6 +43,8 @@ from azgym.track.unicycle import (
     MotionSteps,
     predict,
 )
+
+__all__ = ["DEFAULT_NOISE", "GatedEkf", "subset"]
 
 INITIALIZERS = ("ransac", "loo")
 """The per-frame localizers a tracker may start from."""
@@ -186,28 +188,34 @@ class GatedEkf(Tracker):
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         if not self._running:
-            fix = self._fix(measurements, beacons)
-            if fix is None:
+            found = self._fix(measurements, beacons)
+            if found is None:
                 return Estimate.failure(f"not initialized: {self._why}", len(measurements))
-            self._start(np.array(fix.pose), fix.covariance)
+            fix, covariance = found
+            self._start(np.array(fix.pose), covariance)
             return self._estimate(fix.inliers, {"initialized": True})
         inliers, _ = self._correct(measurements, beacons)
         return self._estimate(inliers)
 
     # -- the steps ---------------------------------------------------------------------------
 
-    def _fix(self, measurements: Measurements, beacons: BeaconMap) -> Estimate | None:
-        """The initializer's fix of this frame, or None (with ``_why`` set) if it is unfit."""
+    def _fix(self, measurements: Measurements,
+             beacons: BeaconMap) -> tuple[Estimate, FloatArray] | None:
+        """The initializer's fix of this frame and its (finite) covariance.
+
+        None (with ``_why`` set) if the fix is unfit.
+        """
         fix = self._localizer.localize(measurements, beacons)
         if not fix.ok:
             self._why = f"{self.initializer}: {fix.reason}"
             return None
-        if fix.n_inliers < self.min_init_inliers or fix.covariance is None \
-                or not np.isfinite(fix.covariance).all():
+        covariance = fix.covariance
+        if fix.n_inliers < self.min_init_inliers or covariance is None \
+                or not np.isfinite(covariance).all():
             self._why = (f"{self.initializer}'s fix has {fix.n_inliers} inliers, fewer than "
                          f"min_init_inliers={self.min_init_inliers}, or no covariance")
             return None
-        return fix
+        return fix, covariance
 
     def _correct(self, measurements: Measurements,
                  beacons: BeaconMap) -> tuple[np.ndarray, int]:

@@ -23,6 +23,9 @@ import numpy as np
 
 from azgym.core import FloatArray
 
+__all__ = ["HEADING", "SIZE", "VX", "VY", "camera_observation", "inertial_step", "predict",
+           "scalar_update", "update"]
+
 X, Y, VX, VY, HEADING, BIAS = range(6)
 SIZE = 6
 

@@ -26,6 +26,9 @@ from azgym.profile import DIFFERENTIAL_DRIVE, FORKLIFT
 from azgym.sensing.motion import OdometrySamples
 from azgym.world.forklift import ForkliftSpec
 
+__all__ = ["CAMERA_AHEAD", "CAMERA_FROM_IMU", "WHEELBASE", "LowPass", "advance", "held_spans",
+           "odometry_yaw_rates", "yaw_rates"]
+
 _SPEC = ForkliftSpec()
 WHEELBASE = _SPEC.wheelbase
 """The default forklift's wheelbase L [m]."""

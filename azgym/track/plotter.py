@@ -59,6 +59,8 @@ from azgym.track.kalman import (
 from azgym.track.kinematics import CAMERA_FROM_IMU, WHEELBASE, LowPass, odometry_yaw_rates
 from azgym.track.unicycle import VEHICLE_DEFAULTS, YAW_SOURCES
 
+__all__ = ["Lpkf", "Tkf"]
+
 CHI2_3DOF_999 = 16.27
 """The 99.9 % point of χ² with 3 degrees of freedom: a fix this far off (x, y, φ) is an outlier."""
 FALLBACK_FIX_SD = (0.1, 0.1, math.radians(2.0))
@@ -142,8 +144,8 @@ class Tkf(Tracker):
             check_choice(name, "yaw_source", self.yaw_source, YAW_SOURCES)
         check_choice(name, "vehicle", self.vehicle, VEHICLE_KINDS)
         check_range(name, "wheelbase", self.wheelbase, low=0.0, low_open=True)
-        object.__setattr__(self, "_yaw_source", VEHICLE_DEFAULTS[self.vehicle][0]
-                           if self.yaw_source is None else self.yaw_source)
+        self._yaw_source = VEHICLE_DEFAULTS[self.vehicle][0] if self.yaw_source is None \
+            else self.yaw_source
         check_range(name, "camera_from_imu", self.camera_from_imu)
         if not isinstance(self.localizer, str):
             raise InvalidInputError(f"{type(self).__name__}.localizer must be a localizer "
@@ -152,7 +154,7 @@ class Tkf(Tracker):
         if not isinstance(fixer, SupportsLocalize):
             raise InvalidInputError(f"{type(self).__name__}.localizer must name a per-frame "
                                     f"localizer, got {self.localizer!r} (a tracker)")
-        object.__setattr__(self, "_fixer", fixer)
+        self._fixer = fixer
 
     def _lowpass(self) -> LowPass | None:
         """The accelerometer's prefilter: none for the traditional filter."""

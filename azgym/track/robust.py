@@ -30,12 +30,14 @@ import math
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, Measurements, Pose
+from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose
 from azgym.hyperparameters import check_range
 from azgym.profile import FORKLIFT
 from azgym.track.gated_ekf import DEFAULT_NOISE, GatedEkf, subset
 from azgym.track.kinematics import WHEELBASE
 from azgym.track.unicycle import IPHI, IX, IY
+
+__all__ = ["Robust"]
 
 CONFIRMING_BEACONS = 4
 """Beacons that confirm a start: one more than a pose's three unknowns, so one is a check."""
@@ -103,9 +105,9 @@ class Robust(GatedEkf):
     def _now(self) -> float:
         return self._steps.time if self._steps.time is not None else 0.0
 
-    def _restart(self, fix: Estimate) -> Estimate:
+    def _restart(self, fix: Estimate, covariance: FloatArray) -> Estimate:
         """Start from a per-frame fix: tentative when it has only three inliers."""
-        self._start(np.array(fix.pose), fix.covariance)
+        self._start(np.array(fix.pose), covariance)
         self._bad_since = None
         self._tentative = fix.n_inliers < CONFIRMING_BEACONS
         self._started_at = np.array(fix.pose[:2])
@@ -114,10 +116,10 @@ class Robust(GatedEkf):
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         if not self._running:
-            fix = self._fix(measurements, beacons)
-            if fix is None:
+            found = self._fix(measurements, beacons)
+            if found is None:
                 return Estimate.failure(f"not initialized: {self._why}", len(measurements))
-            return self._restart(fix)
+            return self._restart(*found)
         if self._position_std() > self.max_position_std:
             return self._relocalize(measurements, beacons)
         inliers, distinct = self._correct(measurements, beacons)
@@ -131,9 +133,9 @@ class Robust(GatedEkf):
         self._bad_since = (self._bad_since if self._bad_since is not None else self._now()) \
             if inconsistent else None
         if inconsistent:
-            fix = self._fix(measurements, beacons)
-            if fix is not None and self._should_restart(fix, accepted):
-                return self._restart(fix)
+            found = self._fix(measurements, beacons)
+            if found is not None and self._should_restart(found[0], accepted):
+                return self._restart(*found)
         return self._answer(inliers)
 
     def _confirms(self, accepted: int) -> bool:
@@ -163,9 +165,10 @@ class Robust(GatedEkf):
         were fitted. Without a fix it only answers that it is lost.
         """
         inliers = np.zeros(len(measurements), dtype=bool)
-        fix = self._fix(measurements, beacons)
-        if fix is None:
+        found = self._fix(measurements, beacons)
+        if found is None:
             return self._answer(inliers)
+        fix, _ = found
         self._state[[IX, IY, IPHI]] = fix.pose
         self._started_at = np.array(fix.pose[:2])
         self._tentative = fix.n_inliers < CONFIRMING_BEACONS

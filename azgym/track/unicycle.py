@@ -33,6 +33,10 @@ from azgym.sensing.motion import ImuModel, Motion, OdometryModel
 from azgym.track.kinematics import CAMERA_AHEAD, odometry_yaw_rates
 from azgym.world.forklift import ForkliftSpec
 
+__all__ = ["HOLD_FLOOR_S", "HOLD_PERIODS", "IBIAS", "IPHI", "ISCALE", "IX", "IY", "MAX_STEP_S",
+           "STATE_SIZE", "VEHICLE_DEFAULTS", "YAW_SOURCES", "HeldStream", "MotionNoise",
+           "MotionSteps", "Step", "predict"]
+
 STATE_SIZE = 5
 """Length of the state ``[x, y, φ, b, k]``: camera position [m], heading [rad], gyro bias
 [rad/s] and the odometry's scale correction k [1] (the true speed is (1 + k) times the read)."""

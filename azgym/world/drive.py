@@ -20,10 +20,12 @@ camera ``camera_ahead`` of the turning axis.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import numbers
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
@@ -47,6 +49,8 @@ from azgym.world.motion_sensors import MotionSensors, RobotMotionSensors
 from azgym.world.robot import Robot, RobotDriver, RobotSpec
 from azgym.world.sway import CameraSway
 from azgym.world.world import World
+
+__all__ = ["Frame", "camera_trajectory", "checked_camera_rate", "motion_models", "simulate"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,7 +159,8 @@ def _robot_frames(scenario: Scenario, route: Route, camera_rate_hz: float, dt: f
     ``on_step`` sees the robot after every step. The drive ends at the frame after the robot
     has stopped at the route's end, or after ``max_time``.
     """
-    robot = Robot(route.start_pose(), spec or RobotSpec(), dt, scenario.vehicle.camera_ahead)
+    robot = Robot(route.start_pose(), spec or RobotSpec(), dt,
+                  scenario.vehicle.robot_camera_ahead)
     driver = RobotDriver(route, robot.spec)
     period = 1.0 / checked_camera_rate(camera_rate_hz)
     next_frame = 0.0
@@ -176,23 +181,21 @@ def _camera_pose(world: World) -> Pose:
     return x, y, world.forklift.pose[2]
 
 
-def _checked_spec(scenario: Scenario, spec: ForkliftSpec | RobotSpec | None) -> None:
-    """Refuse a vehicle spec of the other kind than the scenario's vehicle."""
-    wanted = RobotSpec if scenario.differential_drive else ForkliftSpec
-    if spec is not None and not isinstance(spec, wanted):
-        raise InvalidInputError(f"spec: scenario {scenario.name!r} is driven by a "
-                                f"{scenario.vehicle.kind}, whose spec is a {wanted.__name__}, "
-                                f"got {type(spec).__name__}")
+_Part = TypeVar("_Part")
 
 
-def _checked_odometry(scenario: Scenario,
-                      odometry: OdometryModel | DifferentialOdometryModel | None) -> None:
-    """Refuse an odometry model of the other kind than the scenario's vehicle's."""
-    wanted = DifferentialOdometryModel if scenario.differential_drive else OdometryModel
-    if odometry is not None and not isinstance(odometry, wanted):
-        raise InvalidInputError(f"odometry: scenario {scenario.name!r} is driven by a "
-                                f"{scenario.vehicle.kind}, whose odometry model is a "
-                                f"{wanted.__name__}, got {type(odometry).__name__}")
+def _vehicle_part(scenario: Scenario, name: str, what: str, value: object,
+                  wanted: type[_Part]) -> _Part | None:
+    """``value`` (None: the default) if it is a ``wanted``, the scenario's vehicle's kind.
+
+    Raises:
+        InvalidInputError: A part of the other vehicle (a spec or an odometry model).
+    """
+    if value is not None and not isinstance(value, wanted):
+        raise InvalidInputError(f"{name}: scenario {scenario.name!r} is driven by a "
+                                f"{scenario.vehicle.kind}, whose {what} is a {wanted.__name__}, "
+                                f"got {type(value).__name__}")
+    return value
 
 
 def _checked_sensor(scenario: Scenario, sensor: Sensor | None) -> Sensor:
@@ -223,13 +226,15 @@ def camera_trajectory(scenario: Scenario, route: Route, camera_rate_hz: float = 
     The drive is deterministic (no random draw), the same for every seed; ``simulate`` adds the
     sensors along it.
     """
-    _checked_spec(scenario, spec)
-    dt, max_time = _defaults(scenario, dt, max_time)
     if scenario.differential_drive:
+        robot_spec = _vehicle_part(scenario, "spec", "spec", spec, RobotSpec)
+        dt, max_time = _defaults(scenario, dt, max_time)
         return np.array([robot.camera_pose() for robot in _robot_frames(
-            scenario, route, camera_rate_hz, dt, spec, max_time)])  # type: ignore[arg-type]
+            scenario, route, camera_rate_hz, dt, robot_spec, max_time)])
+    forklift_spec = _vehicle_part(scenario, "spec", "spec", spec, ForkliftSpec)
+    dt, max_time = _defaults(scenario, dt, max_time)
     return np.array([_camera_pose(world) for world in _frames(
-        scenario, route, camera_rate_hz, dt, spec, max_time)])  # type: ignore[arg-type]
+        scenario, route, camera_rate_hz, dt, forklift_spec, max_time)])
 
 
 def motion_models(scenario: Scenario, rate_hz: float | None = None
@@ -241,12 +246,22 @@ def motion_models(scenario: Scenario, rate_hz: float | None = None
     IMU's) rate: a robot's nominal interval becomes 1 / ``rate_hz``, its jitter scaled alike.
     """
     if scenario.differential_drive:
-        robot = DifferentialOdometryModel()
-        if rate_hz is None:
-            return robot, None
-        scale = 1.0 / (rate_hz * robot.period)
-        return dataclasses.replace(robot, period=robot.period * scale,
-                                   period_jitter=robot.period_jitter * scale), None
+        return _robot_odometry(rate_hz), None
+    return _forklift_models(rate_hz)
+
+
+def _robot_odometry(rate_hz: float | None = None) -> DifferentialOdometryModel:
+    """A robot's default odometry (see :func:`motion_models`)."""
+    robot = DifferentialOdometryModel()
+    if rate_hz is None:
+        return robot
+    scale = 1.0 / (rate_hz * robot.period)
+    return dataclasses.replace(robot, period=robot.period * scale,
+                               period_jitter=robot.period_jitter * scale)
+
+
+def _forklift_models(rate_hz: float | None = None) -> tuple[OdometryModel, ImuModel]:
+    """A forklift's default odometry and IMU (see :func:`motion_models`)."""
     odometry, imu = OdometryModel(), ImuModel()
     if rate_hz is None:
         return odometry, imu
@@ -258,14 +273,14 @@ _Moment = tuple[float, Pose, Tilt, OdometrySamples, ImuSamples, int]
 """What the vehicle did up to a frame: time, camera pose, tilt, motion samples, new contacts."""
 
 
-def _forklift_moments(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
-                      spec: ForkliftSpec | None, max_time: float,
-                      odometry: OdometryModel | None, imu: ImuModel | None,
+def _forklift_moments(spec: ForkliftSpec | None, odometry: OdometryModel | None,
+                      imu: ImuModel | None, scenario: Scenario, route: Route,
+                      camera_rate_hz: float, dt: float, max_time: float,
                       rngs: list[np.random.Generator]) -> Iterator[_Moment]:
     """The forklift's frames: pymunk, its odometry and IMU, the mast's sway on bumps."""
     odometry_rng, imu_rng, sway_rng = rngs
-    default_odometry, default_imu = motion_models(scenario)
-    motion = MotionSensors(odometry or default_odometry, imu or default_imu,  # type: ignore[arg-type]
+    default_odometry, default_imu = _forklift_models()
+    motion = MotionSensors(odometry or default_odometry, imu or default_imu,
                            odometry_rng, imu_rng, dt)
     sway = CameraSway(scenario, 1.0 / camera_rate_hz, spec)
     contacts_seen = 0
@@ -277,17 +292,35 @@ def _forklift_moments(scenario: Scenario, route: Route, camera_rate_hz: float, d
         contacts_seen = len(world.contacts)
 
 
-def _robot_moments(scenario: Scenario, route: Route, camera_rate_hz: float, dt: float,
-                   spec: RobotSpec | None, max_time: float,
-                   odometry: DifferentialOdometryModel | None, imu: ImuModel | None,
+def _robot_moments(spec: RobotSpec | None, odometry: DifferentialOdometryModel | None,
+                   imu: ImuModel | None, scenario: Scenario, route: Route,
+                   camera_rate_hz: float, dt: float, max_time: float,
                    rngs: list[np.random.Generator]) -> Iterator[_Moment]:
     """The robot's frames: the unicycle, its odometry (and IMU if asked for); a level camera."""
     odometry_rng, imu_rng, _ = rngs
-    motion = RobotMotionSensors(odometry or motion_models(scenario)[0],  # type: ignore[arg-type]
-                                imu, odometry_rng, imu_rng)
+    motion = RobotMotionSensors(odometry or _robot_odometry(), imu, odometry_rng, imu_rng)
     for robot in _robot_frames(scenario, route, camera_rate_hz, dt, spec, max_time,
                                on_step=motion.step):
         yield (robot.time, robot.camera_pose(), LEVEL, *motion.take(robot.time), 0)
+
+
+_Drive = Callable[[Scenario, Route, float, float, float, list[np.random.Generator]],
+                  Iterator[_Moment]]
+"""A vehicle's moments, parts bound: (scenario, route, camera rate, dt, time limit, rngs)."""
+
+
+def _vehicle_moments(scenario: Scenario, spec: ForkliftSpec | RobotSpec | None,
+                     odometry: OdometryModel | DifferentialOdometryModel | None,
+                     imu: ImuModel | None) -> _Drive:
+    """The scenario's vehicle's moments, refusing a spec or odometry of the other vehicle."""
+    if scenario.differential_drive:
+        return functools.partial(
+            _robot_moments, _vehicle_part(scenario, "spec", "spec", spec, RobotSpec),
+            _vehicle_part(scenario, "odometry", "odometry model", odometry,
+                          DifferentialOdometryModel), imu)
+    return functools.partial(
+        _forklift_moments, _vehicle_part(scenario, "spec", "spec", spec, ForkliftSpec),
+        _vehicle_part(scenario, "odometry", "odometry model", odometry, OdometryModel), imu)
 
 
 def simulate(
@@ -332,17 +365,14 @@ def simulate(
     scenario = load_scenario(scenario)
     chosen = _route(scenario, route)
     sensor = _checked_sensor(scenario, sensor)
-    _checked_spec(scenario, spec)
-    _checked_odometry(scenario, odometry)
+    drive = _vehicle_moments(scenario, spec, odometry, imu)
     dt, max_time = _defaults(scenario, dt, max_time)
     camera_rate_hz = checked_camera_rate(
         sensor.frame_rate_hz if camera_rate_hz is None else camera_rate_hz)
     streams = np.random.SeedSequence(seed).spawn(5)
     camera_rng, *rngs = (np.random.default_rng(stream) for stream in streams[:4])
     sensor.reset(streams[4])
-    drive = _robot_moments if scenario.differential_drive else _forklift_moments
-    moments = drive(scenario, chosen, camera_rate_hz, dt, spec, max_time,  # type: ignore[arg-type]
-                    odometry, imu, rngs)
+    moments = drive(scenario, chosen, camera_rate_hz, dt, max_time, rngs)
     for index, (time, pose, tilt, odometry_samples, imu_samples, contacts) in enumerate(moments):
         observation = sensor.observe(pose, camera_rng, tilt)
         yield Frame(index=index, time=time, observation=observation, pose=pose,

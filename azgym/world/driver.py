@@ -10,6 +10,8 @@ from azgym.core import FloatArray, wrap_scalar
 from azgym.site.elements import Route
 from azgym.world.forklift import ForkliftSpec
 
+__all__ = ["PurePursuit", "point_at"]
+
 
 class PurePursuit:
     """Steers toward a point one lookahead distance ahead on the route (pure pursuit).

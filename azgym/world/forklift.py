@@ -21,6 +21,8 @@ import pymunk
 from azgym.core import wrap_scalar
 from azgym.errors import InvalidInputError
 
+__all__ = ["FORKLIFT_COLLISION_TYPE", "Forklift", "ForkliftSpec"]
+
 FORKLIFT_COLLISION_TYPE = 1
 SLIP_TOLERANCE = 0.2
 """Largest gap between commanded and actual speed [m/s] before the command follows the body."""

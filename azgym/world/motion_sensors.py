@@ -13,6 +13,7 @@ rate at its logger's stamps; it has an IMU only when one is asked for.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,11 @@ from azgym.sensing.motion import (
 )
 from azgym.world.robot import Robot
 from azgym.world.world import World
+
+if TYPE_CHECKING:
+    from pymunk import Vec2d
+
+__all__ = ["MotionSensors", "RobotMotionSensors"]
 
 
 class MotionSensors:
@@ -50,7 +56,7 @@ class MotionSensors:
         self._odometer = Odometer(odometry, odometry_rng)
         self._imu = Imu(imu, imu_rng)
         self._dt = dt
-        self._velocity = None
+        self._velocity: Vec2d | None = None
 
     def step(self, world: World) -> None:
         """Sample the step just taken (nothing at the start, before the first one)."""

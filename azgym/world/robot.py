@@ -22,6 +22,8 @@ from azgym.errors import InvalidInputError
 from azgym.site.elements import Route
 from azgym.world.driver import point_at
 
+__all__ = ["Robot", "RobotDriver", "RobotSpec"]
+
 
 @dataclass(frozen=True)
 class RobotSpec:

@@ -84,7 +84,7 @@ def odometry_heading(time: FloatArray, yaw_rate: FloatArray, at: FloatArray) -> 
 
 def _axle(scenario: Scenario, poses: FloatArray) -> FloatArray:
     """The turning axis' positions (F, 2) under the camera poses (F, 3)."""
-    ahead = scenario.vehicle.camera_ahead or 0.0
+    ahead = scenario.vehicle.robot_camera_ahead
     return poses[:, :2] - ahead * np.column_stack([np.cos(poses[:, 2]), np.sin(poses[:, 2])])
 
 

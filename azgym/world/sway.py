@@ -25,6 +25,8 @@ from azgym.errors import InvalidInputError
 from azgym.site import Scenario
 from azgym.world.forklift import ForkliftSpec
 
+__all__ = ["CameraSway"]
+
 
 class CameraSway:
     """Pitch and roll of the camera, frame by frame (see the module).

@@ -9,6 +9,8 @@ import pymunk
 from azgym.site import Scenario
 from azgym.world.forklift import FORKLIFT_COLLISION_TYPE, Forklift, ForkliftSpec
 
+__all__ = ["WALL_THICKNESS", "Contact", "World"]
+
 STATIC_COLLISION_TYPE = 2
 WALL_THICKNESS = 0.1
 
@@ -45,7 +47,7 @@ class World:
         static = self.space.static_body
         self._obstacle_of: dict[pymunk.Shape, tuple[str, int]] = {}
         for k, rack in enumerate(scenario.racks):
-            shape = pymunk.Poly(static, [tuple(corner) for corner in rack.corners()])
+            shape: pymunk.Shape = pymunk.Poly(static, [tuple(corner) for corner in rack.corners()])
             self._add_static(shape, ("rack", k))
         for k, wall in enumerate(scenario.walls):
             shape = pymunk.Segment(static, wall.start, wall.end, WALL_THICKNESS / 2)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -9,8 +10,10 @@ import pytest
 
 from azgym.bench.suites import robot as robot_suite
 from azgym.errors import InvalidInputError
+from azgym.profile import DIFFERENTIAL_DRIVE
 from azgym.sensing.motion import DifferentialOdometryModel, ImuModel, OdometryModel
 from azgym.site import load_scenario
+from azgym.site.elements import Vehicle
 from azgym.world.drive import camera_trajectory, motion_models, simulate
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.motion_sensors import RobotMotionSensors
@@ -172,3 +175,13 @@ def test_the_suite_is_the_routes_as_sequences_from_their_start():
     frames = list(simulate(SCENARIO, "wander-1", seed=5))
     assert len(cases) == (len(frames) + 1) // 2
     assert [c.pose for c in cases] == [f.pose for f in frames[::2]]
+
+
+def test_a_robot_vehicle_without_camera_ahead_has_its_camera_on_the_axis():
+    on_axis = dataclasses.replace(SCENARIO, vehicle=Vehicle(DIFFERENTIAL_DRIVE))
+    route = SCENARIO.routes[0]
+    ahead = camera_trajectory(SCENARIO, route, max_time=5.0)  # camera_ahead = 0.1
+    axis = camera_trajectory(on_axis, route, max_time=5.0)
+    offset = 0.1 * np.column_stack([np.cos(ahead[:, 2]), np.sin(ahead[:, 2])])
+    assert np.allclose(axis[:, :2], ahead[:, :2] - offset)
+    assert np.array_equal(axis[:, 2], ahead[:, 2])

@@ -19,6 +19,8 @@ from scipy.special import ellipe
 from azgym.core import BeaconMap, BoolArray
 from azgym.site.error_model import ErrorModel
 
+__all__ = ["wls_position_error"]
+
 
 def wls_position_error(
     x: float, y: float, beacons: BeaconMap, error_model: ErrorModel, use: BoolArray | None = None

@@ -17,8 +17,10 @@ from azgym.experiments.paper.reproduce import (
     Reproduction,
 )
 
+__all__ = ["markdown_table", "paper_method", "write_outputs"]
 
-def _fmt(value: float, digits: int = 2) -> str:
+
+def _fmt(value: float | None, digits: int = 2) -> str:
     return "–" if value is None or (isinstance(value, float) and math.isnan(value)) else \
         f"{value:.{digits}f}"
 
@@ -99,9 +101,11 @@ def write_outputs(reproduction: Reproduction, out: Path, figures: bool = True) -
     written = [out / "results.json", out / "results.md", out / "runs.npz"]
     written[0].write_text(json.dumps(results, indent=1, allow_nan=True) + "\n", encoding="utf-8")
     written[1].write_text(markdown_table(results) + "\n", encoding="utf-8")
-    np.savez_compressed(written[2], **{f"{label}__k{k}": errors
-                                       for label, by_k in reproduction.errors.items()
-                                       for k, errors in by_k.items()})
+    # Typed as Any: numpy's stub would take a key for savez's own allow_pickle flag.
+    arrays: dict[str, Any] = {f"{label}__k{k}": errors
+                              for label, by_k in reproduction.errors.items()
+                              for k, errors in by_k.items()}
+    np.savez_compressed(written[2], **arrays)
     if figures:
         written += _figures(reproduction, out)
     return written
@@ -134,14 +138,15 @@ def _error_map(plt: Any, per_point: dict[str, Any], labels: list[str], k: str,
                              squeeze=False, constrained_layout=True)
     highest = max(float(np.nanmax(per_point[label][k]["mean_cm"])) for label in labels)
     # One colour scale for every panel; errors below 0.5 cm are shown as 0.5 cm.
-    norm = LogNorm(vmin=0.5, vmax=max(10.0, highest))
+    lowest = 0.5
+    norm = LogNorm(vmin=lowest, vmax=max(10.0, highest))
     for ax, label in zip(axes[0], labels, strict=False):
         data = per_point[label][k]
         xs, ys = np.array(data["x"]), np.array(data["y"])
         grid_x, grid_y = np.unique(xs), np.unique(ys)
         image = np.full((grid_y.size, grid_x.size), np.nan)
         image[np.searchsorted(grid_y, ys), np.searchsorted(grid_x, xs)] = np.maximum(
-            np.array(data["mean_cm"], dtype=float), norm.vmin)
+            np.array(data["mean_cm"], dtype=float), lowest)
         shown = ax.pcolormesh(grid_x, grid_y, image, shading="nearest", cmap="viridis",
                               norm=norm)
         ax.set_title(f"{label}, K = {k}")

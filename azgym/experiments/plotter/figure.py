@@ -9,6 +9,8 @@ from typing import Any
 from azgym.experiments.plotter.reproduce import METHODS
 from azgym.files import write_file
 
+__all__ = ["LABELS", "write_figure"]
+
 LABELS = {"tkf": "TKF", "lpkf": "LPKF", "naive": "naive accumulation"}
 
 

@@ -24,6 +24,8 @@ from azgym.sensing.synthetic import noisy_measurements
 from azgym.site.error_model import ErrorModel
 from azgym.track.base import make_tracker
 
+__all__ = ["METHODS", "reproduce_plotter"]
+
 PAPER = {"lpkf_p90": 0.026, "naive_at_40s": 10.0}
 """The paper's figures: LPKF's 90 % error bound [m] (Fig. 5(c)), the naive error after 40 s [m]."""
 METHODS = ("tkf", "lpkf", "naive")

@@ -19,6 +19,9 @@ import numpy as np
 from azgym.core import BeaconMap, FloatArray
 from azgym.sensing.motion import Imu, ImuModel, ImuSamples
 
+__all__ = ["CAMERA_HZ", "LAP", "SIDE", "TrailState", "beacon_ring", "imu_samples", "peak_accel",
+           "trail_state"]
+
 SIDE = 0.22
 """The square's side [m] (the paper's 0.22 m × 0.22 m trail)."""
 LAP = 10.0

@@ -6,3 +6,5 @@ partial occlusion; ``mirrors`` their mirror images (ghosts); ``frame`` the two k
 collect a frame and finish it into measurements; ``sensor`` the ``GeometrySensor`` that calls
 them.
 """
+
+__all__ = ["detections", "direct", "frame", "mirrors", "occluders", "ordering", "sensor"]

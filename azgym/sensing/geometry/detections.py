@@ -13,6 +13,10 @@ from __future__ import annotations
 
 from azgym.jit import jit
 
+__all__ = ["FOUND_AZIMUTH", "FOUND_BEACON", "FOUND_BRIGHTNESS", "FOUND_ELEVATION",
+           "FOUND_FLOAT_ROWS", "FOUND_HALF_WIDTH", "FOUND_INT_ROWS", "FOUND_LABEL", "FOUND_VISIBLE",
+           "list_detection"]
+
 # Rows of the detections ``frame.collect`` lists, before noise (``found`` floats, ``found_ints``).
 FOUND_AZIMUTH = 0
 """Azimuth in the world frame [rad]."""

@@ -22,6 +22,8 @@ from azgym.sensing.geometry.ordering import stable_order
 from azgym.sensing.labels import DIRECT, MOVED, PARTIAL
 from azgym.site.elements import SEG_HEIGHT, SEG_X1, SEG_X2, SEG_Y1, SEG_Y2
 
+__all__ = ["direct_view"]
+
 # Rows of the scratch array of one beacon's covers: the angular interval each occluder hides.
 _COVER_LO = 0
 _COVER_HI = 1

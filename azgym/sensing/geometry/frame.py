@@ -32,6 +32,10 @@ from azgym.sensing.identities import misread_row
 from azgym.sensing.labels import GHOST, MISIDENTIFIED
 from azgym.sensing.protocol import AZIMUTH, BEACON, ID, LABEL, MIRRORED, TRUE_AZIMUTH, VISIBLE
 
+__all__ = ["FRAME_AZIMUTH", "FRAME_BEACON", "FRAME_ELEVATION", "FRAME_FLOAT_ROWS",
+           "FRAME_HALF_WIDTH", "FRAME_ID", "FRAME_INT_ROWS", "FRAME_LABEL", "FRAME_MIRRORED",
+           "FRAME_QUALITY", "FRAME_TRUE_AZIMUTH", "FRAME_VISIBLE", "collect", "finish_frame"]
+
 # Rows of a finished frame, sorted by measured azimuth (``FrameBuffers.floats`` and ``.ints``).
 # They are laid out as an Observation's packed arrays (azgym.sensing.protocol): rows 0-1 are its
 # ``measured``, rows 2-3 its ``true``, and the int rows its ``ints``, so that a frame becomes an

@@ -19,6 +19,8 @@ from azgym.sensing.geometry.occluders import CROSSING_EPS, blocked, crossing
 from azgym.sensing.labels import GHOST
 from azgym.site.elements import SEG_HEIGHT, SEG_REFLECTIVITY, SEG_X1, SEG_X2, SEG_Y1, SEG_Y2
 
+__all__ = ["mirror_view"]
+
 
 @jit(inline="always")
 def _mirror_image(cx, cy, cz, px, py, pz, ax, ay, bx, by, top, reflectivity, limit2,

@@ -21,6 +21,8 @@ import math
 from azgym.jit import jit
 from azgym.site.elements import SEG_HEIGHT, SEG_X1, SEG_X2, SEG_Y1, SEG_Y2
 
+__all__ = ["CROSSING_EPS", "blocked", "crossing", "ray_ranges"]
+
 CROSSING_EPS = 1e-9
 """Tolerance of the crossing tests: a touch at a ray's or segment's very end counts as none."""
 

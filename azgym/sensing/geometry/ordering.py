@@ -12,6 +12,8 @@ import numpy as np
 
 from azgym.jit import jit
 
+__all__ = ["stable_order"]
+
 
 @jit
 def stable_order(values, count):

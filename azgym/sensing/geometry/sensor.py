@@ -47,6 +47,8 @@ from azgym.sensing.protocol import (
 from azgym.site import Scenario
 from azgym.site.elements import SEG_REFLECTIVITY, occluder_table
 
+__all__ = ["FrameBuffers", "GeometrySensor"]
+
 
 class GeometrySensor:
     """Frames of one scenario's camera, computed from the geometry (a :class:`Sensor`).

@@ -4,3 +4,5 @@
 send their ids in, ``blob_tracker`` follows blobs across frames and decodes it, and ``sensor``
 (``ImageSensor``) puts them together.
 """
+
+__all__ = ["blink_code", "blob_tracker", "detect", "render", "sensor"]

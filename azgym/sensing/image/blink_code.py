@@ -26,6 +26,8 @@ from numpy.typing import ArrayLike
 
 from azgym.errors import InvalidInputError
 
+__all__ = ["BLINK_CAMERA_RATE_HZ", "MARKER", "MAX_DARK_RUN", "BlinkCode"]
+
 MARKER = (1, 1, 1, 0)
 """The start marker: three lit frames and a dark one."""
 BLINK_CAMERA_RATE_HZ = 30.0

@@ -21,6 +21,8 @@ from azgym.core import FloatArray, IntArray, wrap_angle, wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.sensing.image.blink_code import MAX_DARK_RUN, BlinkCode
 
+__all__ = ["NEW_TRACK_GATES", "BlobTracker"]
+
 MERGE_SHARE = 0.8
 """A blob is taken for several close beacons' merged light when its area is at least this share
 of their blobs' areas alone (areas fluctuate by about ±20 % with noise at the threshold)."""

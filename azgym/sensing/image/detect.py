@@ -14,6 +14,8 @@ import numpy as np
 
 from azgym.site.fisheye import FisheyeCamera
 
+__all__ = ["Blob", "detect"]
+
 
 @dataclass(frozen=True)
 class Blob:

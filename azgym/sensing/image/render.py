@@ -21,6 +21,8 @@ from azgym.core import FloatArray
 from azgym.jit import jit
 from azgym.site.fisheye import FisheyeCamera
 
+__all__ = ["render"]
+
 PSF_SIGMA_PX = 0.8
 """Standard deviation of the lens' point spread [px]."""
 

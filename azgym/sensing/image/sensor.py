@@ -53,6 +53,8 @@ from azgym.sensing.protocol import (
 from azgym.site import Scenario
 from azgym.site.elements import Faults
 
+__all__ = ["ImageSensor"]
+
 
 class ImageSensor:
     """A scenario's fisheye camera, measuring beacons from rendered pixels.
