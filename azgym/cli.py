@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
 from azgym.cli_calibrate import add_calibrate
 from azgym.cli_evaluate import add_evaluate
 from azgym.cli_layout import add_layout
@@ -59,7 +59,7 @@ from azgym.cli_train import add_train
 from azgym.errors import AzgymError, InvalidInputError
 
 if TYPE_CHECKING:
-    from azgym.bench.contenders import Contender
+    from azgym.bench.run.contenders import Contender
     from azgym.profile import Profile
 
 
@@ -68,9 +68,9 @@ DEFAULT_SUITE = "warehouse-static"
 
 def _bench(args: argparse.Namespace) -> int:
     from azgym.bench.navigation.suites import NAVIGATION_SUITES
-    from azgym.bench.runner import run_benchmark
+    from azgym.bench.report.table import run_report
+    from azgym.bench.run.runner import run_benchmark
     from azgym.bench.suites import SUITES
-    from azgym.bench.table import run_report
     from azgym.errors import unknown_name
     from azgym.files import prepare_folder
 
@@ -118,7 +118,7 @@ def _contenders(specs: Sequence[str], with_builtins: bool,
     worker process, as the run would build it, within the time limit; with a profile, the
     built-ins too (with the profile's defaults).
     """
-    from azgym.bench.contenders import (
+    from azgym.bench.run.contenders import (
         check_buildable,
         contender,
         with_defaults,
@@ -238,7 +238,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _add_bench(commands: argparse._SubParsersAction) -> None:
     """``azgym bench``: score localizers on a suite."""
-    from azgym.bench.contenders import DEFAULT_SPECS
+    from azgym.bench.run.contenders import DEFAULT_SPECS
 
     bench = commands.add_parser("bench", help="score localizers on a benchmark suite")
     bench.add_argument("--suite", help=f"suite name (default: {DEFAULT_SUITE}, quick); the "

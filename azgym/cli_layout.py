@@ -168,7 +168,7 @@ def _write_placement(args: argparse.Namespace, scenario: Any, floor: Any, placem
 
 def add_layout(commands: argparse._SubParsersAction) -> None:
     """``azgym layout analyze|optimize``."""
-    from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+    from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
     from azgym.layout.candidates import DEFAULT_SPACING
     from azgym.layout.floor import DEFAULT_STEP
 

@@ -50,7 +50,8 @@ def add_leaderboard(commands: argparse._SubParsersAction) -> None:
 
 
 def _leaderboard(args: argparse.Namespace) -> int:
-    from azgym.bench import board, leaderboard
+    from azgym.bench.leaderboard import board
+    from azgym.bench.leaderboard import entries as leaderboard
     from azgym.bench.navigation.board import verify_navigation
     from azgym.bench.navigation.results_file import is_navigation_file
 
@@ -92,7 +93,7 @@ def _verdict(entry: str, differences: dict[str, tuple[Any, Any]],
     """Print a rerun's differing figures, or that it reproduced; the command's exit status.
 
     A test entry is rerun on fresh frames, so its figures agree when their 95 % intervals
-    overlap (:func:`azgym.bench.leaderboard.verify`); any other, within 1e-6.
+    overlap (:func:`azgym.bench.leaderboard.entries.verify`); any other, within 1e-6.
     """
     if differences:
         for key, (claimed, fresh) in differences.items():
@@ -107,7 +108,7 @@ def _verdict(entry: str, differences: dict[str, tuple[Any, Any]],
 
 def _navigation_dir(named: str | None, entries: Path) -> Path | None:
     """The navigation results folder: the one named (it must exist), else any beside entries."""
-    from azgym.bench.entry_files import LeaderboardError
+    from azgym.bench.leaderboard.entry_files import LeaderboardError
 
     if named is None:
         beside = entries.parent / "navigation"

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from azgym.bench.runner import Progress
+    from azgym.bench.run.runner import Progress
     from azgym.logs.read import Log
     from azgym.profile import Profile
 
@@ -106,10 +106,10 @@ def bench_data(args: argparse.Namespace, progress: Progress, profile: Profile | 
 
     Each takes its defaults from the log's profile, with ``profile``'s fields over it.
     """
-    from azgym.bench.isolation import DEFAULT_TIME_LIMIT
-    from azgym.bench.runner import run_log_benchmark, write_log_results
+    from azgym.bench.report.table import run_report
+    from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+    from azgym.bench.run.runner import run_log_benchmark, write_log_results
     from azgym.bench.suites.data import log_cases, log_profile
-    from azgym.bench.table import run_report
     from azgym.cli import _contenders
     from azgym.cli_options import resolve_workers
     from azgym.errors import InvalidInputError

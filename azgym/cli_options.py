@@ -85,7 +85,7 @@ def check_backend(args: argparse.Namespace) -> None:
 
 def resolve_workers(args: Any) -> int:
     """``--workers``: 0 is one per core here, or (with Ray) one per CPU of the cluster."""
-    from azgym.bench.isolation import default_workers
+    from azgym.bench.run.processes import default_workers
 
     if args.workers:
         return args.workers

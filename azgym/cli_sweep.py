@@ -1,6 +1,6 @@
 """``azgym sweep CONFIG``: localizers x hyperparameter grids x suites x seeds, one table.
 
-The config is a TOML file (:mod:`azgym.bench.sweep_config`, docs/scaling.md), checked field by
+The config is a TOML file (:mod:`azgym.bench.sweep.config`, docs/scaling.md), checked field by
 field before anything runs; the runs go through the benchmark's runner, on worker processes here
 or on Ray (``--backend ray [--address ADDR]``).
 """
@@ -11,7 +11,7 @@ import argparse
 import time
 from pathlib import Path
 
-from azgym.bench.isolation import BACKENDS
+from azgym.bench.run.isolation import BACKENDS
 from azgym.cli_options import check_backend, out_folder, resolve_workers, workers_option
 
 
@@ -27,7 +27,7 @@ def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None
 
 def _address(text: str) -> str:
     """``--address``: checked for its form (HOST:PORT, a port in 1-65535) as it is parsed."""
-    from azgym.bench.ray_backend import check_address
+    from azgym.bench.run.ray_backend import check_address
     from azgym.errors import InvalidInputError
 
     try:
@@ -50,8 +50,8 @@ def add_sweep(commands: argparse._SubParsersAction) -> None:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from azgym.bench.sweep import run_sweep
-    from azgym.bench.sweep_config import load_sweep
+    from azgym.bench.sweep.config import load_sweep
+    from azgym.bench.sweep.run import run_sweep
     from azgym.cli import _progress_printer
     from azgym.files import prepare_folder
 

@@ -1,15 +1,15 @@
 """Error statistics of a set of estimates, the way EvAAL and ISO/IEC 18305 report them.
 
 A missing estimate (``ok=False``) is never a zero error. The **headline**, ``p75_all_cm``, is the
-75th percentile of the position error over *every* frame, a frame without an estimate counting
-as an infinite error (the EvAAL competitions' rule): a method cannot improve it by refusing the
-frames it would get wrong, and it is infinite when more than a quarter of the frames got no
-estimate. Boards rank by it (:func:`azgym.bench.table.rank_key`). Beside it, availability says
-how many frames got an estimate, the failure rate counts a missing estimate or one more than
-:data:`FAILURE_DISTANCE` off as a failure, and the other error statistics (mean, median, p75,
-p95, ...) describe the frames that got an estimate. Heading errors are NaN where the truth has
-no heading (a log's position-only truth): the heading figures leave them out, and are None
-(``null`` in results.json) when no answered frame has a true heading to score against.
+75th percentile of the position error over *every* frame, a frame without an estimate counting as an
+infinite error (the EvAAL competitions' rule): a method cannot improve it by refusing the frames it
+would get wrong, and it is infinite when more than a quarter of the frames got no estimate. Boards
+rank by it (:func:`azgym.bench.report.table.rank_key`). Beside it, availability says how many frames
+got an estimate, the failure rate counts a missing estimate or one more than
+:data:`FAILURE_DISTANCE` off as a failure, and the other error statistics (mean, median, p75, p95,
+...) describe the frames that got an estimate. Heading errors are NaN where the truth has no heading
+(a log's position-only truth): the heading figures leave them out, and are None (``null`` in
+results.json) when no answered frame has a true heading to score against.
 
 Intervals (:func:`confidence_intervals`) come from a bootstrap that respects how the frames
 were drawn: frames on their own are resampled one by one, the frames of a driven route in

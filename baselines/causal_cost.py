@@ -31,9 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from azgym.bench import runner
-from azgym.bench.contenders import DEFAULT_SPECS, contender
-from azgym.bench.isolation import IsolatedRun
+from azgym.bench.run import runner
+from azgym.bench.run.contenders import DEFAULT_SPECS, contender
+from azgym.bench.run.isolation import IsolatedRun
 from azgym.bench.suites import get_suite
 
 SUITES = ("warehouse-routes", "image-routes", "route-events")
@@ -50,7 +50,7 @@ class BatchedRun(IsolatedRun):
 
 def batched_ray_run() -> type:
     """The Ray backend's batch path: a batch relayed to the actor's worker in one step."""
-    from azgym.bench.ray_backend import RayRun
+    from azgym.bench.run.ray_backend import RayRun
 
     class BatchedRayRun(RayRun):
         def _step_end(self, first: int, stop: int) -> int:
@@ -62,7 +62,7 @@ def batched_ray_run() -> type:
 def timed_run(cases, candidate, workers: int, backend: str, batched: bool):
     """(seconds, outcome) of one contender on the cases, by the causal or the batch path."""
     if backend == "ray":
-        from azgym.bench import ray_backend
+        from azgym.bench.run import ray_backend
 
         original, name, module = ray_backend.RayRun, "RayRun", ray_backend
         replacement = batched_ray_run()

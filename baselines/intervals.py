@@ -19,8 +19,8 @@ import time
 
 import numpy as np
 
-from azgym.bench.contenders import contender
-from azgym.bench.runner import run_contenders
+from azgym.bench.run.contenders import contender
+from azgym.bench.run.runner import run_contenders
 from azgym.bench.suites import get_suite
 from azgym.metrics import BLOCK_SECONDS, bootstrap_blocks, confidence_intervals, quantile
 

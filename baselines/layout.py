@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import azgym
-from azgym.bench.isolation import default_workers
+from azgym.bench.run.processes import default_workers
 from azgym.files import prepare_folder, write_file
 from azgym.layout.analysis import agreement, predict
 from azgym.layout.candidates import candidate_places

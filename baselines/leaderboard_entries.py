@@ -27,16 +27,17 @@ from pathlib import Path
 from typing import Any
 
 import azgym
-from azgym.bench import board, leaderboard
-from azgym.bench.contenders import Contender, contender
-from azgym.bench.runner import (
+from azgym.bench.leaderboard import board
+from azgym.bench.leaderboard import entries as leaderboard
+from azgym.bench.report.table import ranked_table
+from azgym.bench.run.contenders import Contender, contender
+from azgym.bench.run.runner import (
     default_contenders,
     run_benchmark,
     run_log_benchmark,
     write_log_results,
 )
 from azgym.bench.suites import SUITES
-from azgym.bench.table import ranked_table
 from azgym.localize.registry import list_trackers
 from azgym.logs import read_log
 from azgym.logs.manifest import read_manifest

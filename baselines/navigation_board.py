@@ -18,7 +18,7 @@ import json
 import time
 from pathlib import Path
 
-from azgym.bench import board
+from azgym.bench.leaderboard import board
 from azgym.bench.navigation.benchmark import check_contenders, contenders_of, run_navigation
 from azgym.bench.navigation.report import score_table
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS

@@ -17,8 +17,8 @@ import time
 
 import numpy as np
 
-from azgym.bench.isolation import default_workers
-from azgym.bench.runner import run_benchmark
+from azgym.bench.run.processes import default_workers
+from azgym.bench.run.runner import run_benchmark
 from azgym.bench.suites import get_suite
 
 

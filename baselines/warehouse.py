@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 import azgym
-from azgym.bench.runner import Contender, run_contenders
+from azgym.bench.run.runner import Contender, run_contenders
 from azgym.bench.suites import Case, frame_cause
 from azgym.bench.suites.warehouse import fault_levels
 from azgym.sensing.geometry.sensor import GeometrySensor

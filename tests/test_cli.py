@@ -9,8 +9,8 @@ import textwrap
 import pytest
 
 from azgym import cli, cli_leaderboard, cli_studies
-from azgym.bench import runner
-from azgym.bench.contenders import Contender, default_contenders
+from azgym.bench.run import runner
+from azgym.bench.run.contenders import Contender, default_contenders
 
 PARSED = [
     pytest.param(["bench"], cli._bench,

@@ -34,7 +34,7 @@ def module_name(path: Path) -> str:
 
 
 def unit(module: str) -> str:
-    """The unit of a module: ``azgym.bench.runner`` -> ``bench``; the package itself: __init__."""
+    """The unit of a module: ``azgym.bench.run.runner`` -> ``bench``; the package: __init__."""
     parts = module.split(".")
     if len(parts) == 1:
         return "__init__"
@@ -137,5 +137,5 @@ def test_the_checker_sees_every_kind_of_import():
             "if TYPE_CHECKING:\n    from azgym.track import base\n"
             "def f():\n    from azgym.bench import runner\n    return runner\n"
             "from . import sibling\n")
-    modules = {"azgym.bench.runner", "azgym.track.base", "azgym.localize.sibling"}
+    modules = {"azgym.bench.run.runner", "azgym.track.base", "azgym.localize.sibling"}
     assert imported(text, "azgym.localize.probe", False, modules) == modules

@@ -216,7 +216,7 @@ def test_the_layout_section_analyzes_and_optimizes(tmp_path, monkeypatch):
 
 
 def test_the_sweep_the_readme_names_is_a_valid_config():
-    from azgym.bench.sweep_config import load_sweep
+    from azgym.bench.sweep.config import load_sweep
 
     section = README.read_text(encoding="utf-8").split("## Beyond one machine", 1)[1]
     path = re.search(r"`azgym sweep (\S+\.toml)`", section).group(1)

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from azgym.bench.sweep import FIGURES, INTERVAL, SweepResult, run_sweep, write_sweep_figure
-from azgym.bench.sweep_config import MAX_RUNS, load_sweep, parse_sweep
+from azgym.bench.sweep.config import MAX_RUNS, load_sweep, parse_sweep
+from azgym.bench.sweep.run import FIGURES, INTERVAL, SweepResult, run_sweep, write_sweep_figure
 from azgym.cli import main
 from azgym.errors import InvalidInputError
 

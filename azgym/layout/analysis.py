@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
 from azgym.core import BoolArray, FloatArray
 from azgym.files import write_file
 from azgym.layout.floor import Floor

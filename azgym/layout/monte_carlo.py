@@ -5,7 +5,7 @@ At each cell, N frames as the paper's protocol draws them (Rátosi & Simon 2021,
 (:mod:`azgym.layout.visibility`) measured at its true azimuth plus the errors of eq. 3 drawn from
 the scenario's error model (:meth:`~azgym.site.error_model.ErrorModel.sample`), no outliers.
 Each frame goes to the localizer with the whole map, through the benchmark's runner
-(:func:`azgym.bench.runner.run_contenders`): the localizer runs in worker processes of its own,
+(:func:`azgym.bench.run.runner.run_contenders`): the localizer runs in worker processes of its own,
 and a frame on which it raises (``SystemExit`` too), overruns the time limit, crashes its worker
 or answers no finite pose (:func:`azgym.core.estimated_pose`) has no fix, with the reason kept,
 as in ``azgym bench``. The error of a fix is its position minus the cell; over a cell's fixes:
@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from azgym import arguments
-from azgym.bench.contenders import contender
-from azgym.bench.isolation import DEFAULT_TIME_LIMIT
-from azgym.bench.runner import run_contenders
+from azgym.bench.run.contenders import contender
+from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.run.runner import run_contenders
 from azgym.bench.suites import Case
 from azgym.core import BeaconMap, BoolArray, FloatArray, Measurements, wrap_angle
 from azgym.layout.information import MIN_BEACONS

@@ -8,7 +8,7 @@ detection: frame, beacon id, azimuth, quality), and optionally ``odometry.csv``,
 column, and settles what real loggers' clocks do with a note (``Log.notes``,
 :mod:`azgym.logs.clocks`); :func:`frame_measurements` gives each frame's detections to localize;
 :func:`export_route` writes a simulated route as a log. A log with truth is scored as a suite
-(:mod:`azgym.bench.suites.data`, :func:`azgym.bench.runner.run_log_benchmark`).
+(:mod:`azgym.bench.suites.data`, :func:`azgym.bench.run.runner.run_log_benchmark`).
 """
 
 from azgym.logs.export import export_route

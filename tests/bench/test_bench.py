@@ -8,9 +8,9 @@ import textwrap
 import numpy as np
 import pytest
 
-from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.report.table import ranked_table
+from azgym.bench.run.runner import Contender, run_benchmark
 from azgym.bench.suites import CAUSES, SUITES, get_suite
-from azgym.bench.table import ranked_table
 from azgym.cli import main
 from azgym.errors import InvalidInputError
 

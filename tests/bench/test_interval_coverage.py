@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from azgym.bench.contenders import contender
-from azgym.bench.runner import run_contenders
+from azgym.bench.run.contenders import contender
+from azgym.bench.run.runner import run_contenders
 from azgym.bench.suites import get_suite
 from azgym.metrics import bootstrap_blocks, confidence_intervals, quantile
 

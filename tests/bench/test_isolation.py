@@ -13,11 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from azgym.bench import worker
-from azgym.bench.contenders import Contender
-from azgym.bench.isolation import GIVE_UP_AFTER, STARTUP_LIMIT, IsolatedRun
-from azgym.bench.processes import Worker
-from azgym.bench.runner import run_contenders
+from azgym.bench.run import worker
+from azgym.bench.run.contenders import Contender
+from azgym.bench.run.isolation import GIVE_UP_AFTER, STARTUP_LIMIT, IsolatedRun
+from azgym.bench.run.processes import Worker
+from azgym.bench.run.runner import run_contenders
 from azgym.bench.suites import get_suite
 from azgym.cli import main
 from azgym.localize.registry import is_builtin
@@ -169,9 +169,9 @@ def test_a_built_in_compiling_its_kernels_has_the_startup_allowance_not_the_time
 WARM_UP_CHECK = """
 import sys
 import numba
-from azgym.bench import worker
+from azgym.bench.run import worker
 from azgym.bench.suites import get_suite
-from azgym.bench.wire import pack, pack_map, unpack, unpack_map
+from azgym.bench.run.wire import pack, pack_map, unpack, unpack_map
 from azgym.localize.registry import PRESETS, list_localizers, list_trackers
 from azgym.site import load_scenario
 from azgym.track.base import make_tracker
@@ -257,7 +257,7 @@ def test_a_plugin_scribbling_on_its_build_progress_cannot_wait_without_end(phase
 def test_a_message_nested_too_deeply_is_a_protocol_breach_not_a_crash():
     import struct
 
-    from azgym.bench.wire import ProtocolError, heard
+    from azgym.bench.run.wire import ProtocolError, heard
 
     body = b"[" * 100_000 + b"]" * 100_000
     inbox = bytearray(struct.pack("!i", len(body)) + body)

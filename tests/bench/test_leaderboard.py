@@ -16,15 +16,15 @@ import subprocess
 
 import pytest
 
-from azgym.bench import board as B
-from azgym.bench import leaderboard as L
-from azgym.bench.entries import clean, suite_cases
-from azgym.bench.entry_files import parse_frames
+from azgym.bench.leaderboard import board as B
+from azgym.bench.leaderboard import entries as L
+from azgym.bench.leaderboard.checks import clean, suite_cases
+from azgym.bench.leaderboard.entry_files import parse_frames
 from azgym.bench.navigation.benchmark import contenders_of
 from azgym.bench.navigation.results_file import load_navigation
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS
-from azgym.bench.results import contender_metrics
-from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.report.results import contender_metrics
+from azgym.bench.run.runner import Contender, run_benchmark
 from azgym.bench.suites import get_suite
 from azgym.cli import main
 from azgym.localize.registry import list_trackers

@@ -12,9 +12,9 @@ import shutil
 import pytest
 from logs.mini_log import mini_files, write_log
 
-from azgym.bench import board as B
-from azgym.bench import leaderboard as L
-from azgym.bench.runner import Contender, run_log_benchmark, write_log_results
+from azgym.bench.leaderboard import board as B
+from azgym.bench.leaderboard import entries as L
+from azgym.bench.run.runner import Contender, run_log_benchmark, write_log_results
 from azgym.cli import main
 from azgym.logs import read_log
 
@@ -204,7 +204,7 @@ def test_a_log_with_a_beacon_table_for_map_gets_its_figures(mini_run):
 
 
 def test_a_datasets_folder_cannot_shadow_a_shipped_log(tmp_path):
-    from azgym.bench.entry_data import find_dataset
+    from azgym.bench.leaderboard.entry_data import find_dataset
 
     shutil.copytree(read_log("warehouse-small-simulated").folder,
                     tmp_path / "warehouse-small-simulated")

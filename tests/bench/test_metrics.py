@@ -183,8 +183,8 @@ def test_fewer_than_two_blocks_give_no_interval():
 
 
 def test_a_runs_intervals_resample_its_routes_in_blocks_and_lone_frames_one_by_one():
-    from azgym.bench.outcome import Outcome
-    from azgym.bench.results import contender_metrics
+    from azgym.bench.report.results import contender_metrics
+    from azgym.bench.run.outcome import Outcome
     from azgym.bench.suites import get_suite
 
     for name, routes in (("warehouse-routes", True), ("warehouse-static", False)):

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from azgym.bench.plots import write_figures
-from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.report.plots import write_figures
+from azgym.bench.run.runner import Contender, run_benchmark
 from azgym.bench.suites import get_suite
 
 pytest.importorskip("matplotlib")

@@ -13,10 +13,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from azgym.bench.contenders import Contender, contender
-from azgym.bench.leaderboard import LeaderboardError, submit
-from azgym.bench.profiles import SimulatedNoise, contender_params
-from azgym.bench.runner import run_benchmark, run_contenders, run_log_benchmark
+from azgym.bench.leaderboard.entries import LeaderboardError, submit
+from azgym.bench.run.contenders import Contender, contender
+from azgym.bench.run.profiles import SimulatedNoise, contender_params
+from azgym.bench.run.runner import run_benchmark, run_contenders, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.bench.suites.data import log_profile
 from azgym.bench.suites.warehouse import scenario_suite
@@ -331,7 +331,7 @@ def test_bench_refuses_an_empty_profile_name(capsys):
 def test_a_run_given_a_profile_is_no_leaderboard_entry(tmp_path) -> None:
     """A run with --profile is scored with other defaults than the suite's: submit refuses it,
     even where the profile sets nothing the simulator draws (the frames would match)."""
-    from azgym.bench.leaderboard import make_entry
+    from azgym.bench.leaderboard.entries import make_entry
 
     (tmp_path / "results.json").write_text(json.dumps({
         "localizers": {"ransac": {}}, "profile_given": {"sensor": {"field_of_view": 1.0}}}))

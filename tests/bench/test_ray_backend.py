@@ -12,11 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from azgym.bench.contenders import Contender, contender
-from azgym.bench.runner import run_benchmark, run_contenders
+from azgym.bench.run.contenders import Contender, contender
+from azgym.bench.run.runner import run_benchmark, run_contenders
 from azgym.bench.suites import get_suite
-from azgym.bench.sweep import run_sweep
-from azgym.bench.sweep_config import parse_sweep
+from azgym.bench.sweep.config import parse_sweep
+from azgym.bench.sweep.run import run_sweep
 from azgym.cli import main
 from azgym.errors import DependencyNotInstalled
 
@@ -142,7 +142,7 @@ def test_an_address_where_something_else_listens_fails_by_name_within_the_deadli
     """A server that accepts connections but is not Ray: Ray alone would wait for minutes."""
     with socket.create_server(("127.0.0.1", 0)) as server:
         port = server.getsockname()[1]
-        code = ("import azgym.bench.ray_backend as backend\n"
+        code = ("import azgym.bench.run.ray_backend as backend\n"
                 "backend.JOIN_TIMEOUT = 3.0\n"
                 "from azgym.cli import main\n"
                 f"raise SystemExit(main(['bench', '--backend', 'ray', '--address', "
@@ -171,10 +171,10 @@ def test_a_missing_ray_names_the_extra_to_install(monkeypatch):
 
 
 def test_azgym_and_the_default_bench_never_import_ray():
-    code = ("import sys, azgym, azgym.cli, azgym.bench.runner, azgym.bench.sweep\n"
-            "from azgym.bench.runner import run_contenders\n"
+    code = ("import sys, azgym, azgym.cli, azgym.bench.run.runner, azgym.bench.sweep.run\n"
+            "from azgym.bench.run.runner import run_contenders\n"
             "from azgym.bench.suites import get_suite\n"
-            "from azgym.bench.contenders import contender\n"
+            "from azgym.bench.run.contenders import contender\n"
             "run_contenders(get_suite('warehouse-static').build(7, True)[:2], [contender('lsq')])\n"
             "assert 'ray' not in sys.modules, 'ray imported'\n")
     subprocess.run([sys.executable, "-c", code], check=True, timeout=300)

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from azgym.bench.contenders import Contender
-from azgym.bench.runner import batch_bounds, run_contenders
+from azgym.bench.run.contenders import Contender
+from azgym.bench.run.runner import batch_bounds, run_contenders
 from azgym.bench.suites import get_suite
 from azgym.bench.suites.base import Case
 

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import math
 
-from azgym.bench.table import LEGEND, POSITION_ONLY, cell, interval_cell, rank_key, ranked_table
+from azgym.bench.report.table import (
+    LEGEND,
+    POSITION_ONLY,
+    cell,
+    interval_cell,
+    rank_key,
+    ranked_table,
+)
 
 
 def test_headline_ranks_first_then_failures_then_answered_p75_then_availability_then_name():
@@ -85,7 +92,7 @@ def test_a_table_on_position_only_truth_says_the_heading_was_not_scored():
 
 def test_the_table_says_which_profile_set_the_defaults() -> None:
     """A run with a profile prints it above the rows; a plain run prints no profile line."""
-    from azgym.bench.table import profile_lines
+    from azgym.bench.report.table import profile_lines
 
     assert profile_lines({"profile": {}}) == [] and profile_lines({}) == []
     assert profile_lines({"profile": {"sensor": {"delta_alpha_d": 0.07, "coverage": False}}}) \

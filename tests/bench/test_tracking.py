@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from azgym.bench.outcome import Outcome
+from azgym.bench.report.tracking import tracking_metrics
+from azgym.bench.run.outcome import Outcome
 from azgym.bench.suites import get_suite
 from azgym.bench.suites.base import Case
-from azgym.bench.tracking import tracking_metrics
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 
 

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from azgym.bench.runner import Contender
+from azgym.bench.run.runner import Contender
 from azgym.bench.suites.paper import ProtocolConfig
 from azgym.experiments.paper.report import write_outputs
 from azgym.experiments.paper.reproduce import reproduce

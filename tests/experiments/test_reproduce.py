@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from azgym import load_scenario
-from azgym.bench.runner import Contender
+from azgym.bench.run.runner import Contender
 from azgym.bench.suites.paper import ProtocolConfig, draw_runs, grid_points, near_beacon
 from azgym.cli import main
 from azgym.experiments.paper.reproduce import reproduce

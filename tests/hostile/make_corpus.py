@@ -27,11 +27,11 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.entries import ENTRY_FORMAT, clean
-from azgym.bench.leaderboard import frames_file_text, make_entry
-from azgym.bench.outcome import Outcome
-from azgym.bench.results import contender_metrics
-from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.leaderboard.checks import ENTRY_FORMAT, clean
+from azgym.bench.leaderboard.entries import frames_file_text, make_entry
+from azgym.bench.report.results import contender_metrics
+from azgym.bench.run.outcome import Outcome
+from azgym.bench.run.runner import Contender, run_benchmark
 from azgym.bench.suites import Case, get_suite
 
 CORPUS = Path(__file__).resolve().parent / "entries"

@@ -146,7 +146,7 @@ def test_a_test_run_made_of_the_dev_splits_episodes_is_refused(genuine, tmp_path
 
 def test_two_test_runs_sharing_episodes_are_refused(genuine, tmp_path, monkeypatch):
     # Each file alone is sound (the per-file checks are stood in for): the board's own rule.
-    from azgym.bench.entry_files import LeaderboardError
+    from azgym.bench.leaderboard.entry_files import LeaderboardError
     from azgym.bench.navigation import board
 
     for name, seed in (("t1.json", 900_000), ("t2.json", 900_003)):

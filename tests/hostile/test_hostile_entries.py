@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from azgym.bench import leaderboard as L
+from azgym.bench.leaderboard import entries as L
 
 CORPUS = Path(__file__).resolve().parent / "entries"
 SOUND = {"sound", "sound-track"}
@@ -101,7 +101,7 @@ def test_a_hostile_entry_is_refused_with_its_reason(name):
 
 
 def test_a_folder_holding_a_hostile_entry_builds_no_board(tmp_path):
-    from azgym.bench import board
+    from azgym.bench.leaderboard import board
 
     with pytest.raises(L.LeaderboardError, match=r"absolute-plugin\.json: localizer/spec"):
         board.build(CORPUS, tmp_path / "board")

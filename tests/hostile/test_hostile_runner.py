@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from azgym.bench.leaderboard import submit
+from azgym.bench.leaderboard.entries import submit
 
 THIEF = Path(__file__).parent / "plugins" / "seed_thief.py"
 
@@ -65,8 +65,8 @@ def test_no_process_of_the_run_lets_a_worker_read_its_memory(tmp_path, backend):
 def test_verify_reruns_a_test_entry_on_a_fresh_seed_that_no_plug_in_can_read(tmp_path):
     # The submitter's own run, on a seed of their choosing, answered from the truth.
     own_run = (f"from pathlib import Path\n"
-               f"from azgym.bench.contenders import contender\n"
-               f"from azgym.bench.runner import run_benchmark\n"
+               f"from azgym.bench.run.contenders import contender\n"
+               f"from azgym.bench.run.runner import run_benchmark\n"
                f"from azgym.bench.suites import get_suite\n"
                f"run_benchmark(get_suite('stress'), [contender('{THIEF}:CmdlineThief')], "
                f"split='test', seed=123456, quick=True).write(Path('{tmp_path / 'out'}'))\n")

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
-from azgym.bench import board as B
-from azgym.bench import leaderboard as L
-from azgym.bench.runner import Contender, run_benchmark
+from azgym.bench.leaderboard import board as B
+from azgym.bench.leaderboard import entries as L
+from azgym.bench.report.table import ranked_table
+from azgym.bench.run.runner import Contender, run_benchmark
 from azgym.bench.suites import get_suite
-from azgym.bench.table import ranked_table
 
 PICKY = str(Path(__file__).parent / "plugins" / "picky.py") + ":Picky"
 

@@ -24,10 +24,10 @@ import numpy as np
 import pytest
 from logs.mini_log import mini_files_2, write_log
 
-from azgym.bench import board as B
-from azgym.bench import leaderboard as L
-from azgym.bench.contenders import Contender
-from azgym.bench.runner import run_log_benchmark
+from azgym.bench.leaderboard import board as B
+from azgym.bench.leaderboard import entries as L
+from azgym.bench.run.contenders import Contender
+from azgym.bench.run.runner import run_log_benchmark
 from azgym.cli import main
 from azgym.errors import InvalidInputError
 from azgym.logs import Log, read_log

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from azgym.bench.contenders import Contender
-from azgym.bench.results import cases_digest
-from azgym.bench.runner import run_contenders
+from azgym.bench.report.results import cases_digest
+from azgym.bench.run.contenders import Contender
+from azgym.bench.run.runner import run_contenders
 from azgym.bench.suites.base import route_cases
 from azgym.bench.suites.data import log_cases
 from azgym.cli import main

@@ -12,8 +12,8 @@ import pytest
 from helpers import quick_navigation_run
 
 from azgym import cli
-from azgym.bench import board
-from azgym.bench.entry_files import LeaderboardError
+from azgym.bench.leaderboard import board
+from azgym.bench.leaderboard.entry_files import LeaderboardError
 from azgym.bench.navigation.benchmark import drive_all
 from azgym.bench.navigation.board import verify_navigation
 from azgym.bench.navigation.results_file import load_navigation

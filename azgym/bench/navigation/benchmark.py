@@ -32,7 +32,7 @@ import gymnasium as gym
 
 from azgym._version import __version__
 from azgym.arguments import whole_number
-from azgym.bench.entries import clean
+from azgym.bench.leaderboard.checks import clean
 from azgym.bench.navigation.suites import NavigationSuite, get_navigation_suite
 from azgym.errors import InvalidInputError
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from azgym.bench.entries import clean
-from azgym.bench.entry_files import LeaderboardError
-from azgym.bench.leaderboard import differences
+from azgym.bench.leaderboard.checks import clean
+from azgym.bench.leaderboard.entries import differences
+from azgym.bench.leaderboard.entry_files import LeaderboardError
 from azgym.bench.navigation.benchmark import drive_all
 from azgym.bench.navigation.report import figure
 from azgym.bench.navigation.results_file import episode_seeds, load_navigation

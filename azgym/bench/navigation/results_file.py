@@ -40,8 +40,8 @@ from pathlib import Path
 from typing import Any
 
 from azgym import arguments
-from azgym.bench.entries import clean, close
-from azgym.bench.entry_files import LeaderboardError, read_json
+from azgym.bench.leaderboard.checks import clean, close
+from azgym.bench.leaderboard.entry_files import LeaderboardError, read_json
 from azgym.bench.navigation.benchmark import KIND, RESULTS_FORMAT
 from azgym.bench.navigation.scoring import wilson_interval
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite, overlap

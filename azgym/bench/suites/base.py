@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
+from azgym.bench.run.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.core import Measurements, Pose
 from azgym.errors import InvalidInputError
 from azgym.profile import Profile
@@ -90,7 +90,7 @@ class Suite:
             Such a suite drives the same routes for every seed, so it has no test split
             (:data:`NO_TEST_SPLIT`).
         simulates: The profile fields (``section.field``) its simulator takes
-            (:mod:`azgym.bench.profiles`); none: it takes no profile.
+            (:mod:`azgym.bench.run.profiles`); none: it takes no profile.
         vehicle: The kind of vehicle that drives its routes (a profile of another kind is
             refused); None: any (frames on their own).
         profile: The profile it is drawn with (:meth:`profiled`); None: as shipped.

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from azgym.bench.profiles import DIFFERENTIAL_MOTION_NOISE, MOTION_NOISE, SENSOR_NOISE
+from azgym.bench.run.profiles import DIFFERENTIAL_MOTION_NOISE, MOTION_NOISE, SENSOR_NOISE
 from azgym.bench.suites import events, image, paper, robot, warehouse
 from azgym.bench.suites.base import Suite
 from azgym.errors import unknown_name

@@ -18,7 +18,7 @@ import dataclasses
 
 import numpy as np
 
-from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
+from azgym.bench.run.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, route_cases
 from azgym.bench.suites.warehouse import SCENARIOS
 from azgym.errors import ScenarioError

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
+from azgym.bench.run.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, keep_every, route_cases
 from azgym.bench.suites.warehouse import SCENARIOS
 from azgym.sensing.image.sensor import ImageSensor

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
+from azgym.bench.run.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case
 from azgym.core import BeaconMap, BoolArray, FloatArray, Measurements, wrap_angle
 from azgym.errors import InvalidInputError

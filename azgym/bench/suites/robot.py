@@ -8,7 +8,7 @@ scored; the scenario's ``long`` route (15 min) is left out, for calibrating a pr
 
 from __future__ import annotations
 
-from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
+from azgym.bench.run.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, keep_every, route_cases
 from azgym.profile import Profile
 from azgym.site import load_scenario

@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from azgym.bench.profiles import AS_SHIPPED, SimulatedNoise
+from azgym.bench.run.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, Suite, frame_cause, keep_every, route_cases
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.site import Scenario, load_scenario

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.outcome import Outcome
-from azgym.bench.runner import Contender, Progress, default_contenders, run_contenders
+from azgym.bench.run.outcome import Outcome
+from azgym.bench.run.runner import Contender, Progress, default_contenders, run_contenders
 from azgym.bench.suites.paper import ProtocolConfig, Runs, cases_of, draw_runs
 from azgym.experiments.paper.bound import wls_position_error
 from azgym.localize.registry import make_localizer

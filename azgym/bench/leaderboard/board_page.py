@@ -1,10 +1,10 @@
 """The board's web page: every table sortable, with its error CDFs, in one self-contained file.
 
-:func:`page` writes what :mod:`azgym.bench.board` lays out: the board's parts (the suites and
-simulated logs, then the real data and the navigation suites, each under its own heading and
-introduction), each suite's tables with the error CDF of each table's entries drawn from their
+:func:`page` writes what :mod:`azgym.bench.leaderboard.board` lays out: the board's parts (the
+suites and simulated logs, then the real data and the navigation suites, each under its own heading
+and introduction), each suite's tables with the error CDF of each table's entries drawn from their
 own per-frame results. Text is HTML-escaped; a link has already been made safe by
-:func:`azgym.bench.board.web_link`.
+:func:`azgym.bench.leaderboard.board.web_link`.
 """
 
 from __future__ import annotations

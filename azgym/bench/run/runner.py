@@ -1,7 +1,7 @@
 """The runner: every contender on every case, the one loop behind ``azgym bench`` and the paper.
 
 Cases are drawn once, in this process; each contender runs in worker processes of its own
-(:mod:`azgym.bench.isolation`) that see the measurements and the maps only, never the truth.
+(:mod:`azgym.bench.run.isolation`) that see the measurements and the maps only, never the truth.
 A localizer that raises, hangs or crashes on a case is scored as unavailable on that case (the
 reason is kept), never taking the run down. Each frame is localized on its own, so the figures
 do not depend on ``workers``. Runtimes are measured per call,
@@ -25,24 +25,24 @@ import numpy as np
 
 from azgym.arguments import time_limit as checked_time_limit
 from azgym.arguments import whole_number
-from azgym.bench.answers import Answers
-from azgym.bench.contenders import (
+from azgym.bench.report.results import BenchResult, summarize
+from azgym.bench.run.answers import Answers
+from azgym.bench.run.contenders import (
     REFERENCE,
     Contender,
     default_contenders,
     warm_up,
     with_reference,
 )
-from azgym.bench.isolation import BACKENDS, DEFAULT_TIME_LIMIT, IsolatedRun
-from azgym.bench.outcome import Outcome
-from azgym.bench.processes import start_fork_server
-from azgym.bench.profiles import describe_profile
-from azgym.bench.results import BenchResult, summarize
+from azgym.bench.run.isolation import BACKENDS, DEFAULT_TIME_LIMIT, IsolatedRun
+from azgym.bench.run.outcome import Outcome
+from azgym.bench.run.processes import start_fork_server
+from azgym.bench.run.profiles import describe_profile
+from azgym.bench.run.wire import pack, pack_map
+from azgym.bench.run.worker import hide_process
 from azgym.bench.suites import NO_TEST_SPLIT, Case, Suite
 from azgym.bench.suites.data import SPLIT as DATA_SPLIT
 from azgym.bench.suites.data import data_suite, log_cases, log_profile
-from azgym.bench.wire import pack, pack_map
-from azgym.bench.worker import hide_process
 from azgym.core import BeaconMap, pose_error
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.jit import localizers_compiled
@@ -72,10 +72,10 @@ def run_contenders(
 ) -> dict[str, Outcome]:
     """Score every contender on every case; the outcomes are in the order of ``cases``.
 
-    Each contender runs in worker processes of its own (:mod:`azgym.bench.isolation`), which
+    Each contender runs in worker processes of its own (:mod:`azgym.bench.run.isolation`), which
     get the measurements and the beacon maps only; the errors are computed here. A contender
     is labelled as written; a profile is context (each worker builds its contender with the
-    profile's hyperparameters under the spec's: :func:`~azgym.bench.profiles.contender_params`).
+    profile's hyperparameters under the spec's: :func:`~azgym.bench.run.profiles.contender_params`).
 
     Args:
         cases: The cases.
@@ -122,7 +122,7 @@ def _backend(backend: str, address: str | None, workers: int) -> tuple[Any, Any]
         workers = whole_number("workers", workers, minimum=1)
         start_fork_server()
         return IsolatedRun, contextlib.nullcontext(workers)
-    from azgym.bench.ray_backend import RayRun, ray_session
+    from azgym.bench.run.ray_backend import RayRun, ray_session
 
     return RayRun, ray_session(address, whole_number("workers", workers, minimum=0))
 
@@ -196,7 +196,7 @@ def run_benchmark(
         contenders: The localizers (default: :func:`default_contenders`). ``ransac`` is added as
             the runtime reference if missing.
         split: "dev" (the suite's fixed seed) or "test" (a seed drawn now in secret: the process
-            turns non-dumpable first, :func:`~azgym.bench.worker.hide_process`, and the seed
+            turns non-dumpable first, :func:`~azgym.bench.run.worker.hide_process`, and the seed
             is printed and written only once every contender has answered).
         quick: Draw the suite's small version.
         workers: Worker processes per contender at a time.
@@ -278,7 +278,7 @@ def write_log_results(result: BenchResult, log: Log, out: Path) -> list[Path]:
     """
     written = result.write(out, figures=False)
     if importlib.util.find_spec("matplotlib") is not None:
-        from azgym.bench.plots import write_figures
+        from azgym.bench.report.plots import write_figures
 
         maps = {} if log.shipped_map else {log.map_name: log.beacons}
         written += write_figures(result.summary, result.cases, result.outcomes, out, maps)
@@ -300,7 +300,7 @@ def _seed(suite: Suite, split: str, seed: int | None) -> tuple[int, bool]:
     """The seed the cases are drawn from, and whether it is secret (a test split's, drawn now).
 
     A secret seed is drawn once the process is not dumpable
-    (:func:`~azgym.bench.worker.hide_process`): no other process of the user's can read it
+    (:func:`~azgym.bench.run.worker.hide_process`): no other process of the user's can read it
     (docs/leaderboard.md).
     """
     _check_split(suite, split, seed)

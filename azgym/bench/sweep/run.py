@@ -1,6 +1,6 @@
 """Parameter sweeps: every grid point on every suite and seed, through the one runner.
 
-Each (suite, seed) is one :func:`~azgym.bench.runner.run_benchmark` of every grid point, locally
+Each (suite, seed) is one :func:`~azgym.bench.run.runner.run_benchmark` of every grid point, locally
 or on Ray (one Ray session for the whole sweep). The results merge into one table, a row per
 grid point, suite and seed, holding the accuracy figures only: they depend on the config alone,
 so the same config gives the same table, whatever the backend or the number of workers.
@@ -24,9 +24,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from azgym.bench.plots import _save
-from azgym.bench.runner import Progress, run_benchmark
-from azgym.bench.sweep_config import GridPoint, SweepConfig
+from azgym.bench.report.plots import _save
+from azgym.bench.run.runner import Progress, run_benchmark
+from azgym.bench.sweep.config import GridPoint, SweepConfig
 from azgym.files import prepare_folder, write_file
 from azgym.metrics import HEADLINE
 
@@ -76,7 +76,7 @@ def run_sweep(config: SweepConfig, *, backend: str = "local", address: str | Non
     """Run every grid point on every suite and seed of a checked config.
 
     Args:
-        config: The sweep (:func:`~azgym.bench.sweep_config.load_sweep`).
+        config: The sweep (:func:`~azgym.bench.sweep.config.load_sweep`).
         backend: "local" or "ray" (one Ray session serves every run).
         address: The Ray cluster's address (``backend="ray"`` only).
         workers: Workers per contender at a time (with Ray, 0: one per CPU of the cluster).
@@ -84,7 +84,7 @@ def run_sweep(config: SweepConfig, *, backend: str = "local", address: str | Non
     """
     session: Any = contextlib.nullcontext(workers)
     if backend == "ray":
-        from azgym.bench.ray_backend import ray_session
+        from azgym.bench.run.ray_backend import ray_session
 
         session = ray_session(address, workers)
         address = None  # the session joins it; each run then uses the session

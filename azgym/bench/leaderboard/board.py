@@ -2,7 +2,7 @@
 
 The board has parts: the suites' tables and the simulated logs', then the real data's (logs of
 real sensors, :data:`REAL_PART`), then the navigation suites'. The page is drawn by
-:mod:`azgym.bench.board_page`. A suite of driven routes adds track columns
+:mod:`azgym.bench.leaderboard.board_page`. A suite of driven routes adds track columns
 (:data:`TRACK_COLUMNS`) after the accuracy ones, and one with events (an outage, a kidnapping)
 the worst recovery (:data:`RECOVERY_COLUMN`).
 
@@ -18,11 +18,15 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-from azgym.bench.board_page import NAME_COLUMN, Section, cdf_png, page
-from azgym.bench.leaderboard import DatasetUnavailable, LeaderboardError, load_available
+from azgym.bench.leaderboard.board_page import NAME_COLUMN, Section, cdf_png, page
+from azgym.bench.leaderboard.entries import (
+    DatasetUnavailable,
+    LeaderboardError,
+    load_available,
+)
+from azgym.bench.report.table import LEGEND, RANK_BY, rank_key
+from azgym.bench.report.tracking import KIDNAP_WINDOW_S, RECOVERED_CM
 from azgym.bench.suites import SUITES, get_suite
-from azgym.bench.table import LEGEND, RANK_BY, rank_key
-from azgym.bench.tracking import KIDNAP_WINDOW_S, RECOVERED_CM
 from azgym.files import prepare_folder, write_file
 
 WEB_SCHEMES = ("http://", "https://")
@@ -83,7 +87,7 @@ def _ranked(loaded: list[tuple[dict[str, Any], str]], suite: str, split: str,
 
 
 def _interval(bounds: list[float | None] | None) -> str:
-    """A stored 95 % interval, as :func:`~azgym.bench.table.interval_cell` shows one.
+    """A stored 95 % interval, as :func:`~azgym.bench.report.table.interval_cell` shows one.
 
     JSON keeps an infinite bound as null: a null lower bound (an infinite interval, or none)
     shows ``–``, a null upper bound after a finite lower one ``∞``.
@@ -110,14 +114,14 @@ COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
            ("azgym", None)]
 TRACK_COLUMNS = ("track avail. %", "track max cm")
 """A route suite's track figures: availability after the first fix, the largest error outside
-kidnapping windows (:mod:`azgym.bench.tracking`)."""
+kidnapping windows (:mod:`azgym.bench.report.tracking`)."""
 RECOVERY_COLUMN = "worst recovery s"
 """On a suite with events: the longest recovery, or ``never (k/N)`` when k of N events had none."""
 TRACKS_AT = [c for c, _ in COLUMNS].index("answered mean cm") + 1
 """The track columns come after the accuracy ones."""
 BOARD_LEGEND = LEGEND.replace("(inf:", "(∞:").replace("answered median, p75, p95, mean",
                                                        "answered median, p75, p95, mean cm")
-"""What each column is (:data:`azgym.bench.table.LEGEND`, with the board's ∞)."""
+"""What each column is (:data:`azgym.bench.report.table.LEGEND`, with the board's ∞)."""
 TRACKS_NOTE = (
     "Suites of driven routes add track columns: *track avail. %* is the share of frames with an "
     "estimate from each route's first fix on, *track max cm* the largest error outside the "

@@ -1,10 +1,10 @@
 """The runner's Ray backend: each contender's batches of frames run as Ray actors.
 
-The same run as :mod:`azgym.bench.isolation`, with Ray actors in place of the fork server.
+The same run as :mod:`azgym.bench.run.isolation`, with Ray actors in place of the fork server.
 Each contender gets up to ``workers`` actors at a time, each a process of its own on some node,
 killed when the contender is done (never reused by another contender). An actor forks one worker
-process (:func:`azgym.bench.worker.serve`, the pool's own) before it gets any frame; it gets the
-packed beacon maps once and then batches of packed frames (:mod:`azgym.bench.wire`), the
+process (:func:`azgym.bench.run.worker.serve`, the pool's own) before it gets any frame; it gets the
+packed beacon maps once and then batches of packed frames (:mod:`azgym.bench.run.wire`), the
 measurements only: the true poses never leave the runner, which scores the answers. The actor
 hands its worker one frame at a time, the next once this one is answered (a tracker cannot see
 its route's future), and streams the answers back as they come (a Ray generator; gathered for
@@ -17,7 +17,7 @@ frame's time limit by its own clock:
   does a worker or an actor that dies (a segfault, ``os._exit``, a node lost), and after
   ``GIVE_UP_AFTER`` losses in a row the contender's other frames are not run.
 
-The actor's side is :mod:`azgym.bench.ray_actor`. What differs from the process pool is in
+The actor's side is :mod:`azgym.bench.run.ray_actor`. What differs from the process pool is in
 docs/scaling.md: an actor starts as a fresh
 interpreter (about a second, not milliseconds); a plug-in runs on a Ray node, with the
 cluster's API within reach; runtimes are measured on whichever node ran the frame.
@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
-from azgym.bench.answers import (
+from azgym.bench.run.answers import (
     GIVE_UP_AFTER,
     STARTUP_LIMIT,
     Answers,
@@ -48,8 +48,8 @@ from azgym.bench.answers import (
     overrun_reason,
     record_answers,
 )
-from azgym.bench.isolation import default_workers
-from azgym.bench.wire import MapData, Packed
+from azgym.bench.run.processes import default_workers
+from azgym.bench.run.wire import MapData, Packed
 from azgym.errors import InvalidInputError, require
 from azgym.profile import Profile
 
@@ -69,7 +69,7 @@ def _actor_class() -> Any:
     """
     import ray
 
-    from azgym.bench.ray_actor import RayWorker
+    from azgym.bench.run.ray_actor import RayWorker
 
     return ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RayWorker)
 
@@ -179,7 +179,7 @@ class _Slot:
 class RayRun:
     """One contender on a run's frames, in up to ``workers`` Ray actors at a time.
 
-    The same arguments and answers as :class:`~azgym.bench.isolation.IsolatedRun`.
+    The same arguments and answers as :class:`~azgym.bench.run.isolation.IsolatedRun`.
     """
 
     def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[Packed],

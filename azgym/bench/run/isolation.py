@@ -1,6 +1,6 @@
 """The runner's side of an isolated run: worker processes that can hang, crash or cheat safely.
 
-Each contender runs in processes of its own (:mod:`azgym.bench.worker`), started from a fork
+Each contender runs in processes of its own (:mod:`azgym.bench.run.worker`), started from a fork
 server that imported azgym and loaded the built-in localizers' compiled code once, so a worker
 starts in milliseconds and holds nothing of the run that started it: no true pose, no other
 contender. A worker gets a batch of frames in steps and answers each step into shared memory:
@@ -29,8 +29,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from azgym.bench import worker
-from azgym.bench.answers import (
+from azgym.bench.run import worker
+from azgym.bench.run.answers import (
     GIVE_UP_AFTER,
     STARTUP_LIMIT,
     Answers,
@@ -41,15 +41,23 @@ from azgym.bench.answers import (
     overrun_reason,
     record_answers,
 )
-from azgym.bench.processes import (
+from azgym.bench.run.processes import (
     Worker,
     build_verdict,
     poll,
     start_worker,
     stop,
 )
-from azgym.bench.wire import DONE, MapData, Packed, ProtocolError, heard, step_message, write_all
-from azgym.bench.worker import ANSWER_SIZE
+from azgym.bench.run.wire import (
+    DONE,
+    MapData,
+    Packed,
+    ProtocolError,
+    heard,
+    step_message,
+    write_all,
+)
+from azgym.bench.run.worker import ANSWER_SIZE
 from azgym.profile import Profile
 
 DEFAULT_TIME_LIMIT = 10.0
@@ -59,12 +67,7 @@ CHECK_EVERY = 0.01
 """Seconds between the runner's looks at its workers' deadlines while messages keep coming."""
 BACKENDS = ("local", "ray")
 """Where the contenders run: worker processes forked here, or Ray actors on a cluster
-(:mod:`azgym.bench.ray_backend`, imported only when asked for)."""
-
-
-def default_workers() -> int:
-    """One worker process per core."""
-    return max(1, os.cpu_count() or 1)
+(:mod:`azgym.bench.run.ray_backend`, imported only when asked for)."""
 
 
 @dataclass
@@ -91,7 +94,7 @@ class IsolatedRun:
     ``batches`` are the (start, stop) ranges of frames each sent in one round trip; the runner
     keeps a sequence (a route) within one, so a tracker sees it whole and in order. Each worker
     builds the contender with ``params`` and ``profile``'s defaults under them
-    (:func:`~azgym.bench.profiles.contender_params`).
+    (:func:`~azgym.bench.run.profiles.contender_params`).
     """
 
     def __init__(self, spec: str, params: dict[str, Any], frames: Sequence[Packed],
@@ -289,7 +292,7 @@ class IsolatedRun:
         return True
 
     def _hear(self, w: Worker, message: list[Any]) -> None:
-        """Act on one message of the worker's (:func:`azgym.bench.worker.serve` lists them)."""
+        """Act on one message of the worker's (:func:`azgym.bench.run.worker.serve` lists them)."""
         batch = w.batch
         assert batch is not None
         match message:

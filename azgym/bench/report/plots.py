@@ -19,7 +19,7 @@ from azgym.metrics import HEADLINE
 from azgym.site import load_scenario
 
 if TYPE_CHECKING:
-    from azgym.bench.outcome import Outcome
+    from azgym.bench.run.outcome import Outcome
 
 
 def write_figures(summary: dict[str, Any], frames: list[Case],

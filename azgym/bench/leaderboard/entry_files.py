@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from azgym.bench.outcome import Outcome
-from azgym.bench.results import FRAME_COLUMNS, frame_number
+from azgym.bench.report.results import FRAME_COLUMNS, frame_number
+from azgym.bench.run.outcome import Outcome
 from azgym.errors import AzgymError
 
 if TYPE_CHECKING:
@@ -137,7 +137,7 @@ def parse_frames(text: str, origin: str, cases: Sequence[Case] | None = None) ->
     """Read per-frame results (:data:`FRAME_COLUMNS`), refusing any row the runner cannot write.
 
     Frames are in order, numbered as the results number them
-    (:func:`~azgym.bench.results.frame_number`): by the recording's numbers of ``cases`` (a
+    (:func:`~azgym.bench.report.results.frame_number`): by the recording's numbers of ``cases`` (a
     log's frames), else 0, 1, …; an estimate (``ok`` 1) has finite errors, the position's
     non-negative and the heading's in [0, π] (NaN where the case's truth has no heading); a
     frame without one (``ok`` 0) has NaN errors; a runtime is NaN (the call raised) or finite

@@ -1,7 +1,7 @@
 """What a contender answered, and the rules both backends share (the pool's and Ray's).
 
-The runner's backends (:mod:`azgym.bench.isolation`, :mod:`azgym.bench.ray_backend`) record a
-contender's answers, word the reasons of lost frames and decide when to give up the same way.
+The runner's backends (:mod:`azgym.bench.run.isolation`, :mod:`azgym.bench.run.ray_backend`) record
+a contender's answers, word the reasons of lost frames and decide when to give up the same way.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench import worker
+from azgym.bench.run import worker
 from azgym.localize.registry import is_builtin
 
 STARTUP_LIMIT = 300.0

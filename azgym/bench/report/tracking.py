@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.outcome import Outcome
+from azgym.bench.run.outcome import Outcome
 from azgym.bench.suites import Case
 
 RECOVERED_CM = 10.0

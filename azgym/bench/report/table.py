@@ -119,7 +119,7 @@ def profile_lines(summary: dict[str, Any]) -> list[str]:
 
 
 def tracking_table(summary: dict[str, Any]) -> str:
-    """The track figures of a run with sequences (:mod:`azgym.bench.tracking`), or ""."""
+    """The track figures of a run with sequences (:mod:`azgym.bench.report.tracking`), or ""."""
     rows = [(label, row["tracking"]) for label, row in summary["localizers"].items()
             if row.get("tracking")]
     if not rows:

@@ -5,7 +5,7 @@ the known start pose on a sequence's first frame, its measurements and the motio
 the previous frame. The worker unpacks the arrays as views of the received bytes, which cannot
 be made writable: a localizer cannot change what it was given, let alone what others get.
 
-Frames go in steps (a route's one frame at a time, :mod:`azgym.bench.isolation`), each one
+Frames go in steps (a route's one frame at a time, :mod:`azgym.bench.run.isolation`), each one
 message on the worker's pipe. A route costs a message a frame, so a route's messages are made
 once a run and the worker reads each with one system call into a buffer of its own. What a
 worker says back (:func:`say`) is JSON, never a pickle: unpickling runs code, and the worker

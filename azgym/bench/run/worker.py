@@ -11,7 +11,7 @@ enforce a time limit per call, and when the process dies (a segfault, ``os._exit
 before the fatal frame are kept. An exception in the localizer, ``SystemExit`` included, is
 scored on its frame and the worker goes on.
 
-Layouts shared with :mod:`azgym.bench.isolation`: ``progress`` holds (phase, start time in
+Layouts shared with :mod:`azgym.bench.run.isolation`: ``progress`` holds (phase, start time in
 ``time.monotonic_ns``); ``answers`` holds ``ANSWER_SIZE`` numbers per frame of a batch.
 """
 
@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.profiles import contender_params
-from azgym.bench.wire import (
+from azgym.bench.run.profiles import contender_params
+from azgym.bench.run.wire import (
     DONE,
     MapData,
     Packed,
@@ -80,21 +80,21 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
     ever holds a frame the tracker has not reached; frames on their own (no sequence), which
     have no future to see, several at a time.
 
-    Messages to the parent (:func:`azgym.bench.wire.say`): ``["ready"]`` once built, or
+    Messages to the parent (:func:`azgym.bench.run.wire.say`): ``["ready"]`` once built, or
     ``["unbuildable", why]``; then per step ``["error", k, text]`` for each frame k (of the
     step) that raised, ``["warmed"]`` after a plug-in's untimed first call, and ``["done"]``
     at the step's end.
 
     Args:
-        conn: The pipe to the parent; it sends steps (:func:`azgym.bench.wire.step_message`)
-            or :data:`~azgym.bench.wire.STOP`.
+        conn: The pipe to the parent; it sends steps (:func:`azgym.bench.run.wire.step_message`)
+            or :data:`~azgym.bench.run.wire.STOP`.
         progress: Shared int64 pair (phase: the frame of the step being answered; start time
             of the current call).
         answers: Shared float64 array, ``ANSWER_SIZE`` slots per frame of a step.
         spec: The localizer's or tracker's spec.
         params: Its hyperparameters.
         profile: The profile whose hyperparameters are its defaults (None: none), resolved
-            here (:func:`~azgym.bench.profiles.contender_params`): the runner never imports a
+            here (:func:`~azgym.bench.run.profiles.contender_params`): the runner never imports a
             plug-in.
         maps: Each scenario's beacon map.
         folder: The runner's working folder: relative paths in the spec (a plug-in file, a

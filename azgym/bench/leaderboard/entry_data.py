@@ -18,8 +18,8 @@ import functools
 from pathlib import Path
 from typing import Any
 
-from azgym.bench.entry_files import LeaderboardError
-from azgym.bench.results import cases_digest
+from azgym.bench.leaderboard.entry_files import LeaderboardError
+from azgym.bench.report.results import cases_digest
 from azgym.bench.suites import Case
 from azgym.bench.suites.data import SPLIT, log_cases
 from azgym.logs.manifest import FORMATS, MANIFEST

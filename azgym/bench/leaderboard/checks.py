@@ -10,11 +10,12 @@ An entry (format in ``entry.schema.json``) is sound when:
   time with a zone and not in the future, and a plug-in file is named relative to the entry's
   folder, with its SHA-256;
 - its per-frame results match ``results_sha256``, are well formed row by row
-  (:func:`~azgym.bench.entry_files.parse_frames`) and cover exactly the suite's frames: the
+  (:func:`~azgym.bench.leaderboard.entry_files.parse_frames`) and cover exactly the suite's
+  frames: the
   suite is redrawn for the entry's seed and size, the digest of the cases must be
   ``cases_sha256`` and each row's scenario, group and cause the drawn frame's; an entry scored
   on a log (``data:NAME``) takes its cases from the log instead, found and checked unchanged by
-  :mod:`~azgym.bench.entry_data`;
+  :mod:`~azgym.bench.leaderboard.entry_data`;
 - every figure under ``metrics`` (overall, 95 % intervals, by cause, by group, runtimes, and the
   track figures of a suite of driven routes) equals the one recomputed from the per-frame
   results and the suite's cases as drawn for the coverage check, and ``n_frames`` their count.
@@ -38,10 +39,10 @@ from typing import Any
 import jsonschema
 
 from azgym._version import __version__
-from azgym.bench.entry_data import check_data_run, dataset_cases, is_data_entry
-from azgym.bench.entry_files import FrameTable, LeaderboardError, parse_frames
-from azgym.bench.plugin_files import is_portable, plugin_path
-from azgym.bench.results import cases_digest, contender_metrics, frame_number
+from azgym.bench.leaderboard.entry_data import check_data_run, dataset_cases, is_data_entry
+from azgym.bench.leaderboard.entry_files import FrameTable, LeaderboardError, parse_frames
+from azgym.bench.leaderboard.plugin_files import is_portable, plugin_path
+from azgym.bench.report.results import cases_digest, contender_metrics, frame_number
 from azgym.bench.suites import NO_TEST_SPLIT, SUITES, Case
 
 ENTRY_FORMAT = 4
@@ -57,7 +58,8 @@ _VERSION = re.compile(r"^(\d+(?:\.\d+)*)(?:(?:a|b|rc)\d+)?(?:\.post\d+)?(?:\.dev
 
 def schema() -> dict[str, Any]:
     """The JSON Schema of an entry."""
-    return json.loads(resources.files("azgym.bench").joinpath("entry.schema.json").read_text())
+    schema_file = resources.files("azgym.bench.leaderboard").joinpath("entry.schema.json")
+    return json.loads(schema_file.read_text())
 
 
 def clean(value: Any) -> Any:

@@ -1,6 +1,6 @@
 """The actor's side of the Ray backend: a Ray actor that feeds one worker process.
 
-:mod:`azgym.bench.ray_backend` makes :class:`RayWorker` an actor and drives it; this module does
+:mod:`azgym.bench.run.ray_backend` makes :class:`RayWorker` an actor and drives it; this module does
 not import Ray.
 """
 
@@ -12,9 +12,9 @@ import time
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
-from azgym.bench import worker
-from azgym.bench.answers import death
-from azgym.bench.wire import MapData, Packed, ProtocolError, heard, step_message, write_all
+from azgym.bench.run import worker
+from azgym.bench.run.answers import death
+from azgym.bench.run.wire import MapData, Packed, ProtocolError, heard, step_message, write_all
 from azgym.profile import Profile
 
 STREAM_EVERY = 0.05
@@ -24,11 +24,11 @@ more than a fast frame); it streams what it has at once when its worker is slowe
 class RayWorker:
     """The contender's side on a Ray node: an actor that feeds one worker process frame by frame.
 
-    The actor forks the worker (:func:`azgym.bench.worker.serve`, the process pool's) as it is
+    The actor forks the worker (:func:`azgym.bench.run.worker.serve`, the process pool's) as it is
     built, before it holds any frame, and never runs the contender's code itself. It receives
     a batch's frames and hands the worker one step (one frame) at a time, the next only once
     the worker has answered, so the contender's process never holds a frame it has not
-    reached. The actor is not dumpable (:func:`~azgym.bench.worker.hide_process`): the worker
+    reached. The actor is not dumpable (:func:`~azgym.bench.run.worker.hide_process`): the worker
     cannot read the frames ahead in its memory.
     """
 

@@ -1,8 +1,8 @@
 """The worker processes of the pool: started from the fork server, heard, stopped.
 
-The fork server (:mod:`azgym.bench.preload`) is a fresh interpreter that imported azgym and
+The fork server (:mod:`azgym.bench.run.preload`) is a fresh interpreter that imported azgym and
 loaded the built-ins' compiled code; every worker forks from it, so it starts in milliseconds
-and holds nothing of the run that started it. :mod:`azgym.bench.isolation` drives the workers.
+and holds nothing of the run that started it. :mod:`azgym.bench.run.isolation` drives the workers.
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from azgym.bench import worker
-from azgym.bench.answers import death
-from azgym.bench.wire import STOP, MapData, ProtocolError, heard, write_all
+from azgym.bench.run import worker
+from azgym.bench.run.answers import death
+from azgym.bench.run.wire import STOP, MapData, ProtocolError, heard, write_all
 from azgym.profile import Profile
 
-PRELOAD = "azgym.bench.preload"
+PRELOAD = "azgym.bench.run.preload"
 
 
 def context() -> Any:
@@ -139,3 +139,8 @@ def stop(w: Worker) -> None:
             w.process.kill()
     w.process.join(timeout=5.0)
     w.conn.close()
+
+
+def default_workers() -> int:
+    """One worker process per core."""
+    return max(1, os.cpu_count() or 1)

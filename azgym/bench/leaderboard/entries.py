@@ -2,11 +2,11 @@
 
 An entry (``leaderboard/entries/NAME.json``, format in ``entry.schema.json``) holds a localizer's
 metrics on one suite (or one log, ``data:NAME``), and beside it the per-frame results they were
-computed from (``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Every entry read
-is checked by :func:`~azgym.bench.entries.validate_entry`, which recomputes every figure it
-shows; ``submit`` never writes over another entry's files; ``verify`` reruns the entry's
-localizer (a plug-in file is found relative to the entry's folder, and must still have the
-SHA-256 it was scored with) and compares. :mod:`azgym.bench.board` publishes the entries.
+computed from (``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Every entry read is
+checked by :func:`~azgym.bench.leaderboard.checks.validate_entry`, which recomputes every figure it
+shows; ``submit`` never writes over another entry's files; ``verify`` reruns the entry's localizer
+(a plug-in file is found relative to the entry's folder, and must still have the SHA-256 it was
+scored with) and compares. :mod:`azgym.bench.leaderboard.board` publishes the entries.
 """
 
 from __future__ import annotations
@@ -24,23 +24,28 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from azgym.bench.entries import ENTRY_FORMAT, clean, close, schema, validate_entry
-from azgym.bench.entry_data import (
+from azgym.bench.leaderboard.checks import ENTRY_FORMAT, clean, close, schema, validate_entry
+from azgym.bench.leaderboard.entry_data import (
     DatasetUnavailable,
     checked_log,
     default_datasets,
     is_data_entry,
 )
-from azgym.bench.entry_files import (
+from azgym.bench.leaderboard.entry_files import (
     MAX_FRAMES_BYTES,
     LeaderboardError,
     read_bytes,
     read_frames,
     read_json,
 )
-from azgym.bench.plugin_files import file_sha256, plugin_path, relative_spec, resolve_spec
-from azgym.bench.results import FRAME_COLUMNS
-from azgym.bench.runner import Contender, run_benchmark, run_log_benchmark
+from azgym.bench.leaderboard.plugin_files import (
+    file_sha256,
+    plugin_path,
+    relative_spec,
+    resolve_spec,
+)
+from azgym.bench.report.results import FRAME_COLUMNS
+from azgym.bench.run.runner import Contender, run_benchmark, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
 

@@ -33,8 +33,8 @@ from typing import Any
 
 from azgym import arguments
 from azgym.arguments import time_limit as checked_time_limit
-from azgym.bench.contenders import Contender, check_buildable
-from azgym.bench.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.run.contenders import Contender, check_buildable
+from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
 from azgym.bench.suites import Suite
 from azgym.bench.suites.warehouse import scenario_suite
 from azgym.core import BeaconMap
@@ -262,7 +262,7 @@ def _scalar(fields: _Fields, field: str, value: Any) -> None:
 
 def _build_problem(base: Contender, params: dict[str, Any], time_limit: float) -> str:
     """Why ``base`` with ``params`` added does not build ("" when it does)."""
-    from azgym.bench.contenders import contender
+    from azgym.bench.run.contenders import contender
     from azgym.localize.registry import build, spec_label
 
     try:
@@ -293,7 +293,7 @@ def _culprit(field: str, base: Contender, params: dict[str, Any], varied: dict[s
 def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict[str, Any]]],
             time_limit: float) -> list[GridPoint]:
     """Each grid point as a contender, built once (a bad name or value is named here)."""
-    from azgym.bench.contenders import contender
+    from azgym.bench.run.contenders import contender
     from azgym.localize.registry import spec_label
 
     points: list[GridPoint] = []

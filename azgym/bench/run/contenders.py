@@ -14,9 +14,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from azgym.bench.isolation import DEFAULT_TIME_LIMIT, build_problem
-from azgym.bench.profiles import contender_params
-from azgym.bench.worker import warm_up as warm_up_tracker
+from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT, build_problem
+from azgym.bench.run.profiles import contender_params
+from azgym.bench.run.worker import warm_up as warm_up_tracker
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import parse_spec, spec_label
 from azgym.profile import Profile
@@ -84,7 +84,7 @@ def check_buildable(candidate: Contender, time_limit: float = DEFAULT_TIME_LIMIT
                     profile: Profile | None = None) -> None:
     """Build the contender once, in a worker: a bad name, spec or hyperparameter raises here.
 
-    The build runs where the benchmark runs the localizer (:mod:`azgym.bench.isolation`), with
+    The build runs where the benchmark runs the localizer (:mod:`azgym.bench.run.isolation`), with
     the same time limit and hyperparameters (the profile's defaults under its own), so a
     plug-in whose module or constructor hangs or crashes is reported instead of stopping the
     caller.
@@ -98,7 +98,7 @@ def check_buildable(candidate: Contender, time_limit: float = DEFAULT_TIME_LIMIT
 
 
 def warm_up(contenders: Iterable[Contender], profile: Profile | None = None) -> None:
-    """Run each contender through the warm-up route (:func:`azgym.bench.worker.warm_up`).
+    """Run each contender through the warm-up route (:func:`azgym.bench.run.worker.warm_up`).
 
     That loads (or compiles) its kernels for every specialization a run's frames reach. The
     workers' fork server does this for every default contender before it forks any worker.

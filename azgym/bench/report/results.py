@@ -24,11 +24,11 @@ from typing import Any
 import numpy as np
 
 from azgym._version import __version__
-from azgym.bench.contenders import Contender
-from azgym.bench.outcome import Outcome
-from azgym.bench.plugin_files import plugin_record
+from azgym.bench.leaderboard.plugin_files import plugin_record
+from azgym.bench.report.tracking import tracking_metrics
+from azgym.bench.run.contenders import Contender
+from azgym.bench.run.outcome import Outcome
 from azgym.bench.suites import CAUSES, Case, Suite
-from azgym.bench.tracking import tracking_metrics
 from azgym.files import prepare_folder, write_file
 from azgym.metrics import bootstrap_blocks, confidence_intervals
 
@@ -78,7 +78,7 @@ def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: flo
 
     The one rule for them: the runner's summary and a leaderboard entry's check (which
     recomputes them from the entry's per-frame results and the suite's cases, drawn again) both
-    call this. ``tracking`` is :func:`~azgym.bench.tracking.tracking_metrics` (None for cases
+    call this. ``tracking`` is :func:`~azgym.bench.report.tracking.tracking_metrics` (None for cases
     without driven sequences).
 
     Args:
@@ -157,7 +157,7 @@ class BenchResult:
             writer.writerows(frame_rows(label, self.cases, outcome))
         written = [summary_path, write_file(out / "frames.csv", table.getvalue())]
         if figures and importlib.util.find_spec("matplotlib") is not None:
-            from azgym.bench.plots import write_figures
+            from azgym.bench.report.plots import write_figures
 
             written += write_figures(self.summary, self.cases, self.outcomes, out)
         return written
