@@ -28,10 +28,8 @@ from azgym.site.elements import occluder_table
 from azgym.track.base import Tracker
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.sway import CameraSway
-from azgym.world.world import World
+from azgym.world.world import PHYSICS_DT, World
 
-PHYSICS_DT = 0.02
-"""The world's physics step [s]."""
 MAX_STEPS = 600
 """Control steps before an episode is truncated (``max_steps``'s default: 60 s)."""
 

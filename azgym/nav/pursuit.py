@@ -22,10 +22,10 @@ import math
 
 import numpy as np
 
-from azgym.envs.navigate import PHYSICS_DT
 from azgym.nav.controls import CONTROL_STEPS, nearest_discrete
 from azgym.nav.guidance import AHEAD_SCALE, FIX_AGE_SCALE, fields
 from azgym.world.forklift import ForkliftSpec
+from azgym.world.world import PHYSICS_DT
 
 CRUISE_SPEED = 2.0
 """Target speed on straight path [m/s]."""

@@ -9,8 +9,10 @@ import pymunk
 from azgym.site import Scenario
 from azgym.world.forklift import FORKLIFT_COLLISION_TYPE, Forklift, ForkliftSpec
 
-__all__ = ["WALL_THICKNESS", "Contact", "World"]
+__all__ = ["PHYSICS_DT", "WALL_THICKNESS", "Contact", "World"]
 
+PHYSICS_DT = 0.02
+"""The world's physics step [s]."""
 STATIC_COLLISION_TYPE = 2
 WALL_THICKNESS = 0.1
 
@@ -39,7 +41,7 @@ class World:
     """
 
     def __init__(self, scenario: Scenario, start: tuple[float, float, float],
-                 spec: ForkliftSpec | None = None, dt: float = 0.02) -> None:
+                 spec: ForkliftSpec | None = None, dt: float = PHYSICS_DT) -> None:
         self.scenario = scenario
         self.dt = dt
         self.space = pymunk.Space()

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 import azgym  # noqa: F401 - registers the ids
-from azgym.envs.navigate import PHYSICS_DT
 from azgym.errors import InvalidInputError
 from azgym.localize.ransac import Ransac
 from azgym.nav.pursuit import PurePursuit
 from azgym.sensing.motion import ImuModel, OdometryModel
 from azgym.track.base import make_tracker
 from azgym.track.gated_ekf import GatedEkf
+from azgym.world.world import PHYSICS_DT
 
 ENV_ID = "azgym/Navigate-WarehouseSmall-v2"
 

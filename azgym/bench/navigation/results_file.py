@@ -45,11 +45,12 @@ from azgym.bench.leaderboard.entry_files import LeaderboardError, read_json
 from azgym.bench.navigation.benchmark import KIND, RESULTS_FORMAT
 from azgym.bench.navigation.scoring import wilson_interval
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite, overlap
-from azgym.envs.navigate import MAX_STEPS, PHYSICS_DT
+from azgym.envs.navigate import MAX_STEPS
 from azgym.errors import AzgymError, InvalidInputError
 from azgym.localize.registry import is_builtin
 from azgym.nav.controls import CONTROL_STEPS
 from azgym.world.forklift import ForkliftSpec
+from azgym.world.world import PHYSICS_DT
 
 MAX_CONTENDERS = 64
 """At most this many contenders in a file (the suites' defaults are 20): a rerun of a file

@@ -22,9 +22,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from azgym.envs.navigate import PHYSICS_DT, NavigateEnv
+from azgym.envs.navigate import NavigateEnv
 from azgym.errors import InvalidInputError
 from azgym.nav.controls import CONTROL_STEPS, Policy
+from azgym.world.world import PHYSICS_DT
 
 
 def drive(env: gym.Env, policy: Policy, episodes: int, seed: int,
