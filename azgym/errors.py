@@ -10,8 +10,9 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterable
 
-__all__ = ["AzgymError", "DependencyNotInstalled", "InvalidInputError", "ModelFileError",
-           "ScenarioError", "UnknownNameError", "require", "unknown_name"]
+__all__ = ["AzgymError", "DependencyNotInstalled", "InvalidInputError", "LocalizerCheckError",
+           "LogError", "ModelFileError", "ScenarioError", "TrackerCheckError", "UnknownNameError",
+           "require", "unknown_name"]
 
 
 class AzgymError(Exception):
@@ -39,6 +40,30 @@ class ModelFileError(InvalidInputError):
 
 class DependencyNotInstalled(AzgymError, ImportError):
     """An optional dependency is missing; the message says which extra to install."""
+
+
+class LocalizerCheckError(AzgymError, AssertionError):
+    """A localizer failed one of the conformance checks (:mod:`azgym.localize.checks`)."""
+
+
+class TrackerCheckError(AzgymError, AssertionError):
+    """A tracker failed one of the conformance checks (:mod:`azgym.track.checks`)."""
+
+
+class LogError(InvalidInputError):
+    """A log folder is missing, malformed or cannot be used for what was asked.
+
+    Attributes:
+        problems: Each problem, as ``"file, line N, column C: what"``.
+    """
+
+    def __init__(self, folder: str, problems: list[str], total: int | None = None) -> None:
+        self.problems = list(problems)
+        total = len(problems) if total is None else total
+        more = f"\n  … and {total - len(problems)} more" if total > len(problems) else ""
+        noun = "problem" if total == 1 else "problems"
+        super().__init__(f"{folder}: {total} {noun} in the log:\n  " + "\n  ".join(problems)
+                         + more)
 
 
 def unknown_name(kind: str, name: str, known: Iterable[str]) -> UnknownNameError:

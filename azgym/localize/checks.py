@@ -22,14 +22,10 @@ from azgym.core import (
     pose_error,
     wrap_scalar,
 )
-from azgym.errors import AzgymError
+from azgym.errors import AzgymError, LocalizerCheckError
 from azgym.localize.base import Localizer
 from azgym.localize.registry import SupportsLocalize
 from azgym.sensing.synthetic import ideal_azimuths
-
-
-class LocalizerCheckError(AzgymError, AssertionError):
-    """A localizer failed one of the conformance checks."""
 
 
 def _room(rotation: float = 0.0, shift: tuple[float, float] = (0.0, 0.0)) -> BeaconMap:

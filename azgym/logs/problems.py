@@ -6,7 +6,7 @@ fix (up to :data:`MAX_PROBLEMS`), not the first problem only.
 
 from __future__ import annotations
 
-from azgym.errors import InvalidInputError
+from azgym.errors import LogError
 
 __all__ = ["MAX_PROBLEMS", "LogError", "Problems", "cut", "places", "seconds", "shown"]
 
@@ -50,22 +50,6 @@ def places(lines: list[int], unit: str = "line", limit: int = MAX_PLACES) -> str
     more = f" and {rest} more" if rest else ""
     plural = "s" if len(lines) > 1 else ""
     return f"{unit}{plural} {', '.join(parts)}{more}"
-
-
-class LogError(InvalidInputError):
-    """A log folder is missing, malformed or cannot be used for what was asked.
-
-    Attributes:
-        problems: Each problem, as ``"file, line N, column C: what"``.
-    """
-
-    def __init__(self, folder: str, problems: list[str], total: int | None = None) -> None:
-        self.problems = list(problems)
-        total = len(problems) if total is None else total
-        more = f"\n  … and {total - len(problems)} more" if total > len(problems) else ""
-        noun = "problem" if total == 1 else "problems"
-        super().__init__(f"{folder}: {total} {noun} in the log:\n  " + "\n  ".join(problems)
-                         + more)
 
 
 class Problems:

@@ -16,17 +16,13 @@ from typing import Any
 import numpy as np
 
 from azgym.core import Estimate, estimated_pose, pose_error
-from azgym.errors import AzgymError
+from azgym.errors import AzgymError, TrackerCheckError
 from azgym.track.base import Tracker
 
 __all__ = ["TrackerCheckError", "check_tracker"]
 
 ROUTE_SECONDS = 8.0
 """How much of the route the checks drive."""
-
-
-class TrackerCheckError(AzgymError, AssertionError):
-    """A tracker failed one of the conformance checks."""
 
 
 def _expect(condition: bool, check: str, detail: str) -> None:
