@@ -25,6 +25,9 @@ from azgym.localize.learned.ng_ransac import MODEL_NAME
 from azgym.localize.learned.weights import load_weights, save_weights
 from azgym.localize.ransac import OUT_SIZE, OUT_SUPPORT, settings_array
 
+__all__ = ["GuidedRuns", "RIGHT_M", "calibrate_weights", "card_section", "choose_threshold",
+           "guided_runs"]
+
 RIGHT_M = 1.0
 """An answer within this distance of the truth [m] is right; beyond it, wrong."""
 DEFAULT_RIGHT_LOST = 0.005

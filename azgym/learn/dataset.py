@@ -55,6 +55,9 @@ from azgym.sensing.synthetic import inject_outliers
 from azgym.site import generate
 from azgym.site.sampling import random_free_pose
 
+__all__ = ["FRAMES_FORMAT", "Frame", "FrameBatch", "HELD_OUT_LAYOUTS", "LEVELS", "TRAIN_LAYOUTS",
+           "inlier_truth", "layout_frames", "make_frames", "observed_frame"]
+
 TRAIN_LAYOUTS = range(0, 100_000)
 """The generator seeds trained on."""
 HELD_OUT_LAYOUTS = tuple(range(1_000_000, 1_000_020))

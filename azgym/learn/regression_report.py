@@ -21,6 +21,9 @@ from azgym.learn.distribution import card_section
 from azgym.learn.train_report import bullets, show
 from azgym.localize.learned.pose_network import PoseRegressor
 
+__all__ = ["GENERALIZATION_SEED", "SolverSettings", "VARIANTS", "generalization", "localize_frames",
+           "write_regression_card"]
+
 GENERALIZATION_SEED = 99
 """The data seed of the generalization frames (training uses 0 unless told)."""
 GENERALIZATION_LAYOUTS = 20

@@ -23,6 +23,8 @@ from torch import nn
 from azgym.localize.learned.inlier_network import ARCHITECTURE
 from azgym.localize.learned.weights import save_weights
 
+__all__ = ["TorchInlierScorer", "export"]
+
 
 class TorchInlierScorer(nn.Module):
     """``relu([h1, max h1, mean h1] W2 + b2) w3 + b3`` with ``h1 = relu(x W1 + b1)``.

@@ -22,6 +22,8 @@ from torch import nn
 from azgym.localize.learned.pose_network import ARCHITECTURE, LOG_VARIANCE_RANGE, OUTPUTS
 from azgym.localize.learned.weights import save_weights
 
+__all__ = ["TorchPoseRegressor", "export"]
+
 
 class TorchPoseRegressor(nn.Module):
     """Tokens to trust logits and (u, v, log σ_u², log σ_v²) (the module docstring's network).

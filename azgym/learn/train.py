@@ -37,6 +37,10 @@ from azgym.files import prepare_folder, write_file
 from azgym.learn.torch_net import TorchInlierScorer, export
 from azgym.learn.train_report import progress_bar, write_card, write_learning_curve
 
+__all__ = ["CHECKPOINT_NAME", "EVAL_BATCH", "MODEL", "TrainConfig", "TrainResult", "WEIGHTS_NAME",
+           "auc", "build_data", "evaluate", "fingerprint", "finite", "fit", "layout_seeds",
+           "prepared_data", "resume", "save_checkpoint", "train_ng_ransac"]
+
 MODEL = "ng-ransac"
 """The model this module trains (the name in its weight file)."""
 WEIGHTS_NAME = "ng-ransac.npz"

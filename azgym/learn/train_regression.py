@@ -50,6 +50,10 @@ from azgym.learn.train import fingerprint as run_fingerprint
 from azgym.learn.train_report import progress_bar
 from azgym.localize.learned.pose_network import N_TOKENS, frame_tokens
 
+__all__ = ["CHECKPOINT_NAME", "MODEL", "RegressionConfig", "WEIGHTS_NAME", "epoch_line", "evaluate",
+           "fit_regression", "frame_arrays", "learning_rate", "loss_terms", "tensors",
+           "train_learned"]
+
 MODEL = "learned"
 """The model this module trains (the name in its weight file)."""
 WEIGHTS_NAME = "learned.npz"

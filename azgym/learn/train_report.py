@@ -18,6 +18,8 @@ from typing import Any
 from azgym.files import write_file
 from azgym.learn.distribution import card_section
 
+__all__ = ["FIGURES", "bullets", "progress_bar", "show", "write_card", "write_learning_curve"]
+
 FIGURES = (("held_out_accuracy", "accuracy"), ("held_out_auc", "AUC"),
            ("held_out_top3", "top-3 all inliers"))
 """The held-out figures plotted and tabled, each with its label."""

@@ -20,6 +20,10 @@ from azgym.errors import InvalidInputError
 from azgym.hyperparameters import Hyperparameters
 from azgym.jit import jit
 
+__all__ = ["FLOAT_ROWS", "INT_ROWS", "Localizer", "MAX_MEASUREMENTS", "MIN_MEASUREMENTS", "Problem",
+           "ROW_AZIMUTH", "ROW_BEACON_INDEX", "ROW_BX", "ROW_BY", "ROW_COS_AZ", "ROW_SIN_AZ",
+           "ROW_SOURCE", "ROW_WIDTH", "gather"]
+
 MIN_MEASUREMENTS = 3
 """A 2-D position and a heading are three unknowns: three azimuths are the minimum."""
 MAX_MEASUREMENTS = 1024

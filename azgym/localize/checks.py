@@ -27,6 +27,8 @@ from azgym.localize.base import Localizer
 from azgym.localize.registry import SupportsLocalize
 from azgym.sensing.synthetic import ideal_azimuths
 
+__all__ = ["check_localizer"]
+
 
 def _room(rotation: float = 0.0, shift: tuple[float, float] = (0.0, 0.0)) -> BeaconMap:
     """Eight beacons on the walls of a 6 m × 6 m room, optionally rotated and shifted."""

@@ -14,6 +14,8 @@ from azgym.localize.lsq import fit_subset
 from azgym.localize.refinement import refine_estimate
 from azgym.site.error_model import ErrorModel
 
+__all__ = ["LeaveOneOut"]
+
 
 class LeaveOneOut(Localizer):
     """Drop, one at a time, the measurement whose removal lowers the mean squared residual most.

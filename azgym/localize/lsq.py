@@ -16,6 +16,8 @@ from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem
 from azgym.localize.refinement import refine_estimate
 from azgym.site.error_model import ErrorModel
 
+__all__ = ["LeastSquares", "algebraic_start", "fit_subset", "heading_sum"]
+
 
 @jit(inline="always")
 def _pool_circles(bx, by, ca, sa, beacon_index, use, ox, oy, scale, ata, atb):

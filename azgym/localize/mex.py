@@ -26,6 +26,8 @@ from azgym.localize._mex_area import (
 )
 from azgym.localize.base import MIN_MEASUREMENTS, Localizer, Problem
 
+__all__ = ["Mex", "grid_search"]
+
 CANCELLED = 1e-18
 """|Σ unit vectors|² below this times n² leaves a grid point's heading (and E_ref) undefined.
 

@@ -37,6 +37,11 @@ from azgym.localize.base import (
 from azgym.localize.refinement import package, refine_with_covariance
 from azgym.site.error_model import ErrorModel
 
+__all__ = ["N_SETTINGS", "OUT_SIZE", "OUT_SUPPORT", "OUT_TRIPLET_MEAN_SQ", "OUT_VALID_TRIPLETS",
+           "Ransac", "SETTING_COVERAGE", "SETTING_DEGENERACY_TOL", "SETTING_DELTA_D",
+           "SETTING_MAX_ITER", "SETTING_WEIGHTED", "n_trials", "refine_winner", "score_candidate",
+           "score_triplets", "settings_array", "solve_from_triplets"]
+
 # The slots of ``settings``, the hyperparameters handed to the kernels as one float array (one
 # argument instead of five: each argument costs time at the Python/compiled boundary).
 SETTING_DELTA_D = 0

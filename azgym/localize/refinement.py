@@ -20,6 +20,8 @@ from azgym.localize._levenberg_marquardt import information, refine, solve3
 from azgym.localize.base import Problem
 from azgym.site.error_model import ErrorModel
 
+__all__ = ["package", "refine_estimate", "refine_with_covariance"]
+
 MIN_VARIANCE = 1e-300
 """Floor on a measurement's model variance [rad²] before it is inverted into a weight.
 

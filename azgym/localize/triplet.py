@@ -13,6 +13,8 @@ from azgym.localize import _kernels as K
 from azgym.localize._circles import distinct_beacons, pair_table, solve_triplet
 from azgym.localize.base import Localizer, Problem
 
+__all__ = ["DEGENERACY_TOL", "Triplet"]
+
 DEGENERACY_TOL = 1e-2
 """Triplet's default ``degeneracy_tol``: the smallest normalised determinant it answers from.
 

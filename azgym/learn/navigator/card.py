@@ -20,6 +20,8 @@ from azgym._version import __version__
 from azgym.files import write_file
 from azgym.learn.navigator.request import EVAL_SEED, Request
 
+__all__ = ["REPRODUCIBILITY", "write_card", "write_learning_curve"]
+
 REPRODUCIBILITY = (
     "Runs are repeatable on one machine: the same command, with the same versions of azgym, "
     "torch and stable-baselines3 on the CPU, gives a policy with bit-identical parameters "

@@ -38,6 +38,9 @@ from azgym.learn.navigator.request import EVAL_SEED, Request
 from azgym.nav import policy_file
 from azgym.nav.controls import Policy
 
+__all__ = ["ALGORITHMS", "EpisodeEnds", "HYPERPARAMS", "SETTINGS", "TrainingResult",
+           "hyperparameters", "prepare", "require_rl", "run", "train_navigator"]
+
 ALGORITHMS = ("ppo", "sac")
 """The algorithms ``--algo`` names (stable-baselines3's PPO and SAC)."""
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")

@@ -68,6 +68,10 @@ from azgym.localize.base import (
     Problem,
 )
 
+__all__ = ["CONSENSUS_CANDIDATES", "CONSENSUS_TOLERANCE", "FEATURE_LAYOUT", "FEATURE_NAMES",
+           "N_FEATURES", "consensus_of", "consensus_tolerance", "fill_features",
+           "first_quality_column", "frame_features", "measurement_features"]
+
 FEATURE_NAMES: tuple[str, ...] = (
     "quality_rank", "quality_span", "same_id_others", "brightest_of_id", "beacons_in_view",
     "consensus_residual", "consensus_support",

@@ -28,6 +28,8 @@ from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 from azgym.jit import jit
 
+__all__ = ["ARCHITECTURE", "InlierScorer", "ORDER", "inlier_logits", "pack"]
+
 ARCHITECTURE = "deepsets-context-1"
 """The ``kind`` of architecture this module computes
 (:func:`azgym.localize.learned.weights.array_shapes`)."""

@@ -77,6 +77,8 @@ from azgym.localize.ransac import (
 )
 from azgym.localize.refinement import package
 
+__all__ = ["MODEL_NAME", "NgRansac", "SHIPPED_WEIGHTS"]
+
 MODEL_NAME = "ng-ransac"
 """The model name a weight file for this localizer must carry."""
 SHIPPED_WEIGHTS = MODELS / f"{MODEL_NAME}.npz"

@@ -50,6 +50,9 @@ from azgym.localize.base import ROW_BX, ROW_BY, ROW_COS_AZ, ROW_SIN_AZ
 from azgym.localize.learned.features import FEATURE_NAMES, N_FEATURES
 from azgym.localize.learned.inlier_network import _context, _embed
 
+__all__ = ["ARCHITECTURE", "LOG_VARIANCE_RANGE", "N_TOKENS", "ORDER", "OUTPUTS", "PoseRegressor",
+           "frame_tokens", "pack", "regress"]
+
 ARCHITECTURE = "deepsets-regression-1"
 """The ``kind`` of architecture this module computes
 (:func:`azgym.localize.learned.weights.array_shapes`)."""

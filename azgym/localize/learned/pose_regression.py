@@ -91,6 +91,9 @@ from azgym.localize.learned.weights import MODELS, load_weights, model_path
 from azgym.localize.lsq import heading_sum
 from azgym.localize.refinement import refine_with_covariance
 
+__all__ = ["Learned", "MODEL_NAME", "OUT_ITERATIONS", "OUT_SIZE", "SET_GATE", "SHIPPED_WEIGHTS",
+           "settings_array", "solve_regressed"]
+
 MODEL_NAME = "learned"
 """The model name a weight file for this localizer must carry."""
 SHIPPED_WEIGHTS = MODELS / f"{MODEL_NAME}.npz"
