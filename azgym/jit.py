@@ -33,8 +33,8 @@ PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
     "core.py", "errors.py", "hyperparameters.py", "jit.py", "localize/_angles.py",
     "localize/_circles.py", "localize/_kernels.py", "localize/_levenberg_marquardt.py",
-    "localize/_mex_area.py", "localize/_ransac_search.py",
-    "localize/learned/_ng_search.py", "localize/learned/distribution.py",
+    "localize/_mex_area.py", "localize/ransac_search.py",
+    "localize/learned/ng_search.py", "localize/learned/distribution.py",
     "localize/learned/features.py", "localize/learned/inlier_network.py",
     "localize/learned/ng_ransac.py", "localize/learned/pose_network.py",
     "localize/learned/pose_regression.py", "localize/learned/weights.py",

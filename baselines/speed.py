@@ -27,8 +27,8 @@ import numpy as np  # noqa: E402
 
 import azgym  # noqa: E402
 from azgym.localize import ransac as ransac_module  # noqa: E402
-from azgym.localize._ransac_search import search as ransac_search  # noqa: E402
 from azgym.localize.base import Problem  # noqa: E402
+from azgym.localize.ransac_search import search as ransac_search  # noqa: E402
 from azgym.sensing.synthetic import noisy_measurements  # noqa: E402
 
 TARGETS_US = {"ransac": 30.0, "mex": 500_000.0}

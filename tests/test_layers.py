@@ -16,8 +16,8 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "azgym"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_version",), ("errors",), ("core",), ("arguments", "hyperparameters", "files", "profile"),
-    ("jit",), ("metrics",),
+    ("_version",), ("errors",), ("registry",), ("core",),
+    ("arguments", "hyperparameters", "files", "profile"), ("jit",), ("metrics",),
     ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("nav",),
     ("envs",), ("bench",), ("learn", "layout", "experiments"), ("cli",), ("__init__",),
 )
@@ -135,7 +135,7 @@ def test_the_checker_sees_every_kind_of_import():
     # A lazy import inside a function, one under TYPE_CHECKING and a relative one all count.
     text = ("from typing import TYPE_CHECKING\n"
             "if TYPE_CHECKING:\n    from azgym.track import base\n"
-            "def f():\n    from azgym.bench import runner\n    return runner\n"
+            "def f():\n    from azgym.bench.run import runner\n    return runner\n"
             "from . import sibling\n")
     modules = {"azgym.bench.run.runner", "azgym.track.base", "azgym.localize.sibling"}
     assert imported(text, "azgym.localize.probe", False, modules) == modules

@@ -19,9 +19,9 @@ import numpy as np
 from azgym.learn.dataset import FrameBatch
 from azgym.localize import _kernels as K
 from azgym.localize.base import INT_ROWS, ROW_BEACON_INDEX, ROW_SOURCE
-from azgym.localize.learned._ng_search import guided_settings, ng_ransac_search
 from azgym.localize.learned.inlier_network import InlierScorer
 from azgym.localize.learned.ng_ransac import MODEL_NAME
+from azgym.localize.learned.ng_search import guided_settings, ng_ransac_search
 from azgym.localize.learned.weights import load_weights, save_weights
 from azgym.localize.ransac import OUT_SIZE, OUT_SUPPORT, settings_array
 

@@ -3,7 +3,7 @@
 Here: the :class:`Ransac` class, which triplets it tries (all of them, or N_Q random ones from
 eq. 4-6), and its two compiled entry points, which run steps 1-6 on a frame and exchange the
 hyperparameters and results with the class through the named ``SETTING_*`` and ``OUT_*`` slots.
-Steps 1-5, the triplet search itself, are compiled in :mod:`azgym.localize._ransac_search`;
+Steps 1-5, the triplet search itself, are compiled in :mod:`azgym.localize.ransac_search`;
 step 6 is the shared refinement of :mod:`azgym.localize.refinement`.
 """
 
@@ -20,7 +20,6 @@ from azgym.core import BeaconMap, BoolArray, Estimate, FloatArray, IntArray, Mea
 from azgym.hyperparameters import check_flag, check_range
 from azgym.jit import jit
 from azgym.localize import _kernels as K
-from azgym.localize._ransac_search import score_pose, search
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
     ROW_BEACON_INDEX,
@@ -34,6 +33,7 @@ from azgym.localize.base import (
     Problem,
     gather,
 )
+from azgym.localize.ransac_search import score_pose, search
 from azgym.localize.refinement import package, refine_with_covariance
 from azgym.site.error_model import ErrorModel
 

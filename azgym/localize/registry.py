@@ -31,12 +31,17 @@ import json
 import re
 import sys
 from collections.abc import Callable
-from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 from azgym.core import BeaconMap, Estimate, Measurements
 from azgym.errors import AzgymError, InvalidInputError, unknown_name
+from azgym.registry import Registry
+
+__all__ = ["ENTRY_POINT_GROUP", "LOCALIZERS", "PRESETS", "TRACKERS", "TRACKER_ENTRY_POINT_GROUP",
+           "Factory", "SupportsLocalize", "build", "is_builtin", "list_localizers",
+           "list_trackers", "make_localizer", "parse_spec", "register_localizer", "resolve",
+           "spec_label"]
 
 ENTRY_POINT_GROUP = "azgym.localizers"
 TRACKER_ENTRY_POINT_GROUP = "azgym.trackers"
@@ -53,7 +58,28 @@ class SupportsLocalize(Protocol):
 
 Factory = Callable[..., SupportsLocalize]
 
-_BUILTIN: dict[str, str] = {
+
+def _localizer_class(spec: str, factory: Any) -> Factory:
+    """The factory a spec names, if it is a localizer or tracker class.
+
+    A localizer class has a ``localize`` method; a tracker class has ``reset``, ``predict`` and
+    ``update``. A spec comes from a command line or a leaderboard entry, which anyone can write:
+    refusing anything else before calling it means that ``"os:system"`` or
+    ``"subprocess:Popen"`` with hyperparameters can never run a command.
+    """
+    is_class = isinstance(factory, type)
+    localizer = is_class and callable(getattr(factory, "localize", None))
+    tracker = is_class and all(callable(getattr(factory, method, None))
+                               for method in ("reset", "predict", "update"))
+    if not (localizer or tracker):
+        raise InvalidInputError(
+            f"localizer spec {spec!r} names a {type(factory).__name__}, not a localizer class "
+            "(a class with a localize(measurements, beacons) method) or a tracker class (with "
+            "reset, predict and update)")
+    return factory
+
+
+LOCALIZERS: Registry[Factory] = Registry("localizer", {
     "triplet": "azgym.localize.triplet:Triplet",
     "ransac": "azgym.localize.ransac:Ransac",
     "mex": "azgym.localize.mex:Mex",
@@ -61,14 +87,15 @@ _BUILTIN: dict[str, str] = {
     "loo": "azgym.localize.loo:LeaveOneOut",
     "ng-ransac": "azgym.localize.learned:NgRansac",
     "learned": "azgym.localize.learned:Learned",
-}
-_BUILTIN_TRACKERS: dict[str, str] = {
+}, group=ENTRY_POINT_GROUP, check=_localizer_class)
+"""Localizers by name: the built-ins, those of :func:`register_localizer` and the plug-ins."""
+TRACKERS: Registry[Factory] = Registry("tracker", {
     "dead-reckoning": "azgym.track.dead_reckoning:DeadReckoning",
     "tkf": "azgym.track.plotter:Tkf",
     "lpkf": "azgym.track.plotter:Lpkf",
     "gated-ekf": "azgym.track.gated_ekf:GatedEkf",
     "robust": "azgym.track.robust:Robust",
-}
+}, group=TRACKER_ENTRY_POINT_GROUP, check=_localizer_class)
 """Trackers (:mod:`azgym.track`) by name; they share the specs, presets and plug-in rules."""
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
     "ransac-weighted": ("ransac", {"weighted": True}),
@@ -77,7 +104,9 @@ PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
 """Named built-ins with hyperparameters: ``name -> (target, params)``; the bench's defaults use
 them. A preset is only a short spec: it expands to its target and hyperparameters wherever it is
 read, so results and leaderboard entries record ``ransac`` with ``weighted=true``."""
-_REGISTERED: dict[str, Factory] = {}
+_SHIPPED = frozenset(LOCALIZERS.names(plugins=False) + TRACKERS.names(plugins=False)) | \
+    set(PRESETS)
+"""The names that ship with azgym (registered above, before any user's)."""
 
 
 def register_localizer(name: str, factory: Factory) -> None:
@@ -86,22 +115,14 @@ def register_localizer(name: str, factory: Factory) -> None:
     Raises:
         InvalidInputError: The name is empty or already taken.
     """
-    if not isinstance(name, str) or not name:
-        raise InvalidInputError(f"localizer name must be a non-empty string, got {name!r}")
-    if name in _BUILTIN or name in _BUILTIN_TRACKERS or name in PRESETS or name in _REGISTERED:
+    if isinstance(name, str) and (name in TRACKERS.names(plugins=False) or name in PRESETS):
         raise InvalidInputError(f"a localizer named {name!r} is already registered")
-    _REGISTERED[name] = factory
-
-
-def _entry_points(*groups: str) -> dict[str, Any]:
-    groups = groups or (ENTRY_POINT_GROUP, TRACKER_ENTRY_POINT_GROUP)
-    return {ep.name: ep for group in groups for ep in entry_points(group=group)}
+    LOCALIZERS.register(name, factory)
 
 
 def list_localizers() -> list[str]:
     """Every localizer name: built-ins, presets, registered and entry-point localizers."""
-    return sorted(set(_BUILTIN) | set(PRESETS) | set(_REGISTERED)
-                  | set(_entry_points(ENTRY_POINT_GROUP)))
+    return sorted(set(LOCALIZERS) | set(PRESETS))
 
 
 def is_builtin(spec: str) -> bool:
@@ -114,7 +135,7 @@ def is_builtin(spec: str) -> bool:
         target, _ = parse_spec(spec)
     except AzgymError:
         return False
-    return target in _BUILTIN or target in _BUILTIN_TRACKERS or target in PRESETS
+    return target in _SHIPPED
 
 
 def list_trackers() -> list[str]:
@@ -122,7 +143,7 @@ def list_trackers() -> list[str]:
 
     Any localizer runs as a tracker too (:func:`azgym.track.base.make_tracker`).
     """
-    return sorted(set(_BUILTIN_TRACKERS) | set(_entry_points(TRACKER_ENTRY_POINT_GROUP)))
+    return sorted(TRACKERS)
 
 
 def _load_attribute(spec: str) -> Factory:
@@ -158,36 +179,17 @@ def _load_attribute(spec: str) -> Factory:
     return _localizer_class(spec, factory)
 
 
-def _localizer_class(spec: str, factory: Any) -> Factory:
-    """The factory a spec names, if it is a localizer or tracker class.
-
-    A localizer class has a ``localize`` method; a tracker class has ``reset``, ``predict`` and
-    ``update``. A spec comes from a command line or a leaderboard entry, which anyone can write:
-    refusing anything else before calling it means that ``"os:system"`` or
-    ``"subprocess:Popen"`` with hyperparameters can never run a command.
-    """
-    is_class = isinstance(factory, type)
-    localizer = is_class and callable(getattr(factory, "localize", None))
-    tracker = is_class and all(callable(getattr(factory, method, None))
-                               for method in ("reset", "predict", "update"))
-    if not (localizer or tracker):
-        raise InvalidInputError(
-            f"localizer spec {spec!r} names a {type(factory).__name__}, not a localizer class "
-            "(a class with a localize(measurements, beacons) method) or a tracker class (with "
-            "reset, predict and update)")
-    return factory
-
-
 def resolve(name: str) -> Factory:
-    """The factory behind a name or spec (see module docstring)."""
+    """The factory behind a name or spec (see module docstring).
+
+    A registered name (a built-in's, or one of :func:`register_localizer`) comes before a
+    plug-in's of the same name, whichever registry each is in.
+    """
     if not isinstance(name, str):
         raise InvalidInputError(f"localizer name must be a string, got {type(name).__name__}")
-    if name in _REGISTERED:
-        return _REGISTERED[name]
-    if name in _BUILTIN:
-        return _load_attribute(_BUILTIN[name])
-    if name in _BUILTIN_TRACKERS:
-        return _load_attribute(_BUILTIN_TRACKERS[name])
+    for registry in (LOCALIZERS, TRACKERS):
+        if name in registry.names(plugins=False):
+            return registry[name]
     if name in PRESETS:
         return resolve(PRESETS[name][0])
     if ":" in name:
@@ -197,9 +199,9 @@ def resolve(name: str) -> Factory:
                 f"localizer spec {name!r}: {registered!r} is a registered name; its "
                 f"hyperparameters are written {registered}:NAME=VALUE[,NAME=VALUE...]")
         return _load_attribute(name)
-    plugins = _entry_points()
-    if name in plugins:
-        return _localizer_class(name, plugins[name].load())
+    for registry in (TRACKERS, LOCALIZERS):  # a name in both groups: the tracker's, as ever
+        if name in registry:
+            return registry[name]
     raise unknown_name("localizer", name, list_localizers() + list_trackers())
 
 

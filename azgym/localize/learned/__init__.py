@@ -13,7 +13,7 @@ Everything here runs on numpy and numba; none of it imports torch. Training live
 - :mod:`~azgym.localize.learned.distribution`: the training distribution a model file records
   (:class:`TrainingDistribution`) and the refusal of frames outside it;
 - :mod:`~azgym.localize.learned.ng_ransac` (:class:`NgRansac`, its compiled search in
-  ``_ng_search``) and :mod:`~azgym.localize.learned.pose_regression` (:class:`Learned`): the
+  ``ng_search``) and :mod:`~azgym.localize.learned.pose_regression` (:class:`Learned`): the
   localizers, registered as ``ng-ransac`` and ``learned``.
 """
 

@@ -19,7 +19,7 @@ azimuths, the minimal set is the paper's triplet (Rátosi & Simon 2021, eq. 7-20
    with two detections of one beacon is never tried: it cannot be solved), and, when their
    winner is not confident, every triplet of the ``fallback_ranked`` most probable; the
    paper's tolerance scores them and its refinement finishes the winner (ransac's own
-   compiled steps 1-6; the search itself is :mod:`azgym.localize.learned._ng_search`);
+   compiled steps 1-6; the search itself is :mod:`azgym.localize.learned.ng_search`);
 4. a guided answer stands only if its supporters' summed inlier probability reaches
    ``min_support_weight``: three supporters that the network takes for ghosts are a pose no
    frame can confirm, and the frame is refused rather than answered metres off.
@@ -53,11 +53,6 @@ from azgym.localize.base import (
     Problem,
     gather,
 )
-from azgym.localize.learned._ng_search import (
-    CONSENSUS_HYPOTHESES,
-    guided_settings,
-    ng_ransac_search,
-)
 from azgym.localize.learned.distribution import TrainingDistribution
 from azgym.localize.learned.features import (
     CONSENSUS_CANDIDATES,
@@ -67,6 +62,11 @@ from azgym.localize.learned.features import (
     measurement_features,
 )
 from azgym.localize.learned.inlier_network import InlierScorer
+from azgym.localize.learned.ng_search import (
+    CONSENSUS_HYPOTHESES,
+    guided_settings,
+    ng_ransac_search,
+)
 from azgym.localize.learned.weights import MODELS, load_weights, model_path
 from azgym.localize.ransac import (
     OUT_SIZE,

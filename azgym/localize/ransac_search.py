@@ -21,6 +21,8 @@ from azgym.localize import _kernels as K
 from azgym.localize._angles import fast_atan2, small_angle
 from azgym.localize._circles import distinct_beacons, pair_table, solve_triplet
 
+__all__ = ["score_pose", "search"]
+
 SERIES_Z_MAX = 0.0025
 """u² = tan² ε up to which :func:`_score_all` trusts its atan series (to u¹¹) for an inlier.
 

@@ -37,6 +37,9 @@ from azgym.localize.ransac import (
     solve_from_triplets,
 )
 
+__all__ = ["CONFIDENT_SUPPORT", "CONSENSUS_HYPOTHESES", "confident_support", "guided_search",
+           "guided_settings", "guided_triplets", "ng_ransac_search", "support_weight"]
+
 
 @jit
 def guided_triplets(logits, beacon_index, max_ranked, max_hypotheses):
