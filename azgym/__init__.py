@@ -8,18 +8,19 @@ The public API in one place::
     estimate = localizer.localize(measurements, scenario.beacons)
 
 Importing azgym does no work and loads no heavy library: each name below is imported when it is
-first used (PEP 562), and the Gymnasium environment ids are registered when Gymnasium itself is
-imported (before or after azgym; see :mod:`azgym.envs.registration`).
+first used (PEP 562). The Gymnasium environment ids are registered by ``import azgym.envs`` (or
+by reading ``azgym.ENV_IDS``), and by ``import azgym`` itself when Gymnasium is already imported
+(see :mod:`azgym.envs.registration`).
 """
 
 from __future__ import annotations
 
 import importlib
+import sys
 from typing import TYPE_CHECKING, Any
 
 from azgym._version import __version__
 from azgym.core import BeaconMap, Estimate, Measurements, pose_error, wrap_angle
-from azgym.envs.registration import register_when_gymnasium_loads
 from azgym.errors import (
     AzgymError,
     DependencyNotInstalled,
@@ -29,7 +30,8 @@ from azgym.errors import (
 )
 
 _LAZY = {
-    "ENV_IDS": "azgym.envs.registration",
+    "Contender": "azgym.bench.run.contenders",
+    "ENV_IDS": "azgym.envs",
     "ErrorModel": "azgym.site.error_model",
     "FrameByFrame": "azgym.track.base",
     "Localizer": "azgym.localize.base",
@@ -40,6 +42,7 @@ _LAZY = {
     "check_localizer": "azgym.localize.checks",
     "check_tracker": "azgym.track.checks",
     "evaluate": "azgym.envs.evaluate",
+    "get_suite": "azgym.bench.suites",
     "list_localizers": "azgym.localize.registry",
     "list_trackers": "azgym.localize.registry",
     "list_scenarios": "azgym.site.load",
@@ -47,11 +50,15 @@ _LAZY = {
     "make_localizer": "azgym.localize.registry",
     "make_tracker": "azgym.track.base",
     "register_localizer": "azgym.localize.registry",
+    "run_benchmark": "azgym.bench.run.runner",
 }
 
 if TYPE_CHECKING:
+    from azgym.bench.run.contenders import Contender
+    from azgym.bench.run.runner import run_benchmark
+    from azgym.bench.suites import get_suite
+    from azgym.envs import ENV_IDS
     from azgym.envs.evaluate import evaluate
-    from azgym.envs.registration import ENV_IDS
     from azgym.localize.base import Localizer
     from azgym.localize.checks import LocalizerCheckError, check_localizer
     from azgym.localize.registry import (
@@ -81,12 +88,14 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
 
 
-register_when_gymnasium_loads()
+if "gymnasium" in sys.modules:  # `import gymnasium as gym, azgym`: the ids are wanted now
+    importlib.import_module("azgym.envs")
 
 __all__ = [
     "ENV_IDS",
     "AzgymError",
     "BeaconMap",
+    "Contender",
     "DependencyNotInstalled",
     "ErrorModel",
     "Estimate",
@@ -104,6 +113,7 @@ __all__ = [
     "check_localizer",
     "check_tracker",
     "evaluate",
+    "get_suite",
     "list_localizers",
     "list_trackers",
     "list_scenarios",
@@ -112,5 +122,6 @@ __all__ = [
     "make_tracker",
     "pose_error",
     "register_localizer",
+    "run_benchmark",
     "wrap_angle",
 ]

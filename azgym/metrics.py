@@ -22,18 +22,18 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Sequence
-from typing import Any
+from typing import Final, Generic, TypedDict, TypeVar
 
 import numpy as np
 import scipy.stats
 from numpy.typing import ArrayLike
 
-__all__ = ["BLOCK_SECONDS", "FAILURE_DISTANCE", "HEADLINE", "bootstrap_blocks",
-           "confidence_intervals", "quantile", "summarize_errors"]
+__all__ = ["BLOCK_SECONDS", "FAILURE_DISTANCE", "HEADLINE", "ErrorStats", "Figure", "Intervals",
+           "bootstrap_blocks", "confidence_intervals", "quantile", "summarize_errors"]
 
 FAILURE_DISTANCE = 1.0
 """An estimate further than this from the truth [m] is a failure."""
-HEADLINE = "p75_all_cm"
+HEADLINE: Final = "p75_all_cm"
 """The headline figure: the p75 position error over every frame, a refusal infinite [cm]."""
 BLOCK_SECONDS = 5.0
 """The length of a route's bootstrap blocks [s]: consecutive frames of a route closer than this
@@ -44,6 +44,41 @@ RESAMPLES = 400
 """Bootstrap resamples per interval."""
 _BATCH = 50
 """Resamples drawn at a time, to bound memory."""
+
+Figure = TypeVar("Figure", bound=float | None)
+"""How a figure is held: ``float`` as computed (NaN where there is none, inf where it is
+infinite), ``float | None`` as JSON keeps it (a leaderboard entry: null for either)."""
+
+
+class ErrorStats(TypedDict, Generic[Figure]):
+    """Error statistics of a set of estimates (:func:`summarize_errors`).
+
+    ``p75_all_cm`` is over every run, a missing estimate infinite; the others (position errors
+    [cm], heading errors [deg]) over the runs with an estimate. A heading figure is None when
+    estimates were given but the truth has no heading to score them against.
+    """
+
+    n: int
+    availability: Figure
+    failure_rate: Figure
+    p75_all_cm: Figure
+    mean_cm: Figure
+    rmse_cm: Figure
+    median_cm: Figure
+    p75_cm: Figure
+    p90_cm: Figure
+    p95_cm: Figure
+    max_cm: Figure
+    heading_mean_deg: Figure | None
+    heading_median_deg: Figure | None
+
+
+class Intervals(TypedDict, Generic[Figure]):
+    """95 % intervals [low, high] of three figures (:func:`confidence_intervals`)."""
+
+    p75_all_cm: list[Figure]
+    mean_cm: list[Figure]
+    failure_rate: list[Figure]
 
 
 def quantile(errors: ArrayLike, q: float) -> float:
@@ -78,7 +113,7 @@ def _sorted_quantile(rows: np.ndarray, counts: np.ndarray, q: float) -> np.ndarr
 
 def summarize_errors(
     position_error: ArrayLike, heading_error: ArrayLike, ok: ArrayLike
-) -> dict[str, Any]:
+) -> ErrorStats[float]:
     """Statistics of position errors [m → cm] and heading errors [rad → deg].
 
     Args:
@@ -100,30 +135,31 @@ def summarize_errors(
     heading = heading[~np.isnan(heading)]
     n = int(ok.size)
     failures = int(np.count_nonzero(~ok)) + int(np.count_nonzero(position > FAILURE_DISTANCE * 100))
-    stats: dict[str, Any] = {
+    heading_mean: float | None
+    heading_median: float | None
+    if position.size:
+        q50, q75, q90, q95 = (float(q) for q in np.percentile(position, [50, 75, 90, 95]))
+        mean, rmse = float(position.mean()), float(np.sqrt(np.mean(position**2)))
+        worst = float(position.max())
+        heading_mean = float(heading.mean()) if heading.size else None
+        heading_median = float(np.median(heading)) if heading.size else None
+    else:
+        q50 = q75 = q90 = q95 = mean = rmse = worst = heading_mean = heading_median = math.nan
+    return {
         "n": n,
         "availability": float(ok.mean()) if n else math.nan,
         "failure_rate": failures / n if n else math.nan,
         HEADLINE: quantile(np.concatenate([position, np.full(n - position.size, np.inf)]), 0.75),
+        "mean_cm": mean,
+        "rmse_cm": rmse,
+        "median_cm": q50,
+        "p75_cm": q75,
+        "p90_cm": q90,
+        "p95_cm": q95,
+        "max_cm": worst,
+        "heading_mean_deg": heading_mean,
+        "heading_median_deg": heading_median,
     }
-    if position.size:
-        q50, q75, q90, q95 = np.percentile(position, [50, 75, 90, 95])
-        stats.update(
-            mean_cm=float(position.mean()),
-            rmse_cm=float(np.sqrt(np.mean(position**2))),
-            median_cm=float(q50),
-            p75_cm=float(q75),
-            p90_cm=float(q90),
-            p95_cm=float(q95),
-            max_cm=float(position.max()),
-            heading_mean_deg=float(heading.mean()) if heading.size else None,
-            heading_median_deg=float(np.median(heading)) if heading.size else None,
-        )
-    else:
-        for key in ("mean_cm", "rmse_cm", "median_cm", "p75_cm", "p90_cm", "p95_cm", "max_cm",
-                    "heading_mean_deg", "heading_median_deg"):
-            stats[key] = math.nan
-    return stats
 
 
 def bootstrap_blocks(sequences: Sequence[str], times: ArrayLike,
@@ -154,7 +190,7 @@ def bootstrap_blocks(sequences: Sequence[str], times: ArrayLike,
 
 
 def confidence_intervals(position: np.ndarray, ok: np.ndarray, blocks: np.ndarray,
-                         seed: int = 0) -> dict[str, list[float]]:
+                         seed: int = 0) -> Intervals[float]:
     """95 % percentile-bootstrap intervals of the headline, the mean error [cm] and failure rate.
 
     Whole blocks (:func:`bootstrap_blocks`) are resampled with replacement, as many as there
@@ -169,9 +205,9 @@ def confidence_intervals(position: np.ndarray, ok: np.ndarray, blocks: np.ndarra
         seed: The bootstrap's seed.
     """
     count = int(blocks.max()) + 1 if blocks.size else 0
-    keys = (HEADLINE, "mean_cm", "failure_rate")
     if count < 2:
-        return {key: [math.nan, math.nan] for key in keys}
+        return {HEADLINE: [math.nan, math.nan], "mean_cm": [math.nan, math.nan],
+                "failure_rate": [math.nan, math.nan]}
     error = np.where(ok, position * 100.0, np.inf)
     order = np.argsort(blocks, kind="stable")
     sizes = np.bincount(blocks, minlength=count)
@@ -194,8 +230,8 @@ def confidence_intervals(position: np.ndarray, ok: np.ndarray, blocks: np.ndarra
             (np.arange(count),), statistics, n_resamples=RESAMPLES, batch=_BATCH,
             vectorized=True, method="percentile", random_state=np.random.default_rng(seed),
         ).bootstrap_distribution
-    return {key: _percentile_interval(values) for key, values in zip(keys, distribution,
-                                                                      strict=True)}
+    headline, mean, failed = (_percentile_interval(values) for values in distribution)
+    return {HEADLINE: headline, "mean_cm": mean, "failure_rate": failed}
 
 
 def _percentile_interval(values: np.ndarray) -> list[float]:

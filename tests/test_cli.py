@@ -8,45 +8,47 @@ import textwrap
 
 import pytest
 
-from azgym import cli, cli_leaderboard, cli_studies
+from azgym import cli
 from azgym.bench.run import runner
-from azgym.bench.run.contenders import Contender, default_contenders
+from azgym.bench.run.contenders import Contender, default_contenders, resolve_contenders
+from azgym.cli import bench, leaderboard, studies
+from azgym.cli import info as listings
 
 PARSED = [
-    pytest.param(["bench"], cli._bench,
+    pytest.param(["bench"], bench._bench,
                  {"suite": None, "localizer": [], "with_builtins": False, "split": "dev",
                   "workers": 0, "quick": False, "out": "results/bench", "profile": None},
                  id="bench"),
     pytest.param(["bench", "--localizer", "ransac", "--localizer", "lsq", "--split", "test"],
-                 cli._bench, {"localizer": ["ransac", "lsq"], "split": "test"},
+                 bench._bench, {"localizer": ["ransac", "lsq"], "split": "test"},
                  id="bench-repeated-localizer"),
     pytest.param(["leaderboard", "submit", "out", "--localizer", "ransac", "--name", "mine",
-                  "--version", "1.0", "--authors", "A. B.", "C. D."], cli_leaderboard._leaderboard,
+                  "--version", "1.0", "--authors", "A. B.", "C. D."], leaderboard._leaderboard,
                  {"action": "submit", "results": "out", "authors": ["A. B.", "C. D."],
                   "link": "", "entries": "leaderboard/entries", "overwrite": False},
                  id="leaderboard-submit"),
-    pytest.param(["leaderboard", "build"], cli_leaderboard._leaderboard,
+    pytest.param(["leaderboard", "build"], leaderboard._leaderboard,
                  {"action": "build", "entries": "leaderboard/entries", "out": "leaderboard"},
                  id="leaderboard-build"),
-    pytest.param(["leaderboard", "verify", "entry.json"], cli_leaderboard._leaderboard,
+    pytest.param(["leaderboard", "verify", "entry.json"], leaderboard._leaderboard,
                  {"action": "verify", "entry": "entry.json", "workers": 1},
                  id="leaderboard-verify"),
-    pytest.param(["reproduce", "paper"], cli_studies._reproduce_paper,
+    pytest.param(["reproduce", "paper"], studies._reproduce_paper,
                  {"target": "paper", "quick": False, "out": "results/paper", "workers": 0,
                   "seed": 2021, "no_figures": False}, id="reproduce-paper"),
-    pytest.param(["study", "error-model"], cli_studies._study_error_model,
+    pytest.param(["study", "error-model"], studies._study_error_model,
                  {"scenario": "warehouse-small", "frames": 600, "noise": 2.0,
                   "calibration_px": 1.0, "seed": 0, "out": "results/study",
                   "no_figures": False}, id="study-error-model"),
-    pytest.param(["study", "ids"], cli_studies._study_ids,
+    pytest.param(["study", "ids"], studies._study_ids,
                  {"scenario": "warehouse-small", "rate": None, "noise": 2.0, "seed": 0},
                  id="study-ids"),
-    pytest.param(["reproduce", "plotter"], cli_studies._reproduce_plotter,
+    pytest.param(["reproduce", "plotter"], studies._reproduce_plotter,
                  {"target": "plotter", "runs": 100, "seed": 0, "out": "results/plotter"},
                  id="reproduce-plotter"),
-    pytest.param(["scenarios"], cli._scenarios, {}, id="scenarios"),
-    pytest.param(["localizers"], cli._localizers, {}, id="localizers"),
-    pytest.param(["check", "ransac:weighted=true"], cli._check,
+    pytest.param(["scenarios"], listings._scenarios, {}, id="scenarios"),
+    pytest.param(["localizers"], listings._localizers, {}, id="localizers"),
+    pytest.param(["check", "ransac:weighted=true"], listings._check,
                  {"localizer": "ransac:weighted=true"}, id="check"),
 ]
 
@@ -85,29 +87,29 @@ def test_version_and_defaults_are_shown(capsys):
 
 @pytest.mark.parametrize("expected", default_contenders(), ids=lambda c: c.label)
 def test_every_default_label_given_to_localizer_builds_that_very_contender(expected):
-    assert cli._contenders([expected.label], with_builtins=False) == [expected]
+    assert resolve_contenders([expected.label], with_builtins=False) == [expected]
 
 
 def test_a_label_never_means_two_localizers():
     labels = {c.label: c for c in default_contenders()}
     assert len(labels) == len(default_contenders())
-    exhaustive = cli._contenders(["mex"], with_builtins=False)
+    exhaustive = resolve_contenders(["mex"], with_builtins=False)
     assert exhaustive == [Contender("mex", "mex", {})]
     assert "mex" not in labels and labels["mex-coarse"].params == {"coarse_step": 0.1}
 
 
 def test_hyperparameters_on_the_command_line_and_the_label_they_get():
-    assert cli._contenders(["ransac:weighted=true", "lsq:max_iter=20", "ransac-weighted"],
+    assert resolve_contenders(["ransac:weighted=true", "lsq:max_iter=20", "ransac-weighted"],
                            with_builtins=False) == [
         Contender("ransac-weighted", "ransac", {"weighted": True}),
         Contender("lsq:max_iter=20", "lsq", {"max_iter": 20})]
 
 
 def test_with_builtins_adds_the_defaults_to_the_named_localizers():
-    named = cli._contenders(["lsq:max_iter=20"], with_builtins=False)
-    both = cli._contenders(["lsq:max_iter=20", "ransac"], with_builtins=True)
+    named = resolve_contenders(["lsq:max_iter=20"], with_builtins=False)
+    both = resolve_contenders(["lsq:max_iter=20", "ransac"], with_builtins=True)
     assert both == default_contenders() + named
-    assert cli._contenders([], with_builtins=True) == default_contenders()
+    assert resolve_contenders([], with_builtins=True) == default_contenders()
 
 
 @pytest.fixture

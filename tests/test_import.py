@@ -17,15 +17,28 @@ def test_import_azgym_loads_no_heavy_library():
     assert loaded == "[]"
 
 
-def test_environment_ids_register_whether_gymnasium_comes_first_or_second():
+def test_environment_ids_register_with_the_environments_package_in_either_order():
     make = ("env = gym.make('azgym/Localize-WarehouseSmall-v1'); "
             "print(type(env.unwrapped).__name__)")
-    assert run("import gymnasium as gym, azgym; " + make) == "LocalizeEnv"
-    assert run("import azgym; import gymnasium as gym; " + make) == "LocalizeEnv"
+    assert run("import azgym.envs; import gymnasium as gym; " + make) == "LocalizeEnv"
+    assert run("import gymnasium as gym; import azgym.envs; " + make) == "LocalizeEnv"
+    assert run("import gymnasium as gym, azgym; " + make) == "LocalizeEnv"  # Gymnasium first
     assert run("import azgym; print(len(azgym.ENV_IDS))") == "11"
-    # A library probing whether Gymnasium is installed must not disarm the registration.
-    probe = "import azgym, importlib.util; importlib.util.find_spec('gymnasium'); "
-    assert run(probe + "import gymnasium as gym; " + make) == "LocalizeEnv"
+    # Gymnasium's own "module:id" form imports the package itself.
+    assert run("import azgym, gymnasium as gym; env = gym.make('azgym.envs:azgym/Localize-"
+               "WarehouseSmall-v1'); print(type(env.unwrapped).__name__)") == "LocalizeEnv"
+
+
+def test_import_azgym_leaves_the_import_machinery_alone():
+    assert run("import sys; finders = list(sys.meta_path); import azgym, gymnasium; "
+               "print(sys.meta_path == finders)") == "True"
+
+
+def test_the_public_surface_reaches_the_benchmark():
+    assert run("import azgym; print(azgym.get_suite('paper').name, azgym.run_benchmark.__name__, "
+               "azgym.Contender.__name__)") == "paper run_benchmark Contender"
+    assert {"Contender", "get_suite", "run_benchmark"} <= set(
+        run("import azgym; print(' '.join(azgym.__all__))").split())
 
 
 def test_public_names_resolve_lazily_and_unknown_ones_fail_cleanly():

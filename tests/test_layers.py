@@ -139,3 +139,19 @@ def test_the_checker_sees_every_kind_of_import():
             "from . import sibling\n")
     modules = {"azgym.bench.run.runner", "azgym.track.base", "azgym.localize.sibling"}
     assert imported(text, "azgym.localize.probe", False, modules) == modules
+
+
+def test_every_public_module_says_what_it_exports():
+    # A module's public surface is its __all__; a private module (a leading underscore) has none.
+    silent = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if path.name.startswith("_") and path.name != "__init__.py":
+            continue
+        tree = ast.parse(path.read_text(), str(path))
+        named = any(isinstance(target, ast.Name) and target.id == "__all__"
+                    for node in tree.body if isinstance(node, (ast.Assign, ast.AnnAssign))
+                    for target in (node.targets if isinstance(node, ast.Assign)
+                                   else [node.target]))
+        if not named and path.name != "__init__.py":
+            silent.append(module_name(path))
+    assert silent == [], f"modules without __all__: {silent}"

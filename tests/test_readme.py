@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 import azgym
-from azgym.cli import _contenders, main
+from azgym.bench.run.contenders import resolve_contenders
+from azgym.cli import main
 from azgym.localize.learned import NG_RANSAC_WEIGHTS as SHIPPED_WEIGHTS
 
 README = Path(__file__).parent.parent / "README.md"
@@ -90,8 +91,8 @@ def test_every_localizer_spec_the_readme_gives_builds(tmp_path, monkeypatch):
     assert {"ransac:weighted=true", "my_localizer.py:MedianOfTriplets",
             "ransac:max_iter=20"} <= specs
     for spec in sorted(specs):
-        (contender,) = _contenders([spec], with_builtins=False)
-        assert _contenders([contender.label], with_builtins=False) == [contender], spec
+        (contender,) = resolve_contenders([spec], with_builtins=False)
+        assert resolve_contenders([contender.label], with_builtins=False) == [contender], spec
 
 
 def test_the_tracker_example_runs_on_the_routes_and_holds_through_dropouts(tmp_path, capsys):

@@ -10,6 +10,8 @@ from azgym.errors import InvalidInputError
 from azgym.sensing.protocol import AZIMUTH, BEACON, ID, LABEL, Observation
 from azgym.world.drive import checked_camera_rate
 
+__all__ = ["Padder", "check_camera_rate", "check_render_mode", "reward_weights"]
+
 
 def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
     """Refuse an unknown render mode, and "human" where no window can be opened."""

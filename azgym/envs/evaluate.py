@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -12,7 +11,15 @@ from azgym.core import Measurements, estimated_pose, pose_error
 from azgym.envs.localize import LocalizeEnv
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, make_localizer
-from azgym.metrics import summarize_errors
+from azgym.metrics import ErrorStats, summarize_errors
+
+__all__ = ["Evaluation", "evaluate", "measurements_from_observation"]
+
+
+class Evaluation(ErrorStats[float]):
+    """What :func:`evaluate` returns: the error statistics, and the episodes' total reward."""
+
+    total_reward: float
 
 
 def measurements_from_observation(observation: dict[str, np.ndarray]) -> Measurements:
@@ -28,7 +35,7 @@ def measurements_from_observation(observation: dict[str, np.ndarray]) -> Measure
 
 
 def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episodes: int = 1,
-             seed: int | None = None) -> dict[str, Any]:
+             seed: int | None = None) -> Evaluation:
     """Drive ``episodes`` episodes of a Localize environment with a localizer as the agent.
 
     Each frame's estimate is the action (when the localizer gives none, the previous answer is
@@ -76,5 +83,4 @@ def evaluate(env: gym.Env, localizer: str | SupportsLocalize = "ransac", episode
             total += float(reward)
             done = terminated or truncated
     stats = summarize_errors(np.array(position), np.array(heading), np.array(ok))
-    stats["total_reward"] = total
-    return stats
+    return {**stats, "total_reward": total}

@@ -20,8 +20,13 @@ from azgym.site.sampling import random_free_pose
 from azgym.world.drive import camera_trajectory
 from azgym.world.sway import CameraSway
 
+__all__ = ["LocalizeEnv"]
 
-def _copy(observation: dict[str, np.ndarray] | np.ndarray) -> dict[str, np.ndarray] | np.ndarray:
+LocalizeObservation = dict[str, np.ndarray] | np.ndarray
+"""An observation: the padded measurements and the map (a dict), or the image (an array)."""
+
+
+def _copy(observation: LocalizeObservation) -> LocalizeObservation:
     if isinstance(observation, dict):
         return {key: value.copy() for key, value in observation.items()}
     return observation.copy()
@@ -223,7 +228,7 @@ class LocalizeEnv(gym.Env):
                          for _ in range(self.episode_length)])
 
     def reset(self, *, seed: int | None = None,
-              options: dict[str, Any] | None = None) -> tuple[dict[str, np.ndarray], dict]:
+              options: dict[str, Any] | None = None) -> tuple[LocalizeObservation, dict]:
         """Start an episode: pick the route and show its first frame."""
         super().reset(seed=seed)
         options = options or {}
@@ -248,7 +253,7 @@ class LocalizeEnv(gym.Env):
             self.render()
         return observation, self._frame_info()
 
-    def step(self, action: np.ndarray) -> tuple[dict[str, np.ndarray], float, bool, bool, dict]:
+    def step(self, action: np.ndarray) -> tuple[LocalizeObservation, float, bool, bool, dict]:
         """Score the estimate of the current frame's pose, then show the next frame."""
         estimate = self.action_to_pose(self._check_action(action))
         x, y, heading = (float(v) for v in self._poses[self._frame])
@@ -272,14 +277,15 @@ class LocalizeEnv(gym.Env):
 
     # -- helpers -------------------------------------------------------------------------------
 
-    def _observe(self) -> dict[str, np.ndarray] | np.ndarray:
+    def _observe(self) -> LocalizeObservation:
         x, y, heading = self._poses[self._frame]
         tilt = self._sway.step(x, y, self.np_random)
         observed = self.camera.observe((x, y, heading), self.np_random, tilt)
         self.last_observation = observed
         shown = self._shown = self._padder.pad(observed)
         if self.observation == "image":
-            self._observation = observed.image[:, :, None]
+            assert observed.image is not None, "an image sensor's frame carries its image"
+            self._observation: LocalizeObservation = observed.image[:, :, None]
         else:
             self._observation = {"ids": shown["ids"], "azimuth": shown["azimuth"],
                                  "valid": shown["valid"], "quality": shown["quality"],

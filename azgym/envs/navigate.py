@@ -8,14 +8,15 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.error import ResetNeeded
 from gymnasium.utils import seeding
 
 from azgym.arguments import positive_number, whole_number
-from azgym.core import estimated_pose, pose_error, wrap_scalar
+from azgym.core import Pose, estimated_pose, pose_error, wrap_scalar
 from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
 from azgym.localize.registry import SupportsLocalize
 from azgym.nav.controls import CONTROL_STEPS, DISCRETE_CONTROLS, controls
-from azgym.nav.estimator import TrackerFeed, is_tracker, resolve_estimator
+from azgym.nav.estimator import feed_for, resolve_estimator
 from azgym.nav.geodesic import shortest_paths_for
 from azgym.nav.guidance import SUPPORT_SCALE, Guidance
 from azgym.nav.planner import planner_for
@@ -25,10 +26,12 @@ from azgym.sensing.catalog import make_sensor
 from azgym.sensing.protocol import Observation
 from azgym.site import Scenario, load_scenario
 from azgym.site.elements import occluder_table
-from azgym.track.base import Tracker
+from azgym.track.base import SupportsTrack
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.sway import CameraSway
 from azgym.world.world import PHYSICS_DT, World
+
+__all__ = ["MAX_STEPS", "NavigateEnv"]
 
 MAX_STEPS = 600
 """Control steps before an episode is truncated (``max_steps``'s default: 60 s)."""
@@ -159,7 +162,7 @@ class NavigateEnv(gym.Env):
     def __init__(
         self,
         scenario: str | Scenario = "warehouse-small",
-        localizer: str | SupportsLocalize | Tracker = "ransac",
+        localizer: str | SupportsLocalize | SupportsTrack = "ransac",
         discrete: bool = False,
         max_steps: int = MAX_STEPS,
         progress: float = 1.0,
@@ -183,8 +186,7 @@ class NavigateEnv(gym.Env):
                                       success=success)
         self.localizer_name = localizer if isinstance(localizer, str) else type(localizer).__name__
         self.localizer = resolve_estimator(localizer)
-        self._feed = (TrackerFeed(self.localizer, PHYSICS_DT) if is_tracker(self.localizer)
-                      else None)
+        self._feed = feed_for(self.localizer, PHYSICS_DT)
         self.discrete = bool(discrete)
         self.max_steps = whole_number("max_steps", max_steps)
         self.goal_radius = positive_number("goal_radius", goal_radius, "m")
@@ -232,7 +234,7 @@ class NavigateEnv(gym.Env):
         self._travelled = 0.0
         self._pose.reset()
         self._localized = False
-        self._answer = None
+        self._answer: Pose | None = None
         self._frames = 1  # frame 0 is taken now, at the start
         if self._feed is not None:
             self._feed.reset(self._world, self.np_random)
@@ -245,7 +247,7 @@ class NavigateEnv(gym.Env):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
         """Drive for one control period (0.1 s), taking camera frames on the way; localize."""
         throttle, steer = controls(action, self.discrete)
-        world = self._world
+        world = self._episode()
         contacts_before = len(world.contacts)
         frames = self._due_frames(world.steps)
         states = [self._camera_pose()]  # the camera pose i physics steps into the period
@@ -279,15 +281,20 @@ class NavigateEnv(gym.Env):
         return (observation, float(sum(rewards.values())), bool(arrived),
                 self._steps >= self.max_steps and not arrived, info)
 
-    # -- helpers -------------------------------------------------------------------------------
 
     def _cost_to_go(self) -> float:
         """The planner's cost to go from the true pose: the potential of the progress reward."""
-        x, y, _ = self._world.forklift.pose
+        x, y, _ = self._episode().forklift.pose
         return self.planner.cost_to_go(self._goal_index, x, y)
 
+    def _episode(self) -> World:
+        """The episode's world; refuses a call before :meth:`reset`."""
+        if self._world is None:
+            raise ResetNeeded("NavigateEnv: call reset() before step() or render()")
+        return self._world
+
     def _camera_pose(self) -> tuple[float, float, float]:
-        forklift = self._world.forklift
+        forklift = self._episode().forklift
         return (*forklift.camera_position(), forklift.pose[2])
 
     def _due_frames(self, start: int) -> list[tuple[int, float, float]]:
@@ -299,7 +306,7 @@ class NavigateEnv(gym.Env):
         into the period to the state i + 1 steps in, at ``time`` on the world's clock (a whole
         step's time is the world's own, bit for bit).
         """
-        frames = []
+        frames: list[tuple[int, float, float]] = []
         while True:
             due = self._frames * self._frame_steps
             if abs(due - round(due)) < 1e-9 * max(1.0, due):
@@ -323,27 +330,27 @@ class NavigateEnv(gym.Env):
             return
         for pose, _ in frames:
             tilt = self._sway.step(pose[0], pose[1], self.np_random)
-            self.last_observation = self.camera.observe(pose, self.np_random, tilt)
+            self.last_observation = observed = self.camera.observe(pose, self.np_random, tilt)
         pose, time = frames[-1]
-        measurements, beacons = self.last_observation.measurements, self.scenario.beacons
-        if self.localizer is None:
+        measurements, beacons = observed.measurements, self.scenario.beacons
+        if self._feed is None:  # the truth
             self._answer, support = pose, SUPPORT_SCALE
         else:
-            estimate = (self.localizer.localize(measurements, beacons) if self._feed is None
-                        else self._feed.estimate(time, measurements, beacons))
+            estimate = self._feed.estimate(time, measurements, beacons)
             self._answer = estimated_pose(estimate)
             support = int(np.count_nonzero(estimate.inliers)) if self._answer else 0
         self._localized = self._pose.offer(self._answer, support)
 
     def _observe(self) -> np.ndarray:
-        forklift = self._world.forklift
+        forklift = self._episode().forklift
         spec = forklift.spec
         return self._guidance.observe(
             self._pose.body_pose(), self._pose.age, self._pose.support, self._localized,
             forklift.speed / spec.max_speed, forklift.steer / spec.max_steer, forklift.pose)
 
     def _info(self) -> dict[str, Any]:
-        x, y, heading = self._world.forklift.pose
+        world = self._episode()
+        x, y, heading = world.forklift.pose
         answer = self._answer
         error = pose_error(answer, self._camera_pose())[0] if answer else None
         return {"true_pose": (x, y, heading), "estimate": self._pose.pose,
@@ -352,7 +359,7 @@ class NavigateEnv(gym.Env):
                 "goal": tuple(self._goal), "distance": math.hypot(self._goal[0] - x,
                                                                   self._goal[1] - y),
                 "shortest_path": self._shortest_path, "travelled": self._travelled,
-                "contacts": len(self._world.contacts)}
+                "contacts": len(world.contacts)}
 
     def shortest_path(self, seed: int) -> float:
         """``info["shortest_path"]`` of the episode ``reset(seed=seed)`` starts, without resetting.

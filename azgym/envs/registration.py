@@ -1,4 +1,4 @@
-"""Register an environment id for every shipped scenario (``azgym.ENV_IDS``), when it is needed.
+"""Register an environment id for every shipped scenario (``azgym.ENV_IDS``).
 
 Each scenario file in ``envs/`` gives ``azgym/Localize-<Scenario>-v1`` and, when it has routes
 (whose waypoints are the pick and drop spots), ``azgym/Navigate-<Scenario>-v2`` and
@@ -6,25 +6,24 @@ Each scenario file in ``envs/`` gives ``azgym/Localize-<Scenario>-v1`` and, when
 drives a forklift, so a scenario whose routes a differential-drive robot drives has no Navigate id.
 ``gym.make(id, scenario="path/to/my.toml")`` runs an id's environment on a user's file instead.
 
-Registering needs Gymnasium and reads the scenario files, so it is not done when azgym is
-imported: it is done as soon as Gymnasium is imported (whether before or after azgym), or when
-``azgym.ENV_IDS`` is first read. Gymnasium 1.x has no plug-in entry point to do it with.
+Registering needs Gymnasium and reads the scenario files, so ``import azgym`` alone does not do
+it: importing :mod:`azgym.envs` does (as does reading ``azgym.ENV_IDS``, or ``import azgym`` once
+Gymnasium is imported). Gymnasium 1.x has no plug-in entry point to do it with; its own
+``"module:id"`` form imports the package first:
+``gym.make("azgym.envs:azgym/Localize-WarehouseSmall-v1")``.
 """
 
 from __future__ import annotations
 
 import functools
-import importlib.abc
-import importlib.machinery
-import sys
-from collections.abc import Sequence
-from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from azgym.errors import InvalidInputError, unknown_name
 
 if TYPE_CHECKING:
     from gymnasium.envs.registration import EnvSpec
+
+__all__ = ["NAMESPACE", "VERSIONS", "camel_case", "navigation_spec", "register_environments"]
 
 NAMESPACE = "azgym"
 VERSIONS = {"Localize": 1, "Navigate": 2, "NavigateDiscrete": 2}
@@ -45,7 +44,8 @@ def register_environments() -> tuple[str, ...]:
 
     ids = []
     for name in list_scenarios():
-        entries = [("Localize", "azgym.envs.localize:LocalizeEnv", {})]
+        entries: list[tuple[str, str, dict[str, Any]]] = [
+            ("Localize", "azgym.envs.localize:LocalizeEnv", {})]
         scenario = load_scenario(name)
         if scenario.routes and not scenario.differential_drive:  # Navigate drives a forklift
             entries += [("Navigate", "azgym.envs.navigate:NavigateEnv", {}),
@@ -58,49 +58,6 @@ def register_environments() -> tuple[str, ...]:
                              kwargs={"scenario": name, **extra}, max_episode_steps=None)
             ids.append(env_id)
     return tuple(ids)
-
-
-class _AfterGymnasiumImport(importlib.abc.MetaPathFinder):
-    """Registers the ids right after Gymnasium's module has run (a post-import hook).
-
-    It hands out Gymnasium's spec with a loader that registers after running the module, every
-    time the spec is looked up (a look-up alone, ``importlib.util.find_spec("gymnasium")`` as
-    libraries probe optional dependencies, imports nothing), and leaves ``sys.meta_path`` once
-    Gymnasium has really been imported.
-    """
-
-    def find_spec(self, fullname: str, path: Sequence[str] | None,
-                  target: ModuleType | None = None) -> Any:
-        if fullname != "gymnasium":
-            return None
-        spec = importlib.machinery.PathFinder.find_spec(fullname, path)
-        if spec is None or spec.loader is None:
-            return spec
-        run = spec.loader.exec_module
-
-        def exec_then_register(module: ModuleType) -> None:
-            run(module)
-            if self in sys.meta_path:
-                sys.meta_path.remove(self)
-            register_environments()
-
-        spec.loader.exec_module = exec_then_register  # type: ignore[method-assign]
-        return spec
-
-
-def register_when_gymnasium_loads() -> None:
-    """Register the ids now if Gymnasium is loaded, else as soon as it is imported."""
-    if "gymnasium" in sys.modules:
-        register_environments()
-    elif not any(isinstance(finder, _AfterGymnasiumImport) for finder in sys.meta_path):
-        sys.meta_path.insert(0, _AfterGymnasiumImport())
-
-
-def __getattr__(name: str) -> Any:
-    """``ENV_IDS``: every registered id (registering them first)."""
-    if name == "ENV_IDS":
-        return list(register_environments())
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def navigation_spec(env_id: str) -> EnvSpec:
@@ -130,8 +87,9 @@ def _is_navigation(spec: EnvSpec) -> bool:
     from azgym.envs.navigate import NavigateEnv
 
     entry = spec.entry_point
-    if isinstance(entry, str):
-        if not entry.startswith("azgym."):  # loading another package's entry point runs it
-            return False
-        entry = gym.envs.registration.load_env_creator(entry)
-    return isinstance(entry, type) and issubclass(entry, NavigateEnv)
+    if not isinstance(entry, str):
+        return isinstance(entry, type) and issubclass(entry, NavigateEnv)
+    if not entry.startswith("azgym."):  # loading another package's entry point runs it
+        return False
+    creator = gym.envs.registration.load_env_creator(entry)
+    return isinstance(creator, type) and issubclass(creator, NavigateEnv)

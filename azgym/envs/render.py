@@ -14,14 +14,19 @@ from __future__ import annotations
 import math
 import os
 import sys
-from typing import Any
+from typing import Any, Protocol
 
 import cv2
 import numpy as np
 
-from azgym.core import wrap_angle
+from azgym.core import Pose, wrap_angle
 from azgym.errors import AzgymError, require
 from azgym.sensing.labels import DIRECT, DISTRACTOR, GHOST, MISIDENTIFIED, MOVED, PARTIAL
+from azgym.sensing.protocol import Observation
+from azgym.site import Scenario
+
+__all__ = ["ACCEPTED", "BEACON", "Drawable", "REJECTED", "SIZE", "UNIDENTIFIED", "WALL",
+           "blob_status", "draw", "render_frame", "require_display"]
 
 SIZE = 640
 BACKGROUND = (245, 245, 245)
@@ -40,6 +45,28 @@ RAY = {DIRECT: (80, 180, 80), PARTIAL: (40, 170, 230), GHOST: (40, 40, 220),
        MISIDENTIFIED: (160, 40, 160), MOVED: (20, 120, 240), DISTRACTOR: (120, 120, 120)}
 
 
+class Drawable(Protocol):
+    """What a drawing needs of an environment: its scenario, poses and camera frame."""
+
+    @property
+    def scenario(self) -> Scenario:
+        """The scenario it runs in."""
+        ...
+
+    @property
+    def last_observation(self) -> Observation | None:
+        """The camera's last frame (None before the first)."""
+        ...
+
+    def true_pose(self) -> Pose:
+        """The camera's true pose."""
+        ...
+
+    def last_estimate(self) -> Pose | None:
+        """The pose last estimated (None before the first)."""
+        ...
+
+
 class _Canvas:
     """World metres to image pixels for a scenario's room (north up)."""
 
@@ -56,7 +83,7 @@ class _Canvas:
         return int(round((x - self.x0) * self.scale)), int(round((self.y1 - y) * self.scale))
 
 
-def render_frame(env: Any, mode: str | None) -> np.ndarray | None:
+def render_frame(env: Drawable, mode: str | None) -> np.ndarray | None:
     """Draw the environment: an RGB array ("rgb_array"), or a window ("human").
 
     Raises:
@@ -102,7 +129,7 @@ def _show(image: np.ndarray) -> None:
 _WINDOW: Any = None
 
 
-def draw(env: Any) -> np.ndarray:
+def draw(env: Drawable) -> np.ndarray:
     """The environment's current state, top-down, as an RGB image."""
     scenario = env.scenario
     canvas = _Canvas(scenario.bounds)
@@ -134,14 +161,15 @@ def draw(env: Any) -> np.ndarray:
     if estimate is not None:
         _arrow(canvas, *estimate, ESTIMATE)
     if frame is not None and frame.image is not None:
-        image = np.hstack([image, _camera_panel(scenario, frame, estimate, image.shape[0])])
+        image = np.hstack([image, _camera_panel(scenario, frame, frame.image, estimate,
+                                                image.shape[0])])
     return image[:, :, ::-1].copy()  # BGR drawing colours to RGB
 
 
-def _camera_panel(scenario: Any, frame: Any, estimate: tuple[float, float, float] | None,
-                  height: int) -> np.ndarray:
-    """The fisheye frame, scaled to ``height``, with each blob ringed by its status."""
-    panel = cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
+def _camera_panel(scenario: Scenario, frame: Observation, fisheye: np.ndarray,
+                  estimate: Pose | None, height: int) -> np.ndarray:
+    """The frame's fisheye image, scaled to ``height``, with each blob ringed by its status."""
+    panel = cv2.cvtColor(fisheye, cv2.COLOR_GRAY2BGR)
     scale = height / panel.shape[0]
     panel = cv2.resize(panel, (int(round(panel.shape[1] * scale)), height),
                        interpolation=cv2.INTER_AREA)
@@ -152,8 +180,8 @@ def _camera_panel(scenario: Any, frame: Any, estimate: tuple[float, float, float
     return panel
 
 
-def blob_status(scenario: Any, frame: Any,
-                estimate: tuple[float, float, float] | None) -> list[tuple[int, int, int]]:
+def blob_status(scenario: Scenario, frame: Observation,
+                estimate: Pose | None) -> list[tuple[int, int, int]]:
     """Each blob's ring colour: accepted, rejected by the estimate, unidentified, or identified.
 
     A blob is accepted when its id is a map beacon and its azimuth is within the error model's
@@ -180,7 +208,8 @@ def blob_status(scenario: Any, frame: Any,
     return colours
 
 
-def _arrow(canvas: _Canvas, x: float, y: float, heading: float, colour: tuple[int, int, int]):
+def _arrow(canvas: _Canvas, x: float, y: float, heading: float,
+           colour: tuple[int, int, int]) -> None:
     tip = (x + 1.5 * math.cos(heading), y + 1.5 * math.sin(heading))
     cv2.circle(canvas.image, canvas.px(x, y), 6, colour, 2, cv2.LINE_AA)
     cv2.arrowedLine(canvas.image, canvas.px(x, y), canvas.px(*tip), colour, 2, cv2.LINE_AA,

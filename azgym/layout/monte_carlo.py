@@ -101,11 +101,9 @@ def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localiz
                                  maps={scenario.name: scenario.beacons})[runs.label]
         for error in filter(None, outcome.errors):
             problems[error] = problems.get(error, 0) + 1
-        estimate = outcome.estimate
-        assert estimate is not None, "a run's own outcome keeps its estimates"
         for k, p in enumerate(part):
             rows = slice(k * frames, (k + 1) * frames)
-            fixed = estimate[rows][outcome.ok[rows], :2] - points[p]
+            fixed = outcome.estimate[rows][outcome.ok[rows], :2] - points[p]
             figures[:, p] = _figures(fixed, frames)
         if progress is not None:
             progress(start + len(part), len(cells))

@@ -56,7 +56,7 @@ from azgym.site import generate
 from azgym.site.sampling import random_free_pose
 
 __all__ = ["FRAMES_FORMAT", "Frame", "FrameBatch", "HELD_OUT_LAYOUTS", "LEVELS", "TRAIN_LAYOUTS",
-           "inlier_truth", "layout_frames", "make_frames", "observed_frame"]
+           "inlier_truth", "layout_frames", "layout_seeds", "make_frames", "observed_frame"]
 
 TRAIN_LAYOUTS = range(0, 100_000)
 """The generator seeds trained on."""
@@ -228,6 +228,25 @@ def inlier_truth(label: IntArray, injected: BoolArray) -> BoolArray:
     """
     label = np.asarray(label)
     return ((label == DIRECT) | (label == PARTIAL)) & ~np.asarray(injected, dtype=bool)
+
+
+def layout_seeds(layouts: int | Sequence[int]) -> list[int]:
+    """The generator seeds to train on, never a held-out one.
+
+    Args:
+        layouts: How many of :data:`~azgym.learn.dataset.TRAIN_LAYOUTS` (the first ones), or
+            the seeds themselves.
+    """
+    if isinstance(layouts, int):
+        whole_number("layouts", layouts)
+        if layouts > len(TRAIN_LAYOUTS):
+            raise InvalidInputError(f"layouts must be at most {len(TRAIN_LAYOUTS)} (the "
+                                    f"training layouts there are), got {layouts}")
+        return [int(x) for x in list(TRAIN_LAYOUTS)[:layouts]]
+    overlap = set(layouts) & set(HELD_OUT_LAYOUTS)
+    if overlap:
+        raise InvalidInputError(f"layouts: {sorted(overlap)} are held-out layouts")
+    return [int(x) for x in layouts]
 
 
 def make_frames(layout_seeds: Sequence[int], frames_per_layout: int, seed: int, *,

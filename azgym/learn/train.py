@@ -34,15 +34,17 @@ from scipy.stats import rankdata
 from azgym.arguments import positive_number, whole_number
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder, write_file
+from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
 from azgym.learn.torch_net import TorchInlierScorer, export
 from azgym.learn.train_report import progress_bar, write_card, write_learning_curve
 
 __all__ = ["CHECKPOINT_NAME", "EVAL_BATCH", "MODEL", "TrainConfig", "TrainResult", "WEIGHTS_NAME",
-           "auc", "build_data", "evaluate", "fingerprint", "finite", "fit", "layout_seeds",
+           "auc", "build_data", "evaluate", "fingerprint", "finite", "fit",
            "prepared_data", "resume", "save_checkpoint", "train_ng_ransac"]
 
 MODEL = "ng-ransac"
 """The model this module trains (the name in its weight file)."""
+_DEFAULTS = MODEL_DEFAULTS[MODEL]
 WEIGHTS_NAME = "ng-ransac.npz"
 CHECKPOINT_NAME = "checkpoint.pt"
 EVAL_BATCH = 1024
@@ -64,9 +66,9 @@ class TrainConfig:
         threads: torch's CPU threads.
     """
 
-    epochs: int = 20
+    epochs: int = _DEFAULTS.epochs
     seed: int = 0
-    hidden: int = 16
+    hidden: int = _DEFAULTS.hidden
     batch_size: int = 64
     learning_rate: float = 1e-3
     pos_weight: float | None = None
@@ -93,33 +95,12 @@ class TrainResult:
     seconds: float = 0.0
 
 
-def layout_seeds(layouts: int | Sequence[int]) -> list[int]:
-    """The generator seeds to train on, never a held-out one.
-
-    Args:
-        layouts: How many of :data:`~azgym.learn.dataset.TRAIN_LAYOUTS` (the first ones), or
-            the seeds themselves.
-    """
-    from azgym.learn.dataset import HELD_OUT_LAYOUTS, TRAIN_LAYOUTS
-
-    if isinstance(layouts, int):
-        whole_number("layouts", layouts)
-        if layouts > len(TRAIN_LAYOUTS):
-            raise InvalidInputError(f"layouts must be at most {len(TRAIN_LAYOUTS)} (the "
-                                    f"training layouts there are), got {layouts}")
-        return [int(x) for x in list(TRAIN_LAYOUTS)[:layouts]]
-    overlap = set(layouts) & set(HELD_OUT_LAYOUTS)
-    if overlap:
-        raise InvalidInputError(f"layouts: {sorted(overlap)} are held-out layouts")
-    return [int(x) for x in layouts]
-
-
 def build_data(layouts: Sequence[int], frames_per_layout: int, seed: int
                ) -> tuple[Any, Any, dict[str, Any]]:
     """The training and held-out frames (:func:`azgym.learn.dataset.make_frames`).
 
     Args:
-        layouts: The generator seeds to train on (:func:`layout_seeds`).
+        layouts: The generator seeds to train on (:func:`azgym.learn.dataset.layout_seeds`).
         frames_per_layout: Frames drawn in each warehouse (held-out ones too).
         seed: Seeds the frames.
 
@@ -141,8 +122,9 @@ def build_data(layouts: Sequence[int], frames_per_layout: int, seed: int
     return train, held_out, info
 
 
-def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = 64,
-                    frames: int = 100, epochs: int = 20, seed: int = 0, hidden: int = 16,
+def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = _DEFAULTS.layouts,
+                    frames: int = FRAMES_PER_LAYOUT, epochs: int = _DEFAULTS.epochs,
+                    seed: int = 0, hidden: int = _DEFAULTS.hidden,
                     threads: int = 1, progress: bool = True) -> TrainResult:
     """Draw the frames, train the inlier scorer on them, write everything to ``out_dir``.
 
@@ -171,6 +153,8 @@ def prepared_data(out_dir: Path | str, layouts: int | Sequence[int], frames: int
     Returns the folder, the training frames, the held-out ones and what the model card says of
     them (``draw_seconds`` included).
     """
+    from azgym.learn.dataset import layout_seeds
+
     whole_number("frames", frames)
     seeds = layout_seeds(layouts)
     out = prepare_folder(Path(out_dir))

@@ -36,6 +36,7 @@ import torch
 from azgym.arguments import positive_number, whole_number
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder
+from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
 from azgym.learn.torch_regression import TorchPoseRegressor, export
 from azgym.learn.train import (
     EVAL_BATCH,
@@ -53,6 +54,8 @@ from azgym.localize.learned.pose_network import N_TOKENS, frame_tokens
 __all__ = ["CHECKPOINT_NAME", "MODEL", "RegressionConfig", "WEIGHTS_NAME", "epoch_line", "evaluate",
            "fit_regression", "frame_arrays", "learning_rate", "loss_terms", "tensors",
            "train_learned"]
+
+_DEFAULTS = MODEL_DEFAULTS["learned"]
 
 MODEL = "learned"
 """The model this module trains (the name in its weight file)."""
@@ -79,9 +82,9 @@ class RegressionConfig:
         threads: torch's CPU threads.
     """
 
-    epochs: int = 60
+    epochs: int = _DEFAULTS.epochs
     seed: int = 0
-    hidden: int = 32
+    hidden: int = _DEFAULTS.hidden
     batch_size: int = 64
     learning_rate: float = 3e-3
     trust_weight: float = 1.0
@@ -125,8 +128,9 @@ def tensors(batch: Any) -> tuple[torch.Tensor, ...]:
             torch.from_numpy(norm[:, 2].astype(np.float32)))
 
 
-def train_learned(out_dir: Path | str, *, layouts: int | Sequence[int] = 1000,
-                  frames: int = 100, epochs: int = 60, seed: int = 0, hidden: int = 32,
+def train_learned(out_dir: Path | str, *, layouts: int | Sequence[int] = _DEFAULTS.layouts,
+                  frames: int = FRAMES_PER_LAYOUT, epochs: int = _DEFAULTS.epochs,
+                  seed: int = 0, hidden: int = _DEFAULTS.hidden,
                   threads: int = 1, progress: bool = True) -> TrainResult:
     """Draw the frames, train the pose regressor on them, write everything to ``out_dir``.
 

@@ -103,7 +103,7 @@ class Calibration:
         fits: Every fit, in the table's order.
         skipped: (parameter, why) of every parameter not fitted.
         base: The log's own profile (its manifest's), which the fits override.
-        residuals: The residuals drawn (:func:`azgym.cli_calibrate.draw_residuals`): "azimuth"
+        residuals: The residuals drawn (:func:`azgym.cli.calibrate.draw_residuals`): "azimuth"
             (distance [m], residual [rad], inlier), "speed" and "turn" (time [s], residual
             over its white noise's scale), "camera" (2 sin(Δφ/2), sideways slide [m]).
         notes: Counts worth knowing (detections left out, intervals used).

@@ -12,6 +12,8 @@ import numpy as np
 
 from azgym.errors import InvalidInputError
 
+__all__ = ["CONTROL_STEPS", "DISCRETE_CONTROLS", "Policy", "controls", "nearest_discrete"]
+
 CONTROL_STEPS = 5
 """Physics steps per control period: the navigator acts and the camera looks every 0.1 s."""
 DISCRETE_THROTTLES = (1.0, 0.0, -1.0)

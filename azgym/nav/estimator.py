@@ -17,7 +17,7 @@ before trackers could drive. A localizer given as a tracker (``make_tracker("ran
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TypeGuard
 
 import numpy as np
 
@@ -25,9 +25,11 @@ from azgym.core import BeaconMap, Estimate, Measurements
 from azgym.errors import InvalidInputError
 from azgym.localize.registry import SupportsLocalize, build
 from azgym.sensing.motion import ImuModel, OdometryModel
-from azgym.track.base import FrameByFrame
+from azgym.track.base import FrameByFrame, SupportsTrack
 from azgym.world.motion_sensors import MotionSensors
 from azgym.world.world import World
+
+__all__ = ["LocalizerFeed", "TrackerFeed", "feed_for", "is_tracker", "resolve_estimator"]
 
 TRACKER_METHODS = ("reset", "predict", "update")
 """What a tracker object must have (:class:`azgym.track.base.Tracker`)."""
@@ -35,13 +37,14 @@ SEED_BOUND = 2**63
 """The seeds of an episode's motion sensors and tracker are drawn below this."""
 
 
-def is_tracker(estimator: Any) -> bool:
+def is_tracker(estimator: object) -> TypeGuard[SupportsTrack]:
     """Whether ``estimator`` runs as a tracker: no ``localize``, but reset, predict and update."""
     return not isinstance(estimator, (type, SupportsLocalize)) and all(
         callable(getattr(estimator, method, None)) for method in TRACKER_METHODS)
 
 
-def resolve_estimator(localizer: Any) -> Any:
+def resolve_estimator(localizer: str | SupportsLocalize | SupportsTrack
+                      ) -> SupportsLocalize | SupportsTrack | None:
     """None for ``"truth"``, else the localizer or tracker a name, spec or object stands for.
 
     Raises:
@@ -65,6 +68,27 @@ def resolve_estimator(localizer: Any) -> Any:
     return built
 
 
+class LocalizerFeed:
+    """A localizer in an episode: nothing to sample, each frame localized on its own.
+
+    Args:
+        localizer: The localizer.
+    """
+
+    def __init__(self, localizer: SupportsLocalize) -> None:
+        self.localizer = localizer
+
+    def reset(self, world: World, rng: np.random.Generator) -> None:
+        """Start an episode: nothing to start (no draw from ``rng``)."""
+
+    def step(self, world: World) -> None:
+        """A physics step: nothing to sample."""
+
+    def estimate(self, time: float, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        """The localizer's estimate of the frame at ``time`` [s]."""
+        return self.localizer.localize(measurements, beacons)
+
+
 class TrackerFeed:
     """A tracker in an episode: the motion sensors sampled every physics step, fed per frame.
 
@@ -73,7 +97,7 @@ class TrackerFeed:
         dt: The world's physics step [s].
     """
 
-    def __init__(self, tracker: Any, dt: float) -> None:
+    def __init__(self, tracker: SupportsTrack, dt: float) -> None:
         self.tracker = tracker
         self._dt = dt
         self._sensors: MotionSensors | None = None
@@ -90,7 +114,7 @@ class TrackerFeed:
 
     def step(self, world: World) -> None:
         """Sample the physics step just taken."""
-        self._sensors.step(world)
+        self._started().step(world)
 
     def estimate(self, time: float, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         """The tracker's estimate of the frame at ``time`` [s].
@@ -98,5 +122,26 @@ class TrackerFeed:
         It predicts with the samples up to that time (later ones wait for the next frame), then
         updates with the frame's measurements.
         """
-        self.tracker.predict(self._sensors.motion(time))
+        self.tracker.predict(self._started().motion(time))
         return self.tracker.update(measurements, beacons)
+
+    def _started(self) -> MotionSensors:
+        """The episode's motion sensors; refuses a call before :meth:`reset`."""
+        if self._sensors is None:
+            raise InvalidInputError("TrackerFeed: call reset() before step() or estimate()")
+        return self._sensors
+
+
+def feed_for(estimator: SupportsLocalize | SupportsTrack | None, dt: float
+             ) -> LocalizerFeed | TrackerFeed | None:
+    """What feeds and asks an estimator in an episode; None for the truth (nothing to ask).
+
+    Args:
+        estimator: What :func:`resolve_estimator` gave.
+        dt: The world's physics step [s].
+    """
+    if estimator is None:
+        return None
+    if isinstance(estimator, SupportsLocalize):
+        return LocalizerFeed(estimator)
+    return TrackerFeed(estimator, dt)

@@ -41,11 +41,14 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from azgym.core import FloatArray
+from azgym.core import BoolArray, FloatArray
 from azgym.errors import InvalidInputError
 from azgym.site import Scenario
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.world import WALL_THICKNESS
+
+__all__ = ["ARC_STEP", "BODY_CLEARANCE", "COLLISION_SLOP", "inflated", "obstacles_of",
+           "shortest_lengths", "shortest_paths_for"]
 
 COLLISION_SLOP = 0.1
 """pymunk's default ``Space.collision_slop``, which the world keeps: how far two shapes may
@@ -109,7 +112,9 @@ class _Obstacles:
     """Convex polygons as half-planes n · x ≤ c (outward unit normals), grouped by polygon."""
 
     def __init__(self, polygons: Sequence[FloatArray]) -> None:
-        normals, offsets, starts = [], [], []
+        normals: list[FloatArray] = []
+        offsets: list[FloatArray] = []
+        starts: list[int] = []
         for polygon in polygons:
             edges = np.roll(polygon, -1, axis=0) - polygon
             lengths = np.hypot(edges[:, 0], edges[:, 1])
@@ -122,12 +127,12 @@ class _Obstacles:
         self.offsets = np.concatenate(offsets) if offsets else np.zeros(0)
         self.starts = np.array(starts, dtype=np.int64)
 
-    def inside(self, points: FloatArray) -> np.ndarray:
+    def inside(self, points: FloatArray) -> BoolArray:
         """Which points lie in some polygon's interior, deeper than the tolerance; (P,) bool."""
         if not len(self.starts) or not len(points):
             return np.zeros(len(points), dtype=bool)
         depth = points @ self.normals.T - self.offsets
-        return (np.maximum.reduceat(depth, self.starts, axis=1) < -_EPS).any(axis=1)
+        return np.any(np.maximum.reduceat(depth, self.starts, axis=1) < -_EPS, axis=1)
 
     def blocks(self, ends: FloatArray, others: FloatArray) -> np.ndarray:
         """Which segments ends[i]-others[i] pass through some polygon's interior; (M,) bool.

@@ -22,6 +22,8 @@ from azgym.site import Scenario
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.world import WALL_THICKNESS
 
+__all__ = ["Grid", "INFLATION", "MAX_CELLS", "RESOLUTION", "build_grid"]
+
 RESOLUTION = 0.1
 """Side of a grid cell [m]."""
 INFLATION = 0.5 * ForkliftSpec().width + 0.2

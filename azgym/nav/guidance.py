@@ -37,13 +37,15 @@ from azgym.nav._descent import follow, points_at
 from azgym.nav.planner import Planner
 from azgym.sensing.geometry import occluders as G
 
+__all__ = ["AHEAD_SCALE", "FIX_AGE_SCALE", "Guidance", "REMAINING_SCALE", "SUPPORT_SCALE", "fields"]
+
 ARCS = np.array([1.5, 3.0, 5.0])
 """Arc lengths along the planned path of the points shown [m]."""
 AHEAD_SCALE = 5.0
 """Body-frame offsets of the points ahead are divided by this [m]."""
 FIX_AGE_SCALE = 2.0
 """Seconds since the last pose are divided by this (and clipped at 1)."""
-SUPPORT_SCALE = 8.0
+SUPPORT_SCALE = 8
 """Measurements that agree with the pose are divided by this (and clipped at 1)."""
 REPLAN_DISTANCE = 1.5
 """An estimate this far from the path [m] has the path planned again from it."""

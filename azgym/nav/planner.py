@@ -28,6 +28,8 @@ from azgym.nav._descent import MOVES, descend
 from azgym.nav.grid import INFLATION, RESOLUTION, Grid, build_grid
 from azgym.site import Scenario
 
+__all__ = ["Planner", "clearance_weight", "planner_for"]
+
 PREFERRED_CLEARANCE = 1.4
 """Clearance from which a cell costs no more than its length [m]: the middle of a 2.8 m aisle."""
 CLEARANCE_COST = 4.0

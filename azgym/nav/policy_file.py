@@ -27,6 +27,8 @@ from azgym.errors import DependencyNotInstalled, ModelFileError
 from azgym.nav.controls import Policy
 from azgym.nav.pursuit import PurePursuit
 
+__all__ = ["ALGORITHMS", "MODELS", "SB3Policy", "SHIPPED_FILES", "load_policy", "require_rl"]
+
 PURE_PURSUIT = "pure-pursuit"
 """The name of the scripted baseline (:class:`azgym.nav.pursuit.PurePursuit`)."""
 SHIPPED_PPO = "ppo"

@@ -19,6 +19,8 @@ from azgym.core import Pose
 from azgym.track.kinematics import advance
 from azgym.world.forklift import ForkliftSpec
 
+__all__ = ["JUMP_MARGIN", "LOST_AFTER", "PoseKeeper"]
+
 JUMP_MARGIN = 1.0
 """Distance an answer may lie from the dead-reckoned pose right after a fix [m]."""
 DRIFT_RATE = 0.5

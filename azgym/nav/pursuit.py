@@ -27,6 +27,8 @@ from azgym.nav.guidance import AHEAD_SCALE, FIX_AGE_SCALE, fields
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.world import PHYSICS_DT
 
+__all__ = ["PurePursuit", "SPEED"]
+
 CRUISE_SPEED = 2.0
 """Target speed on straight path [m/s]."""
 LATERAL_ACCEL = 1.0

@@ -10,6 +10,8 @@ from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 from azgym.site import Scenario
 
+__all__ = ["HEADING_SPREAD", "aisle_headings", "draw_route", "spots_of"]
+
 MIN_GOAL_DISTANCE = 5.0
 """A goal spot is at least this far from the start, in a straight line [m]."""
 HEADING_SPREAD = math.radians(15.0)

@@ -2,15 +2,22 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from azgym.errors import InvalidInputError, unknown_name
+from azgym.registry import Registry
 from azgym.sensing.identities import ID_MODES
 from azgym.sensing.protocol import Sensor
 from azgym.site import Scenario
 
 __all__ = ["SENSORS", "make_sensor"]
 
-SENSORS = ("geometry", "image")
-"""The camera models: the compiled geometry, or rendered and detected fisheye frames."""
+SENSORS: Registry[Callable[..., Sensor]] = Registry("sensor", {
+    "geometry": "azgym.sensing.geometry.sensor:GeometrySensor",
+    "image": "azgym.sensing.image.sensor:ImageSensor",
+})
+"""The camera models: the compiled geometry, or rendered and detected fisheye frames (each
+imported when first made)."""
 
 
 def make_sensor(scenario: Scenario, sensor: str = "geometry", ids: str = "oracle") -> Sensor:
@@ -26,16 +33,11 @@ def make_sensor(scenario: Scenario, sensor: str = "geometry", ids: str = "oracle
         UnknownNameError: An unknown sensor or id mode.
         InvalidInputError: Blinking ids without the image sensor.
     """
-    if not isinstance(sensor, str) or sensor not in SENSORS:
-        raise unknown_name("sensor", str(sensor), SENSORS)
+    SENSORS.check_name(sensor)
     if not isinstance(ids, str) or ids not in ID_MODES:
         raise unknown_name("ids", str(ids), ID_MODES)
     if sensor == "geometry":
         if ids == "blink":
             raise InvalidInputError('ids="blink" needs the image path: sensor="image"')
-        from azgym.sensing.geometry.sensor import GeometrySensor
-
-        return GeometrySensor(scenario)
-    from azgym.sensing.image.sensor import ImageSensor
-
-    return ImageSensor(scenario, ids=ids)
+        return SENSORS.make(sensor, scenario=scenario)
+    return SENSORS.make(sensor, scenario=scenario, ids=ids)

@@ -142,6 +142,16 @@ def test_navigation_reports_a_failed_localizer_instead_of_a_pose():
     assert info["estimate"] is None and not info["localized"] and info["position_error"] is None
 
 
+def test_navigation_refuses_a_step_or_a_drawing_before_reset():
+    # The class itself, without Gymnasium's order-enforcing wrapper: a clear error, not an
+    # AttributeError on the episode's world that does not exist yet.
+    env = gym.make("azgym/Navigate-WarehouseSmall-v2", render_mode="rgb_array").unwrapped
+    with pytest.raises(gym.error.ResetNeeded, match="reset"):
+        env.step(env.action_space.sample())
+    with pytest.raises(gym.error.ResetNeeded, match="reset"):
+        env.render()
+
+
 def test_the_path_ahead_is_shown_in_the_body_frame_of_the_pose():
     env = gym.make("azgym/Navigate-WarehouseSmall-v2", localizer="truth")
     observation, info = env.reset(seed=0)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-import azgym  # noqa: F401 - registers the environment ids
+import azgym.envs  # noqa: F401 - registers the environment ids
 from azgym import InvalidInputError, UnknownNameError
 from azgym.envs.navigate import _interpolate
 

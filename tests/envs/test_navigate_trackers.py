@@ -6,9 +6,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import azgym  # noqa: F401 - registers the ids
+import azgym.envs  # noqa: F401 - registers the ids
+from azgym.core import BeaconMap, Measurements
 from azgym.errors import InvalidInputError
 from azgym.localize.ransac import Ransac
+from azgym.nav.estimator import TrackerFeed
 from azgym.nav.pursuit import PurePursuit
 from azgym.sensing.motion import ImuModel, OdometryModel
 from azgym.track.base import make_tracker
@@ -115,6 +117,14 @@ def test_a_tracker_object_runs_as_its_name_does():
     by_object = episode(env, 5)
     by_name = episode(gym.make(ENV_ID, localizer="gated-ekf", max_steps=60), 5)
     assert [repr(info) for info in by_object] == [repr(info) for info in by_name]
+
+
+def test_a_tracker_fed_before_its_episode_starts_is_refused():
+    feed = TrackerFeed(make_tracker("gated-ekf"), PHYSICS_DT)
+    beacons = BeaconMap(np.arange(3), np.array([[0.0, 0.0, 3.0], [5.0, 0.0, 3.0],
+                                                [0.0, 5.0, 3.0]]))
+    with pytest.raises(InvalidInputError, match="reset"):
+        feed.estimate(0.0, Measurements([0, 1, 2], [0.1, 0.2, 0.3]), beacons)
 
 
 def test_a_tracker_without_a_start_pose_may_never_answer():

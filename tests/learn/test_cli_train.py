@@ -7,8 +7,13 @@ import hashlib
 
 import pytest
 
-from azgym import cli, cli_train
+from azgym import cli
+from azgym.cli import train as cli_train
 from azgym.localize.learned.weights import load_weights
+
+SHIPPED_SETTINGS = {"ng-ransac": {"layouts": 64, "epochs": 20, "hidden": 16},
+                    "learned": {"layouts": 1000, "epochs": 60, "hidden": 32}}
+"""The defaults the command must pass (``learned``'s are the shipped weights' settings)."""
 
 
 def test_the_command_parses_to_its_handler_with_its_defaults():
@@ -41,7 +46,7 @@ def test_each_model_trains_with_its_own_defaults_unless_told(model, monkeypatch,
     base = ["train", "localizer", "--model", model, "--out", str(tmp_path)]
     assert cli.main(base) == 0
     assert cli.main([*base, "--layouts", "3", "--epochs", "2", "--hidden", "4"]) == 0
-    assert calls == [{"frames": 100, "seed": 0, "threads": 1, **cli_train.DEFAULTS[model]},
+    assert calls == [{"frames": 100, "seed": 0, "threads": 1, **SHIPPED_SETTINGS[model]},
                      {"frames": 100, "seed": 0, "threads": 1, "layouts": 3, "epochs": 2,
                       "hidden": 4}]
 

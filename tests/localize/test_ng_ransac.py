@@ -14,8 +14,8 @@ import azgym
 from azgym import InvalidInputError, Measurements
 from azgym.localize import _kernels as K
 from azgym.localize.base import Problem
-from azgym.localize.learned._ng_search import guided_search, guided_settings, guided_triplets
 from azgym.localize.learned.ng_ransac import SHIPPED_WEIGHTS, NgRansac
+from azgym.localize.learned.ng_search import guided_search, guided_settings, guided_triplets
 from azgym.localize.learned.weights import load_weights
 from azgym.localize.ransac import OUT_SIZE, score_candidate, score_triplets, settings_array
 

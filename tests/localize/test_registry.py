@@ -51,7 +51,7 @@ PLUGIN_SOURCE = textwrap.dedent('''
 @pytest.fixture
 def clean_registry(monkeypatch):
     """Registrations made by a test are forgotten afterwards."""
-    monkeypatch.setattr(registry, "_REGISTERED", {})
+    monkeypatch.setattr(registry.LOCALIZERS, "_entries", dict(registry.LOCALIZERS._entries))
 
 
 def test_builtins_are_listed():
@@ -335,6 +335,7 @@ def test_random_state_generator_is_kept_as_given():
 def test_entry_point_plugins_are_listed_and_built(monkeypatch):
     from importlib.metadata import EntryPoint
 
+    import azgym.registry
     from azgym.localize import registry
 
     plugin = EntryPoint(name="vendor-lsq", value="azgym.localize.lsq:LeastSquares",
@@ -343,12 +344,27 @@ def test_entry_point_plugins_are_listed_and_built(monkeypatch):
     def fake_entry_points(*, group):
         return [plugin] if group == registry.ENTRY_POINT_GROUP else []
 
-    monkeypatch.setattr(registry, "entry_points", fake_entry_points)
+    monkeypatch.setattr(azgym.registry, "entry_points", fake_entry_points)
     assert "vendor-lsq" in azgym.list_localizers()
     localizer = azgym.make_localizer("vendor-lsq", max_iter=7)
     assert type(localizer).__name__ == "LeastSquares" and localizer.max_iter == 7
     with pytest.raises(azgym.UnknownNameError, match=re.escape("Did you mean 'vendor-lsq'?")):
         azgym.make_localizer("vendor-lsk")
+
+
+def test_a_plugin_never_shadows_a_built_in_and_a_registration_is_no_built_in(clean_registry,
+                                                                            monkeypatch):
+    from importlib.metadata import EntryPoint
+
+    import azgym.registry
+
+    plugin = EntryPoint(name="tkf", value="azgym.localize.lsq:LeastSquares",
+                        group=registry.ENTRY_POINT_GROUP)
+    monkeypatch.setattr(azgym.registry, "entry_points", lambda *, group: [plugin] if group ==
+                        registry.ENTRY_POINT_GROUP else [])
+    assert registry.resolve("tkf").__name__ == "Tkf"  # the built-in tracker, not the plug-in
+    azgym.register_localizer("mine", LeastSquares)
+    assert registry.is_builtin("ransac") and not registry.is_builtin("mine")
 
 
 @pytest.mark.parametrize(("ok", "x", "message"), [("True", 0.4, "ok is a bool"),

@@ -199,7 +199,7 @@ def test_the_simulated_robot_gives_back_its_noise(tmp_path):
 
 
 def run_cli(*argv: str) -> int:
-    from azgym.cli_calibrate import add_calibrate
+    from azgym.cli.calibrate import add_calibrate
 
     parser = argparse.ArgumentParser(prog="azgym")
     add_calibrate(parser.add_subparsers(dest="command", required=True))

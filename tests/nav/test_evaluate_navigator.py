@@ -13,8 +13,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from azgym import cli, cli_evaluate
+from azgym import cli
 from azgym.bench.navigation import scoring
+from azgym.cli import evaluate as cli_evaluate
 from azgym.errors import DependencyNotInstalled, ModelFileError
 from azgym.nav.policy_file import SB3Policy, load_policy
 

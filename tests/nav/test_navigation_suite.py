@@ -14,11 +14,11 @@ from helpers import quick_navigation_run
 from azgym import cli
 from azgym.bench.leaderboard import board
 from azgym.bench.leaderboard.entry_files import LeaderboardError
-from azgym.bench.navigation.benchmark import drive_all
+from azgym.bench.navigation.benchmark import contenders_of, drive_all, navigation_contenders
 from azgym.bench.navigation.board import verify_navigation
 from azgym.bench.navigation.results_file import load_navigation
 from azgym.bench.navigation.scoring import wilson_interval
-from azgym.bench.navigation.suites import NAVIGATION_SUITES, get_navigation_suite
+from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS, get_navigation_suite
 
 SUITE = NAVIGATION_SUITES["navigation"]
 SHIPPED_ENTRIES = Path(__file__).parents[2] / "leaderboard" / "entries"
@@ -206,6 +206,16 @@ def test_wilson_interval_matches_hand_worked_values():
 def test_bad_navigation_bench_arguments_are_refused_by_name(argv, message, tmp_path, capsys):
     assert cli.main(["bench", *argv, "--out", str(tmp_path)]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_a_navigation_suite_chooses_its_localizers_by_the_frame_suites_rule():
+    """Each localizer once by its canonical label, the suite's first with --with-builtins, and
+    every navigator with every localizer when none is named."""
+    assert navigation_contenders(SUITE, ["ppo", "ppo"], [
+        "ransac:weighted=true", "ransac-weighted"]) == [("ppo", "ransac-weighted")]
+    both = navigation_contenders(SUITE, ["ppo"], ["mex", "truth"], with_builtins=True)
+    assert both == [("ppo", name) for name in (*SUITE.localizers, "mex")]
+    assert navigation_contenders(SUITE, [], []) == contenders_of(NAVIGATORS, SUITE.localizers)
 
 
 @pytest.mark.parametrize("env_id", ["azgym/Navigate-WarehouseSmall-v2",

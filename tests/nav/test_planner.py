@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import azgym  # noqa: F401  (registers the environments)
+import azgym.envs  # noqa: F401  (registers the environments)
 from azgym import InvalidInputError
 from azgym.bench.navigation.scoring import drive, summarize
 from azgym.nav._descent import follow, points_at

@@ -11,7 +11,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from azgym import cli, cli_train
+from azgym import cli
+from azgym.cli import train as cli_train
 from azgym.errors import AzgymError, DependencyNotInstalled
 from azgym.learn.navigator import card as train_card
 from azgym.learn.navigator import train

@@ -24,10 +24,14 @@ from azgym.bench.leaderboard.entries import (
     LeaderboardError,
     load_available,
 )
+from azgym.bench.leaderboard.entry_files import Entry
 from azgym.bench.report.table import LEGEND, RANK_BY, rank_key
-from azgym.bench.report.tracking import KIDNAP_WINDOW_S, RECOVERED_CM
+from azgym.bench.report.tracking import KIDNAP_WINDOW_S, RECOVERED_CM, TrackFigures
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
+
+__all__ = ["COLUMNS", "KINDS", "REAL_NOTE", "REAL_PART", "RECOVERY_COLUMN", "TRACKS_AT",
+           "TRACK_COLUMNS", "build", "markdown_cell", "web_link"]
 
 WEB_SCHEMES = ("http://", "https://")
 """A link is shown only with one of these schemes (no ``javascript:``, no local files)."""
@@ -79,8 +83,8 @@ NAVIGATION_NOTE = (
     "episodes.")
 
 
-def _ranked(loaded: list[tuple[dict[str, Any], str]], suite: str, split: str,
-            quick: bool) -> list[tuple[dict[str, Any], str]]:
+def _ranked(loaded: list[tuple[Entry, str]], suite: str, split: str,
+            quick: bool) -> list[tuple[Entry, str]]:
     rows = [(e, frames) for e, frames in loaded
             if (e["suite"], e["split"], e["quick"]) == (suite, split, quick)]
     return sorted(rows, key=lambda pair: rank_key(pair[0]["metrics"]["all"], pair[0]["name"]))
@@ -135,7 +139,7 @@ def _percent(value: float | None) -> str:
     return _fmt(None if value is None else 100 * value, 1)
 
 
-def _cells(rank: int, entry: dict[str, Any], tracks: int) -> list[str]:
+def _cells(rank: int, entry: Entry, tracks: int) -> list[str]:
     """A table row: the entry's figures, with ``tracks`` track cells (0, 2 or 3)."""
     stats, runtime = entry["metrics"]["all"], entry["metrics"]["runtime_us"]
     return [str(rank), entry["name"], entry["version"], ", ".join(entry["authors"]),
@@ -148,19 +152,20 @@ def _cells(rank: int, entry: dict[str, Any], tracks: int) -> list[str]:
             entry["azgym_version"]]
 
 
-def _track_cells(tracking: dict[str, Any] | None) -> list[str]:
+def _track_cells(tracking: TrackFigures[float | None] | None) -> list[str]:
     """Availability after the first fix, the largest error outside kidnaps, worst recovery."""
     if tracking is None:
         return ["–"] * (len(TRACK_COLUMNS) + 1)
-    events = tracking["events"]
-    never = sum(1 for event in events if event["recovery_s"] is None)
-    worst = f"never ({never}/{len(events)})" if never else \
-        _fmt(max((event["recovery_s"] for event in events), default=None), 1)
+    recoveries = [event["recovery_s"] for event in tracking["events"]]
+    recovered = [seconds for seconds in recoveries if seconds is not None]
+    never = len(recoveries) - len(recovered)
+    worst = f"never ({never}/{len(recoveries)})" if never else \
+        _fmt(max(recovered, default=None), 1)
     return [_percent(tracking["availability_after_first_fix"]),
             _fmt(tracking["max_cm_outside_kidnaps"], 1), worst]
 
 
-def _header(entries: list[dict[str, Any]]) -> tuple[list[str], int]:
+def _header(entries: list[Entry]) -> tuple[list[str], int]:
     """A table's column names and how many track columns it has (the suite's, for every row)."""
     tracks = [entry["metrics"]["tracking"] for entry in entries]
     extra = [*TRACK_COLUMNS] if any(tracks) else []
@@ -242,7 +247,7 @@ def _intro(count: int) -> list[str]:
 
 def _add_table(lines: list[str], sections: list[Section],
                heading: tuple[str, str, str, str, str],
-               ranked: list[tuple[dict[str, Any], str]]) -> None:
+               ranked: list[tuple[Entry, str]]) -> None:
     """A ranked table's Markdown lines and page section (heading: part, suite, text, title, id)."""
     part, suite, description, title, table_id = heading
     header, tracks = _header([entry for entry, _ in ranked])
@@ -252,7 +257,7 @@ def _add_table(lines: list[str], sections: list[Section],
                      [web_link(entry["link"]) for entry, _ in ranked], cdf_png(ranked)))
 
 
-def _dataset_tables(loaded: list[tuple[dict[str, Any], str]], sections: list[Section],
+def _dataset_tables(loaded: list[tuple[Entry, str]], sections: list[Section],
                     real: bool) -> list[str]:
     """One ranked table per dataset of real data, or of simulated data (its name and SHA-256).
 
@@ -304,14 +309,14 @@ def _navigation_section(directory: Path, sections: list[Section]) -> list[str]:
 
 
 def _markdown_table(header: list[str], rows: list[list[str]],
-                    entries: list[dict[str, Any]]) -> list[str]:
+                    entries: list[Entry]) -> list[str]:
     """A ranked table's Markdown lines: header, rule, one escaped line per entry."""
     return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
             *("| " + " | ".join(_markdown_row(row, entry)) + " |"
               for row, entry in zip(rows, entries, strict=True))]
 
 
-def _markdown_row(row: list[str], entry: dict[str, Any]) -> list[str]:
+def _markdown_row(row: list[str], entry: Entry) -> list[str]:
     """A table row's cells escaped for Markdown; the name links to the entry's web link."""
     cells = [markdown_cell(cell) for cell in row]
     link = web_link(entry["link"])

@@ -14,9 +14,10 @@ import csv
 import html
 import importlib.util
 import io
-from typing import Any
 
 import numpy as np
+
+from azgym.bench.leaderboard.entry_files import Entry
 
 __all__ = ["NAME_COLUMN", "Section", "cdf_png", "page"]
 
@@ -43,7 +44,7 @@ document.querySelectorAll("table.board th").forEach(function (th) {
 """
 
 
-def cdf_png(ranked: list[tuple[dict[str, Any], str]]) -> str | None:
+def cdf_png(ranked: list[tuple[Entry, str]]) -> str | None:
     """A table's error CDFs, each from its entry's own per-frame results, as a base64 PNG.
 
     None without matplotlib.

@@ -40,10 +40,12 @@ import jsonschema
 
 from azgym._version import __version__
 from azgym.bench.leaderboard.entry_data import check_data_run, dataset_cases, is_data_entry
-from azgym.bench.leaderboard.entry_files import FrameTable, LeaderboardError, parse_frames
+from azgym.bench.leaderboard.entry_files import Entry, FrameTable, LeaderboardError, parse_frames
 from azgym.bench.leaderboard.plugin_files import is_portable, plugin_path
 from azgym.bench.report.results import cases_digest, contender_metrics, frame_number
 from azgym.bench.suites import NO_TEST_SPLIT, SUITES, Case
+
+__all__ = ["ENTRY_FORMAT", "clean", "close", "release", "schema", "suite_cases", "validate_entry"]
 
 ENTRY_FORMAT = 4
 """The entry format this azgym writes and reads (``format`` in ``entry.schema.json``); 3 added
@@ -74,7 +76,7 @@ def clean(value: Any) -> Any:
 
 
 def validate_entry(entry: Any, frames_text: str | None, origin: str,
-                   stem: str | None = None, datasets: Path | None = None) -> None:
+                   stem: str | None = None, datasets: Path | None = None) -> str:
     """Raise :class:`LeaderboardError` naming the problem unless the entry is sound.
 
     Args:
@@ -83,6 +85,9 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
         origin: Where it came from, for messages.
         stem: Its file's name without ``.json`` (None: not yet written; its name is used).
         datasets: Where a dataset entry's log is looked for first (:mod:`.entry_data`).
+
+    Returns:
+        The per-frame results, checked.
 
     Raises:
         DatasetUnavailable: A dataset entry's log is not found (every other check passed).
@@ -100,6 +105,7 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
     table = parse_frames(frames_text, origin, cases)
     _check_coverage(entry, table, cases, origin)
     _check_figures(entry, table, cases, origin)
+    return frames_text
 
 
 def _check_schema(entry: Any, origin: str) -> None:
@@ -115,7 +121,7 @@ def _check_schema(entry: Any, origin: str) -> None:
         raise LeaderboardError(f"{origin}: {where}: {first.message}")
 
 
-def _check_identity(entry: dict[str, Any], origin: str, stem: str) -> None:
+def _check_identity(entry: Entry, origin: str, stem: str) -> None:
     """The name is the file's stem, and the per-frame results are the entry's own file."""
     if entry["name"] != stem:
         raise LeaderboardError(f"{origin}: name: {entry['name']!r}, but the file is "
@@ -126,7 +132,7 @@ def _check_identity(entry: dict[str, Any], origin: str, stem: str) -> None:
                                f"{entry['results_file']!r}")
 
 
-def _check_run(entry: dict[str, Any], origin: str) -> None:
+def _check_run(entry: Entry, origin: str) -> None:
     """Suite (or dataset) and version, seed, azgym version, time and the plug-in's spec."""
     if is_data_entry(entry):
         check_data_run(entry, origin)
@@ -145,7 +151,7 @@ def _check_run(entry: dict[str, Any], origin: str) -> None:
                                    "required (submit records it)")
 
 
-def _check_suite_run(entry: dict[str, Any], origin: str) -> None:
+def _check_suite_run(entry: Entry, origin: str) -> None:
     """A suite's entry: the suite at the entry's version, and the split's seed."""
     suite = SUITES.get(entry["suite"])
     if suite is None:
@@ -208,7 +214,7 @@ def suite_cases(name: str, version: int, seed: int, quick: bool
     return cases_digest(cases), tuple(cases)
 
 
-def _entry_cases(entry: dict[str, Any], origin: str, datasets: Path | None
+def _entry_cases(entry: Entry, origin: str, datasets: Path | None
                  ) -> tuple[Case, ...]:
     """The entry's frames (the suite's draw, or the log's), their digest the entry's."""
     if is_data_entry(entry):
@@ -227,12 +233,12 @@ def _entry_cases(entry: dict[str, Any], origin: str, datasets: Path | None
     return cases
 
 
-def _run(entry: dict[str, Any]) -> str:
+def _run(entry: Entry) -> str:
     """A suite entry's draw, in words."""
     return f"seed {entry['seed']}, {'quick' if entry['quick'] else 'full'}"
 
 
-def _check_coverage(entry: dict[str, Any], table: FrameTable, cases: tuple[Case, ...],
+def _check_coverage(entry: Entry, table: FrameTable, cases: tuple[Case, ...],
                     origin: str) -> None:
     """The per-frame results hold exactly the entry's frames, each its scenario/group/cause."""
     has = f"the log {entry['dataset']['name']} has" if is_data_entry(entry) else \
@@ -253,7 +259,7 @@ def _check_coverage(entry: dict[str, Any], table: FrameTable, cases: tuple[Case,
                                f"per-frame results hold {len(frames)}")
 
 
-def _check_figures(entry: dict[str, Any], table: FrameTable, cases: tuple[Case, ...],
+def _check_figures(entry: Entry, table: FrameTable, cases: tuple[Case, ...],
                    origin: str) -> None:
     """Every stored figure is the one its per-frame results (on the suite's cases) give."""
     reference_us = entry["metrics"]["runtime_us"]["reference_us"]

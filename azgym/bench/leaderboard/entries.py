@@ -20,9 +20,10 @@ import math
 import os
 import platform
 import sys
+from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 from azgym.bench.leaderboard.checks import ENTRY_FORMAT, clean, close, schema, validate_entry
 from azgym.bench.leaderboard.entry_data import (
@@ -33,6 +34,8 @@ from azgym.bench.leaderboard.entry_data import (
 )
 from azgym.bench.leaderboard.entry_files import (
     MAX_FRAMES_BYTES,
+    Entry,
+    EntryLocalizer,
     LeaderboardError,
     read_bytes,
     read_frames,
@@ -45,13 +48,20 @@ from azgym.bench.leaderboard.plugin_files import (
     resolve_spec,
 )
 from azgym.bench.report.results import FRAME_COLUMNS
+from azgym.bench.report.summary import Dataset
 from azgym.bench.run.runner import Contender, run_benchmark, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
 
-__all__ = ["ENTRY_FORMAT", "SUITES", "DatasetUnavailable", "LeaderboardError",
+__all__ = ["ENTRY_FORMAT", "SUITES", "DatasetUnavailable", "Entry", "LeaderboardError",
            "frames_file_text", "load_all", "load_available", "load_entries", "load_entry",
            "make_entry", "schema", "submit", "validate_entry", "verify"]
+
+
+class _DatasetField(TypedDict, total=False):
+    """An entry's ``dataset`` (scored on a log), and nothing for a suite's entry."""
+
+    dataset: Dataset
 
 
 def frames_file_text(rows: list[list[str]]) -> str:
@@ -64,7 +74,7 @@ def frames_file_text(rows: list[list[str]]) -> str:
 
 
 def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, version: str,
-               authors: list[str], link: str) -> tuple[dict[str, Any], str]:
+               authors: list[str], link: str) -> tuple[Entry, str]:
     """An entry for localizer ``label`` from an ``azgym bench`` output folder, and its frames.
 
     A plug-in file's spec is stored relative to ``entries_dir``, with the file's SHA-256.
@@ -90,7 +100,7 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
     figures = schema()["properties"]["metrics"]["required"]  # all, ci95, …, tracking
     try:
         text = _frames_of(results_dir / "frames.csv", label)
-        entry = {
+        entry: Entry = {
             "format": ENTRY_FORMAT, "name": name, "version": version, "authors": authors,
             "link": link, "localizer": _portable(row, entries_dir),
             "suite": summary["suite"], "suite_version": summary["suite_version"],
@@ -111,12 +121,13 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
     return entry, text
 
 
-def _dataset_of(summary: dict[str, Any]) -> dict[str, Any]:
+def _dataset_of(summary: dict[str, Any]) -> _DatasetField:
     """A log's run: the ``dataset`` record an entry keeps (name, SHA-256, format, simulated)."""
     if "dataset" not in summary:
         return {}
-    return {"dataset": {key: summary["dataset"][key]
-                        for key in ("name", "sha256", "format", "simulated")}}
+    dataset = summary["dataset"]
+    return {"dataset": {"name": dataset["name"], "sha256": dataset["sha256"],
+                        "format": dataset["format"], "simulated": dataset["simulated"]}}
 
 
 def _frames_of(path: Path, label: str) -> str:
@@ -129,12 +140,13 @@ def _frames_of(path: Path, label: str) -> str:
     return frames_file_text([row for row in rows if row and row[0] == label])
 
 
-def _portable(row: dict[str, Any], entries_dir: Path) -> dict[str, Any]:
+def _portable(row: dict[str, Any], entries_dir: Path) -> EntryLocalizer:
     """The localizer as an entry stores it: a plug-in file relative to the entries folder."""
     spec, params = row["spec"], row["params"]
-    if not isinstance(spec, str) or plugin_path(spec) is None:
+    file = plugin_path(spec) if isinstance(spec, str) else None
+    if file is None:
         return {"spec": spec, "params": params}
-    path = Path(row["file"]) if "file" in row else plugin_path(spec)
+    path = Path(row["file"]) if "file" in row else file
     if not path.is_file():
         raise LeaderboardError(f"localizer/spec: the plug-in file {path} the results were made "
                                "with is missing")
@@ -207,7 +219,7 @@ def _results_file_of(path: Path) -> str | None:
     return Path(claimed).name if isinstance(claimed, str) else None
 
 
-def load_entry(path: Path, datasets: Path | None = None) -> dict[str, Any]:
+def load_entry(path: Path, datasets: Path | None = None) -> Entry:
     """Read and validate one entry file (and its per-frame results beside it).
 
     A dataset entry's log is looked for in ``datasets`` (default: ``datasets/`` beside the
@@ -216,7 +228,7 @@ def load_entry(path: Path, datasets: Path | None = None) -> dict[str, Any]:
     return _load(path, datasets or default_datasets(path.parent))[0]
 
 
-def _load(path: Path, datasets: Path | None) -> tuple[dict[str, Any], str]:
+def _load(path: Path, datasets: Path | None) -> tuple[Entry, str]:
     """The validated entry and its per-frame results text."""
     entry = read_json(path, "leaderboard entry")
     frames = None
@@ -224,18 +236,17 @@ def _load(path: Path, datasets: Path | None) -> tuple[dict[str, Any], str]:
         frames_path = path.parent / Path(entry["results_file"]).name
         if frames_path.is_file():
             frames = read_frames(frames_path)
-    validate_entry(entry, frames, str(path), stem=path.name.removesuffix(".json"),
-                   datasets=datasets)
-    return entry, frames
+    return entry, validate_entry(entry, frames, str(path), stem=path.name.removesuffix(".json"),
+                                 datasets=datasets)
 
 
-def load_entries(entries_dir: Path, datasets: Path | None = None) -> list[dict[str, Any]]:
+def load_entries(entries_dir: Path, datasets: Path | None = None) -> list[Entry]:
     """Every entry in the folder, validated (the first bad one raises, naming its file)."""
     return [entry for entry, _ in load_all(entries_dir, datasets)]
 
 
 def load_all(entries_dir: Path, datasets: Path | None = None
-             ) -> list[tuple[dict[str, Any], str]]:
+             ) -> list[tuple[Entry, str]]:
     """Every entry of the folder with its per-frame results, validated; names unique.
 
     Raises:
@@ -248,7 +259,7 @@ def load_all(entries_dir: Path, datasets: Path | None = None
 
 
 def load_available(entries_dir: Path, datasets: Path | None = None
-                   ) -> tuple[list[tuple[dict[str, Any], str]], list[DatasetUnavailable]]:
+                   ) -> tuple[list[tuple[Entry, str]], list[DatasetUnavailable]]:
     """Every entry that can be checked, validated, and the dataset entries that cannot.
 
     A dataset entry whose log is not found (in ``datasets``, default ``datasets/`` beside the
@@ -257,7 +268,7 @@ def load_available(entries_dir: Path, datasets: Path | None = None
     that ignores case, two such entries would share their files.
     """
     datasets = datasets or default_datasets(entries_dir)
-    loaded: list[tuple[dict[str, Any], str]] = []
+    loaded: list[tuple[Entry, str]] = []
     unavailable: list[DatasetUnavailable] = []
     seen: dict[str, str] = {}
     for path in sorted(entries_dir.glob("*.json")):
@@ -275,7 +286,7 @@ def load_available(entries_dir: Path, datasets: Path | None = None
     return loaded, unavailable
 
 
-def runnable_spec(path: Path, entry: dict[str, Any]) -> str:
+def runnable_spec(path: Path, entry: Entry) -> str:
     """The entry's localizer spec, a plug-in file found relative to the entry and unchanged.
 
     Raises:
@@ -330,11 +341,14 @@ def verify(path: Path, workers: int = 1, datasets: Path | None = None
     if fresh["crashes"] == entry["n_frames"]:
         raise LeaderboardError(f"{path}: the localizer could not run on any frame: "
                                f"{fresh['first_error']}")
+    # compared name by name: the entry's figures say what is compared
+    stored: Mapping[str, Any] = entry["metrics"]
+    rerun_figures: Mapping[str, Any] = fresh
     if test:
-        return {f"ci95/{key}": (claimed, rerun) for key, claimed in entry["metrics"]["ci95"].items()
-                if not _overlap(claimed, rerun := clean(fresh["ci95"][key]))}
-    claimed = {key: value for key, value in entry["metrics"].items() if key != "runtime_us"}
-    return differences(claimed, clean({key: fresh[key] for key in claimed}), "")
+        return {f"ci95/{key}": (claimed, rerun) for key, claimed in stored["ci95"].items()
+                if not _overlap(claimed, rerun := clean(rerun_figures["ci95"][key]))}
+    claimed = {key: value for key, value in stored.items() if key != "runtime_us"}
+    return differences(claimed, clean({key: rerun_figures[key] for key in claimed}), "")
 
 
 def _overlap(claimed: list[Any], rerun: list[Any]) -> bool:

@@ -16,15 +16,17 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
-from typing import Any
 
-from azgym.bench.leaderboard.entry_files import LeaderboardError
+from azgym.bench.leaderboard.entry_files import Entry, LeaderboardError
 from azgym.bench.report.results import cases_digest
 from azgym.bench.suites import Case
 from azgym.bench.suites.data import SPLIT, log_cases
 from azgym.logs.manifest import FORMATS, MANIFEST
 from azgym.logs.problems import LogError
 from azgym.logs.read import Log, read_log, shipped_logs
+
+__all__ = ["DatasetUnavailable", "check_data_run", "checked_log", "dataset_cases",
+           "default_datasets", "find_dataset", "is_data_entry"]
 
 PREFIX = "data:"
 """A dataset entry's suite is ``data:`` and the dataset's name."""
@@ -39,12 +41,12 @@ class DatasetUnavailable(LeaderboardError):
         entry: The entry (schema, identity and per-frame file already checked).
     """
 
-    def __init__(self, message: str, entry: dict[str, Any]) -> None:
+    def __init__(self, message: str, entry: Entry) -> None:
         super().__init__(message)
         self.entry = entry
 
 
-def is_data_entry(entry: dict[str, Any]) -> bool:
+def is_data_entry(entry: Entry) -> bool:
     """Whether the entry claims to be scored on a log (by any of its suite, split or dataset)."""
     return entry["suite"].startswith(PREFIX) or entry["split"] == SPLIT or "dataset" in entry
 
@@ -74,7 +76,7 @@ def find_dataset(name: str, datasets: Path | None) -> Path | None:
     return shipped
 
 
-def check_data_run(entry: dict[str, Any], origin: str) -> None:
+def check_data_run(entry: Entry, origin: str) -> None:
     """Suite, split, seed, size and the dataset record agree, in a format this azgym reads."""
     dataset = entry.get("dataset")
     if dataset is None:
@@ -99,7 +101,7 @@ def check_data_run(entry: dict[str, Any], origin: str) -> None:
                                f"({dataset['format']}), the entry says {entry['suite_version']}")
 
 
-def dataset_cases(entry: dict[str, Any], origin: str, datasets: Path | None
+def dataset_cases(entry: Entry, origin: str, datasets: Path | None
                   ) -> tuple[str, tuple[Case, ...]]:
     """The cases of the entry's log (found, and checked unchanged) and their digest."""
     log = checked_log(entry, origin, datasets)
@@ -116,7 +118,7 @@ def _cases_of(log: Log) -> tuple[str, tuple[Case, ...]]:
     return cases_digest(cases), cases
 
 
-def checked_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Log:
+def checked_log(entry: Entry, origin: str, datasets: Path | None) -> Log:
     """The entry's log, found and checked to be the one it was scored on.
 
     Raises:
@@ -130,11 +132,12 @@ def checked_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Lo
             f"{origin}: dataset/sha256: the log {log.folder} changed since the entry was made "
             f"(its files' SHA-256 is {log.sha256}, the entry was scored on {dataset['sha256']}); "
             "rerun the entry on it with azgym bench --data")
-    for field, value in (("name", log.manifest.name), ("simulated", log.manifest.simulated),
-                         ("format", log.manifest.format)):
-        if dataset[field] != value:
+    for field, claimed, value in (("name", dataset["name"], log.manifest.name),
+                                  ("simulated", dataset["simulated"], log.manifest.simulated),
+                                  ("format", dataset["format"], log.manifest.format)):
+        if claimed != value:
             raise LeaderboardError(f"{origin}: dataset/{field}: the entry says "
-                                   f"{dataset[field]!r}, the log's log.toml says {value!r}")
+                                   f"{claimed!r}, the log's log.toml says {value!r}")
     return log
 
 
@@ -151,7 +154,7 @@ def _read(folder: Path, stamp: tuple[tuple[str, int, int], ...]) -> Log:
     return read_log(folder)
 
 
-def _found_log(entry: dict[str, Any], origin: str, datasets: Path | None) -> Log:
+def _found_log(entry: Entry, origin: str, datasets: Path | None) -> Log:
     """The entry's log read and checked (not yet compared with the entry)."""
     name = entry["dataset"]["name"]
     folder = find_dataset(name, datasets)

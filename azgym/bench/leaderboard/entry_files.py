@@ -17,16 +17,21 @@ import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NotRequired, TypedDict
 
 import numpy as np
 
 from azgym.bench.report.results import FRAME_COLUMNS, frame_number
+from azgym.bench.report.summary import ContenderMetrics, Dataset
 from azgym.bench.run.outcome import Outcome
 from azgym.errors import AzgymError
 
 if TYPE_CHECKING:
     from azgym.bench.suites import Case
+
+__all__ = ["HEADING_LIMIT", "MAX_FRAMES_BYTES", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "Entry",
+           "EntryLocalizer", "FrameTable", "LeaderboardError", "Machine", "parse_frames",
+           "read_bytes", "read_frames", "read_json"]
 
 MAX_JSON_BYTES = 16 * 2**20
 """An entry or results.json larger than this is refused (a real one is a few kB)."""
@@ -41,6 +46,56 @@ HEADING_LIMIT = math.pi + 1e-9
 
 class LeaderboardError(AzgymError, ValueError):
     """An entry is malformed, tampered with, or does not match what it claims."""
+
+
+class EntryLocalizer(TypedDict):
+    """An entry's localizer: its spec and hyperparameters.
+
+    A plug-in file is named relative to the entry's folder, with the file's SHA-256.
+    """
+
+    spec: str
+    params: dict[str, Any]
+    sha256: NotRequired[str]
+
+
+class Machine(TypedDict):
+    """The machine an entry's runtimes were measured on."""
+
+    platform: str
+    processor: str
+    cpus: int | None
+    python: str
+
+
+class Entry(TypedDict):
+    """A leaderboard entry, as ``entry.schema.json`` states it and its checks have passed.
+
+    Its metrics are a contender's row of the run's summary
+    (:class:`~azgym.bench.report.results.ContenderMetrics`), JSON's null for a NaN or infinite
+    figure; ``dataset`` is an entry scored on a log's.
+    """
+
+    format: int
+    name: str
+    version: str
+    authors: list[str]
+    link: str
+    localizer: EntryLocalizer
+    suite: str
+    suite_version: int
+    split: str
+    seed: int
+    quick: bool
+    n_frames: int
+    cases_sha256: str
+    azgym_version: str
+    dataset: NotRequired[Dataset]
+    metrics: ContenderMetrics[float | None]
+    machine: Machine
+    timestamp: str
+    results_file: str
+    results_sha256: str
 
 
 def _refuse_constant(name: str) -> Any:
@@ -162,9 +217,9 @@ def parse_frames(text: str, origin: str, cases: Sequence[Case] | None = None) ->
     except csv.Error as exc:
         raise LeaderboardError(f"{origin}: per-frame results: line {reader.line_num}: not CSV: "
                                f"{exc}") from None
-    columns = list(zip(*values, strict=True)) or [(), (), (), ()]
-    table.outcome = Outcome(np.array(columns[0], dtype=bool),
-                            *(np.array(column, dtype=float) for column in columns[1:]), errors)
+    oks, positions, headings, times = list(zip(*values, strict=True)) or [(), (), (), ()]
+    table.outcome = Outcome(np.array(oks, dtype=bool), np.array(positions, dtype=float),
+                            np.array(headings, dtype=float), np.array(times, dtype=float), errors)
     return table
 
 

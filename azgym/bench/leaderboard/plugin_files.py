@@ -11,7 +11,17 @@ from __future__ import annotations
 import hashlib
 import os
 from pathlib import Path, PurePosixPath
-from typing import Any
+from typing import TypedDict
+
+__all__ = ["PluginRecord", "file_sha256", "is_portable", "plugin_path", "plugin_record",
+           "relative_spec", "resolve_spec"]
+
+
+class PluginRecord(TypedDict, total=False):
+    """A plug-in file as ``results.json`` records it: its absolute path and SHA-256."""
+
+    file: str
+    file_sha256: str
 
 
 def plugin_path(spec: str) -> Path | None:
@@ -29,7 +39,7 @@ def file_sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def plugin_record(spec: str) -> dict[str, Any]:
+def plugin_record(spec: str) -> PluginRecord:
     """What ``results.json`` keeps of a spec's file: its absolute path and SHA-256 (or nothing).
 
     A file that does not exist is left out: the run scored it as unable to build.

@@ -33,8 +33,12 @@ import gymnasium as gym
 from azgym._version import __version__
 from azgym.arguments import whole_number
 from azgym.bench.leaderboard.checks import clean
-from azgym.bench.navigation.suites import NavigationSuite, get_navigation_suite
+from azgym.bench.navigation.suites import NAVIGATORS, NavigationSuite, get_navigation_suite
 from azgym.errors import InvalidInputError
+
+__all__ = ["KIND", "RESULTS_FORMAT", "Contender", "check_contenders", "contenders_of",
+           "drive_all", "drive_contender", "episode_rows", "make_env", "navigation_contenders",
+           "run_navigation"]
 
 RESULTS_FORMAT = 2
 """The layout of ``navigation.json`` (``format``). 2: an episode's ``shortest_path_m`` (the
@@ -53,6 +57,27 @@ def contenders_of(navigators: Sequence[str], localizers: Sequence[str]) -> list[
         raise InvalidInputError("a navigation run needs at least one navigator and one "
                                 "localizer")
     return list(dict.fromkeys(pairs))
+
+
+def navigation_contenders(suite: NavigationSuite, navigators: Sequence[str],
+                          localizers: Sequence[str], *, with_builtins: bool = False
+                          ) -> list[Contender]:
+    """Who drives a navigation suite: ``azgym bench --suite navigation``'s pairs, unchecked.
+
+    The navigators named (all of :data:`~azgym.bench.navigation.suites.NAVIGATORS` if none),
+    each with every localizer chosen by the frame suites' rule
+    (:func:`~azgym.bench.run.contenders.resolve_contenders`, the suite's localizers as the
+    built-ins): labelled by their canonical specs, each once. :func:`check_contenders` builds
+    them.
+
+    Raises:
+        InvalidInputError: A localizer spec whose hyperparameters cannot be read.
+    """
+    from azgym.bench.run.contenders import resolve_contenders
+
+    chosen = resolve_contenders(localizers, with_builtins=with_builtins,
+                                builtins=suite.localizers, check=None)
+    return contenders_of(navigators or NAVIGATORS, [c.label for c in chosen])
 
 
 def make_env(suite: NavigationSuite, localizer: str) -> gym.Env:

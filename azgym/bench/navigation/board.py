@@ -20,6 +20,8 @@ from azgym.bench.navigation.report import figure
 from azgym.bench.navigation.results_file import episode_seeds, load_navigation
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, overlap
 
+__all__ = ["Table", "navigation_tables", "table_rows", "verify_navigation"]
+
 HEADER = ["#", "navigator", "localizer", "success % [95 % CI]", "SPL", "collisions/ep",
           "collided %", "time to goal s", "answered %", "error median cm", "error p95 cm"]
 """The columns of a navigation table."""
@@ -80,10 +82,10 @@ def navigation_tables(directory: Path) -> list[Table]:
     for path in sorted(directory.glob("*.json")):
         data = load_navigation(path)
         episodes = episode_seeds(data)
-        for suite, other, where in runs:
-            if suite == data["suite"] and (shared := overlap(episodes, other)):
+        for name, other, where in runs:
+            if name == data["suite"] and (shared := overlap(episodes, other)):
                 raise LeaderboardError(
-                    f"{where} and {path} share episodes of the {suite} suite (seeds "
+                    f"{where} and {path} share episodes of the {name} suite (seeds "
                     f"{shared.start} to {shared.stop - 1}): a board shows each episode once; "
                     "keep one of them")
         runs.append((data["suite"], episodes, path))

@@ -11,6 +11,8 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+__all__ = ["COLUMNS", "figure", "score_table"]
+
 COLUMNS = (("success %", 1), ("SPL", 3), ("collisions/ep", 2), ("collided %", 1),
            ("time to goal s", 1),
            ("answered %", 1), ("error median cm", 1), ("error p95 cm", 1), ("runtime s", 1))

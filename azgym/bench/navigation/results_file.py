@@ -52,6 +52,9 @@ from azgym.nav.controls import CONTROL_STEPS
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.world import PHYSICS_DT
 
+__all__ = ["FORKLIFT", "episode_seeds", "is_navigation_file", "load_navigation",
+           "recomputed_summary"]
+
 MAX_CONTENDERS = 64
 """At most this many contenders in a file (the suites' defaults are 20): a rerun of a file
 drives each one's episodes, so a padded file must not cost hours."""
@@ -165,11 +168,13 @@ def episode_seeds(data: dict[str, Any]) -> range:
 def _shortest_paths(suite: NavigationSuite, data: dict[str, Any]) -> dict[int, float]:
     """The geodesic shortest path of each of the file's episodes, by seed [m]."""
     from azgym.bench.navigation.benchmark import make_env
+    from azgym.envs.navigate import NavigateEnv
 
     env = make_env(suite, "truth")
     try:
-        return {seed: env.unwrapped.shortest_path(seed)
-                for seed in episode_seeds(data)}
+        navigate = env.unwrapped
+        assert isinstance(navigate, NavigateEnv), "a navigation suite drives a NavigateEnv"
+        return {seed: navigate.shortest_path(seed) for seed in episode_seeds(data)}
     finally:
         env.close()
 

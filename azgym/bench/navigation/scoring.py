@@ -27,6 +27,8 @@ from azgym.errors import InvalidInputError
 from azgym.nav.controls import CONTROL_STEPS, Policy
 from azgym.world.world import PHYSICS_DT
 
+__all__ = ["drive", "summarize", "wilson_interval"]
+
 
 def drive(env: gym.Env, policy: Policy, episodes: int, seed: int,
           progress: Callable[[int], None] | None = None) -> dict[str, Any]:

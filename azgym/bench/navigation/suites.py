@@ -20,7 +20,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from azgym.arguments import MAX_SEED
-from azgym.errors import unknown_name
+from azgym.registry import Registry
+
+__all__ = ["NAVIGATION_SUITES", "NAVIGATORS", "NavigationSuite", "get_navigation_suite",
+           "overlap"]
 
 NAVIGATORS = ("pure-pursuit", "ppo")
 """The built-in navigators: the scripted baseline and the shipped PPO policy
@@ -78,23 +81,23 @@ def overlap(first: range, second: range) -> range:
     return range(max(first.start, second.start), min(first.stop, second.stop))
 
 
-NAVIGATION_SUITES: dict[str, NavigationSuite] = {suite.name: suite for suite in (
-    NavigationSuite(
-        "navigation", 2, "closed loop in warehouse-small: a navigator drives spot to spot on "
-        "each localizer's pose; success, SPL, collisions, time to goal, error along the way",
-        2300, "azgym/Navigate-WarehouseSmall-v2", 100, 10,
-        ("truth", "ransac", "lsq", "mex-coarse", "loo", "ng-ransac", "learned", "tkf", "lpkf",
-         "gated-ekf")),
-    NavigationSuite(
-        "navigation-image", 2, "the navigation suite through the fisheye image path: blobs "
-        "detected from pixels, ids decoded from blinking (30 Hz camera)",
-        2400, "azgym/Navigate-WarehouseSmall-v2", 100, 5, ("ransac", "lsq", "gated-ekf"),
-        {"sensor": "image", "ids": "blink"}),
-)}
+NAVIGATION_SUITES: Registry[NavigationSuite] = Registry("navigation suite", {
+    suite.name: suite for suite in (
+        NavigationSuite(
+            "navigation", 2, "closed loop in warehouse-small: a navigator drives spot to spot on "
+            "each localizer's pose; success, SPL, collisions, time to goal, error along the way",
+            2300, "azgym/Navigate-WarehouseSmall-v2", 100, 10,
+            ("truth", "ransac", "lsq", "mex-coarse", "loo", "ng-ransac", "learned", "tkf", "lpkf",
+             "gated-ekf")),
+        NavigationSuite(
+            "navigation-image", 2, "the navigation suite through the fisheye image path: blobs "
+            "detected from pixels, ids decoded from blinking (30 Hz camera)",
+            2400, "azgym/Navigate-WarehouseSmall-v2", 100, 5, ("ransac", "lsq", "gated-ekf"),
+            {"sensor": "image", "ids": "blink"}),
+    )})
+"""The navigation suites by name, in the order the board shows them."""
 
 
 def get_navigation_suite(name: str) -> NavigationSuite:
     """The navigation suite of that name ("Did you mean ...?" otherwise)."""
-    if name not in NAVIGATION_SUITES:
-        raise unknown_name("navigation suite", name, NAVIGATION_SUITES)
     return NAVIGATION_SUITES[name]

@@ -19,11 +19,14 @@ from azgym.metrics import HEADLINE
 from azgym.site import load_scenario
 
 if TYPE_CHECKING:
-    from azgym.bench.run.outcome import Outcome
+    from azgym.bench.report.summary import Summary
+    from azgym.bench.run.outcome import RunOutcome
+
+__all__ = ["write_figures"]
 
 
-def write_figures(summary: dict[str, Any], frames: list[Case],
-                  outcomes: dict[str, Outcome], out: Path,
+def write_figures(summary: Summary, frames: list[Case],
+                  outcomes: dict[str, RunOutcome], out: Path,
                   maps: dict[str, BeaconMap] | None = None) -> list[Path]:
     """cdf.png, causes.png and one error_map_<scenario>.png per scenario (needs matplotlib).
 
@@ -49,13 +52,13 @@ def write_figures(summary: dict[str, Any], frames: list[Case],
         written.append(_error_map(plt, summary, frames, outcomes, (scenario_name, plan),
                                   out / f"error_map_{scenario_name}.png"))
         routed = any(f.sequence for f in frames if f.scenario == scenario_name)
-        if routed and all(o.estimate is not None for o in outcomes.values()):
+        if routed:
             written.append(_trajectories(plt, summary, frames, outcomes, (scenario_name, plan),
                                          out / f"trajectories_{scenario_name}.png"))
     return written
 
 
-def _error_cdfs(plt: Any, summary: dict[str, Any], outcomes: dict[str, Outcome],
+def _error_cdfs(plt: Any, summary: Summary, outcomes: dict[str, RunOutcome],
                 path: Path) -> Path:
     """One curve per localizer: the share of frames within each position error."""
     figure, axes = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
@@ -74,7 +77,7 @@ def _error_cdfs(plt: Any, summary: dict[str, Any], outcomes: dict[str, Outcome],
     return _save(figure, path, plt)
 
 
-def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
+def _p75_by_cause(plt: Any, summary: Summary, path: Path) -> Path:
     """Bars of each localizer's headline per fault cause that occurs.
 
     The headline (:data:`~azgym.metrics.HEADLINE`) counts a refusal as infinitely wrong;
@@ -83,8 +86,9 @@ def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
     labels = list(summary["localizers"])
     causes = [c for c in CAUSES if any(c in summary["localizers"][lab]["by_cause"]
                                        for lab in labels)]
-    values = np.array([[summary["localizers"][label]["by_cause"].get(c, {}).get(
-        HEADLINE, np.nan) for c in causes] for label in labels], dtype=float)
+    by_cause = [summary["localizers"][label]["by_cause"] for label in labels]
+    values = np.array([[stats[c][HEADLINE] if c in stats else np.nan for c in causes]
+                       for stats in by_cause], dtype=float)
     finite = values[np.isfinite(values) & (values > 0)]
     top = 10.0 ** np.ceil(np.log10(finite.max() * 2)) if finite.size else 100.0
     figure, axes = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
@@ -106,8 +110,8 @@ def _p75_by_cause(plt: Any, summary: dict[str, Any], path: Path) -> Path:
     return _save(figure, path, plt)
 
 
-def _error_map(plt: Any, summary: dict[str, Any], frames: list[Case],
-               outcomes: dict[str, Outcome], scenario: tuple[str, str | BeaconMap],
+def _error_map(plt: Any, summary: Summary, frames: list[Case],
+               outcomes: dict[str, RunOutcome], scenario: tuple[str, str | BeaconMap],
                path: Path) -> Path:
     """One floor plan per localizer: its position error at each of the scenario's frames.
 
@@ -162,8 +166,8 @@ def _floor_plan(axes: Any, plan: str | BeaconMap) -> None:
     axes.set_aspect("equal")
 
 
-def _trajectories(plt: Any, summary: dict[str, Any], frames: list[Case],
-                  outcomes: dict[str, Outcome], scenario: tuple[str, str | BeaconMap],
+def _trajectories(plt: Any, summary: Summary, frames: list[Case],
+                  outcomes: dict[str, RunOutcome], scenario: tuple[str, str | BeaconMap],
                   path: Path) -> Path:
     """One floor plan per contender: the true routes (lines) and its estimates, by error.
 

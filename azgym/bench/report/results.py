@@ -16,30 +16,42 @@ import io
 import json
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
 from azgym._version import __version__
 from azgym.bench.leaderboard.plugin_files import plugin_record
+from azgym.bench.report.summary import ContenderMetrics, ContenderRow, DatasetSummary, Summary
 from azgym.bench.report.tracking import tracking_metrics
 from azgym.bench.run.contenders import Contender
-from azgym.bench.run.outcome import Outcome
+from azgym.bench.run.outcome import Outcome, RunOutcome
 from azgym.bench.suites import CAUSES, Case, Suite
 from azgym.files import prepare_folder, write_file
 from azgym.metrics import bootstrap_blocks, confidence_intervals
+from azgym.profile import Profile, profile_toml
+
+__all__ = ["FRAME_COLUMNS", "BenchResult", "cases_digest", "contender_metrics", "frame_number",
+           "frame_rows", "summarize"]
 
 FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
                  "heading_error_rad", "micros", "error"]
 """The columns of a per-frame results file (``frames.csv``, and a leaderboard entry's)."""
 
 
+class _DatasetField(TypedDict, total=False):
+    """A run on a log's ``dataset`` (and nothing for a suite's run)."""
+
+    dataset: DatasetSummary
+
+
 def summarize(suite: Suite, split: str, seed: int, quick: bool,
               contenders: Sequence[Contender], cases: Sequence[Case],
-              outcomes: dict[str, Outcome], reference: str) -> dict[str, Any]:
+              outcomes: Mapping[str, Outcome], reference: str, *, profile: Profile | None,
+              given: Profile | None, dataset: DatasetSummary | None = None) -> Summary:
     """The metrics of every contender: overall, by cause, by group, runtimes and tracks.
 
     Args:
@@ -51,9 +63,12 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
         cases: The cases.
         outcomes: Each contender's outcome, by label.
         reference: The label whose median runtime the others are compared with.
+        profile: The profile applied (None: none).
+        given: The profile given for the run (None: none).
+        dataset: The log a run on a log scored (None: a suite's run).
     """
     reference_us = float(np.nanmedian(outcomes[reference].micros))
-    results: dict[str, Any] = {}
+    results: dict[str, ContenderRow] = {}
     for contender in contenders:
         outcome = outcomes[contender.label]
         results[contender.label] = {
@@ -63,14 +78,16 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
             "crashes": sum(1 for e in outcome.errors if e),
             "first_error": next((e for e in outcome.errors if e), ""),
         }
+    run_on: _DatasetField = {} if dataset is None else {"dataset": dataset}
     return {"suite": suite.name, "suite_version": suite.version, "split": split, "seed": seed,
             "quick": quick, "n_frames": len(cases), "cases_sha256": cases_digest(cases),
             "azgym_version": __version__, "python": sys.version.split()[0],
-            "localizers": results}
+            "localizers": results, **run_on, "profile": profile_toml(profile or Profile()),
+            "profile_given": profile_toml(given or Profile())}
 
 
 def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: float
-                      ) -> dict[str, Any]:
+                      ) -> ContenderMetrics[float]:
     """One contender's figures: overall, 95 % intervals, by cause, by group, runtimes, tracks.
 
     The intervals resample a route's frames in blocks of a few seconds, frames on their own
@@ -142,9 +159,9 @@ def frame_rows(label: str, cases: Sequence[Case], outcome: Outcome) -> list[list
 class BenchResult:
     """A benchmark run: the summary (results.json) and every case's outcome (frames.csv)."""
 
-    summary: dict[str, Any]
+    summary: Summary
     cases: list[Case]
-    outcomes: dict[str, Outcome]
+    outcomes: dict[str, RunOutcome]
 
     def write(self, out: Path, figures: bool = True) -> list[Path]:
         """Write results.json, frames.csv and, with matplotlib installed, the figures."""

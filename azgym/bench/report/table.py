@@ -5,12 +5,18 @@ from __future__ import annotations
 import math
 import textwrap
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any, Final
 
 from azgym.metrics import BLOCK_SECONDS, FAILURE_DISTANCE, HEADLINE
 from azgym.profile import field_texts
 
-RANK_BY = HEADLINE
+if TYPE_CHECKING:
+    from azgym.bench.report.summary import Summary
+
+__all__ = ["LEGEND", "POSITION_ONLY", "RANK_BY", "cell", "heading_scored", "interval_cell",
+           "profile_lines", "rank_key", "ranked_table", "run_report", "tracking_table"]
+
+RANK_BY: Final = HEADLINE
 """Boards rank by the p75 position error over every frame, a refusal infinite (EvAAL's rule)."""
 LEGEND = (
     f"p75: the 75th percentile of the position error over every frame, a frame without an "
@@ -28,7 +34,7 @@ POSITION_ONLY = ("position-only truth: heading not scored (the truth has no head
 """Printed under a ranked table when the truth has no heading (:func:`heading_scored`)."""
 
 
-def heading_scored(summary: Mapping[str, Any]) -> bool:
+def heading_scored(summary: Summary) -> bool:
     """Whether a run's heading was scored: False when an answered frame's heading figure is None.
 
     :func:`~azgym.metrics.summarize_errors` leaves a heading figure out (None) only when
@@ -81,7 +87,7 @@ def interval_cell(bounds: Sequence[float | None] | None, digits: int = 2) -> str
     return f"{cell(bounds[0], digits)}-{cell(bounds[1], digits)}"
 
 
-def ranked_table(summary: dict[str, Any]) -> str:
+def ranked_table(summary: Summary) -> str:
     """The contenders of a run, ranked (:func:`rank_key`), as a text table with its legend."""
     rows = sorted(summary["localizers"].items(), key=lambda item: rank_key(item[1]["all"],
                                                                            item[0]))
@@ -111,17 +117,17 @@ def ranked_table(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def profile_lines(summary: dict[str, Any]) -> list[str]:
+def profile_lines(summary: Summary) -> list[str]:
     """The profile a run applied (``summary["profile"]``), wrapped: [] when none was."""
     given = list(field_texts(summary.get("profile") or {}).values())
     return textwrap.wrap(f"profile (the contenders' defaults): {', '.join(given)}", 100) \
         if given else []
 
 
-def tracking_table(summary: dict[str, Any]) -> str:
+def tracking_table(summary: Summary) -> str:
     """The track figures of a run with sequences (:mod:`azgym.bench.report.tracking`), or ""."""
-    rows = [(label, row["tracking"]) for label, row in summary["localizers"].items()
-            if row.get("tracking")]
+    rows = [(label, track) for label, row in summary["localizers"].items()
+            if (track := row["tracking"]) is not None]
     if not rows:
         return ""
     width = max([len("localizer"), *(len(label) for label, _ in rows)])
@@ -140,7 +146,7 @@ def tracking_table(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def run_report(summary: dict[str, Any], seconds: float, written: list[Any]) -> str:
+def run_report(summary: Summary, seconds: float, written: list[Any]) -> str:
     """What ``azgym bench`` prints after a run: the ranking, the tracks, the time and the files."""
     parts = ["", ranked_table(summary)]
     if tracks := tracking_table(summary):

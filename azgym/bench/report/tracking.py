@@ -16,12 +16,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Generic, TypedDict
 
 import numpy as np
 
 from azgym.bench.run.outcome import Outcome
 from azgym.bench.suites import Case
+from azgym.metrics import Figure
+
+__all__ = ["FAILED_CM", "KIDNAP_WINDOW_S", "RECOVERED_CM", "Recovery", "TrackFigures",
+           "tracking_metrics"]
 
 RECOVERED_CM = 10.0
 """An estimate this close to the truth [cm] ends a recovery."""
@@ -31,7 +35,42 @@ FAILED_CM = 100.0
 """An error over this [cm] is a failed frame (as in the per-frame figures)."""
 
 
-def tracking_metrics(cases: Sequence[Case], outcome: Outcome) -> dict[str, Any] | None:
+class Recovery(TypedDict):
+    """The recovery after one event (module docstring).
+
+    Attributes:
+        event: The event (``Case.event``).
+        sequence: Its sequence.
+        time_s: Its time in the sequence [s].
+        recovery_s: Seconds to the first estimate within ``RECOVERED_CM`` (None: never).
+        max_cm_before_recovery: The largest finite error until then (None: no estimate).
+    """
+
+    event: str
+    sequence: str
+    time_s: float
+    recovery_s: float | None
+    max_cm_before_recovery: float | None
+
+
+class TrackFigures(TypedDict, Generic[Figure]):
+    """One contender's track figures (module docstring); see :class:`~azgym.metrics.Figure`.
+
+    Attributes:
+        availability_after_first_fix: The share of frames with an estimate after each
+            sequence's first.
+        max_cm_outside_kidnaps: The largest error outside kidnapping windows [cm] (NaN: none).
+        frames_over_1m_outside_kidnaps: The estimates over ``FAILED_CM`` there.
+        events: The recovery after each event, in order.
+    """
+
+    availability_after_first_fix: float
+    max_cm_outside_kidnaps: Figure
+    frames_over_1m_outside_kidnaps: int
+    events: list[Recovery]
+
+
+def tracking_metrics(cases: Sequence[Case], outcome: Outcome) -> TrackFigures[float] | None:
     """The track figures of one contender (module docstring); None without driven sequences.
 
     A sequence is driven when its frames carry motion samples: frames of a static recording
@@ -75,7 +114,7 @@ def _sequences(cases: Sequence[Case]) -> list[list[int]]:
     return list(found.values())
 
 
-def _recovery(cases: Sequence[Case], error_cm: np.ndarray, rest: list[int]) -> dict[str, Any]:
+def _recovery(cases: Sequence[Case], error_cm: np.ndarray, rest: list[int]) -> Recovery:
     """How long after an event the estimate was back within RECOVERED_CM, and the worst error."""
     start = rest[0]
     back = next((k for k in rest if error_cm[k] <= RECOVERED_CM), None)

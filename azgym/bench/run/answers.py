@@ -16,6 +16,9 @@ import numpy as np
 from azgym.bench.run import worker
 from azgym.localize.registry import is_builtin
 
+__all__ = ["Answers", "GIVE_UP_AFTER", "Report", "STARTUP_LIMIT", "build_allowance", "death",
+           "give_up_note", "overrun_reason", "record_answers"]
+
 STARTUP_LIMIT = 300.0
 """Seconds a new worker may take to come up, not counting the build. The first run on a machine
 compiles azgym's kernels in the fork server (tens of seconds); later runs take milliseconds."""

@@ -6,11 +6,14 @@ target and its hyperparameters written as ``--localizer`` takes them (``ransac``
 (``ransac-weighted`` is ``ransac:weighted=true``). So every label in a table is something
 ``--localizer`` accepts and builds exactly that contender, and one label never means two
 localizers.
+
+Which contenders a command runs is one rule, :func:`resolve_contenders`: the frame suites, a
+log, a navigation suite and a sweep all choose theirs through it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,6 +24,9 @@ from azgym.errors import InvalidInputError
 from azgym.localize.registry import parse_spec, spec_label
 from azgym.profile import Profile
 from azgym.track.base import make_tracker
+
+__all__ = ["DEFAULT_SPECS", "REFERENCE", "Contender", "check_buildable", "contender",
+           "default_contenders", "resolve_contenders", "warm_up", "with_reference"]
 
 REFERENCE = "ransac"
 """The localizer every runtime is compared with (added to a run that lacks it)."""
@@ -73,13 +79,6 @@ def with_reference(contenders: Iterable[Contender]) -> list[Contender]:
     return contenders
 
 
-def with_defaults(contenders: Iterable[Contender]) -> list[Contender]:
-    """The default contenders, then the given ones that are not among them."""
-    defaults = default_contenders()
-    labels = {c.label for c in defaults}
-    return defaults + [c for c in contenders if c.label not in labels]
-
-
 def check_buildable(candidate: Contender, time_limit: float = DEFAULT_TIME_LIMIT,
                     profile: Profile | None = None) -> None:
     """Build the contender once, in a worker: a bad name, spec or hyperparameter raises here.
@@ -95,6 +94,67 @@ def check_buildable(candidate: Contender, time_limit: float = DEFAULT_TIME_LIMIT
     problem = build_problem(candidate.spec, candidate.params, time_limit, profile)
     if problem:
         raise InvalidInputError(f"cannot build {candidate.label}: {problem}")
+
+
+def resolve_contenders(
+    specs: Sequence[str],
+    *,
+    with_builtins: bool = False,
+    builtins: Sequence[str] = DEFAULT_SPECS,
+    check: Callable[[Contender], None] | None = check_buildable,
+    check_builtins: bool = False,
+    refuse_repeat: Callable[[str, int, int], Exception] | None = None,
+) -> list[Contender]:
+    """Which contenders run: the ones ``specs`` name, else the built-ins; each once, each built.
+
+    The one rule of every command that runs localizers (``azgym bench`` on a frame suite, a log
+    or a navigation suite, ``azgym evaluate navigator`` and ``azgym sweep``), in this order:
+
+    1. Each spec is a contender labelled by its canonical spec (:func:`contender`); a spec whose
+       hyperparameters cannot be read stops the caller here, before anything is built.
+    2. A label named again is the same localizer (``ransac:weighted=true`` is
+       ``ransac-weighted``): it runs once; with ``refuse_repeat``, the error it makes of the
+       label and the indices in ``specs`` of the first and of the repeat is raised instead.
+    3. With no spec, the built-ins run; with ``with_builtins``, the built-ins first, then the
+       named ones that are not among them.
+    4. Each named contender is built once by ``check``, which raises on a problem
+       (:func:`check_buildable`: in a worker, as the run builds it; a bad name is answered with
+       the closest ones, "Did you mean ...?"), the built-ins too with ``check_builtins`` (a
+       profile's defaults may not suit one); so a bad name, spec or hyperparameter stops the
+       caller before the run rather than failing every frame. ``None``: none is built here (a
+       navigation suite builds each in its environment). The runtime reference is the
+       runner's to add (:func:`with_reference`).
+
+    Args:
+        specs: What ``--localizer`` takes: a name, preset or plug-in spec, with hyperparameters.
+        with_builtins: Run the built-ins besides the named ones.
+        builtins: The built-ins (default: the bench's, :data:`DEFAULT_SPECS`).
+        check: Builds a contender, raising :class:`InvalidInputError` on a problem.
+        check_builtins: Build the built-ins too.
+        refuse_repeat: Makes the error for a label named twice (None: run it once).
+
+    Raises:
+        InvalidInputError: A spec that cannot be read, or one ``check`` refuses.
+    """
+    named: dict[str, Contender] = {}
+    first: dict[str, int] = {}
+    for k, candidate in enumerate(map(contender, specs)):
+        if candidate.label in named:
+            if refuse_repeat is not None:
+                raise refuse_repeat(candidate.label, first[candidate.label], k)
+            continue
+        named[candidate.label] = candidate
+        first[candidate.label] = k
+    chosen = list(named.values())
+    if with_builtins or not named:
+        defaults = [contender(spec) for spec in builtins]
+        labels = {c.label for c in defaults}
+        chosen = defaults + [c for c in chosen if c.label not in labels]
+    if check is not None:
+        for candidate in chosen:
+            if check_builtins or candidate.label in named:
+                check(candidate)
+    return chosen
 
 
 def warm_up(contenders: Iterable[Contender], profile: Profile | None = None) -> None:

@@ -60,14 +60,13 @@ from azgym.bench.run.wire import (
 from azgym.bench.run.worker import ANSWER_SIZE
 from azgym.profile import Profile
 
+__all__ = ["DEFAULT_TIME_LIMIT", "IsolatedRun", "build_problem"]
+
 DEFAULT_TIME_LIMIT = 10.0
 """Seconds a localizer may take on one frame (or to be built) before it is stopped: 60 times the
 slowest built-in (the exhaustive 1 cm MEX, ~0.15 s a frame)."""
 CHECK_EVERY = 0.01
 """Seconds between the runner's looks at its workers' deadlines while messages keep coming."""
-BACKENDS = ("local", "ray")
-"""Where the contenders run: worker processes forked here, or Ray actors on a cluster
-(:mod:`azgym.bench.run.ray_backend`, imported only when asked for)."""
 
 
 @dataclass
@@ -116,16 +115,16 @@ class IsolatedRun:
 
     def run(self, report: Report) -> Answers:
         """Run every frame; ``report`` hears how many are finished after each batch."""
-        self.selector = selectors.DefaultSelector()
+        self.selector = selector = selectors.DefaultSelector()
         try:
             while self.queue or any(w.batch is not None for w in self.running):
                 self._fill()
-                self._wait()
+                self._wait(selector)
                 report(self.finished)
         finally:
             for w in list(self.running):
                 self._retire(w)
-            self.selector.close()
+            selector.close()
         return self.answers
 
     def _fill(self) -> None:
@@ -196,15 +195,15 @@ class IsolatedRun:
             end += 1
         return end
 
-    def _wait(self) -> None:
+    def _wait(self, selector: selectors.BaseSelector) -> None:
         """Wait for a message, a death or a deadline, and deal with whatever happened.
 
         A route's frames come and go one at a time, so this is the runner's inner loop: it
         reads what is ready (one message a worker), and looks at the deadlines only when the
-        next may have passed (:data:`CHECK_EVERY`).
+        next may have passed (:data:`CHECK_EVERY`). ``selector`` is the one :meth:`run` opened.
         """
         now = time.monotonic()
-        for key, _ in self.selector.select(max(self.check_at - now, 0.0)):
+        for key, _ in selector.select(max(self.check_at - now, 0.0)):
             w = key.data
             if w not in self.running:
                 continue
@@ -396,5 +395,3 @@ def build_problem(spec: str, params: dict[str, Any], time_limit: float,
     """
     return IsolatedRun(spec, params, [], {}, workers=1, time_limit=time_limit,
                        batches=[], profile=profile).build_problem()
-
-

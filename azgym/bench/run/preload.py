@@ -15,6 +15,8 @@ from __future__ import annotations
 from azgym.bench.run import worker
 from azgym.bench.run.contenders import default_contenders, warm_up
 
+__all__: list[str] = []  # imported for what importing does, not for a name
+
 worker.quiet_streams()
 worker.hide_process()
 warm_up(default_contenders())

@@ -22,6 +22,9 @@ from azgym.bench.run.answers import death
 from azgym.bench.run.wire import STOP, MapData, ProtocolError, heard, write_all
 from azgym.profile import Profile
 
+__all__ = ["Worker", "build_verdict", "context", "default_workers", "poll", "start_fork_server",
+           "start_worker", "stop"]
+
 PRELOAD = "azgym.bench.run.preload"
 
 

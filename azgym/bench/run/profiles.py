@@ -34,19 +34,17 @@ import dataclasses
 import inspect
 from collections.abc import Callable, Collection
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any
 
 from azgym.localize.registry import parse_spec, resolve
 from azgym.profile import Profile, field_texts, profile_defaults, profile_toml
-from azgym.sensing.motion import ImuModel, Motion, OdometryModel
+from azgym.sensing.motion import DifferentialOdometryModel, ImuModel, Motion, OdometryModel
 from azgym.site import Scenario
 from azgym.site.error_model import ErrorModel
 
 __all__ = ["AS_SHIPPED", "DIFFERENTIAL_MOTION_NOISE", "MOTION_NOISE", "SENSOR_NOISE",
            "SimulatedNoise", "contender_params", "describe_profile", "hyperparameter_names"]
 
-Model = TypeVar("Model")
-"""A motion sensor's model (a frozen dataclass)."""
 SENSOR_NOISE = ("sensor.delta_alpha_d", "sensor.coverage")
 """The profile fields a simulated camera's azimuth noise takes."""
 MOTION_NOISE = ("motion.speed_factor", "motion.speed_noise", "motion.scale_walk",
@@ -176,12 +174,12 @@ class SimulatedNoise:
             else motion.turn_rate_noise,
             gyro_bias_walk=base.gyro_bias_walk if motion.bias_walk is None else motion.bias_walk)
 
-    def differential_odometry(self, base: Model) -> Model:
+    def differential_odometry(self, base: DifferentialOdometryModel
+                              ) -> DifferentialOdometryModel:
         """A differential drive's odometry model with the profile's motion fields over ``base``'s.
 
         Each motion field the profile gives sets the model's field of the same name
-        (``speed_factor``, ``speed_scale``, ``speed_noise``, ``turn_rate_noise``, ``bias_walk``
-        of :class:`~azgym.sensing.motion.DifferentialOdometryModel`).
+        (``speed_factor``, ``speed_scale``, ``speed_noise``, ``turn_rate_noise``, ``bias_walk``).
         """
         names = {field.name for field in dataclasses.fields(base)}
         given = {name: value for name, value in dataclasses.asdict(self.profile.motion).items()

@@ -17,6 +17,8 @@ from azgym.bench.run.answers import death
 from azgym.bench.run.wire import MapData, Packed, ProtocolError, heard, step_message, write_all
 from azgym.profile import Profile
 
+__all__ = ["RayWorker", "STREAM_EVERY"]
+
 STREAM_EVERY = 0.05
 """Seconds an actor gathers answers before it streams them back (one Ray item a frame costs
 more than a fast frame); it streams what it has at once when its worker is slower."""

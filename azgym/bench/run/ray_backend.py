@@ -53,6 +53,8 @@ from azgym.bench.run.wire import MapData, Packed
 from azgym.errors import InvalidInputError, require
 from azgym.profile import Profile
 
+__all__ = ["JOIN_TIMEOUT", "RayRun", "check_address", "ray_session"]
+
 CONNECT_TIMEOUT = 5.0
 """Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
 retrying for minutes)."""
@@ -89,8 +91,8 @@ def ray_session(address: str | None, workers: int) -> Iterator[int]:
     require("ray", "ray")
     import ray
 
-    if check_address(address) is not None:
-        _probe(address)
+    if address is not None and (endpoint := check_address(address)) is not None:
+        _probe(address, endpoint)
     started = not ray.is_initialized()
     if started:
         _connect(ray, address, workers)
@@ -152,10 +154,10 @@ def check_address(address: str | None) -> tuple[str, int] | None:
     return host.strip("[]"), int(port)
 
 
-def _probe(address: str) -> None:
-    """Refuse, within ``CONNECT_TIMEOUT``, an address where nothing is listening."""
+def _probe(address: str, endpoint: tuple[str, int]) -> None:
+    """Refuse, within ``CONNECT_TIMEOUT``, an address (its host and port) where none listens."""
     try:
-        socket.create_connection(check_address(address), CONNECT_TIMEOUT).close()
+        socket.create_connection(endpoint, CONNECT_TIMEOUT).close()
     except OSError as exc:
         raise InvalidInputError(
             f"--address {address}: no Ray cluster answers there within {CONNECT_TIMEOUT:g} s "

@@ -12,21 +12,20 @@ its data suite (:mod:`azgym.bench.suites.data`), on its own map and with its own
 
 from __future__ import annotations
 
-import contextlib
 import importlib.util
 import math
 import secrets
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from azgym.arguments import time_limit as checked_time_limit
-from azgym.arguments import whole_number
 from azgym.bench.report.results import BenchResult, summarize
+from azgym.bench.report.summary import DatasetSummary
 from azgym.bench.run.answers import Answers
+from azgym.bench.run.backends import BACKENDS
 from azgym.bench.run.contenders import (
     REFERENCE,
     Contender,
@@ -34,8 +33,8 @@ from azgym.bench.run.contenders import (
     warm_up,
     with_reference,
 )
-from azgym.bench.run.isolation import BACKENDS, DEFAULT_TIME_LIMIT, IsolatedRun
-from azgym.bench.run.outcome import Outcome
+from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.run.outcome import RunOutcome
 from azgym.bench.run.processes import start_fork_server
 from azgym.bench.run.profiles import describe_profile
 from azgym.bench.run.wire import pack, pack_map
@@ -44,11 +43,14 @@ from azgym.bench.suites import NO_TEST_SPLIT, Case, Suite
 from azgym.bench.suites.data import SPLIT as DATA_SPLIT
 from azgym.bench.suites.data import data_suite, log_cases, log_profile
 from azgym.core import BeaconMap, pose_error
-from azgym.errors import InvalidInputError, unknown_name
+from azgym.errors import InvalidInputError
 from azgym.jit import localizers_compiled
 from azgym.logs.read import Log
-from azgym.profile import Profile, profile_toml
+from azgym.profile import Profile
 from azgym.site import load_scenario
+
+__all__ = ["Progress", "batch_bounds", "run_benchmark", "run_contenders", "run_log_benchmark",
+           "write_log_results"]
 
 BATCHES_PER_WORKER = 4
 """Frames go to the workers in this many batches per worker: few round trips, and a slow batch
@@ -69,7 +71,7 @@ def run_contenders(
     backend: str = "local",
     address: str | None = None,
     profile: Profile | None = None,
-) -> dict[str, Outcome]:
+) -> dict[str, RunOutcome]:
     """Score every contender on every case; the outcomes are in the order of ``cases``.
 
     Each contender runs in worker processes of its own (:mod:`azgym.bench.run.isolation`), which
@@ -89,7 +91,7 @@ def run_contenders(
         address: The Ray cluster's address (``backend="ray"`` only).
         profile: Whose hyperparameters are every contender's defaults (None: none).
     """
-    Run, session = _backend(backend, address, workers)
+    Run, session = BACKENDS.make(backend, address=address, workers=workers)
     time_limit = checked_time_limit("time_limit", time_limit)
     cases = list(cases)
     say = progress or (lambda _line: None)
@@ -98,7 +100,7 @@ def run_contenders(
     frames = [pack(case.scenario, case.measurements, case.sequence, case.initial, case.motion)
               for case in cases]
     sent_maps = {name: pack_map(beacons) for name, beacons in maps.items()}
-    outcomes: dict[str, Outcome] = {}
+    outcomes: dict[str, RunOutcome] = {}
     with session as workers:
         size = max(1, math.ceil(len(cases) / (BATCHES_PER_WORKER * workers)))
         batches = batch_bounds(cases, size)
@@ -110,21 +112,6 @@ def run_contenders(
             outcomes[contender.label] = _score(answers, cases)
             say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
     return outcomes
-
-
-def _backend(backend: str, address: str | None, workers: int) -> tuple[Any, Any]:
-    """The run class of a backend, and the session it runs in (which yields the workers)."""
-    if backend not in BACKENDS:
-        raise unknown_name("backend", backend, BACKENDS)
-    if backend == "local":
-        if address is not None:
-            raise InvalidInputError("address is for backend 'ray' (a Ray cluster's address)")
-        workers = whole_number("workers", workers, minimum=1)
-        start_fork_server()
-        return IsolatedRun, contextlib.nullcontext(workers)
-    from azgym.bench.run.ray_backend import RayRun, ray_session
-
-    return RayRun, ray_session(address, whole_number("workers", workers, minimum=0))
 
 
 def batch_bounds(cases: Sequence[Case], size: int) -> list[tuple[int, int]]:
@@ -157,16 +144,16 @@ def _progress_bar(label: str, total: int, say: Progress) -> Callable[[int], None
     return report
 
 
-def _score(answers: Answers, cases: Sequence[Case]) -> Outcome:
+def _score(answers: Answers, cases: Sequence[Case]) -> RunOutcome:
     """A contender's answers scored against the true poses (which only this process has)."""
-    outcome = Outcome.empty(len(cases))
+    outcome = RunOutcome.empty(len(cases))
     outcome.ok[:] = answers.posed
     outcome.micros[:] = answers.micros
     outcome.errors[:] = answers.errors
     outcome.estimate[:] = answers.pose
-    for k in np.flatnonzero(answers.posed):
-        estimate = tuple(float(v) for v in answers.pose[k])
-        outcome.position[k], outcome.heading[k] = pose_error(estimate, cases[k].pose)
+    for k in np.flatnonzero(answers.posed).tolist():
+        x, y, heading = (float(v) for v in answers.pose[k])
+        outcome.position[k], outcome.heading[k] = pose_error((x, y, heading), cases[k].pose)
     return outcome
 
 
@@ -226,9 +213,8 @@ def run_benchmark(
                               time_limit=time_limit, progress=progress, backend=backend,
                               address=address, profile=profile)
     reference = next(c.label for c in contenders if c.is_reference)
-    summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference)
-    summary["profile"] = profile_toml(profile or Profile())
-    summary["profile_given"] = profile_toml(suite.profile or Profile())
+    summary = summarize(suite, split, seed, quick, contenders, cases, outcomes, reference,
+                        profile=profile, given=suite.profile)
     return BenchResult(summary, cases, outcomes)
 
 
@@ -261,13 +247,11 @@ def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *
                               maps={log.map_name: log.beacons}, time_limit=time_limit,
                               progress=progress, profile=applied)
     reference = next(c.label for c in contenders if c.is_reference)
+    dataset: DatasetSummary = {"name": log.manifest.name, "format": log.manifest.format,
+                               "simulated": log.manifest.simulated, "sha256": log.sha256,
+                               "description": log.manifest.description}
     summary = summarize(data_suite(log, cases), DATA_SPLIT, 0, False, contenders, cases, outcomes,
-                        reference)
-    summary["dataset"] = {"name": log.manifest.name, "format": log.manifest.format,
-                          "simulated": log.manifest.simulated, "sha256": log.sha256,
-                          "description": log.manifest.description}
-    summary["profile"] = profile_toml(applied)
-    summary["profile_given"] = profile_toml(profile or Profile())
+                        reference, profile=applied, given=profile, dataset=dataset)
     return BenchResult(summary, cases, outcomes)
 
 

@@ -27,6 +27,10 @@ import numpy as np
 from azgym.core import BeaconMap, Measurements, Pose
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 
+__all__ = ["DONE", "MapData", "Packed", "ProtocolError", "STOP", "StepReader", "WorkerFrame",
+           "framed", "heard", "pack", "pack_map", "say", "step_message", "unpack", "unpack_map",
+           "write_all"]
+
 MapData = tuple[np.ndarray, np.ndarray, np.ndarray]
 """One beacon map as sent: ids, xyz, width."""
 

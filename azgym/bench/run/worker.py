@@ -45,10 +45,14 @@ from azgym.bench.run.wire import (
 )
 from azgym.core import BeaconMap, Measurements, estimated_pose
 from azgym.errors import AzgymError
-from azgym.localize.registry import is_builtin
+from azgym.localize.registry import SupportsLocalize, is_builtin
 from azgym.profile import Profile
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
-from azgym.track.base import FrameByFrame, Tracker, make_tracker
+from azgym.track.base import FrameByFrame, SupportsTrack, make_tracker
+
+__all__ = ["ANSWER_HEADING", "ANSWER_MICROS", "ANSWER_SIZE", "ANSWER_STATE", "ANSWER_X", "ANSWER_Y",
+           "BUILDING", "IDLE", "NO_POSE", "POSED", "WARMING", "answer_step", "call_untimed",
+           "describe", "hide_process", "quiet_streams", "seal", "serve", "warm_up"]
 
 _CLOCK = time.perf_counter_ns
 """The timer, bound when the worker loads, before any localizer's code runs (a plug-in that
@@ -113,7 +117,8 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
     steps = StepReader(fd)
     while (step := _receive(steps)) is not None:
         frames = [unpack(packed) for packed in step]
-        if not warm and frames:  # run it once untimed
+        # a plug-in localizer (the only contender that starts cold): run it once untimed
+        if not warm and frames and isinstance(tracker, FrameByFrame):
             _mark(progress, 0)
             first = frames[0]
             call_untimed(tracker.localizer, first.measurements, beacon_maps[first.scenario])
@@ -125,7 +130,7 @@ def serve(conn: Any, progress: Any, answers: Any, spec: str, params: dict[str, A
 
 
 def _build(fd: int, progress: Any, spec: str, params: dict[str, Any], profile: Profile | None
-           ) -> tuple[Tracker, bool] | None:
+           ) -> tuple[SupportsTrack, bool] | None:
     """Build the contender (a built-in then runs through its warm-up) and say it is ready.
 
     Its hyperparameters are ``params`` with the profile's under them.
@@ -149,7 +154,7 @@ def _build(fd: int, progress: Any, spec: str, params: dict[str, Any], profile: P
     return tracker, warm
 
 
-def answer_step(fd: int, progress: Any, answers: Any, tracker: Tracker,
+def answer_step(fd: int, progress: Any, answers: Any, tracker: SupportsTrack,
                  frames: Sequence[WorkerFrame], maps: Mapping[str, BeaconMap],
                  sequence: str | None) -> str | None:
     """Answer each frame of a step, writing its answer (and sending its error on ``fd``) at once.
@@ -182,7 +187,8 @@ def answer_step(fd: int, progress: Any, answers: Any, tracker: Tracker,
     return sequence
 
 
-def call_untimed(localizer: Any, measurements: Measurements, beacons: BeaconMap) -> None:
+def call_untimed(localizer: SupportsLocalize, measurements: Measurements,
+                 beacons: BeaconMap) -> None:
     """One call whose outcome does not count (its frame is localized again, timed)."""
     try:
         localizer.localize(measurements, beacons)
@@ -276,7 +282,7 @@ def describe(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-def warm_up(tracker: Tracker) -> None:
+def warm_up(tracker: SupportsTrack) -> None:
     """Run a tracker (a localizer through :class:`FrameByFrame`) through the warm-up route.
 
     Its calls load its compiled code, or compile it on a machine's first run, for every
@@ -324,7 +330,7 @@ def _warm_up_route(quality_columns: int) -> list[Packed]:
     for k, (ids, azimuth) in enumerate(views):
         quality = None if not quality_columns else \
             np.linspace(0.5, 1.5, len(ids) * quality_columns).reshape(len(ids), quality_columns)
-        if quality_columns == 1:
+        if quality is not None and quality_columns == 1:
             quality = quality[:, 0]
         samples = np.linspace(0.1 * k - 0.08, 0.1 * k, 5) if k else np.zeros(0)
         flat = np.zeros_like(samples)

@@ -27,6 +27,8 @@ from azgym.sensing.motion import Motion, joined
 if TYPE_CHECKING:
     from azgym.world.drive import Frame
 
+__all__ = ["CAUSES", "Case", "NO_TEST_SPLIT", "Suite", "frame_cause", "keep_every", "route_cases"]
+
 NO_TEST_SPLIT = (
     "split: {suite} has no test split: its routes are the same for every seed (the seed draws "
     "only the noise), so frames drawn from a secret seed would have the dev split's true poses, "

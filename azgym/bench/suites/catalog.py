@@ -5,10 +5,12 @@ from __future__ import annotations
 from azgym.bench.run.profiles import DIFFERENTIAL_MOTION_NOISE, MOTION_NOISE, SENSOR_NOISE
 from azgym.bench.suites import events, image, paper, robot, warehouse
 from azgym.bench.suites.base import Suite
-from azgym.errors import unknown_name
 from azgym.profile import DIFFERENTIAL_DRIVE, FORKLIFT
+from azgym.registry import Registry
 
-SUITES: dict[str, Suite] = {suite.name: suite for suite in (
+__all__ = ["SUITES", "get_suite"]
+
+SUITES: Registry[Suite] = Registry("suite", {suite.name: suite for suite in (
     Suite("paper", 1, "Rátosi & Simon Sec. 3: the paper room's 23 x 23 grid, 20 runs a point, "
           "K = 0, 1, 3, 5 (the runs of azgym reproduce paper)", 2021, paper.build,
           simulates=SENSOR_NOISE),
@@ -31,11 +33,10 @@ SUITES: dict[str, Suite] = {suite.name: suite for suite in (
           "turn rate stamped irregularly (5 Hz frames; for trackers)", 23, robot.routes,
           routes=True, simulates=SENSOR_NOISE + DIFFERENTIAL_MOTION_NOISE,
           vehicle=DIFFERENTIAL_DRIVE, defaults=robot.contender_defaults),
-)}
+)})
+"""The frame suites by name, in the order the leaderboard shows them."""
 
 
 def get_suite(name: str) -> Suite:
     """The suite of that name ("Did you mean ...?" otherwise)."""
-    if name not in SUITES:
-        raise unknown_name("suite", name, SUITES)
     return SUITES[name]

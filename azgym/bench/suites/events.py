@@ -26,6 +26,8 @@ from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples, joined
 from azgym.site import load_scenario
 from azgym.world.drive import simulate
 
+__all__ = ["build", "with_events"]
+
 OUTAGE_AT, OUTAGE_S = 0.3, 3.0
 """Where in the route the outage starts (fraction of its frames) and how long it lasts [s]."""
 KIDNAP_AT, KIDNAP_S = 0.6, 10.0

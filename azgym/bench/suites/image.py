@@ -9,6 +9,8 @@ from azgym.sensing.image.sensor import ImageSensor
 from azgym.site import load_scenario
 from azgym.world.drive import simulate
 
+__all__ = ["routes"]
+
 SCORED_EVERY = 3
 """Every third frame of the blinking camera is scored, as a 10 Hz localizer would use them."""
 

@@ -20,6 +20,8 @@ from azgym.errors import InvalidInputError
 from azgym.sensing.synthetic import ideal_azimuths, inject_outliers
 from azgym.site import Scenario, load_scenario
 
+__all__ = ["ProtocolConfig", "Runs", "build", "cases_of", "draw_runs", "grid_points", "near_beacon"]
+
 PAPER_OUTLIER_COUNTS = (0, 1, 3, 5)
 NEAR_BEACON_RADIUS = 0.5
 """Grid points closer than this to a beacon [m] are also reported separately (a grid point may
@@ -95,7 +97,7 @@ def near_beacon(points: FloatArray, beacons: BeaconMap) -> BoolArray:
     """Whether each point lies within NEAR_BEACON_RADIUS of some beacon (horizontally)."""
     distance = np.hypot(points[:, None, 0] - beacons.xy[None, :, 0],
                         points[:, None, 1] - beacons.xy[None, :, 1])
-    return (distance < NEAR_BEACON_RADIUS).any(axis=1)
+    return np.any(distance < NEAR_BEACON_RADIUS, axis=1)
 
 
 def draw_runs(scenario: Scenario, config: ProtocolConfig) -> list[Runs]:

@@ -11,7 +11,8 @@ from __future__ import annotations
 from azgym.bench.run.profiles import AS_SHIPPED, SimulatedNoise
 from azgym.bench.suites.base import Case, keep_every, route_cases
 from azgym.profile import Profile
-from azgym.site import load_scenario
+from azgym.sensing.motion import DifferentialOdometryModel
+from azgym.site import Scenario, load_scenario
 from azgym.world.drive import motion_models, simulate
 
 __all__ = ["ROUTES", "SCENARIO", "contender_defaults", "routes"]
@@ -30,8 +31,7 @@ def contender_defaults() -> Profile:
     the simulated odometry's :meth:`~azgym.sensing.motion.DifferentialOdometryModel.motion_profile`.
     """
     scenario = load_scenario(SCENARIO)
-    odometry, _ = motion_models(scenario)
-    motion = odometry.motion_profile()  # type: ignore[union-attr]  # a robot's model
+    motion = _odometry(scenario).motion_profile()
     return Profile(scenario.profile.vehicle, scenario.profile.sensor, motion)
 
 
@@ -41,11 +41,17 @@ def routes(seed: int, quick: bool, noise: SimulatedNoise = AS_SHIPPED) -> list[C
     ``noise`` sets the bearing noise and the odometry's errors from a profile (``--profile``).
     """
     scenario = noise.scenario(load_scenario(SCENARIO))
-    odometry, _ = motion_models(scenario)
-    odometry = noise.differential_odometry(odometry)
+    odometry = noise.differential_odometry(_odometry(scenario))
     chosen = [route for route in scenario.routes if route.name in ROUTES]
     cases: list[Case] = []
     for k, route in enumerate(chosen[:1] if quick else chosen):
         frames = simulate(scenario, route, seed=seed + k, odometry=odometry)
         cases += route_cases(SCENARIO, f"{SCENARIO}/{route.name}", frames, noise)
     return keep_every(cases, 2) if quick else cases
+
+
+def _odometry(scenario: Scenario) -> DifferentialOdometryModel:
+    """The robot's odometry model as its scenario simulates it (a differential drive's)."""
+    odometry, _ = motion_models(scenario)
+    assert isinstance(odometry, DifferentialOdometryModel), "robot-arena is a differential drive"
+    return odometry

@@ -14,6 +14,9 @@ from azgym.site.elements import Faults
 from azgym.site.sampling import random_free_pose
 from azgym.world.drive import simulate
 
+__all__ = ["SCENARIOS", "fault_levels", "routes", "scenario_suite", "static", "static_cases",
+           "stress"]
+
 SCENARIOS = ("warehouse-small", "warehouse-paper")
 """The warehouses of the static and route suites."""
 RANDOM_POSES = {True: 40, False: 400}

@@ -33,14 +33,17 @@ from typing import Any
 
 from azgym import arguments
 from azgym.arguments import time_limit as checked_time_limit
-from azgym.bench.run.contenders import Contender, check_buildable
-from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+from azgym.bench.run.contenders import Contender, contender, resolve_contenders
+from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT, build_problem
 from azgym.bench.suites import Suite
 from azgym.bench.suites.warehouse import scenario_suite
 from azgym.core import BeaconMap
 from azgym.errors import AzgymError, InvalidInputError, unknown_name
+from azgym.localize.registry import spec_label
 from azgym.metrics import HEADLINE
 from azgym.site import Scenario, load_scenario
+
+__all__ = ["GridPoint", "MAX_RUNS", "SweepConfig", "load_sweep", "parse_sweep"]
 
 MAX_RUNS = 1000
 """At most this many grid points x suites x seeds in one sweep: a grid larger than that is
@@ -261,19 +264,12 @@ def _scalar(fields: _Fields, field: str, value: Any) -> None:
 
 
 def _build_problem(base: Contender, params: dict[str, Any], time_limit: float) -> str:
-    """Why ``base`` with ``params`` added does not build ("" when it does)."""
-    from azgym.bench.run.contenders import contender
-    from azgym.localize.registry import build, spec_label
-
+    """Why ``base`` with ``params`` added does not build ("" when it does), as a run builds it."""
     try:
         candidate = contender(spec_label(base.spec, {**base.params, **params}))
-        if ":" not in candidate.spec:  # a name: azgym's, or an installed package's
-            build(candidate.spec, **candidate.params)
-        else:  # a plug-in is built where it will run, in a worker, within the limit
-            check_buildable(candidate, time_limit)
     except AzgymError as exc:
         return str(exc)
-    return ""
+    return build_problem(candidate.spec, candidate.params, time_limit)
 
 
 def _culprit(field: str, base: Contender, params: dict[str, Any], varied: dict[str, Any],
@@ -290,14 +286,30 @@ def _culprit(field: str, base: Contender, params: dict[str, Any], varied: dict[s
     return field
 
 
+@dataclass(frozen=True)
+class _Draft:
+    """A grid point as its table writes it: the field, the named localizer and its values."""
+
+    field: str
+    base: Contender
+    params: dict[str, Any]
+    varied: dict[str, Any]
+
+    @property
+    def spec(self) -> str:
+        """The grid point's canonical spec: the name's hyperparameters and the table's."""
+        return spec_label(self.base.spec, {**self.base.params, **self.params})
+
+
 def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict[str, Any]]],
             time_limit: float) -> list[GridPoint]:
-    """Each grid point as a contender, built once (a bad name or value is named here)."""
-    from azgym.bench.run.contenders import contender
-    from azgym.localize.registry import spec_label
+    """Each grid point as a contender, built once (a bad name or value is named here).
 
-    points: list[GridPoint] = []
-    seen: dict[str, str] = {}
+    The points go through the one rule of who runs
+    (:func:`~azgym.bench.run.contenders.resolve_contenders`), two that are the same localizer
+    refused; a point that does not build is blamed on the field whose value it refuses.
+    """
+    drafts: list[_Draft] = []
     for k, (table, grid) in enumerate(zip(tables, grids, strict=True)):
         field = f"localizer[{k}]"
         for varied in grid:
@@ -310,13 +322,24 @@ def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict
                 where = "grid" if key in varied else "params"
                 raise fields.error(f"{field}.{where}.{key}", f"is also fixed in the name "
                                                             f"{table['name']!r}")
-            problem = _build_problem(base, params, time_limit)
-            if problem:
-                raise fields.error(_culprit(field, base, params, varied, time_limit), problem)
-            candidate = contender(spec_label(base.spec, {**base.params, **params}))
-            if candidate.label in seen:
-                raise fields.error(field, f"grid point {candidate.label!r} is already in the "
-                                          f"sweep ({seen[candidate.label]})")
-            seen[candidate.label] = field
-            points.append(GridPoint(candidate, base.spec, varied))
-    return points
+            drafts.append(_Draft(field, base, params, varied))
+
+    def repeat(label: str, first: int, again: int) -> InvalidInputError:
+        return fields.error(drafts[again].field, f"grid point {label!r} is already in the "
+                                                 f"sweep ({drafts[first].field})")
+
+    by_label: dict[str, _Draft] = {}
+    for draft in drafts:  # the first of a label: the one built (a repeat is refused)
+        by_label.setdefault(draft.spec, draft)
+
+    def check(candidate: Contender) -> None:
+        draft = by_label[candidate.label]
+        problem = build_problem(candidate.spec, candidate.params, time_limit)
+        if problem:
+            raise fields.error(_culprit(draft.field, draft.base, draft.params, draft.varied,
+                                        time_limit), problem)
+
+    chosen = resolve_contenders([draft.spec for draft in drafts], check=check,
+                                refuse_repeat=repeat)
+    return [GridPoint(candidate, draft.base.spec, draft.varied)
+            for candidate, draft in zip(chosen, drafts, strict=True)]

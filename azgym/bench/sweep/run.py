@@ -22,7 +22,7 @@ import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 from azgym.bench.report.plots import _save
 from azgym.bench.run.runner import Progress, run_benchmark
@@ -30,7 +30,9 @@ from azgym.bench.sweep.config import GridPoint, SweepConfig
 from azgym.files import prepare_folder, write_file
 from azgym.metrics import HEADLINE
 
-FIGURES = ("n", HEADLINE, "availability", "failure_rate", "median_cm", "p75_cm", "p95_cm",
+__all__ = ["FIGURES", "INTERVAL", "LABELS", "SweepResult", "run_sweep", "write_sweep_figure"]
+
+FIGURES: Final = ("n", HEADLINE, "availability", "failure_rate", "median_cm", "p75_cm", "p95_cm",
            "mean_cm", "rmse_cm")
 """The accuracy figures of each row, from each run's overall figures: the headline (every frame,
 a refusal infinite), then the answered frames' figures. The table then adds the headline's 95 %

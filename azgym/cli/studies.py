@@ -11,7 +11,9 @@ import json
 import time
 from pathlib import Path
 
-from azgym.cli_options import resolve_workers, workers_option
+from azgym.cli.options import resolve_workers, workers_option
+
+__all__ = ["add_reproduce", "add_study"]
 
 
 def _reproduce_paper(args: argparse.Namespace) -> int:

@@ -11,30 +11,16 @@ import argparse
 import time
 from pathlib import Path
 
-from azgym.bench.run.isolation import BACKENDS
-from azgym.cli_options import check_backend, out_folder, resolve_workers, workers_option
+from azgym.cli.options import (
+    add_backend_options,
+    check_backend,
+    out_folder,
+    progress_printer,
+    resolve_workers,
+    workers_option,
+)
 
-
-def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None:
-    """``--backend local|ray`` and ``--address ADDR``: one definition for bench and sweep."""
-    parser.add_argument("--backend", choices=BACKENDS, default="local",
-                        help="local: worker processes here; ray: Ray actors (pip install "
-                             f"\"azgym[ray]\"), on --address or a local instance{note}")
-    parser.add_argument("--address", metavar="ADDR", type=_address,
-                        help="--backend ray: a Ray cluster's head, HOST:PORT (see `ray start "
-                             "--head`), ray://HOST:PORT or auto (default: a local instance)")
-
-
-def _address(text: str) -> str:
-    """``--address``: checked for its form (HOST:PORT, a port in 1-65535) as it is parsed."""
-    from azgym.bench.run.ray_backend import check_address
-    from azgym.errors import InvalidInputError
-
-    try:
-        check_address(text)
-    except InvalidInputError as exc:
-        raise argparse.ArgumentTypeError(str(exc).removeprefix(f"--address {text}: ")) from None
-    return text
+__all__ = ["add_sweep"]
 
 
 def add_sweep(commands: argparse._SubParsersAction) -> None:
@@ -52,7 +38,6 @@ def add_sweep(commands: argparse._SubParsersAction) -> None:
 def _sweep(args: argparse.Namespace) -> int:
     from azgym.bench.sweep.config import load_sweep
     from azgym.bench.sweep.run import run_sweep
-    from azgym.cli import _progress_printer
     from azgym.files import prepare_folder
 
     check_backend(args)
@@ -62,7 +47,7 @@ def _sweep(args: argparse.Namespace) -> int:
     workers = resolve_workers(args)
     started = time.perf_counter()
     result = run_sweep(config, backend=args.backend, address=args.address, workers=workers,
-                       progress=_progress_printer())
+                       progress=progress_printer())
     written = result.write(Path(args.out))
     print()
     print(result.text())

@@ -14,9 +14,12 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from azgym.arguments import whole_number
+
+__all__ = ["DEFAULT_ENV", "DEFAULT_LOCALIZER", "TEST_SEED", "add_evaluate"]
 
 DEFAULT_ENV = "azgym/Navigate-WarehouseSmall-v2"
 """The environment driven unless ``--env`` names another."""
@@ -34,6 +37,7 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     from azgym.bench.navigation.benchmark import episode_rows
     from azgym.bench.navigation.report import score_table
     from azgym.bench.navigation.scoring import drive
+    from azgym.bench.run.contenders import resolve_contenders
     from azgym.envs.registration import navigation_spec
     from azgym.files import prepare_folder, write_file
     from azgym.nav.policy_file import load_policy
@@ -42,7 +46,8 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     seed = whole_number("--seed", args.seed, 0)
     env_id = navigation_spec(args.env).id
     out = prepare_folder(Path(args.out)) if args.out else None
-    localizers = list(dict.fromkeys(args.localizer or [DEFAULT_LOCALIZER]))
+    localizers = [c.label for c in resolve_contenders(  # who runs: the bench's one rule
+        args.localizer, builtins=(DEFAULT_LOCALIZER,), check=None)]
     envs = {name: gym.make(env_id, localizer=name, sensor=args.sensor, ids=args.ids)
             for name in localizers}  # every localizer named and built before any episode
     policy = load_policy(args.policy, envs[localizers[0]])
@@ -65,7 +70,7 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     return 0
 
 
-def _progress(localizer: str, episodes: int):
+def _progress(localizer: str, episodes: int) -> Callable[[int], None]:
     """A progress callback: the episode count redrawn in place on a terminal, else nothing."""
     def show(done: int) -> None:
         if sys.stdout.isatty():

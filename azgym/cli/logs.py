@@ -1,24 +1,23 @@
-"""``azgym import DIR``, ``azgym export route`` and ``azgym bench --data DIR``: logged data.
+"""``azgym import DIR`` and ``azgym export route``: logged data.
 
 ``import`` checks a log folder (docs/logs.md) and prints what it holds and what the reader
 changed (its notes: repeated time stamps merged, motion samples trimmed), or every problem found
-with its file, line and column; ``export route`` writes a simulated route as a log; ``bench
---data`` scores localizers and trackers on a log as on a suite.
+with its file, line and column; ``export route`` writes a simulated route as a log. ``azgym
+bench --data`` scores localizers and trackers on a log (:mod:`azgym.cli.bench`).
 """
 
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 if TYPE_CHECKING:
-    from azgym.bench.run.runner import Progress
     from azgym.logs.read import Log
-    from azgym.profile import Profile
+
+__all__ = ["add_logs", "describe"]
 
 
 def add_logs(commands: argparse._SubParsersAction) -> None:
@@ -98,39 +97,4 @@ def _export(args: argparse.Namespace) -> int:
     folder = export_route(args.scenario, args.route, args.seed, Path(args.out), name=args.name,
                           motion_rate_hz=args.motion_rate)
     print(f"wrote the log {folder} (simulated); check it with: azgym import {folder}")
-    return 0
-
-
-def bench_data(args: argparse.Namespace, progress: Progress, profile: Profile | None) -> int:
-    """``azgym bench --data DIR [--profile PROFILE.toml]``: every contender on a log's frames.
-
-    Each takes its defaults from the log's profile, with ``profile``'s fields over it.
-    """
-    from azgym.bench.report.table import run_report
-    from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
-    from azgym.bench.run.runner import run_log_benchmark, write_log_results
-    from azgym.bench.suites.data import log_cases, log_profile
-    from azgym.cli import _contenders
-    from azgym.cli_options import resolve_workers
-    from azgym.errors import InvalidInputError
-    from azgym.files import prepare_folder
-    from azgym.logs import read_log
-
-    if (args.suite is not None or args.navigator or args.quick or args.split != "dev"
-            or args.backend != "local" or args.address is not None):
-        raise InvalidInputError("--data scores a log in local worker processes: it takes no "
-                                "--suite, --navigator, --quick, --split, --backend or --address")
-    log = read_log(args.data)
-    log_cases(log)  # a log without truth stops here, before any localizer is built
-    for note in log.notes:  # what the reader changed, said before the figures it shapes
-        progress(f"note: {note}")
-    time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
-    contenders = _contenders(args.localizer, args.with_builtins, time_limit,
-                             log_profile(log, profile))
-    prepare_folder(Path(args.out))
-    started = time.perf_counter()
-    result = run_log_benchmark(log, contenders, workers=resolve_workers(args),
-                               time_limit=time_limit, progress=progress, profile=profile)
-    written = write_log_results(result, log, Path(args.out))
-    print(run_report(result.summary, time.perf_counter() - started, written))
     return 0

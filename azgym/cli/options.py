@@ -1,22 +1,30 @@
-"""The command line's shared options: one rule per kind of option, for every command.
+"""The command line's shared options and progress: one rule per kind of option, for every command.
 
 ``--time-limit SECONDS``, ``--workers N`` and ``--out DIR`` mean the same in ``azgym bench``,
 ``sweep``, ``layout``, ``leaderboard verify`` and ``reproduce``, and are refused the same way
-while the command line is read; :func:`check_backend` and :func:`resolve_workers` are the one
-reading of ``--backend``, ``--address`` and ``--workers`` for the commands that run the
-benchmark. ``--profile PROFILE.toml`` (:func:`profile_option`) names a profile file.
+while the command line is read; :func:`add_backend_options` defines ``--backend`` and
+``--address`` once for ``bench`` and ``sweep``, and :func:`check_backend` and
+:func:`resolve_workers` are the one reading of them and of ``--workers`` for the commands that
+run the benchmark. ``--profile PROFILE.toml`` (:func:`profile_option`) names a profile file.
+:func:`progress_printer` shows a run's progress.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import TYPE_CHECKING, Any
 
 from azgym.arguments import time_limit
 from azgym.errors import InvalidInputError
 
 if TYPE_CHECKING:
+    from azgym.bench.run.runner import Progress
     from azgym.profile import Profile
+
+__all__ = ["add_backend_options", "check_backend", "out_folder", "profile_option",
+           "progress_printer", "read_profile_option", "resolve_workers", "seconds_option",
+           "workers_option"]
 
 
 def seconds_option(text: str) -> float:
@@ -90,3 +98,39 @@ def resolve_workers(args: Any) -> int:
     if args.workers:
         return args.workers
     return 0 if getattr(args, "backend", "local") == "ray" else default_workers()
+
+
+def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None:
+    """``--backend local|ray`` and ``--address ADDR``: one definition for bench and sweep."""
+    from azgym.bench.run.backends import BACKENDS
+
+    parser.add_argument("--backend", choices=BACKENDS.names(), default="local",
+                        help="local: worker processes here; ray: Ray actors (pip install "
+                             f"\"azgym[ray]\"), on --address or a local instance{note}")
+    parser.add_argument("--address", metavar="ADDR", type=_address,
+                        help="--backend ray: a Ray cluster's head, HOST:PORT (see `ray start "
+                             "--head`), ray://HOST:PORT or auto (default: a local instance)")
+
+
+def _address(text: str) -> str:
+    """``--address``: checked for its form (HOST:PORT, a port in 1-65535) as it is parsed."""
+    from azgym.bench.run.ray_backend import check_address
+
+    try:
+        check_address(text)
+    except InvalidInputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix(f"--address {text}: ")) from None
+    return text
+
+
+def progress_printer() -> Progress:
+    """Print progress: a bar redrawn in place on a terminal, only finished lines otherwise."""
+    terminal = sys.stdout.isatty()
+
+    def show(text: str) -> None:
+        if not text.startswith("\r"):
+            print(("\r" if terminal else "") + text, flush=True)
+        elif terminal:
+            print(text, end="", flush=True)
+
+    return show

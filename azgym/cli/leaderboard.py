@@ -10,7 +10,9 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from azgym.cli_options import resolve_workers, workers_option
+from azgym.cli.options import resolve_workers, workers_option
+
+__all__ = ["DATASETS_HELP", "add_leaderboard"]
 
 DATASETS_HELP = ("where the logs of entries scored on a log are, as DIR/NAME/ (default: "
                  "datasets/ beside the entries, if there is one; shipped logs are found by name)")

@@ -11,7 +11,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from azgym.cli_options import out_folder, resolve_workers, seconds_option, workers_option
+from azgym.cli.options import out_folder, resolve_workers, seconds_option, workers_option
+
+__all__ = ["DEFAULT_FRAMES", "MAX_TOTAL_FRAMES", "add_layout"]
 
 DEFAULT_FRAMES = 100
 """Monte Carlo frames per cell by default (about 7 % sampling error on an RMS; 400: 3.5 %)."""

@@ -10,20 +10,26 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from azgym.arguments import whole_number
 from azgym.errors import AzgymError, DependencyNotInstalled
+from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
 
-MODELS = ("ng-ransac", "learned")
+__all__ = ["MODELS", "add_train"]
+
+MODELS = tuple(MODEL_DEFAULTS)
 """The models ``--model`` names."""
-DEFAULTS = {"ng-ransac": {"layouts": 64, "epochs": 20, "hidden": 16},
-            "learned": {"layouts": 1000, "epochs": 60, "hidden": 32}}
-"""Each model's defaults for the options not given (the shipped weights' settings for
-``learned``; ng-ransac's shipped weights used ``--layouts 400``)."""
 
 
-def _whole(minimum: int):
+def _per_model(setting: str) -> str:
+    """Each model's default of a setting, for the help: ``ng-ransac 64, learned 1000``."""
+    return ", ".join(f"{model} {getattr(given, setting)}"
+                     for model, given in MODEL_DEFAULTS.items())
+
+
+def _whole(minimum: int) -> Callable[[str], int]:
     """An argparse type: a whole number >= ``minimum``, refused by argparse (exit 2)."""
     def parse(text: str) -> int:
         try:
@@ -45,9 +51,10 @@ def _require_training_extra() -> None:
 
 
 def _train_localizer(args: argparse.Namespace) -> int:
-    settings = {key: value if value is not None else DEFAULTS[args.model][key]
-                for key, value in (("layouts", args.layouts), ("epochs", args.epochs),
-                                   ("hidden", args.hidden))}
+    settings: dict[str, int] = {
+        key: value if value is not None else getattr(MODEL_DEFAULTS[args.model], key)
+        for key, value in (("layouts", args.layouts), ("epochs", args.epochs),
+                           ("hidden", args.hidden))}
     _require_training_extra()
     if args.model == "learned":
         from azgym.learn.train_regression import train_learned as train
@@ -55,8 +62,9 @@ def _train_localizer(args: argparse.Namespace) -> int:
         from azgym.learn.train import train_ng_ransac as train
 
     started = time.perf_counter()
-    result = train(Path(args.out), frames=args.frames_per_layout, seed=args.seed,
-                   threads=args.threads, **settings)
+    result = train(Path(args.out), layouts=settings["layouts"], frames=args.frames_per_layout,
+                   epochs=settings["epochs"], seed=args.seed, hidden=settings["hidden"],
+                   threads=args.threads)
     print(f"{args.model}: {len(result.history)} epochs, {time.perf_counter() - started:.0f} s"
           "; wrote " + ", ".join(map(str, (result.weights, result.card, result.figure))))
     return 0
@@ -119,18 +127,19 @@ def _add_localizer(targets: argparse._SubParsersAction) -> None:
     localizer.add_argument("--out", required=True, metavar="DIR",
                            help="output folder (a checkpoint there is resumed)")
     localizer.add_argument("--layouts", type=_whole(1), metavar="N",
-                           help="generated warehouses trained on (default: ng-ransac 64, "
-                                "learned 1000)")
-    localizer.add_argument("--frames-per-layout", type=_whole(1), default=100, metavar="N",
+                           help="generated warehouses trained on (default: "
+                                f"{_per_model('layouts')})")
+    localizer.add_argument("--frames-per-layout", type=_whole(1), default=FRAMES_PER_LAYOUT,
+                           metavar="N",
                            help="frames drawn in each warehouse (held-out ones too)")
     localizer.add_argument("--epochs", type=_whole(1), metavar="N",
-                           help="passes over the frames (default: ng-ransac 20, learned 60)")
+                           help=f"passes over the frames (default: {_per_model('epochs')})")
     localizer.add_argument("--seed", type=_whole(0), default=0, metavar="S",
                            help="seed of the frames, the initial weights and the batch order "
                                 "(default: 0)")
     localizer.add_argument("--hidden", type=_whole(1), metavar="H",
-                           help="width of the network's hidden layers (default: ng-ransac 16, "
-                                "learned 32)")
+                           help="width of the network's hidden layers (default: "
+                                f"{_per_model('hidden')})")
     localizer.add_argument("--threads", type=_whole(1), default=1, metavar="N",
                            help="torch's CPU threads")
     localizer.set_defaults(handler=_train_localizer)

@@ -13,18 +13,22 @@ import importlib.util
 import math
 from io import BytesIO
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from azgym.errors import InvalidInputError
-from azgym.logs.calibrate import TURN_RATE_SOURCES, Calibration
+
+if TYPE_CHECKING:
+    from azgym.logs.calibrate import Calibration
 
 __all__ = ["add_calibrate", "draw_residuals"]
 
 
 def add_calibrate(commands: argparse._SubParsersAction) -> None:
     """Register ``azgym calibrate``."""
+    from azgym.logs.calibrate import TURN_RATE_SOURCES
+
     parser = commands.add_parser(
         "calibrate", help="fit a sensor, vehicle and motion profile to a log with truth")
     parser.add_argument("log", metavar="LOG", help="the log's folder (or a shipped log's name)")

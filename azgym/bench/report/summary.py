@@ -1,0 +1,98 @@
+"""The shapes of a run's results: the summary (``results.json``) and a contender's row in it.
+
+:mod:`azgym.bench.report.results` builds them; a leaderboard entry keeps a row's figures
+(:class:`ContenderMetrics`) and a run on a log's :class:`Dataset`. A figure is a float as
+computed, or float or None as an entry stores it (:class:`~azgym.metrics.Figure`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Generic, NotRequired, TypedDict
+
+from azgym.bench.report.tracking import TrackFigures
+from azgym.metrics import ErrorStats, Figure, Intervals
+
+__all__ = ["ContenderMetrics", "ContenderRow", "Dataset", "DatasetSummary", "Runtimes",
+           "Summary"]
+
+
+class Runtimes(TypedDict, Generic[Figure]):
+    """A contender's runtime per frame [µs]: median, p99, median over the reference's median."""
+
+    median: Figure
+    p99: Figure
+    ratio_to_ransac: Figure
+    reference_us: float
+
+
+class ContenderMetrics(TypedDict, Generic[Figure]):
+    """A contender's figures, as results.json and an entry keep them.
+
+    :func:`~azgym.bench.report.results.contender_metrics` computes them; see
+    :class:`~azgym.metrics.Figure` for the type of a figure.
+    """
+
+    all: ErrorStats[Figure]
+    ci95: Intervals[Figure]
+    by_cause: dict[str, ErrorStats[Figure]]
+    by_group: dict[str, ErrorStats[Figure]]
+    runtime_us: Runtimes[Figure]
+    tracking: TrackFigures[Figure] | None
+
+
+class ContenderRow(ContenderMetrics[float]):
+    """A contender's row of a run's summary: who it is, its figures and its failures.
+
+    Attributes:
+        spec: Its spec.
+        params: Its hyperparameters.
+        file: A plug-in's file (absolute; absent for a built-in or a missing file).
+        file_sha256: The SHA-256 of that file.
+        crashes: The frames on which it raised.
+        first_error: The first exception it raised ("" for none).
+    """
+
+    spec: str
+    params: dict[str, Any]
+    file: NotRequired[str]
+    file_sha256: NotRequired[str]
+    crashes: int
+    first_error: str
+
+
+class Dataset(TypedDict):
+    """The log a run on a log scored (``azgym bench --data``), as a leaderboard entry keeps it."""
+
+    name: str
+    sha256: str
+    format: int
+    simulated: bool
+
+
+class DatasetSummary(Dataset):
+    """The log as a run's summary keeps it: with its description."""
+
+    description: str
+
+
+class Summary(TypedDict):
+    """A run's summary (``results.json``): the run, and each contender's row by its label.
+
+    ``dataset`` is a run on a log's; ``profile`` the profile applied (the contenders'
+    defaults, and the simulator's noise), ``profile_given`` the one given for the run
+    (:func:`~azgym.profile.profile_toml`; empty: none).
+    """
+
+    suite: str
+    suite_version: int
+    split: str
+    seed: int
+    quick: bool
+    n_frames: int
+    cases_sha256: str
+    azgym_version: str
+    python: str
+    localizers: dict[str, ContenderRow]
+    dataset: NotRequired[DatasetSummary]
+    profile: dict[str, dict[str, Any]]
+    profile_given: dict[str, dict[str, Any]]

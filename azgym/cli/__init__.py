@@ -1,0 +1,109 @@
+"""azgym: benchmark azimuth-based indoor localizers, and reproduce the papers they come from.
+
+azgym bench [--suite S | --data DIR] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
+            [--workers N] [--time-limit SECONDS] [--quick] [--out DIR] [--navigator NAME ...]
+            [--backend local|ray] [--address ADDR] [--profile PROFILE.toml]
+azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR]
+azgym import DIR
+azgym calibrate LOG --out PROFILE.toml [--figure FILE] [--turn-rate auto|odometry|imu] [--seed N]
+                [--overwrite]
+azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [--motion-rate HZ]
+azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S] [--workers N]
+                      [--time-limit SECONDS] [--out DIR]
+azgym layout optimize SCENARIO --add N [--step M] [--spacing M] [--out DIR]
+azgym leaderboard submit|build|verify ...
+azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
+azgym reproduce plotter [--runs N] [--seed S] [--out DIR]
+azgym study error-model [--scenario S] [--frames N] [--noise SIGMA] [--calibration-px PX]
+azgym study ids [--scenario S] [--rate HZ] [--noise SIGMA]
+azgym scenarios
+azgym generate --seed N [--out FILE.toml] [--size X Y]
+azgym localizers
+azgym check SPEC
+azgym train localizer --model ng-ransac|learned --out DIR [--layouts N] [--frames-per-layout N]
+                      [--epochs N] [--seed S] [--hidden H] [--threads N]
+azgym train navigator --env ID --algo ppo|sac --out DIR [--steps N] [--seed S] [--localizer L]
+                      [--envs N] [--threads N]
+azgym evaluate navigator POLICY [--env ID] [--localizer L ...] [--episodes N] [--seed S]
+                         [--sensor geometry|image] [--ids oracle|blink] [--out DIR]
+
+The command's modules, one per command group: :mod:`~azgym.cli.bench` (a frame suite, a
+navigation suite or a log), :mod:`~azgym.cli.leaderboard`, :mod:`~azgym.cli.studies`
+(``reproduce``, ``study``), :mod:`~azgym.cli.train`, :mod:`~azgym.cli.evaluate`,
+:mod:`~azgym.cli.logs` (``import``, ``export``), :mod:`~azgym.cli.calibrate`,
+:mod:`~azgym.cli.layout`, :mod:`~azgym.cli.sweep` and :mod:`~azgym.cli.info` (``scenarios``,
+``localizers``, ``generate``, ``check``); :mod:`~azgym.cli.options` the options every command
+shares and the progress printer. Each module registers its parsers (``add_*``); this one builds
+the ``azgym`` parser from them and runs the handler (:func:`main`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from azgym.cli.bench import add_bench
+from azgym.cli.calibrate import add_calibrate
+from azgym.cli.evaluate import add_evaluate
+from azgym.cli.info import add_info
+from azgym.cli.layout import add_layout
+from azgym.cli.leaderboard import add_leaderboard
+from azgym.cli.logs import add_logs
+from azgym.cli.studies import add_reproduce, add_study
+from azgym.cli.sweep import add_sweep
+from azgym.cli.train import add_train
+from azgym.errors import AzgymError
+
+__all__ = ["build_parser", "main"]
+
+
+class _DefaultsFormatter(argparse.HelpFormatter):
+    """Help that ends each option with its default, unless the text says it or there is none."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if (not action.option_strings or "default" in text
+                or action.default in (None, False, [], argparse.SUPPRESS)):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose ``--help`` shows every option's default."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _DefaultsFormatter)
+        super().__init__(*args, **kwargs)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``azgym`` command."""
+    from azgym._version import __version__
+
+    parser = _Parser(prog="azgym", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"azgym {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True)
+    add_bench(commands)
+    add_leaderboard(commands)
+    add_reproduce(commands)
+    add_study(commands)
+    add_train(commands)
+    add_evaluate(commands)
+    add_logs(commands)
+    add_calibrate(commands)
+    add_layout(commands)
+    add_sweep(commands)
+    add_info(commands)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``azgym`` command."""
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.handler(args))
+    except AzgymError as exc:
+        print(f"azgym: error: {exc}", file=sys.stderr)
+        return 2

@@ -1,0 +1,201 @@
+"""``azgym bench``: score localizers on a frame suite, a navigation suite or a log.
+
+One command, three runners, chosen by what is named: a frame suite (``--suite``, by default
+:data:`DEFAULT_SUITE` in its quick size) through :func:`~azgym.bench.run.runner.run_benchmark`;
+a navigation suite (:mod:`azgym.bench.navigation.suites`), run like a frame suite —
+``--localizer``, ``--with-builtins``, ``--split``, ``--quick``, ``--workers``, ``--out`` mean the
+same — with ``--navigator`` naming who drives; or a log of bearing data (``--data DIR``,
+docs/logs.md), scored as a suite is. Each refuses the options that are the others'. Who runs is
+the library's one rule (:func:`~azgym.bench.run.contenders.resolve_contenders`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from azgym.cli.options import (
+    add_backend_options,
+    check_backend,
+    out_folder,
+    profile_option,
+    progress_printer,
+    read_profile_option,
+    resolve_workers,
+    seconds_option,
+    workers_option,
+)
+from azgym.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from azgym.bench.run.contenders import Contender
+    from azgym.bench.run.runner import Progress
+    from azgym.profile import Profile
+
+__all__ = ["DEFAULT_SUITE", "add_bench"]
+
+DEFAULT_SUITE = "warehouse-static"
+"""The suite ``azgym bench`` runs, in its quick size, when none is named."""
+
+
+def add_bench(commands: argparse._SubParsersAction) -> None:
+    """``azgym bench``: score localizers on a suite."""
+    from azgym.bench.run.contenders import DEFAULT_SPECS
+    from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+
+    bench = commands.add_parser("bench", help="score localizers on a benchmark suite")
+    bench.add_argument("--suite", help=f"suite name (default: {DEFAULT_SUITE}, quick); the "
+                                       "closed-loop suites: navigation, navigation-image")
+    bench.add_argument("--localizer", action="append", default=[], metavar="SPEC",
+                       help="a localizer: NAME, package.module:Class or path/file.py:Class, "
+                            "then optionally :NAME=VALUE,... hyperparameters (JSON scalars), "
+                            "e.g. ransac:weighted=true; repeatable; every result is labelled "
+                            "by the spec that rebuilds it (default: the built-ins: "
+                            f"{', '.join(DEFAULT_SPECS)})")
+    bench.add_argument("--with-builtins", action="store_true",
+                       help="run the default built-ins too (naming a --localizer otherwise runs "
+                            "only the ones named, and ransac as the runtime reference)")
+    bench.add_argument("--split", choices=("dev", "test"), default="dev",
+                       help="dev: the suite's fixed seed; test: a fresh seed, reported")
+    bench.add_argument("--workers", type=workers_option, default=0,
+                       help="processes (0: one per core)")
+    bench.add_argument("--time-limit", type=seconds_option, default=None, metavar="SECONDS",
+                       help="time a localizer may take on one frame (or to be built); a frame "
+                            f"over it is scored unavailable (default: {DEFAULT_TIME_LIMIT:g}; "
+                            "frame suites only)")
+    add_backend_options(bench, " (frame suites)")
+    bench.add_argument("--navigator", action="append", default=[], metavar="NAME",
+                       help="navigation suites: who drives, 'pure-pursuit' or 'ppo' (the "
+                            "shipped policy); repeatable (default: both)")
+    bench.add_argument("--data", metavar="DIR", help="score on a log of bearing data instead of "
+                                                     "a suite (docs/logs.md)")
+    bench.add_argument("--profile", type=profile_option, metavar="PROFILE.toml",
+                       help="a profile (docs/logs.md): every contender's defaults (a spec's own "
+                            "win), a suite's simulated noise, or fields over a log's own")
+    bench.add_argument("--quick", action="store_true", help="the suite's small version")
+    bench.add_argument("--out", type=out_folder, default="results/bench", help="output folder")
+    bench.set_defaults(handler=_bench)
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from azgym.bench.navigation.suites import NAVIGATION_SUITES
+    from azgym.bench.report.table import run_report
+    from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+    from azgym.bench.run.runner import run_benchmark
+    from azgym.bench.suites import SUITES
+    from azgym.errors import unknown_name
+    from azgym.files import prepare_folder
+
+    check_backend(args)
+    profile = read_profile_option(args)
+    if args.data is not None:
+        return _bench_data(args, progress_printer(), profile)
+    if args.suite in NAVIGATION_SUITES:
+        return _bench_navigation(args, progress_printer())
+    if args.navigator:
+        raise InvalidInputError(f"--navigator is for the navigation suites "
+                                f"({', '.join(NAVIGATION_SUITES)})")
+    if args.suite is not None and args.suite not in SUITES:
+        raise unknown_name("suite", args.suite, [*SUITES, *NAVIGATION_SUITES])
+    # With no suite named, the default suite runs in its quick size: the README's main job.
+    quick = args.quick or args.suite is None
+    suite = SUITES[args.suite or DEFAULT_SUITE]
+    if profile is not None:
+        suite.check_profile(profile)
+    if args.time_limit is None:
+        args.time_limit = DEFAULT_TIME_LIMIT
+    contenders = _contenders(args, args.time_limit, profile)
+    workers = resolve_workers(args)
+    prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
+    started = time.perf_counter()
+    result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
+                           time_limit=args.time_limit, progress=progress_printer(),
+                           backend=args.backend, address=args.address, profile=profile)
+    written = result.write(Path(args.out))
+    print(run_report(result.summary, time.perf_counter() - started, written))
+    return 0
+
+
+def _contenders(args: argparse.Namespace, time_limit: float, profile: Profile | None
+                ) -> list[Contender]:
+    """The contenders ``--localizer`` and ``--with-builtins`` name, each built once first.
+
+    A bad name, spec or hyperparameter stops the command here, before any frame is drawn,
+    rather than scoring a localizer that cannot run as failing every frame. Each is built in a
+    worker process, as the run would build it, within the time limit; with a profile, the
+    built-ins too (with the profile's defaults).
+    """
+    from azgym.bench.run.contenders import check_buildable, resolve_contenders
+
+    return resolve_contenders(args.localizer, with_builtins=args.with_builtins,
+                              check=partial(check_buildable, time_limit=time_limit,
+                                            profile=profile),
+                              check_builtins=profile is not None)
+
+
+def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile | None) -> int:
+    """``azgym bench --data DIR [--profile PROFILE.toml]``: every contender on a log's frames.
+
+    Each takes its defaults from the log's profile, with ``profile``'s fields over it.
+    """
+    from azgym.bench.report.table import run_report
+    from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+    from azgym.bench.run.runner import run_log_benchmark, write_log_results
+    from azgym.bench.suites.data import log_cases, log_profile
+    from azgym.files import prepare_folder
+    from azgym.logs import read_log
+
+    if (args.suite is not None or args.navigator or args.quick or args.split != "dev"
+            or args.backend != "local" or args.address is not None):
+        raise InvalidInputError("--data scores a log in local worker processes: it takes no "
+                                "--suite, --navigator, --quick, --split, --backend or --address")
+    log = read_log(args.data)
+    log_cases(log)  # a log without truth stops here, before any localizer is built
+    for note in log.notes:  # what the reader changed, said before the figures it shapes
+        progress(f"note: {note}")
+    time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
+    contenders = _contenders(args, time_limit, log_profile(log, profile))
+    prepare_folder(Path(args.out))
+    started = time.perf_counter()
+    result = run_log_benchmark(log, contenders, workers=resolve_workers(args),
+                               time_limit=time_limit, progress=progress, profile=profile)
+    written = write_log_results(result, log, Path(args.out))
+    print(run_report(result.summary, time.perf_counter() - started, written))
+    return 0
+
+
+def _bench_navigation(args: argparse.Namespace, progress: Progress) -> int:
+    """Run the navigation suite ``args.suite``; print the table and write ``navigation.json``."""
+    from azgym.bench.navigation.benchmark import (
+        check_contenders,
+        navigation_contenders,
+        run_navigation,
+    )
+    from azgym.bench.navigation.report import score_table
+    from azgym.bench.navigation.suites import get_navigation_suite
+    from azgym.files import prepare_folder, write_file
+
+    if args.time_limit is not None or args.backend != "local" or args.address is not None:
+        raise InvalidInputError("--time-limit, --backend and --address are for the frame "
+                                "suites: a navigation suite runs each localizer in the loop "
+                                "that drives the forklift, in local processes")
+    suite = get_navigation_suite(args.suite)
+    contenders = navigation_contenders(suite, args.navigator, args.localizer,
+                                       with_builtins=args.with_builtins)
+    workers = resolve_workers(args)
+    out = prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
+    check_contenders(suite, contenders)
+    started = time.perf_counter()
+    result = run_navigation(suite, contenders, split=args.split, quick=args.quick,
+                            workers=workers, progress=progress)
+    path = write_file(out / "navigation.json", json.dumps(result, indent=1) + "\n")
+    print()
+    print(score_table(result["contenders"], ["navigator", "localizer"]))
+    print(f"\n{suite.name} v{suite.version}, {result['split']} split (seed {result['seed']}), "
+          f"{result['episodes']} episodes each; {time.perf_counter() - started:.1f} s; "
+          f"wrote {path}")
+    return 0
