@@ -39,7 +39,8 @@ from azgym.errors import AzgymError, InvalidInputError, unknown_name
 from azgym.registry import Registry
 
 __all__ = ["ENTRY_POINT_GROUP", "LOCALIZERS", "PRESETS", "TRACKERS", "TRACKER_ENTRY_POINT_GROUP",
-           "Factory", "SupportsLocalize", "build", "is_builtin", "list_localizers",
+           "TRACKER_METHODS", "Factory", "SupportsLocalize", "build", "has_tracker_methods",
+           "is_builtin", "list_localizers",
            "list_trackers", "make_localizer", "parse_spec", "register_localizer", "resolve",
            "spec_label"]
 
@@ -56,6 +57,15 @@ class SupportsLocalize(Protocol):
         ...
 
 
+TRACKER_METHODS = ("reset", "predict", "update")
+"""What a tracker must offer (:class:`azgym.track.base.SupportsTrack`), each a callable."""
+
+
+def has_tracker_methods(candidate: object) -> bool:
+    """Whether an object (or a class) has a tracker's methods: the one test of "a tracker"."""
+    return all(callable(getattr(candidate, method, None)) for method in TRACKER_METHODS)
+
+
 Factory = Callable[..., SupportsLocalize]
 
 
@@ -69,8 +79,7 @@ def _localizer_class(spec: str, factory: Any) -> Factory:
     """
     is_class = isinstance(factory, type)
     localizer = is_class and callable(getattr(factory, "localize", None))
-    tracker = is_class and all(callable(getattr(factory, method, None))
-                               for method in ("reset", "predict", "update"))
+    tracker = is_class and has_tracker_methods(factory)
     if not (localizer or tracker):
         raise InvalidInputError(
             f"localizer spec {spec!r} names a {type(factory).__name__}, not a localizer class "

@@ -23,7 +23,7 @@ import numpy as np
 
 from azgym.core import BeaconMap, Estimate, Measurements
 from azgym.errors import InvalidInputError
-from azgym.localize.registry import SupportsLocalize, build
+from azgym.localize.registry import SupportsLocalize, build, has_tracker_methods
 from azgym.sensing.motion import ImuModel, OdometryModel
 from azgym.track.base import FrameByFrame, SupportsTrack
 from azgym.world.motion_sensors import MotionSensors
@@ -31,16 +31,13 @@ from azgym.world.world import World
 
 __all__ = ["LocalizerFeed", "TrackerFeed", "feed_for", "is_tracker", "resolve_estimator"]
 
-TRACKER_METHODS = ("reset", "predict", "update")
-"""What a tracker object must have (:class:`azgym.track.base.Tracker`)."""
 SEED_BOUND = 2**63
 """The seeds of an episode's motion sensors and tracker are drawn below this."""
 
 
 def is_tracker(estimator: object) -> TypeGuard[SupportsTrack]:
     """Whether ``estimator`` runs as a tracker: no ``localize``, but reset, predict and update."""
-    return not isinstance(estimator, (type, SupportsLocalize)) and all(
-        callable(getattr(estimator, method, None)) for method in TRACKER_METHODS)
+    return not isinstance(estimator, (type, SupportsLocalize)) and has_tracker_methods(estimator)
 
 
 def resolve_estimator(localizer: str | SupportsLocalize | SupportsTrack

@@ -24,7 +24,7 @@ from azgym.core import BeaconMap, Estimate, Measurements, Pose
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import Hyperparameters
 from azgym.localize.base import MAX_MEASUREMENTS
-from azgym.localize.registry import SupportsLocalize, build
+from azgym.localize.registry import SupportsLocalize, build, has_tracker_methods
 from azgym.sensing.motion import Motion
 from azgym.track._motion_check import NOT_FINITE, OUT_OF_ORDER, PARTLY_GIVEN, stream_fault
 
@@ -252,7 +252,7 @@ def make_tracker(name: str, **params: Any) -> SupportsTrack:
     built = build(name, **params)
     if isinstance(built, SupportsLocalize):
         return FrameByFrame(localizer=built)
-    if not all(callable(getattr(built, m, None)) for m in ("reset", "predict", "update")):
+    if not has_tracker_methods(built):
         raise InvalidInputError(
             f"{name!r} built a {type(built).__name__}, which is neither a localizer nor a "
             "tracker")
