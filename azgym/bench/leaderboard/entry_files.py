@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, NotRequired, TypedDict
 import numpy as np
 
 from azgym.bench.report.results import FRAME_COLUMNS, frame_number
-from azgym.bench.report.summary import ContenderMetrics, Dataset
+from azgym.bench.report.summary import ContenderMetrics, Dataset, RunIdentity
 from azgym.bench.run.outcome import Outcome
 from azgym.errors import AzgymError
 
@@ -68,7 +68,7 @@ class Machine(TypedDict):
     python: str
 
 
-class Entry(TypedDict):
+class Entry(RunIdentity):
     """A leaderboard entry, as ``entry.schema.json`` states it and its checks have passed.
 
     Its metrics are a contender's row of the run's summary
@@ -82,14 +82,6 @@ class Entry(TypedDict):
     authors: list[str]
     link: str
     localizer: EntryLocalizer
-    suite: str
-    suite_version: int
-    split: str
-    seed: int
-    quick: bool
-    n_frames: int
-    cases_sha256: str
-    azgym_version: str
     dataset: NotRequired[Dataset]
     metrics: ContenderMetrics[float | None]
     machine: Machine

@@ -12,8 +12,8 @@ from typing import Any, Generic, NotRequired, TypedDict
 from azgym.bench.report.tracking import TrackFigures
 from azgym.metrics import ErrorStats, Figure, Intervals
 
-__all__ = ["ContenderMetrics", "ContenderRow", "Dataset", "DatasetSummary", "Runtimes",
-           "Summary"]
+__all__ = ["ContenderMetrics", "ContenderRow", "Dataset", "DatasetSummary", "RunIdentity",
+           "Runtimes", "Summary"]
 
 
 class Runtimes(TypedDict, Generic[Figure]):
@@ -75,12 +75,11 @@ class DatasetSummary(Dataset):
     description: str
 
 
-class Summary(TypedDict):
-    """A run's summary (``results.json``): the run, and each contender's row by its label.
+class RunIdentity(TypedDict):
+    """What a run drew, which a run's summary and a leaderboard entry both carry.
 
-    ``dataset`` is a run on a log's; ``profile`` the profile applied (the contenders'
-    defaults, and the simulator's noise), ``profile_given`` the one given for the run
-    (:func:`~azgym.profile.profile_toml`; empty: none).
+    The suite (or log), its version, split, seed and size, the cases' digest, and the azgym
+    that ran them.
     """
 
     suite: str
@@ -91,6 +90,16 @@ class Summary(TypedDict):
     n_frames: int
     cases_sha256: str
     azgym_version: str
+
+
+class Summary(RunIdentity):
+    """A run's summary (``results.json``): the run, and each contender's row by its label.
+
+    ``dataset`` is a run on a log's; ``profile`` the profile applied (the contenders'
+    defaults, and the simulator's noise), ``profile_given`` the one given for the run
+    (:func:`~azgym.profile.profile_toml`; empty: none).
+    """
+
     python: str
     localizers: dict[str, ContenderRow]
     dataset: NotRequired[DatasetSummary]
