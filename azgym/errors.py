@@ -8,11 +8,13 @@ name the offending field, the problem and, where there is one, the fix.
 from __future__ import annotations
 
 import difflib
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
+from typing import Any
 
-__all__ = ["AzgymError", "DependencyNotInstalled", "InvalidInputError", "LocalizerCheckError",
-           "LogError", "ModelFileError", "ScenarioError", "TrackerCheckError", "UnknownNameError",
-           "require", "unknown_name"]
+__all__ = ["AzgymError", "DatasetUnavailable", "DependencyNotInstalled", "InvalidInputError",
+           "LeaderboardError", "LocalizerCheckError", "LogError", "ModelFileError",
+           "ProtocolError", "ScenarioError", "TrackerCheckError", "UnknownNameError", "require",
+           "unknown_name"]
 
 
 class AzgymError(Exception):
@@ -64,6 +66,29 @@ class LogError(InvalidInputError):
         noun = "problem" if total == 1 else "problems"
         super().__init__(f"{folder}: {total} {noun} in the log:\n  " + "\n  ".join(problems)
                          + more)
+
+
+class LeaderboardError(AzgymError, ValueError):
+    """An entry is malformed, tampered with, or does not match what it claims."""
+
+
+class DatasetUnavailable(LeaderboardError):
+    """A dataset entry's log is neither in the datasets folder nor shipped: it cannot be checked.
+
+    Attributes:
+        entry: The entry (schema, identity and per-frame file already checked).
+    """
+
+    def __init__(self, message: str, entry: Mapping[str, Any]) -> None:
+        super().__init__(message)
+        self.entry = entry
+
+
+class ProtocolError(Exception):
+    """A worker sent something that is not a message of the runner's protocol.
+
+    Never shown to a user as theirs: the runner charges the worker's frame and starts a fresh one.
+    """
 
 
 def unknown_name(kind: str, name: str, known: Iterable[str]) -> UnknownNameError:

@@ -28,14 +28,14 @@ import numpy as np
 import azgym
 from azgym.bench.run.processes import default_workers
 from azgym.files import prepare_folder, write_file
-from azgym.layout.analysis import agreement, predict
-from azgym.layout.candidates import candidate_places
-from azgym.layout.figures import analysis_figure, placement_figure
-from azgym.layout.floor import floor_grid
-from azgym.layout.monte_carlo import monte_carlo
-from azgym.layout.objective import floor_figures
-from azgym.layout.optimize import place_beacons
-from azgym.layout.scenario_file import with_new_beacons, write_scenario
+from azgym.placement.analysis import agreement, predict
+from azgym.placement.candidates import candidate_places
+from azgym.placement.figures import analysis_figure, placement_figure
+from azgym.placement.floor import floor_grid
+from azgym.placement.monte_carlo import monte_carlo
+from azgym.placement.objective import floor_figures
+from azgym.placement.optimize import place_beacons
+from azgym.placement.scenario_file import with_new_beacons, write_scenario
 
 
 def expected_share(frames: int, trials: int = 20_000, seed: int = 0) -> float:

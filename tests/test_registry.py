@@ -123,8 +123,9 @@ def test_no_registry_imports_what_it_registers():
     code = ("import sys\n"
             "import azgym.localize.registry, azgym.sensing.catalog, azgym.bench.run.backends\n"
             "print(sorted(m for m in ('azgym.localize.ransac', 'azgym.localize.learned', "
-            "'azgym.track.plotter', 'azgym.track.gated_ekf', 'azgym.sensing.geometry.sensor', "
-            "'azgym.sensing.image.sensor', 'azgym.bench.run.isolation', 'ray') "
+            "'azgym.track.inertial_kalman', 'azgym.track.gated_ekf', "
+            "'azgym.sensing.geometry.sensor', 'azgym.sensing.image.sensor', "
+            "'azgym.bench.run.isolation', 'ray') "
             "if m in sys.modules))")
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             check=True).stdout.strip()

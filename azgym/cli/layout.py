@@ -23,8 +23,8 @@ MAX_TOTAL_FRAMES = 10_000_000
 
 def _prepared(args: argparse.Namespace) -> tuple[Any, Any, Path]:
     """The scenario, its floor grid and the output folder (made only when it is used)."""
-    from azgym.layout.floor import floor_grid
-    from azgym.layout.scenario_file import file_stem
+    from azgym.placement.floor import floor_grid
+    from azgym.placement.scenario_file import file_stem
     from azgym.site import load_scenario
 
     scenario = load_scenario(args.scenario)
@@ -38,8 +38,8 @@ def _analyze(args: argparse.Namespace) -> int:
     from azgym.arguments import whole_number
     from azgym.errors import InvalidInputError
     from azgym.files import prepare_folder
-    from azgym.layout.analysis import analyze, summary, write_analysis
     from azgym.localize.registry import make_localizer
+    from azgym.placement.analysis import analyze, summary, write_analysis
 
     frames = whole_number("frames", args.frames, minimum=0)
     seed = seed_rule("--seed", args.seed)
@@ -63,7 +63,7 @@ def _analyze(args: argparse.Namespace) -> int:
         workers=workers, time_limit=args.time_limit)
     written = write_analysis(out, scenario, prediction, checked)
     if not args.no_figures:
-        from azgym.layout.figures import analysis_figure
+        from azgym.placement.figures import analysis_figure
 
         written.append(analysis_figure(
             scenario, floor, prediction.sigma, prediction.visible,
@@ -110,9 +110,9 @@ def _print_summary(result: dict[str, Any]) -> None:
 
 def _optimize(args: argparse.Namespace) -> int:
     from azgym.files import prepare_folder
-    from azgym.layout.candidates import candidate_places
-    from azgym.layout.optimize import check_add, place_beacons
-    from azgym.layout.scenario_file import source_data
+    from azgym.placement.candidates import candidate_places
+    from azgym.placement.optimize import check_add, place_beacons
+    from azgym.placement.scenario_file import source_data
 
     scenario, floor, out = _prepared(args)
     candidates = candidate_places(scenario, args.spacing)
@@ -132,8 +132,8 @@ def _write_placement(args: argparse.Namespace, scenario: Any, floor: Any, placem
                      out: Path) -> list[Path]:
     """The new scenario file and figure, and the printout; refused when nothing helps."""
     from azgym.errors import InvalidInputError
-    from azgym.layout.objective import floor_figures
-    from azgym.layout.scenario_file import file_stem, with_new_beacons, write_scenario
+    from azgym.placement.objective import floor_figures
+    from azgym.placement.scenario_file import file_stem, with_new_beacons, write_scenario
 
     placed = len(placement.chosen)
     if not placed:
@@ -152,7 +152,7 @@ def _write_placement(args: argparse.Namespace, scenario: Any, floor: Any, placem
     after = floor_figures(placement.after, placement.visible_after)
     written = [path]
     if not args.no_figures:
-        from azgym.layout.figures import placement_figure
+        from azgym.placement.figures import placement_figure
 
         written.append(placement_figure(
             scenario, floor, placement.before, placement.after, placement.new_xyz,
@@ -171,8 +171,8 @@ def _write_placement(args: argparse.Namespace, scenario: Any, floor: Any, placem
 def add_layout(commands: argparse._SubParsersAction) -> None:
     """``azgym layout analyze|optimize``."""
     from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
-    from azgym.layout.candidates import DEFAULT_SPACING
-    from azgym.layout.floor import DEFAULT_STEP
+    from azgym.placement.candidates import DEFAULT_SPACING
+    from azgym.placement.floor import DEFAULT_STEP
 
     layout = commands.add_parser("layout", help="predict a beacon layout's accuracy over the "
                                                 "floor, or place more beacons")

@@ -55,8 +55,9 @@ from azgym.sensing.synthetic import inject_outliers
 from azgym.site import generate
 from azgym.site.sampling import random_free_pose
 
-__all__ = ["FRAMES_FORMAT", "Frame", "FrameBatch", "HELD_OUT_LAYOUTS", "LEVELS", "TRAIN_LAYOUTS",
-           "inlier_truth", "layout_frames", "layout_seeds", "make_frames", "observed_frame"]
+__all__ = ["FRAMES_FORMAT", "FrameBatch", "HELD_OUT_LAYOUTS", "LEVELS", "TRAIN_LAYOUTS",
+           "TrainingFrame", "inlier_truth", "layout_frames", "layout_seeds", "make_frames",
+           "observed_frame"]
 
 TRAIN_LAYOUTS = range(0, 100_000)
 """The generator seeds trained on."""
@@ -190,7 +191,7 @@ def _check_shapes(path: Path, batch: FrameBatch) -> None:
 
 
 @dataclass(frozen=True, eq=False)
-class Frame:
+class TrainingFrame:
     """One frame before padding: its usable measurements, their features and their truth.
 
     Attributes:
@@ -289,13 +290,14 @@ def _layout_seeds(layout_seeds: Sequence[int]) -> list[int]:
     return [whole_number("layout_seeds entry", value, minimum=0) for value in layout_seeds]
 
 
-def layout_frames(layout_seed: int, count: int, seed: int, outlier_share: float) -> list[Frame]:
+def layout_frames(layout_seed: int, count: int, seed: int,
+                  outlier_share: float) -> list[TrainingFrame]:
     """``count`` frames of one generated layout, from its own stream of ``seed``."""
     scenario = generate(layout_seed)
     levels = [(scenario_at, GeometrySensor(scenario_at))
               for scenario_at in fault_levels(scenario).values()]
     rng = np.random.default_rng([seed, layout_seed])
-    frames: list[Frame] = []
+    frames: list[TrainingFrame] = []
     for _ in range(count * DRAWS_PER_FRAME):
         frame = _draw_frame(levels, scenario.beacons, rng, outlier_share)
         if frame is not None:
@@ -308,7 +310,7 @@ def layout_frames(layout_seed: int, count: int, seed: int, outlier_share: float)
 
 
 def _draw_frame(levels: list[tuple], beacons: BeaconMap, rng: np.random.Generator,
-                outlier_share: float) -> Frame | None:
+                outlier_share: float) -> TrainingFrame | None:
     """One frame at a random level and pose, outliers injected; None if it sees < 3 beacons."""
     level = int(rng.integers(len(levels)))
     scenario, sensor = levels[level]
@@ -321,7 +323,7 @@ def _draw_frame(levels: list[tuple], beacons: BeaconMap, rng: np.random.Generato
 
 
 def observed_frame(observation: Observation, beacons: BeaconMap, pose: Pose, level: int,
-                   outliers: int, rng: np.random.Generator) -> Frame | None:
+                   outliers: int, rng: np.random.Generator) -> TrainingFrame | None:
     """A sensor's frame as training data, with ``outliers`` azimuths injected (Sec. 3.1).
 
     Returns None when the frame sees fewer than three distinct beacons of the map.
@@ -336,11 +338,11 @@ def observed_frame(observation: Observation, beacons: BeaconMap, pose: Pose, lev
         return None
     source = order[problem.source]
     first = first_quality_column(quality, problem.n_measurements)[0][problem.source]
-    return Frame(problem, first, measurement_features(problem, quality),
-                 observation.truth.label[source], injected[source], pose, level, outliers)
+    return TrainingFrame(problem, first, measurement_features(problem, quality),
+                         observation.truth.label[source], injected[source], pose, level, outliers)
 
 
-def _pack(frames: list[Frame], owners: list[int]) -> FrameBatch:
+def _pack(frames: list[TrainingFrame], owners: list[int]) -> FrameBatch:
     """The frames padded to the longest one's usable measurements."""
     n = len(frames)
     width = max(frame.problem.size for frame in frames)

@@ -100,8 +100,8 @@ LOCALIZERS: Registry[Factory] = Registry("localizer", {
 """Localizers by name: the built-ins, those of :func:`register_localizer` and the plug-ins."""
 TRACKERS: Registry[Factory] = Registry("tracker", {
     "dead-reckoning": "azgym.track.dead_reckoning:DeadReckoning",
-    "tkf": "azgym.track.plotter:Tkf",
-    "lpkf": "azgym.track.plotter:Lpkf",
+    "tkf": "azgym.track.inertial_kalman:Tkf",
+    "lpkf": "azgym.track.inertial_kalman:Lpkf",
     "gated-ekf": "azgym.track.gated_ekf:GatedEkf",
     "robust": "azgym.track.robust:Robust",
 }, group=TRACKER_ENTRY_POINT_GROUP, check=_localizer_class)

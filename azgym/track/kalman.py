@@ -6,8 +6,8 @@ P = (I − K H) P⁻. An observation may be nonlinear (an extended filter's step
 h(x) and its Jacobian H. An innovation whose squared Mahalanobis distance exceeds a gate is
 refused (an outlier fix must not pull the state).
 
-:func:`inertial_step` is the prediction of the trackers in :mod:`azgym.track.plotter` over one
-IMU sample. The state is (x, y, vₓ, v_y, φ, b): the IMU's position, velocity and heading and the
+:func:`inertial_step` is the prediction of the trackers in :mod:`azgym.track.inertial_kalman` over
+one IMU sample. The state is (x, y, vₓ, v_y, φ, b): the IMU's position, velocity and heading and the
 gyro's bias b. The body-frame acceleration, turned into the world frame by the heading, is
 integrated as eq. 4 does (constant acceleration over the sample); the heading by the gyro's yaw
 rate less its bias (which random-walks: the fixes' headings estimate it). It is an extended

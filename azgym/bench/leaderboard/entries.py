@@ -23,7 +23,7 @@ import sys
 from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, TypedDict
+from typing import Any, TypedDict, cast
 
 from azgym.bench.leaderboard.checks import ENTRY_FORMAT, clean, close, schema, validate_entry
 from azgym.bench.leaderboard.entry_data import (
@@ -275,7 +275,7 @@ def load_available(entries_dir: Path, datasets: Path | None = None
         try:
             entry, frames = _load(path, datasets)
         except DatasetUnavailable as missing:
-            entry, frames = missing.entry, None
+            entry, frames = cast(Entry, missing.entry), None  # checked before it was raised
             unavailable.append(missing)
         twin = seen.setdefault(entry["name"].lower(), entry["name"])
         if twin != entry["name"]:

@@ -17,10 +17,11 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
-from azgym.bench.leaderboard.entry_files import Entry, LeaderboardError
+from azgym.bench.leaderboard.entry_files import Entry
 from azgym.bench.report.results import cases_digest
 from azgym.bench.suites import Case
 from azgym.bench.suites.data import SPLIT, log_cases
+from azgym.errors import DatasetUnavailable, LeaderboardError
 from azgym.logs.manifest import FORMATS, MANIFEST
 from azgym.logs.problems import LogError
 from azgym.logs.read import Log, read_log, shipped_logs
@@ -32,18 +33,6 @@ PREFIX = "data:"
 """A dataset entry's suite is ``data:`` and the dataset's name."""
 DATASETS_FOLDER = "datasets"
 """The datasets folder used by default: ``datasets/`` beside the entries folder, if it exists."""
-
-
-class DatasetUnavailable(LeaderboardError):
-    """A dataset entry's log is neither in the datasets folder nor shipped: it cannot be checked.
-
-    Attributes:
-        entry: The entry (schema, identity and per-frame file already checked).
-    """
-
-    def __init__(self, message: str, entry: Entry) -> None:
-        super().__init__(message)
-        self.entry = entry
 
 
 def is_data_entry(entry: Entry) -> bool:

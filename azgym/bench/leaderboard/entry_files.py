@@ -24,7 +24,7 @@ import numpy as np
 from azgym.bench.report.results import FRAME_COLUMNS, frame_number
 from azgym.bench.report.summary import ContenderMetrics, Dataset, RunIdentity
 from azgym.bench.run.outcome import Outcome
-from azgym.errors import AzgymError
+from azgym.errors import LeaderboardError
 
 if TYPE_CHECKING:
     from azgym.bench.suites import Case
@@ -42,10 +42,6 @@ MAX_FRAMES_BYTES = 64 * 2**20
 suite's are about 4 MB)."""
 HEADING_LIMIT = math.pi + 1e-9
 """A heading error is wrapped to [0, π] [rad]."""
-
-
-class LeaderboardError(AzgymError, ValueError):
-    """An entry is malformed, tampered with, or does not match what it claims."""
 
 
 class EntryLocalizer(TypedDict):

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from azgym.core import BeaconMap, Measurements, Pose
+from azgym.errors import ProtocolError
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 
 __all__ = ["DONE", "MapData", "Packed", "ProtocolError", "STOP", "StepReader", "WorkerFrame",
@@ -157,10 +158,6 @@ class StepReader:
 
 MAX_MESSAGE = 1 << 20
 """The longest message a worker may send [bytes]; a longer one breaks the protocol."""
-
-
-class ProtocolError(Exception):
-    """A worker sent something that is not a message of the protocol."""
 
 
 def say(fd: int, *message: str | int) -> None:

@@ -2,8 +2,8 @@
 
 100 runs of one 10-second lap of the 0.22 m square (:mod:`~azgym.experiments.plotter.trail`),
 each with its own noise and phone heading. Each run is tracked three ways: ``tkf`` and ``lpkf``
-(:mod:`azgym.track.plotter`, started at the known start pose, the camera at the IMU), and the
-naive accumulation of accelerations of the paper's eq. 2-3 (turned into the world frame by the
+(:mod:`azgym.track.inertial_kalman`, started at the known start pose, the camera at the IMU), and
+the naive accumulation of accelerations of the paper's eq. 2-3 (turned into the world frame by the
 orientation sensor, never corrected). The errors of every camera frame of every run are pooled,
 as the paper's cumulative distribution pools them; the naive method is also run for four laps,
 to compare with the paper's "10 m in 40 s".

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from azgym.errors import InvalidInputError
-from azgym.layout.analysis import agreement, predict
-from azgym.layout.floor import floor_grid
-from azgym.layout.monte_carlo import monte_carlo
+from azgym.placement.analysis import agreement, predict
+from azgym.placement.floor import floor_grid
+from azgym.placement.monte_carlo import monte_carlo
 
 
 def test_ransac_matches_the_predicted_sigma_on_the_paper_room(paper_room):

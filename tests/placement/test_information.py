@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from azgym.layout.information import contributions, position_sigma
 from azgym.localize import _kernels as K
 from azgym.localize.refinement import refine_with_covariance
+from azgym.placement.information import contributions, position_sigma
 from azgym.site.error_model import ErrorModel
 
 WIDTH = 0.03

@@ -1,11 +1,11 @@
 """``azgym layout optimize``: place new beacons to lower the p95 of the predicted σ over the floor.
 
 The information matrix of a layout at a cell is the sum of its beacons' contributions
-(:mod:`azgym.layout.information`), so each candidate's contribution at every cell is computed
+(:mod:`azgym.placement.information`), so each candidate's contribution at every cell is computed
 once, and trying a candidate is one addition per cell. The search:
 
 1. **Greedy**: add, one at a time, the candidate that lowers the objective
-   (:func:`azgym.layout.objective.objective`) most; stop early when none lowers it (a beacon
+   (:func:`azgym.placement.objective.objective`) most; stop early when none lowers it (a beacon
    that helps no cell is not placed, so fewer than asked may be placed, or none).
 2. **Swaps**: for each placed beacon in turn, try every unused candidate in its stead and keep
    the best swap if it lowers the objective; repeat until a whole round changes nothing (at most
@@ -22,11 +22,11 @@ import numpy as np
 from azgym.arguments import whole_number
 from azgym.core import FloatArray, IntArray
 from azgym.errors import InvalidInputError
-from azgym.layout.candidates import Candidates
-from azgym.layout.floor import Floor
-from azgym.layout.information import contributions, position_sigma
-from azgym.layout.objective import objective
-from azgym.layout.visibility import visible_beacons
+from azgym.placement.candidates import Candidates
+from azgym.placement.floor import Floor
+from azgym.placement.information import contributions, position_sigma
+from azgym.placement.objective import objective
+from azgym.placement.visibility import visible_beacons
 from azgym.site import Scenario
 
 __all__ = ["MAX_ADD", "Placement", "check_add", "place_beacons"]

@@ -10,12 +10,12 @@ import pytest
 
 import azgym
 from azgym.errors import InvalidInputError
-from azgym.layout.analysis import predict
-from azgym.layout.candidates import MIN_SEPARATION, candidate_places
-from azgym.layout.floor import floor_grid
-from azgym.layout.objective import objective
-from azgym.layout.optimize import MAX_ADD, check_add, place_beacons
-from azgym.layout.scenario_file import with_new_beacons, write_scenario
+from azgym.placement.analysis import predict
+from azgym.placement.candidates import MIN_SEPARATION, candidate_places
+from azgym.placement.floor import floor_grid
+from azgym.placement.objective import objective
+from azgym.placement.optimize import MAX_ADD, check_add, place_beacons
+from azgym.placement.scenario_file import with_new_beacons, write_scenario
 
 
 @pytest.fixture(scope="module")

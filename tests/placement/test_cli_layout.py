@@ -9,7 +9,7 @@ import pytest
 
 import azgym
 from azgym import cli
-from azgym.layout.scenario_file import file_stem, fresh_ids
+from azgym.placement.scenario_file import file_stem, fresh_ids
 
 
 @pytest.mark.parametrize(("argv", "message"), [

@@ -3,7 +3,7 @@
 Every panel draws the site on top of its map: the room, the racks (grey footprints), the walls,
 the beacons (black triangles) and, after ``optimize``, the new ones (red stars). σ maps share a
 logarithmic colour scale in centimetres; a cell with no fix or a σ at or over the penalty
-(:data:`azgym.layout.objective.PENALTY_SIGMA`) is black.
+(:data:`azgym.placement.objective.PENALTY_SIGMA`) is black.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ import numpy as np
 
 from azgym.core import FloatArray
 from azgym.errors import require
-from azgym.layout.floor import Floor
-from azgym.layout.objective import PENALTY_SIGMA
+from azgym.placement.floor import Floor
+from azgym.placement.objective import PENALTY_SIGMA
 from azgym.site import Scenario
 
 __all__ = ["analysis_figure", "placement_figure"]

@@ -1,8 +1,8 @@
 """``azgym layout analyze``: the predicted σ, the beacons seen and a Monte Carlo check, per cell.
 
-The prediction (:mod:`azgym.layout.information`) is computed for every cell at once; the Monte
-Carlo check (:mod:`azgym.layout.monte_carlo`) runs frames through a localizer, cell by cell. Both
-see the same beacons from each cell (:mod:`azgym.layout.visibility`).
+The prediction (:mod:`azgym.placement.information`) is computed for every cell at once; the Monte
+Carlo check (:mod:`azgym.placement.monte_carlo`) runs frames through a localizer, cell by cell. Both
+see the same beacons from each cell (:mod:`azgym.placement.visibility`).
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ import numpy as np
 from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
 from azgym.core import BoolArray, FloatArray
 from azgym.files import write_file
-from azgym.layout.floor import Floor
-from azgym.layout.information import contributions, position_sigma
-from azgym.layout.monte_carlo import MonteCarlo, monte_carlo
-from azgym.layout.objective import PENALTY_SIGMA, floor_figures
-from azgym.layout.visibility import visible_beacons
+from azgym.placement.floor import Floor
+from azgym.placement.information import contributions, position_sigma
+from azgym.placement.monte_carlo import MonteCarlo, monte_carlo
+from azgym.placement.objective import PENALTY_SIGMA, floor_figures
+from azgym.placement.visibility import visible_beacons
 from azgym.site import Scenario
 
 __all__ = ["Prediction", "agreement", "analyze", "predict", "summary", "write_analysis"]
@@ -69,7 +69,8 @@ def analyze(scenario: Scenario, floor: Floor, localizer: str, frames: int, seed:
             time_limit: float = DEFAULT_TIME_LIMIT) -> tuple[Prediction, MonteCarlo | None]:
     """The prediction, and with ``frames`` > 0 the Monte Carlo check of ``localizer``.
 
-    ``workers`` and ``time_limit`` are the runner's (:func:`~azgym.layout.monte_carlo.monte_carlo`).
+    ``workers`` and ``time_limit`` are the runner's
+    (:func:`~azgym.placement.monte_carlo.monte_carlo`).
     """
     prediction = predict(scenario, floor)
     if frames <= 0:
@@ -94,7 +95,7 @@ def agreement(sigma: FloatArray, checked: MonteCarlo) -> dict[str, Any]:
     """How the Monte Carlo RMS compares with the prediction.
 
     The ratios are over the cells where both are finite; ``rms`` holds the RMS's floor figures
-    as :func:`~azgym.layout.objective.floor_figures` computes the prediction's (a cell without a
+    as :func:`~azgym.placement.objective.floor_figures` computes the prediction's (a cell without a
     fix counting as the penalty), so that the two p95 compare. ``failed_share`` is the share of
     frames without a fix over the cells the localizer was run at (``cells_run``, those seeing
     three beacons or more; the ``cells_not_run`` have no fix); ``lost_frames`` counts the frames

@@ -10,9 +10,9 @@ import pytest
 
 import azgym
 from azgym.errors import InvalidInputError
-from azgym.layout.analysis import predict
-from azgym.layout.floor import MAX_CELLS, floor_grid
-from azgym.layout.visibility import visible_beacons
+from azgym.placement.analysis import predict
+from azgym.placement.floor import MAX_CELLS, floor_grid
+from azgym.placement.visibility import visible_beacons
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.site.elements import Camera
 from azgym.site.sampling import RACK_CLEARANCE, WALL_CLEARANCE

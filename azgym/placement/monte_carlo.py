@@ -2,7 +2,7 @@
 
 At each cell, N frames as the paper's protocol draws them (Rátosi & Simon 2021, Sec. 3.1; the
 ``paper`` suite with K = 0): a uniformly random heading, each beacon seen from the cell
-(:mod:`azgym.layout.visibility`) measured at its true azimuth plus the errors of eq. 3 drawn from
+(:mod:`azgym.placement.visibility`) measured at its true azimuth plus the errors of eq. 3 drawn from
 the scenario's error model (:meth:`~azgym.site.error_model.ErrorModel.sample`), no outliers.
 Each frame goes to the localizer with the whole map, through the benchmark's runner
 (:func:`azgym.bench.run.runner.run_contenders`): the localizer runs in worker processes of its own,
@@ -35,7 +35,7 @@ from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
 from azgym.bench.run.runner import run_contenders
 from azgym.bench.suites import Case
 from azgym.core import BeaconMap, BoolArray, FloatArray, Measurements, wrap_angle
-from azgym.layout.information import MIN_BEACONS
+from azgym.placement.information import MIN_BEACONS
 from azgym.sensing.synthetic import ideal_azimuths
 from azgym.site import Scenario
 
