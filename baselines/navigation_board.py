@@ -14,13 +14,11 @@ a file's episodes and compares every figure.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
 from azgym.bench.leaderboard import board
 from azgym.bench.navigation.benchmark import check_contenders, contenders_of, run_navigation
-from azgym.bench.navigation.report import score_table
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -42,11 +40,10 @@ def main() -> None:
             started = time.perf_counter()
             result = run_navigation(suite, contenders, split=split, workers=args.workers,
                                     progress=print)
-            path = folder / f"{name}-{split}.json"
-            path.write_text(json.dumps(result, indent=1) + "\n")
-            print(score_table(result["contenders"], ["navigator", "localizer"]))
-            print(f"{name} {split} (seed {result['seed']}): {time.perf_counter() - started:.0f} s;"
-                  f" wrote {path}\n", flush=True)
+            path = result.write(folder, f"{name}-{split}.json")
+            print(result.table())
+            print(f"{name} {split} (seed {result.record['seed']}): "
+                  f"{time.perf_counter() - started:.0f} s; wrote {path}\n", flush=True)
     for path in board.build(ROOT / "leaderboard" / "entries", ROOT / "leaderboard", folder):
         print(f"wrote {path}")
 

@@ -13,6 +13,7 @@ from azgym.bench.run import runner
 from azgym.bench.run.contenders import Contender, default_contenders, resolve_contenders
 from azgym.cli import bench, leaderboard, studies
 from azgym.cli import info as listings
+from azgym.errors import InvalidInputError
 
 PARSED = [
     pytest.param(["bench"], bench._bench,
@@ -175,6 +176,35 @@ def test_bench_on_a_log_refuses_the_ray_options_by_name(extra, message, tmp_path
     argv = ["bench", "--data", "warehouse-small-simulated", *extra, "--out", str(tmp_path)]
     assert cli.main(argv) == 2
     assert message in capsys.readouterr().err
+
+
+def test_the_bench_runners_options_are_unset_at_the_parsers_defaults():
+    args = cli.build_parser().parse_args(["bench"])
+    for option, (attribute, unset) in bench.OPTIONS.items():
+        assert getattr(args, attribute) == unset, option
+
+
+GIVEN = {"suite": "stress", "navigator": ["ppo"], "quick": True, "split": "test",
+         "time_limit": 3.0, "backend": "ray", "address": "auto"}
+"""A value of each option of bench.OPTIONS other than its default."""
+
+
+@pytest.mark.parametrize("runner", sorted(bench.RUNNERS))
+def test_each_bench_runner_refuses_what_it_does_not_take_naming_option_and_runner(runner):
+    chosen = bench.RUNNERS[runner]
+    assert chosen.refuses()
+    for option in chosen.refuses():
+        args = cli.build_parser().parse_args(["bench"])
+        attribute, _ = bench.OPTIONS[option]
+        setattr(args, attribute, GIVEN[attribute])
+        named = f"^{option} is not for {re.escape(chosen.name)}: "
+        with pytest.raises(InvalidInputError, match=named):
+            bench.check_options(runner, args)
+    for option in chosen.takes:  # what it takes passes
+        args = cli.build_parser().parse_args(["bench"])
+        attribute, _ = bench.OPTIONS[option]
+        setattr(args, attribute, GIVEN[attribute])
+        bench.check_options(runner, args)
 
 
 def test_an_address_without_the_ray_backend_is_refused_before_any_frame(tmp_path, capsys):

@@ -5,15 +5,17 @@ One command, three runners, chosen by what is named: a frame suite (``--suite``,
 a navigation suite (:mod:`azgym.bench.navigation.suites`), run like a frame suite —
 ``--localizer``, ``--with-builtins``, ``--split``, ``--quick``, ``--workers``, ``--out`` mean the
 same — with ``--navigator`` naming who drives; or a log of bearing data (``--data DIR``,
-docs/logs.md), scored as a suite is. Each refuses the options that are the others'. Who runs is
-the library's one rule (:func:`~azgym.bench.run.contenders.resolve_contenders`).
+docs/logs.md), scored as a suite is. Which runner takes which of the options that are not
+everyone's is one table (:data:`RUNNERS`), checked by :func:`check_options`. Who runs is the
+library's one rule (:func:`~azgym.bench.run.contenders.resolve_contenders`); each runner's result
+writes its own files.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import time
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -36,10 +38,77 @@ if TYPE_CHECKING:
     from azgym.bench.run.runner import Progress
     from azgym.profile import Profile
 
-__all__ = ["DEFAULT_SUITE", "add_bench"]
+__all__ = ["DEFAULT_SUITE", "OPTIONS", "RUNNERS", "Runner", "add_bench", "check_options"]
 
 DEFAULT_SUITE = "warehouse-static"
 """The suite ``azgym bench`` runs, in its quick size, when none is named."""
+
+OPTIONS: dict[str, tuple[str, object]] = {
+    "--suite": ("suite", None), "--navigator": ("navigator", []), "--quick": ("quick", False),
+    "--split": ("split", "dev"), "--time-limit": ("time_limit", None),
+    "--backend": ("backend", "local"), "--address": ("address", None)}
+"""The options that not every runner takes: each one's attribute and its value when not given."""
+
+
+@dataclass(frozen=True)
+class Runner:
+    """One of ``azgym bench``'s runners: which options of :data:`OPTIONS` it takes, and why.
+
+    Attributes:
+        name: The runner, as an error names it.
+        takes: The options of :data:`OPTIONS` it takes.
+        reason: Why it takes no other: a sentence with ``{either}`` (the options it refuses,
+            joined by "or"), ``{each}`` (joined by "and") and ``{navigation_suites}``.
+    """
+
+    name: str
+    takes: frozenset[str]
+    reason: str
+
+    def refuses(self) -> list[str]:
+        """The options of :data:`OPTIONS` it does not take, in their order there."""
+        return [option for option in OPTIONS if option not in self.takes]
+
+
+RUNNERS = {
+    "frame": Runner("a frame suite", frozenset(
+        {"--suite", "--quick", "--split", "--time-limit", "--backend", "--address"}),
+        "{each} is for the navigation suites ({navigation_suites})"),
+    "navigation": Runner("a navigation suite", frozenset(
+        {"--suite", "--navigator", "--quick", "--split"}),
+        "{each} are for the frame suites: a navigation suite runs each localizer in the loop "
+        "that drives the forklift, in local processes"),
+    "data": Runner("a log (--data)", frozenset({"--time-limit"}),
+                   "--data scores a log in local worker processes: it takes no {either}"),
+}
+"""``azgym bench``'s runners: a frame suite, a navigation suite and a log (``--data``)."""
+
+
+def check_options(runner: str, args: argparse.Namespace) -> None:
+    """Refuse the first option given that ``RUNNERS[runner]`` does not take, naming both.
+
+    Raises:
+        InvalidInputError: An option of :data:`OPTIONS` given (not at its default) that the
+            runner does not take.
+    """
+    from azgym.bench.navigation.suites import NAVIGATION_SUITES
+
+    chosen = RUNNERS[runner]
+    refused = chosen.refuses()
+    for option in refused:
+        attribute, unset = OPTIONS[option]
+        if getattr(args, attribute) != unset:
+            reason = chosen.reason.format(
+                either=_listed(refused, "or"), each=_listed(refused, "and"),
+                navigation_suites=", ".join(NAVIGATION_SUITES))
+            raise InvalidInputError(f"{option} is not for {chosen.name}: {reason}")
+
+
+def _listed(options: list[str], conjunction: str) -> str:
+    """``a``, ``a and b``, ``a, b or c``: the options as a sentence lists them."""
+    if len(options) == 1:
+        return options[0]
+    return f"{', '.join(options[:-1])} {conjunction} {options[-1]}"
 
 
 def add_bench(commands: argparse._SubParsersAction) -> None:
@@ -92,13 +161,13 @@ def _bench(args: argparse.Namespace) -> int:
 
     check_backend(args)
     profile = read_profile_option(args)
-    if args.data is not None:
+    runner = ("data" if args.data is not None
+              else "navigation" if args.suite in NAVIGATION_SUITES else "frame")
+    check_options(runner, args)
+    if runner == "data":
         return _bench_data(args, progress_printer(), profile)
-    if args.suite in NAVIGATION_SUITES:
+    if runner == "navigation":
         return _bench_navigation(args, progress_printer())
-    if args.navigator:
-        raise InvalidInputError(f"--navigator is for the navigation suites "
-                                f"({', '.join(NAVIGATION_SUITES)})")
     if args.suite is not None and args.suite not in SUITES:
         raise unknown_name("suite", args.suite, [*SUITES, *NAVIGATION_SUITES])
     # With no suite named, the default suite runs in its quick size: the README's main job.
@@ -149,10 +218,6 @@ def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile |
     from azgym.files import prepare_folder
     from azgym.logs import read_log
 
-    if (args.suite is not None or args.navigator or args.quick or args.split != "dev"
-            or args.backend != "local" or args.address is not None):
-        raise InvalidInputError("--data scores a log in local worker processes: it takes no "
-                                "--suite, --navigator, --quick, --split, --backend or --address")
     log = read_log(args.data)
     log_cases(log)  # a log without truth stops here, before any localizer is built
     for note in log.notes:  # what the reader changed, said before the figures it shapes
@@ -175,14 +240,9 @@ def _bench_navigation(args: argparse.Namespace, progress: Progress) -> int:
         navigation_contenders,
         run_navigation,
     )
-    from azgym.bench.navigation.report import score_table
     from azgym.bench.navigation.suites import get_navigation_suite
-    from azgym.files import prepare_folder, write_file
+    from azgym.files import prepare_folder
 
-    if args.time_limit is not None or args.backend != "local" or args.address is not None:
-        raise InvalidInputError("--time-limit, --backend and --address are for the frame "
-                                "suites: a navigation suite runs each localizer in the loop "
-                                "that drives the forklift, in local processes")
     suite = get_navigation_suite(args.suite)
     contenders = navigation_contenders(suite, args.navigator, args.localizer,
                                        with_builtins=args.with_builtins)
@@ -192,10 +252,11 @@ def _bench_navigation(args: argparse.Namespace, progress: Progress) -> int:
     started = time.perf_counter()
     result = run_navigation(suite, contenders, split=args.split, quick=args.quick,
                             workers=workers, progress=progress)
-    path = write_file(out / "navigation.json", json.dumps(result, indent=1) + "\n")
+    path = result.write(out)
     print()
-    print(score_table(result["contenders"], ["navigator", "localizer"]))
-    print(f"\n{suite.name} v{suite.version}, {result['split']} split (seed {result['seed']}), "
-          f"{result['episodes']} episodes each; {time.perf_counter() - started:.1f} s; "
+    print(result.table())
+    record = result.record
+    print(f"\n{suite.name} v{suite.version}, {record['split']} split (seed {record['seed']}), "
+          f"{record['episodes']} episodes each; {time.perf_counter() - started:.1f} s; "
           f"wrote {path}")
     return 0

@@ -11,9 +11,7 @@ policy trained for another observation costs nothing; :mod:`azgym.cli` adds the 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -32,15 +30,10 @@ tuned on, and the same ones on every run."""
 
 
 def _evaluate_navigator(args: argparse.Namespace) -> int:
-    import gymnasium as gym
-
-    from azgym.bench.navigation.benchmark import episode_rows
-    from azgym.bench.navigation.report import score_table
-    from azgym.bench.navigation.scoring import drive
+    from azgym.bench.navigation.benchmark import evaluate_navigator
     from azgym.bench.run.contenders import resolve_contenders
     from azgym.envs.registration import navigation_spec
-    from azgym.files import prepare_folder, write_file
-    from azgym.nav.policy_file import load_policy
+    from azgym.files import prepare_folder
 
     episodes = whole_number("--episodes", args.episodes, 1)
     seed = whole_number("--seed", args.seed, 0)
@@ -48,31 +41,18 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     out = prepare_folder(Path(args.out)) if args.out else None
     localizers = [c.label for c in resolve_contenders(  # who runs: the bench's one rule
         args.localizer, builtins=(DEFAULT_LOCALIZER,), check=None)]
-    envs = {name: gym.make(env_id, localizer=name, sensor=args.sensor, ids=args.ids)
-            for name in localizers}  # every localizer named and built before any episode
-    policy = load_policy(args.policy, envs[localizers[0]])
-    rows = []
-    for name, env in envs.items():
-        started = time.perf_counter()
-        result = drive(env, policy, episodes, seed, progress=_progress(name, episodes))
-        rows.append({"localizer": name, "runtime_s": time.perf_counter() - started,
-                     "summary": {key: value for key, value in result.items()
-                                 if key != "episodes"},
-                     "episodes": episode_rows(result["episodes"], seed)})
-        env.close()
-    print(score_table(rows, ["localizer"]))
+    result = evaluate_navigator(args.policy, env_id, localizers, episodes=episodes, seed=seed,
+                                sensor=args.sensor, ids=args.ids,
+                                progress=_progress(episodes))
+    print(result.table())
     if out is not None:
-        report = {"policy": str(args.policy), "env": env_id, "sensor": args.sensor,
-                  "ids": args.ids, "episodes": episodes, "seed": seed,
-                  "results": rows}
-        path = write_file(out / "navigation.json", json.dumps(report, indent=1) + "\n")
-        print(f"wrote {path}")
+        print(f"wrote {result.write(out)}")
     return 0
 
 
-def _progress(localizer: str, episodes: int) -> Callable[[int], None]:
-    """A progress callback: the episode count redrawn in place on a terminal, else nothing."""
-    def show(done: int) -> None:
+def _progress(episodes: int) -> Callable[[str, int], None]:
+    """A progress callback: a localizer's episode count redrawn in place on a terminal."""
+    def show(localizer: str, done: int) -> None:
         if sys.stdout.isatty():
             end = "\n" if done == episodes else ""
             print(f"\r{localizer}: {done}/{episodes} episodes", end=end, flush=True)

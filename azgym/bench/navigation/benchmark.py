@@ -11,11 +11,14 @@ forklift every step), so it is not kept from the truth the way the frame suites'
 workers keep it. Run only localizers you trust here; the published navigation board runs
 azgym's own.
 
-The result (:func:`run_navigation`) is what ``navigation.json`` holds: the run's identity, then per
-contender the summary of :func:`azgym.bench.navigation.scoring.summarize`, the wall time, and each
-episode's figures (:func:`episode_rows`), from which the board recomputes the summary
-(:mod:`azgym.bench.navigation.results_file`). A figure that does not exist (no answer, no success)
-is null.
+The result (:func:`run_navigation`, a
+:class:`~azgym.bench.navigation.report.NavigationResult`) is what ``navigation.json`` holds: the
+run's identity, then per contender the summary of
+:func:`azgym.bench.navigation.scoring.summarize`, the wall time, and each episode's figures
+(:func:`episode_rows`), from which the board recomputes the summary
+(:mod:`azgym.bench.navigation.results_file`). A figure that does not exist (no answer, no
+success) is null. :func:`evaluate_navigator` drives one policy the same way on an environment
+named by id, once per localizer (``azgym evaluate navigator``).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from datetime import UTC, datetime
+from functools import partial
 from typing import Any
 
 import gymnasium as gym
@@ -33,12 +37,13 @@ import gymnasium as gym
 from azgym._version import __version__
 from azgym.arguments import whole_number
 from azgym.bench.leaderboard.checks import clean
+from azgym.bench.navigation.report import NavigationResult
 from azgym.bench.navigation.suites import NAVIGATORS, NavigationSuite, get_navigation_suite
 from azgym.errors import InvalidInputError
 
 __all__ = ["KIND", "RESULTS_FORMAT", "Contender", "check_contenders", "contenders_of",
-           "drive_all", "drive_contender", "episode_rows", "make_env", "navigation_contenders",
-           "run_navigation"]
+           "drive_all", "drive_contender", "episode_rows", "evaluate_navigator", "make_env",
+           "navigation_contenders", "run_navigation"]
 
 RESULTS_FORMAT = 2
 """The layout of ``navigation.json`` (``format``). 2: an episode's ``shortest_path_m`` (the
@@ -102,8 +107,8 @@ def check_contenders(suite: NavigationSuite, contenders: Sequence[Contender]) ->
 
 def run_navigation(suite: NavigationSuite, contenders: Sequence[Contender], *, split: str = "dev",
                    quick: bool = False, workers: int = 1,
-                   progress: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """Drive every contender on the suite's episodes; the contents of ``navigation.json``.
+                   progress: Callable[[str], None] | None = None) -> NavigationResult:
+    """Drive every contender on the suite's episodes; what ``navigation.json`` holds.
 
     Args:
         suite: The navigation suite.
@@ -117,13 +122,55 @@ def run_navigation(suite: NavigationSuite, contenders: Sequence[Contender], *, s
         raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
     workers = whole_number("workers", workers, minimum=1)
     seed = suite.dev_seed if split == "dev" else suite.test_seed()
-    return {"kind": KIND, "format": RESULTS_FORMAT, "suite": suite.name,
-            "suite_version": suite.version, "split": split, "seed": seed, "quick": quick,
-            "episodes": suite.size(quick), "env": suite.env_id, "env_kwargs": suite.env_kwargs,
-            "azgym_version": __version__, "python": sys.version.split()[0],
-            "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
-            "contenders": clean(drive_all(suite, contenders, seed, suite.size(quick), workers,
-                                          progress))}
+    return NavigationResult({
+        "kind": KIND, "format": RESULTS_FORMAT, "suite": suite.name,
+        "suite_version": suite.version, "split": split, "seed": seed, "quick": quick,
+        "episodes": suite.size(quick), "env": suite.env_id, "env_kwargs": suite.env_kwargs,
+        "azgym_version": __version__, "python": sys.version.split()[0],
+        "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
+        "contenders": clean(drive_all(suite, contenders, seed, suite.size(quick), workers,
+                                      progress))})
+
+
+def evaluate_navigator(policy: str, env_id: str, localizers: Sequence[str], *, episodes: int,
+                       seed: int, sensor: str, ids: str,
+                       progress: Callable[[str, int], None] | None = None
+                       ) -> NavigationResult:
+    """Drive ``policy`` on episodes seed, seed + 1, ... of ``env_id``, once per localizer.
+
+    Every environment is built and the policy loaded against the first before any episode, so
+    a typo, a missing extra or a policy trained for another observation costs nothing.
+
+    Args:
+        policy: ``pure-pursuit`` or a stable-baselines3 zip (:mod:`azgym.nav.policy_file`).
+        env_id: A Navigate or NavigateDiscrete environment id.
+        localizers: The localizers (names, specs or ``truth``), a row each.
+        episodes: Episodes per localizer.
+        seed: The seed of the first episode.
+        sensor: The camera: ``geometry`` or ``image``.
+        ids: How the image sensor identifies beacons: ``oracle`` or ``blink``.
+        progress: Called with a localizer and its episodes done as each episode ends.
+    """
+    import azgym.envs.registration  # noqa: F401 - registers the ids
+    from azgym.bench.navigation.scoring import drive
+    from azgym.nav.policy_file import load_policy
+
+    envs = {name: gym.make(env_id, localizer=name, sensor=sensor, ids=ids)
+            for name in localizers}  # every localizer named and built before any episode
+    loaded = load_policy(policy, envs[localizers[0]])
+    rows = []
+    for name, env in envs.items():
+        started = time.perf_counter()
+        done = None if progress is None else partial(progress, name)
+        result = drive(env, loaded, episodes, seed, progress=done)
+        rows.append({"localizer": name, "runtime_s": time.perf_counter() - started,
+                     "summary": {key: value for key, value in result.items()
+                                 if key != "episodes"},
+                     "episodes": episode_rows(result["episodes"], seed)})
+        env.close()
+    return NavigationResult({"policy": policy, "env": env_id, "sensor": sensor, "ids": ids,
+                             "episodes": episodes, "seed": seed, "results": rows},
+                            rows="results", names=("localizer",))
 
 
 def drive_all(suite: NavigationSuite, contenders: Sequence[Contender], seed: int, episodes: int,

@@ -30,6 +30,7 @@ from azgym.bench.report.tracking import tracking_metrics
 from azgym.bench.run.contenders import Contender
 from azgym.bench.run.outcome import Outcome, RunOutcome
 from azgym.bench.suites import CAUSES, Case, Suite
+from azgym.core import BeaconMap
 from azgym.files import prepare_folder, write_file
 from azgym.metrics import bootstrap_blocks, confidence_intervals
 from azgym.profile import Profile, profile_toml
@@ -163,8 +164,16 @@ class BenchResult:
     cases: list[Case]
     outcomes: dict[str, RunOutcome]
 
-    def write(self, out: Path, figures: bool = True) -> list[Path]:
-        """Write results.json, frames.csv and, with matplotlib installed, the figures."""
+    def write(self, out: Path, figures: bool = True,
+              maps: dict[str, BeaconMap] | None = None) -> list[Path]:
+        """Write results.json, frames.csv and, with matplotlib installed, the figures.
+
+        Args:
+            out: The folder.
+            figures: Draw the figures too (when matplotlib is installed).
+            maps: Beacon maps by scenario name for maps that are no shipped scenario (a log's
+                ``beacons.csv``), which the figures draw from their beacons.
+        """
         prepare_folder(out)
         summary_path = write_file(out / "results.json", json.dumps(self.summary, indent=1) + "\n")
         table = io.StringIO(newline="")
@@ -176,5 +185,5 @@ class BenchResult:
         if figures and importlib.util.find_spec("matplotlib") is not None:
             from azgym.bench.report.plots import write_figures
 
-            written += write_figures(self.summary, self.cases, self.outcomes, out)
+            written += write_figures(self.summary, self.cases, self.outcomes, out, maps)
         return written

@@ -12,7 +12,6 @@ its data suite (:mod:`azgym.bench.suites.data`), on its own map and with its own
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import secrets
 import time
@@ -260,13 +259,7 @@ def write_log_results(result: BenchResult, log: Log, out: Path) -> list[Path]:
 
     A map that is no shipped scenario (``beacons.csv``) is drawn from its beacons (no racks).
     """
-    written = result.write(out, figures=False)
-    if importlib.util.find_spec("matplotlib") is not None:
-        from azgym.bench.report.plots import write_figures
-
-        maps = {} if log.shipped_map else {log.map_name: log.beacons}
-        written += write_figures(result.summary, result.cases, result.outcomes, out, maps)
-    return written
+    return result.write(out, maps={} if log.shipped_map else {log.map_name: log.beacons})
 
 
 def _start(backend: str, say: Progress) -> bool:
