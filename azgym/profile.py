@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from azgym.errors import InvalidInputError
+from azgym.fields import FLAG, Fields, Number
 
 __all__ = ["VEHICLE_KINDS", "MotionProfile", "Profile", "SensorProfile", "VehicleProfile",
            "field_texts", "parse_profile", "profile_defaults", "profile_toml",
@@ -144,22 +145,21 @@ class Profile:
         return not self.hyperparameters()
 
 
-_Rule = tuple[str, float, float, bool, bool]
-"""(unit, lowest, highest, lowest excluded, highest excluded) of a number."""
-_NUMBERS: dict[str, dict[str, _Rule]] = {
-    "vehicle": {"camera_ahead": ("m", -10.0, 10.0, False, False),
-                "wheelbase": ("m", 0.0, 20.0, True, False)},
-    "sensor": {"delta_alpha_d": ("rad", 0.0, math.pi / 2, False, True),
-               "field_of_view": ("rad", 0.0, 2 * math.pi, True, False)},
-    "motion": {"speed_factor": ("", 0.0, 10.0, True, False),
-               "speed_noise": ("m/s", 0.0, 10.0, False, False),
-               "speed_scale": ("", 0.0, 1.0, False, False),
-               "scale_walk": ("1/√s", 0.0, 1.0, False, False),
-               "turn_rate_noise": ("rad/s", 0.0, 10.0, False, False),
-               "bias_walk": ("rad/s/√s", 0.0, 1.0, False, False),
-               "heading_walk": ("rad/√s", 0.0, 10.0, False, False),
-               "position_walk": ("m/√s", 0.0, 10.0, False, False)},
+_NUMBERS: dict[str, dict[str, Number]] = {
+    "vehicle": {"camera_ahead": Number(-10.0, 10.0, unit="m"),
+                "wheelbase": Number(0.0, 20.0, low_open=True, unit="m")},
+    "sensor": {"delta_alpha_d": Number(0.0, math.pi / 2, high_open=True, unit="rad"),
+               "field_of_view": Number(0.0, 2 * math.pi, low_open=True, unit="rad")},
+    "motion": {"speed_factor": Number(0.0, 10.0, low_open=True),
+               "speed_noise": Number(0.0, 10.0, unit="m/s"),
+               "speed_scale": Number(0.0, 1.0),
+               "scale_walk": Number(0.0, 1.0, unit="1/√s"),
+               "turn_rate_noise": Number(0.0, 10.0, unit="rad/s"),
+               "bias_walk": Number(0.0, 1.0, unit="rad/s/√s"),
+               "heading_walk": Number(0.0, 10.0, unit="rad/√s"),
+               "position_walk": Number(0.0, 10.0, unit="m/√s")},
 }
+"""Each number's rule (its bounds are what makes physical sense; each has both, so no cap)."""
 _OTHER = {"vehicle": {"kind"}, "sensor": {"coverage"}, "motion": set()}
 SECTIONS = tuple(_NUMBERS)
 """The TOML sections a profile is read from."""
@@ -171,6 +171,7 @@ def parse_profile(data: dict[str, Any], report: Callable[[str], None]) -> Profil
     Other top-level keys are not looked at (a log's manifest holds more). Each problem is passed
     to ``report`` as ``section.field: what is wrong``; a field with a problem is left out.
     """
+    read = Fields(report=report)
     sections: dict[str, dict[str, Any]] = {}
     for section in SECTIONS:
         given = data.get(section, {})
@@ -182,10 +183,8 @@ def parse_profile(data: dict[str, Any], report: Callable[[str], None]) -> Profil
             report(f"{section}.{key}: unknown field (known: {', '.join(sorted(known))})")
         values: dict[str, Any] = {}
         for key, rule in _NUMBERS[section].items():
-            if key in given and (problem := _number_problem(given[key], rule)) is None:
+            if key in given and read.check(given[key], f"{section}.{key}", rule):
                 values[key] = float(given[key])
-            elif key in given:
-                report(f"{section}.{key}: {problem}")
         sections[section] = values
     vehicle, sensor = data.get("vehicle"), data.get("sensor")
     kind = vehicle.get("kind") if isinstance(vehicle, dict) else None
@@ -195,29 +194,13 @@ def parse_profile(data: dict[str, Any], report: Callable[[str], None]) -> Profil
     elif kind is not None:
         sections["vehicle"]["kind"] = kind
     coverage = sensor.get("coverage") if isinstance(sensor, dict) else None
-    if coverage is not None and not isinstance(coverage, bool):
-        report(f"sensor.coverage: must be true or false, got {coverage!r}")
-    elif coverage is not None:
+    if coverage is not None and read.check(coverage, "sensor.coverage", FLAG):
         sections["sensor"]["coverage"] = coverage
     if sections["vehicle"].get("kind") == DIFFERENTIAL_DRIVE and \
             sections["vehicle"].pop("wheelbase", None) is not None:
         report("vehicle.wheelbase: a differential-drive vehicle has no steering wheelbase")
     return Profile(VehicleProfile(**sections["vehicle"]), SensorProfile(**sections["sensor"]),
                    MotionProfile(**sections["motion"]))
-
-
-def _number_problem(value: Any, rule: _Rule) -> str | None:
-    """What is wrong with a profile number, or None."""
-    unit, low, high, low_open, high_open = rule
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-            (isinstance(value, float) and not math.isfinite(value)):  # a big int compares exactly
-        return f"must be a number{f' [{unit}]' if unit else ''}, got {value!r}"
-    if value > high or value < low or (low_open and value == low) or \
-            (high_open and value == high):
-        left, right = "(" if low_open else "[", ")" if high_open else "]"
-        return (f"must be in {left}{low:g}, {high:g}{right}{f' {unit}' if unit else ''}, got "
-                f"{value!r}")
-    return None
 
 
 def read_profile(path: str | Path) -> Profile:

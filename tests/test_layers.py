@@ -2,7 +2,7 @@
 
 Each module of ``azgym/`` belongs to one layer (``LAYERS``, lowest first); a module may import
 modules of its own unit and of lower layers only. Units sharing a layer (``logs`` and
-``localize`` do not, ``learn``, ``layout`` and ``experiments`` do) may not import each other.
+``localize`` do not, ``learn``, ``placement`` and ``experiments`` do) may not import each other.
 Every import counts: at the top of a file, inside a function (a lazy import is still a
 dependency) or under ``TYPE_CHECKING``. The package's own ``__init__`` is the public façade on
 top, which nothing inside imports. docs/architecture.md draws the same order.
@@ -17,9 +17,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / "azgym"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("_version",), ("errors",), ("registry",), ("core",),
-    ("arguments", "hyperparameters", "files", "profile"), ("jit",), ("metrics",),
+    ("fields",), ("arguments", "hyperparameters", "files", "profile"), ("jit",), ("metrics",),
     ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("nav",),
-    ("envs",), ("bench",), ("learn", "layout", "experiments"), ("cli",), ("__init__",),
+    ("envs",), ("bench",), ("learn", "placement", "experiments"), ("cli",), ("__init__",),
 )
 """The units, lowest first; a unit is a top-level module or subpackage of ``azgym``."""
 

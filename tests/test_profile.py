@@ -54,7 +54,7 @@ def test_good_profile_reads_every_field() -> None:
 
 @pytest.mark.parametrize(("text", "problem"), [
     ("[sensor]\ndelta_alpha_d = 2.0", "sensor.delta_alpha_d: must be in [0, 1.5708) rad"),
-    ("[sensor]\ndelta_alpha_d = 'big'", "sensor.delta_alpha_d: must be a number [rad]"),
+    ("[sensor]\ndelta_alpha_d = 'big'", "sensor.delta_alpha_d: must be a finite number [rad]"),
     ("[sensor]\nfield_of_view = 0.0", "sensor.field_of_view: must be in (0, 6.28319] rad"),
     ("[sensor]\ncoverage = 1", "sensor.coverage: must be true or false"),
     ("[sensor]\nnoise = 1", "sensor.noise: unknown field"),
@@ -62,7 +62,7 @@ def test_good_profile_reads_every_field() -> None:
     ("[vehicle]\nkind = 'differential-drive'\nwheelbase = 1.0", "vehicle.wheelbase: a "
      "differential-drive vehicle has no steering wheelbase"),
     ("[motion]\nspeed_noise = -0.1", "motion.speed_noise: must be in [0, 10] m/s"),
-    ("[motion]\nspeed_factor = true", "motion.speed_factor: must be a number"),
+    ("[motion]\nspeed_factor = true", "motion.speed_factor: must be a finite number"),
     ("motion = 3", "motion: must be a table"),
 ])
 def test_each_bad_field_is_named(text: str, problem: str) -> None:

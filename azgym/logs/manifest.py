@@ -18,6 +18,7 @@ import numpy as np
 
 from azgym.core import BeaconMap
 from azgym.errors import AzgymError, unknown_name
+from azgym.fields import Fields, Number
 from azgym.logs.files import log_file
 from azgym.logs.plausible import Extent
 from azgym.logs.problems import Problems, shown
@@ -39,6 +40,8 @@ MAX_MANIFEST_BYTES = 64 * 1024
 MAX_NAME = 64
 """The longest name a dataset may have [characters]; otherwise a plain file name, as a
 scenario's (:func:`azgym.site.reader.name_problem`), since it names the log's folder."""
+_CAMERA_RATE = Number(0.0, 1e4, low_open=True, high_open=True, unit="Hz")
+"""The rule for ``camera.rate_hz``: frames per second, more than none and fewer than 10 000."""
 _KEYS = {"": {"format", "name", "description", "simulated", "sequence", "camera", "map",
               "truth"},
          "camera": {"rate_hz", "description"}, "map": {"scenario", "beacons"},
@@ -127,11 +130,8 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
         problems.add(MANIFEST, "simulated: must be true or false (is the data from a real "
                                "camera?)")
     rate = camera.get("rate_hz")
-    rate_ok = rate is None or (not isinstance(rate, bool) and isinstance(rate, (int, float))
-                               and 0 < rate < 1e4)
-    if not rate_ok:
-        problems.add(MANIFEST, f"camera.rate_hz: must be a number of frames per second > 0, "
-                               f"got {shown(rate)}")
+    rate_ok = rate is None or Fields(report=lambda problem: problems.add(MANIFEST, problem)
+                                     ).check(rate, "camera.rate_hz", _CAMERA_RATE)
     maps = [key for key in ("scenario", "beacons") if key in where]
     if len(maps) != 1:
         problems.add(MANIFEST, "map: give exactly one of map.scenario (a shipped scenario or a "

@@ -4,8 +4,9 @@ Every value a scenario file gives passes through here, and every problem found i
 worded here, as ``<file>: <field>: <problem>`` (e.g.
 ``paper-room.toml: beacons[3].width: must be > 0, got -0.01``). The table parsers
 (:mod:`azgym.site.parse`, :mod:`azgym.site.parse_layout`, :mod:`azgym.site.parse_sensor`) say
-which field must be what; this module alone says how a number, a list, a table or a key is
-checked and what the message is, so a rule and its wording live in one place.
+which field must be what; this module says how a list, a table, a key or a text is checked and
+what the message is, and takes the rule for a number and a flag (and their wording) from
+:mod:`azgym.fields`, which every config file is read with.
 
 A file may be hostile, so every value is bounded: no number's magnitude exceeds
 :data:`MAX_MAGNITUDE` (a 400-digit integer or 1e300 is refused before it becomes a float), and a
@@ -16,13 +17,12 @@ short message.
 from __future__ import annotations
 
 import difflib
-import math
 import re
-import reprlib
 from collections.abc import Callable
 from typing import Any, TypeVar
 
 from azgym.errors import ScenarioError
+from azgym.fields import Fields, Number, shown
 
 __all__ = ["MAX_ENTRIES", "MAX_INTEGER", "MAX_NAME", "NAME_CHARACTERS", "Reader", "name_problem",
            "parse_tables", "shown"]
@@ -48,10 +48,6 @@ NAME_CHARACTERS = "A-Za-z0-9._-"
 _NAME = re.compile(rf"[A-Za-z0-9][{NAME_CHARACTERS}]*")
 """A plain file name (output files and folders are named after a scenario, a log)."""
 
-_SHORT = reprlib.Repr()
-_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxstring, _SHORT.maxother = 2, 6, 40, 40
-_SHORT.maxlong = 24
-
 
 def name_problem(name: str, max_length: int = MAX_NAME) -> str | None:
     """Why ``name`` cannot name a scenario (or a log: ``max_length`` 64), or None when it can.
@@ -67,20 +63,16 @@ def name_problem(name: str, max_length: int = MAX_NAME) -> str | None:
     return None
 
 
-def shown(value: Any) -> str:
-    """``repr(value)``, shortened: a hostile value (huge, deeply nested) makes a short message."""
-    return _SHORT.repr(value)
-
-
 class Reader:
     """Reads fields of one file, raising :class:`ScenarioError` that names file and field."""
 
     def __init__(self, origin: str) -> None:
         self.origin = origin
+        self._fields = Fields(origin, error=ScenarioError)
 
     def fail(self, field: str, problem: str) -> ScenarioError:
         """The error for a problem with ``field``, prefixed with the file's name."""
-        return ScenarioError(f"{self.origin}: {field}: {problem}")
+        return ScenarioError(self._fields.message(field, problem))
 
     def keys(self, table: dict[str, Any], allowed: set[str], where: str) -> None:
         """Reject a key not in ``allowed``, suggesting the closest valid one (typos)."""
@@ -113,42 +105,22 @@ class Reader:
         Its magnitude must be at most ``maximum`` (:data:`MAX_MAGNITUDE` unless the field has a
         tighter bound).
         """
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                (isinstance(value, float) and not math.isfinite(value)):
-            raise self.fail(field, f"must be a finite number, got {shown(value)}")
-        if positive and not value > 0:
-            raise self.fail(field, f"must be > 0, got {shown(value)}")
-        if non_negative and value < 0:
-            raise self.fail(field, f"must be >= 0, got {shown(value)}")
-        if abs(value) > maximum:  # compared before float(): a 400-digit int would overflow
-            bound = (f"<= {maximum:g}" if positive or non_negative
-                     else f"in [{-maximum:g}, {maximum:g}]")
-            raise self.fail(field, f"must be {bound}, got {shown(value)}")
-        if below is not None and value >= below:
-            raise self.fail(field, f"must be < {below:g}, got {float(value)}")
-        return float(value)
+        low = 0.0 if positive or non_negative else None
+        return self._fields.number(value, field, Number(low, below, low_open=positive,
+                                                        high_open=True, cap=maximum))
 
     def fraction(self, value: Any, field: str) -> float:
         """``value`` as a number in [0, 1]: a share, a rate or a reflectivity."""
-        share = self.number(value, field, non_negative=True)
-        if share > 1.0:
-            raise self.fail(field, f"must be in [0, 1], got {share}")
-        return share
+        return self._fields.number(value, field, Number(0.0, 1.0, cap=MAX_MAGNITUDE))
 
     def integer(self, value: Any, field: str, minimum: int = -MAX_INTEGER,
                 maximum: int = MAX_INTEGER) -> int:
         """``value`` as an integer (booleans are not) in [``minimum``, ``maximum``]."""
-        if isinstance(value, bool) or not isinstance(value, int) or \
-                not minimum <= value <= maximum:
-            raise self.fail(field, f"must be an integer in [{minimum}, {maximum}], "
-                            f"got {shown(value)}")
-        return value
+        return self._fields.integer(value, field, minimum, maximum)
 
     def boolean(self, value: Any, field: str) -> bool:
         """``value`` as a boolean: TOML's ``true`` or ``false``, never a string or a number."""
-        if not isinstance(value, bool):
-            raise self.fail(field, f"must be true or false, got {shown(value)}")
-        return value
+        return self._fields.boolean(value, field)
 
     def count(self, entries: list[Any], field: str, most: int = MAX_ENTRIES) -> None:
         """Reject an array of more than ``most`` (:data:`MAX_ENTRIES`) entries."""

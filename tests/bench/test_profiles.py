@@ -297,9 +297,12 @@ def test_bench_on_a_log_applies_the_file_over_the_log_s_own_profile(sensed_log, 
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["--profile", "{bad}"], r"profile '.*bad\.toml':\n  sensor\.delta_alpha_d: must be a number"),
+    (["--profile", "{bad}"],
+     r"profile '.*bad\.toml':\n  sensor\.delta_alpha_d: must be a finite number \[rad\], "
+     r"got .wide."),
     (["--profile", "{missing}"], r"profile '.*missing\.toml': no such file"),
-    (["--profile", "{bad}", "--data", "roh"], r"sensor\.delta_alpha_d: must be a number"),
+    (["--profile", "{bad}", "--data", "roh"],
+     r"sensor\.delta_alpha_d: must be a finite number \[rad\], got .wide."),
     (["--profile", "{good}", "--suite", "navigation"], "a navigation suite .--navigator. takes "
                                                         "none"),
     (["--profile", "{good}", "--navigator", "ppo"], "a navigation suite .--navigator. takes none"),

@@ -69,7 +69,7 @@ MALFORMED_2 = {
     "sensor huge": (_manifest("delta_alpha_d = 0.01", "delta_alpha_d = 1e300"),
                     r"log.toml: sensor.delta_alpha_d: must be in \[0, 1.5708\) rad, got 1e\+300"),
     "sensor not a number": (_manifest("field_of_view = 6.0", 'field_of_view = "wide"'),
-                            r"log.toml: sensor.field_of_view: must be a number \[rad\], got "
+                            r"log.toml: sensor.field_of_view: must be a finite number \[rad\], got "
                             r"'wide'"),
     "sensor negative": (_manifest("delta_alpha_d = 0.01", "delta_alpha_d = -0.01"),
                         r"sensor.delta_alpha_d: must be in \[0, 1.5708\) rad, got -0.01"),

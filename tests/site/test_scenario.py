@@ -194,7 +194,7 @@ MALFORMED = [
                  "version: must be an integer in [1, 2147483647], got 0",
                  id="version-zero"),
     pytest.param(VALID.replace("delta_alpha_d_deg = 0.5", "delta_alpha_d_deg = 95"),
-                 "error_model.delta_alpha_d_deg: must be < 90", id="huge-delta"),
+                 "error_model.delta_alpha_d_deg: must be in [0, 90)", id="huge-delta"),
     pytest.param(VALID.replace("delta_alpha_d_deg = 0.5",
                                "delta_alpha_d_deg = 0.5\ncenter_error_px = 1.0"),
                  "error_model.delta_alpha_d_deg: give either", id="two-error-models"),
@@ -211,10 +211,10 @@ MALFORMED = [
     pytest.param(VALID + "\n[faults]\nmisdecode_rate = 1.5\n",
                  "faults.misdecode_rate: must be in [0, 1], got 1.5", id="rate-above-one"),
     pytest.param(VALID + "\n[[racks]]\ncenter = [0.0, -2.0]\nsize = [1.0, 1.0]\nheight = 2.0\n"
-                 "reflectivity = -0.5\n", "racks[0].reflectivity: must be >= 0, got -0.5",
+                 "reflectivity = -0.5\n", "racks[0].reflectivity: must be in [0, 1], got -0.5",
                  id="negative-reflectivity"),
     pytest.param(VALID + "\n[[bumps]]\ncenter = [0.0, -2.0]\nsize = [1.0, 1.0]\ntilt_deg = 50\n",
-                 "bumps[0].tilt_deg: must be < 45, got 50.0", id="steep-bump"),
+                 "bumps[0].tilt_deg: must be in [0, 45), got 50", id="steep-bump"),
 ]
 
 
@@ -282,7 +282,7 @@ EXPECTED_PROBLEMS = {
     "12-conflicting-error-model.toml": "error_model.delta_alpha_d_deg: give either",
     "13-not-toml.toml": "not valid TOML",
     "14-route-leaves-room.toml": "routes[0].waypoints[1]: (15, 5) is outside the room",
-    "15-negative-misdecode-rate.toml": "faults.misdecode_rate: must be >= 0",
+    "15-negative-misdecode-rate.toml": "faults.misdecode_rate: must be in [0, 1]",
     "16-light-without-height.toml": "lights[0].xyz: must be a list of 3 numbers",
     "17-light-without-power.toml": "lights[0].power: must be > 0",
 }

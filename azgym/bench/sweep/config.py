@@ -39,6 +39,7 @@ from azgym.bench.suites import Suite
 from azgym.bench.suites.warehouse import scenario_suite
 from azgym.core import BeaconMap
 from azgym.errors import AzgymError, InvalidInputError, unknown_name
+from azgym.fields import Fields
 from azgym.localize.registry import spec_label
 from azgym.metrics import HEADLINE
 from azgym.site import Scenario, load_scenario
@@ -96,33 +97,27 @@ class SweepConfig:
         return len(self.points) * len(self.suites) * len(self.seeds or [0])
 
 
-class _Fields:
-    """Named checks of a config's fields: each error says the file and the field."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def error(self, field: str, problem: str) -> InvalidInputError:
-        return InvalidInputError(f"{self.source}: {field}: {problem}")
+class _Fields(Fields):
+    """The config's fields (:class:`~azgym.fields.Fields`), and the checks only a sweep has."""
 
     def keys(self, field: str, table: dict[str, Any], known: set[str]) -> None:
         for key in table:
             if key not in known:
-                raise self.error(f"{field}.{key}" if field else key,
+                raise self.fail(f"{field}.{key}" if field else key,
                              str(unknown_name("key", key, known)))
 
     def names(self, field: str, value: Any, known: list[str]) -> list[str]:
         items = self.nonempty_list(field, value)
         for k, item in enumerate(items):
             if item not in known:
-                raise self.error(f"{field}[{k}]", str(unknown_name(field[:-1], str(item), known)))
+                raise self.fail(f"{field}[{k}]", str(unknown_name(field[:-1], str(item), known)))
         return items
 
     def nonempty_list(self, field: str, value: Any) -> list[Any]:
         if not isinstance(value, list) or not value:
-            raise self.error(field, f"must be a non-empty list, got {value!r}")
+            raise self.fail(field, f"must be a non-empty list, got {value!r}")
         if len({repr(v) for v in value}) < len(value):
-            raise self.error(field, f"lists a value twice: {value!r}")
+            raise self.fail(field, f"lists a value twice: {value!r}")
         return value
 
     def seeds(self, value: Any) -> list[int] | None:
@@ -132,7 +127,7 @@ class _Fields:
             return [arguments.seed(f"seeds[{k}]", seed)
                     for k, seed in enumerate(self.nonempty_list("seeds", value))]
         except InvalidInputError as exc:
-            raise InvalidInputError(f"{self.source}: {exc}") from None
+            raise InvalidInputError(f"{self.origin}: {exc}") from None
 
 
 def load_sweep(path: Path) -> SweepConfig:
@@ -165,31 +160,29 @@ def parse_sweep(data: dict[str, Any], source: str = "sweep",
     fields = _Fields(source)
     fields.keys("", data, KEYS)
     if data.get("suites") is None and data.get("scenarios") is None:
-        raise fields.error("suites", "a sweep needs suites, scenarios or both")
+        raise fields.fail("suites", "a sweep needs suites, scenarios or both")
     suites = [SUITES[name] for name in (
         fields.names("suites", data["suites"], list(SUITES)) if "suites" in data else [])]
     scenarios = _scenarios(fields, data.get("scenarios"), folder or Path.cwd())
     axis = [scenario_suite(scenario) for scenario in scenarios]
     suites += axis
     seeds = fields.seeds(data.get("seeds"))
-    quick = data.get("quick", False)
-    if not isinstance(quick, bool):
-        raise fields.error("quick", f"must be true or false, got {quick!r}")
+    quick = fields.boolean(data.get("quick", False), "quick")
     try:
         time_limit = checked_time_limit("time_limit", data.get("time_limit", DEFAULT_TIME_LIMIT))
     except InvalidInputError as exc:
-        raise fields.error("time_limit", str(exc).removeprefix("time_limit ")) from None
+        raise fields.fail("time_limit", str(exc).removeprefix("time_limit ")) from None
     metric = data.get("metric", METRICS[0])
     if metric not in METRICS:
-        raise fields.error("metric", str(unknown_name("metric", str(metric), METRICS)))
+        raise fields.fail("metric", str(unknown_name("metric", str(metric), METRICS)))
     tables = data.get("localizer")
     if not isinstance(tables, list) or not tables:
-        raise fields.error("localizer", "at least one [[localizer]] table is needed")
+        raise fields.fail("localizer", "at least one [[localizer]] table is needed")
     grids = [_grid(fields, f"localizer[{k}]", table) for k, table in enumerate(tables)]
     runs = sum(len(g) for g in grids) * len(suites) * len(seeds or [0])
     if runs > MAX_RUNS:
-        raise fields.error("localizer", f"the sweep holds {runs} runs (grid points x suites x "
-                                        f"seeds), more than the cap of {MAX_RUNS}")
+        raise fields.fail("localizer", f"the sweep holds {runs} runs (grid points x suites x "
+                                       f"seeds), more than the cap of {MAX_RUNS}")
     points = _points(fields, tables, grids, time_limit)
     return SweepConfig(points, suites, seeds, quick, time_limit, metric,
                        {suite.name: {scenario.name: scenario.beacons}
@@ -203,16 +196,16 @@ def _scenarios(fields: _Fields, value: Any, folder: Path) -> list[Scenario]:
     scenarios = []
     for k, name in enumerate(fields.nonempty_list("scenarios", value)):
         if not isinstance(name, str) or not name.strip():
-            raise fields.error(f"scenarios[{k}]", f"must be a name or a .toml file, got {name!r}")
+            raise fields.fail(f"scenarios[{k}]", f"must be a name or a .toml file, got {name!r}")
         where = _beside(fields, f"scenarios[{k}]", folder, name) if name.endswith(".toml") \
             else name
         try:
             scenarios.append(load_scenario(where))
         except AzgymError as exc:
-            raise fields.error(f"scenarios[{k}]", str(exc)) from None
+            raise fields.fail(f"scenarios[{k}]", str(exc)) from None
     names = [scenario.name for scenario in scenarios]
     if len(set(names)) < len(names):
-        raise fields.error("scenarios", f"two scenarios share a name: {names}")
+        raise fields.fail("scenarios", f"two scenarios share a name: {names}")
     return scenarios
 
 
@@ -225,32 +218,32 @@ def _beside(fields: _Fields, field: str, folder: Path, name: str) -> Path:
     """
     path = folder / name
     if not path.resolve().is_relative_to(folder.resolve()):
-        raise fields.error(field, f"{name!r} is outside the config's folder; a scenario file "
-                                  "must be in the config's folder or below it")
+        raise fields.fail(field, f"{name!r} is outside the config's folder; a scenario file "
+                                 "must be in the config's folder or below it")
     return path
 
 
 def _grid(fields: _Fields, field: str, table: Any) -> list[dict[str, Any]]:
     """A localizer table's grid: every combination of its values (one point without a grid)."""
     if not isinstance(table, dict):
-        raise fields.error(field, "must be a table ([[localizer]])")
+        raise fields.fail(field, "must be a table ([[localizer]])")
     fields.keys(field, table, LOCALIZER_KEYS)
     if not isinstance(table.get("name"), str) or not table["name"]:
-        raise fields.error(f"{field}.name", "a localizer's name or spec is needed")
+        raise fields.fail(f"{field}.name", "a localizer's name or spec is needed")
     if not isinstance(table.get("params", {}), dict):
-        raise fields.error(f"{field}.params", "must be a table of hyperparameters")
+        raise fields.fail(f"{field}.params", "must be a table of hyperparameters")
     for key, value in table.get("params", {}).items():
         _scalar(fields, f"{field}.params.{key}", value)
     grid = table.get("grid", {"": [None]})
     if not isinstance(grid, dict) or not grid:
-        raise fields.error(f"{field}.grid", "is empty: give each hyperparameter a list of "
-                                            "values, or leave grid out to run the defaults")
+        raise fields.fail(f"{field}.grid", "is empty: give each hyperparameter a list of "
+                                           "values, or leave grid out to run the defaults")
     for key, values in grid.items():
         for value in fields.nonempty_list(f"{field}.grid.{key}", values):
             if key:  # not the one point of a localizer without a grid
                 _scalar(fields, f"{field}.grid.{key}", value)
         if key in table.get("params", {}):
-            raise fields.error(f"{field}.grid.{key}", "is also fixed in params")
+            raise fields.fail(f"{field}.grid.{key}", "is also fixed in params")
     keys = [key for key in grid if key]
     return [dict(zip(keys, combo, strict=True))
             for combo in itertools.product(*(grid[key] for key in keys))]
@@ -259,8 +252,8 @@ def _grid(fields: _Fields, field: str, table: Any) -> list[dict[str, Any]]:
 def _scalar(fields: _Fields, field: str, value: Any) -> None:
     """Refuse a hyperparameter's value that is not a JSON scalar (:data:`SCALARS`)."""
     if not isinstance(value, SCALARS):
-        raise fields.error(field, f"must be true, false, a number or a string (a JSON scalar), "
-                                  f"got {value!r}")
+        raise fields.fail(field, f"must be true, false, a number or a string (a JSON scalar), "
+                                 f"got {value!r}")
 
 
 def _build_problem(base: Contender, params: dict[str, Any], time_limit: float) -> str:
@@ -317,16 +310,16 @@ def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict
             try:
                 base = contender(table["name"])
             except AzgymError as exc:
-                raise fields.error(field, str(exc)) from None
+                raise fields.fail(field, str(exc)) from None
             for key in sorted(params.keys() & base.params.keys()):
                 where = "grid" if key in varied else "params"
-                raise fields.error(f"{field}.{where}.{key}", f"is also fixed in the name "
-                                                            f"{table['name']!r}")
+                raise fields.fail(f"{field}.{where}.{key}", f"is also fixed in the name "
+                                                           f"{table['name']!r}")
             drafts.append(_Draft(field, base, params, varied))
 
-    def repeat(label: str, first: int, again: int) -> InvalidInputError:
-        return fields.error(drafts[again].field, f"grid point {label!r} is already in the "
-                                                 f"sweep ({drafts[first].field})")
+    def repeat(label: str, first: int, again: int) -> AzgymError:
+        return fields.fail(drafts[again].field, f"grid point {label!r} is already in the "
+                                                f"sweep ({drafts[first].field})")
 
     by_label: dict[str, _Draft] = {}
     for draft in drafts:  # the first of a label: the one built (a repeat is refused)
@@ -336,7 +329,7 @@ def _points(fields: _Fields, tables: list[dict[str, Any]], grids: list[list[dict
         draft = by_label[candidate.label]
         problem = build_problem(candidate.spec, candidate.params, time_limit)
         if problem:
-            raise fields.error(_culprit(draft.field, draft.base, draft.params, draft.varied,
+            raise fields.fail(_culprit(draft.field, draft.base, draft.params, draft.varied,
                                         time_limit), problem)
 
     chosen = resolve_contenders([draft.spec for draft in drafts], check=check,

@@ -1,0 +1,66 @@
+"""The one rule for a number field and the field reader every config file is read with."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from azgym.errors import InvalidInputError, ScenarioError
+from azgym.fields import FLAG, Fields, Number
+
+SHARE = Number(0.0, 1.0, high_open=True, unit="rad")
+
+
+@pytest.mark.parametrize(("rule", "value", "problem"), [
+    (Number(), True, "must be a finite number, got True"),
+    (Number(), math.nan, "must be a finite number, got nan"),
+    (Number(), -math.inf, "must be a finite number, got -inf"),
+    (Number(), "1", "must be a finite number, got '1'"),
+    (SHARE, "1", "must be a finite number [rad], got '1'"),
+    (SHARE, 1.0, "must be in [0, 1) rad, got 1.0"),
+    (SHARE, -0.01, "must be in [0, 1) rad, got -0.01"),
+    (Number(0.0, low_open=True), 0, "must be > 0, got 0"),
+    (Number(0.0), -1, "must be >= 0, got -1"),
+    (Number(high=5.0, high_open=True), 5, "must be < 5, got 5"),
+    (Number(high=5.0), 6, "must be <= 5, got 6"),
+    (Number(0.0, cap=1e5), 10**400, "must be <= 100000, got 1000000000"),
+    (Number(cap=1e5), -1e300, "must be in [-100000, 100000], got -1e+300"),
+    (Number(1, 4, integer=True), 2.0, "must be an integer in [1, 4], got 2.0"),
+    (Number(1, 4, integer=True), False, "must be an integer in [1, 4], got False"),
+    (Number(1, 4, integer=True), 5, "must be an integer in [1, 4], got 5"),
+    (Number(integer=True), 0.5, "must be an integer, got 0.5"),
+    (FLAG, 1, "must be true or false, got 1"),
+])
+def test_a_refused_value_is_worded_by_the_rule(rule: Number, value: object, problem: str) -> None:
+    got = rule.problem(value)
+    assert got is not None and got.startswith(problem)
+
+
+@pytest.mark.parametrize(("rule", "value"), [
+    (SHARE, 0), (SHARE, 0.999), (Number(0.0, low_open=True), 1e-300), (Number(cap=1e5), -1e5),
+    (Number(1, 4, integer=True), 4), (Number(), 10**400), (FLAG, False),
+])
+def test_a_valid_value_has_no_problem(rule: Number, value: object) -> None:
+    assert rule.problem(value) is None
+
+
+def test_a_reader_raises_the_problem_named_by_file_and_field() -> None:
+    read = Fields("room.toml", error=ScenarioError)
+    assert read.number(3, "racks[0].height", Number(0.0, low_open=True)) == 3.0
+    assert read.integer(7, "version", 1, 9) == 7
+    assert read.boolean(False, "quick") is False
+    with pytest.raises(ScenarioError, match=r"^room\.toml: racks\[0\]\.height: must be > 0, "):
+        read.number(-1, "racks[0].height", Number(0.0, low_open=True))
+    with pytest.raises(InvalidInputError, match=r"^quick: must be true or false, got 'yes'$"):
+        Fields().boolean("yes", "quick")
+
+
+def test_a_collecting_reader_reports_every_problem_and_goes_on() -> None:
+    found: list[str] = []
+    read = Fields(report=found.append)
+    assert not read.check(math.nan, "sensor.delta_alpha_d", SHARE)
+    assert not read.check("no", "sensor.coverage", FLAG)
+    assert read.check(0.5, "sensor.delta_alpha_d", SHARE)
+    assert found == ["sensor.delta_alpha_d: must be a finite number [rad], got nan",
+                     "sensor.coverage: must be true or false, got 'no'"]
