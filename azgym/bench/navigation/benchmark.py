@@ -41,7 +41,7 @@ from azgym.bench.navigation.report import NavigationResult
 from azgym.bench.navigation.suites import NAVIGATORS, NavigationSuite, get_navigation_suite
 from azgym.errors import InvalidInputError
 
-__all__ = ["KIND", "RESULTS_FORMAT", "Contender", "check_contenders", "contenders_of",
+__all__ = ["KIND", "RESULTS_FORMAT", "Pairing", "check_contenders", "contenders_of",
            "drive_all", "drive_contender", "episode_rows", "evaluate_navigator", "make_env",
            "navigation_contenders", "run_navigation"]
 
@@ -51,11 +51,12 @@ geodesic shortest path, SPL's l) replaces ``path_length_m`` (the planner's path)
 KIND = "navigation"
 """``kind`` of a navigation results file, which tells it from a frame suite's."""
 
-Contender = tuple[str, str]
-"""(navigator, localizer)."""
+Pairing = tuple[str, str]
+"""A navigation contender: (navigator, localizer); the frame suites' is
+:class:`azgym.bench.run.contenders.Contender`."""
 
 
-def contenders_of(navigators: Sequence[str], localizers: Sequence[str]) -> list[Contender]:
+def contenders_of(navigators: Sequence[str], localizers: Sequence[str]) -> list[Pairing]:
     """Every navigator with every localizer, each pair once, in the order named."""
     pairs = [(navigator, localizer) for navigator in navigators for localizer in localizers]
     if not pairs:
@@ -66,7 +67,7 @@ def contenders_of(navigators: Sequence[str], localizers: Sequence[str]) -> list[
 
 def navigation_contenders(suite: NavigationSuite, navigators: Sequence[str],
                           localizers: Sequence[str], *, with_builtins: bool = False
-                          ) -> list[Contender]:
+                          ) -> list[Pairing]:
     """Who drives a navigation suite: ``azgym bench --suite navigation``'s pairs, unchecked.
 
     The navigators named (all of :data:`~azgym.bench.navigation.suites.NAVIGATORS` if none),
@@ -92,7 +93,7 @@ def make_env(suite: NavigationSuite, localizer: str) -> gym.Env:
     return gym.make(suite.env_id, localizer=localizer, **suite.env_kwargs)
 
 
-def check_contenders(suite: NavigationSuite, contenders: Sequence[Contender]) -> None:
+def check_contenders(suite: NavigationSuite, contenders: Sequence[Pairing]) -> None:
     """Build every localizer and load every navigator against it: a named error now, not later."""
     from azgym.nav.policy_file import load_policy
 
@@ -105,7 +106,7 @@ def check_contenders(suite: NavigationSuite, contenders: Sequence[Contender]) ->
         env.close()
 
 
-def run_navigation(suite: NavigationSuite, contenders: Sequence[Contender], *, split: str = "dev",
+def run_navigation(suite: NavigationSuite, contenders: Sequence[Pairing], *, split: str = "dev",
                    quick: bool = False, workers: int = 1,
                    progress: Callable[[str], None] | None = None) -> NavigationResult:
     """Drive every contender on the suite's episodes; what ``navigation.json`` holds.
@@ -173,7 +174,7 @@ def evaluate_navigator(policy: str, env_id: str, localizers: Sequence[str], *, e
                             rows="results", names=("localizer",))
 
 
-def drive_all(suite: NavigationSuite, contenders: Sequence[Contender], seed: int, episodes: int,
+def drive_all(suite: NavigationSuite, contenders: Sequence[Pairing], seed: int, episodes: int,
               workers: int, progress: Callable[[str], None] | None = None
               ) -> list[dict[str, Any]]:
     """Each contender's record (:func:`drive_contender`), in the order of ``contenders``."""
