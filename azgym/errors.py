@@ -17,6 +17,10 @@ __all__ = ["AzgymError", "DatasetUnavailable", "DependencyNotInstalled", "Invali
            "unknown_name"]
 
 
+MAX_SHOWN_NAME = 40
+"""An unknown name longer than this is cut in its message (a hostile file's 1 MB key makes a
+short message, and only its start is compared with the valid names)."""
+
 class AzgymError(Exception):
     """Base class of every exception raised by azgym."""
 
@@ -100,10 +104,11 @@ def unknown_name(kind: str, name: str, known: Iterable[str]) -> UnknownNameError
         known: Every valid name.
     """
     known = sorted(known)
-    close = difflib.get_close_matches(name, known, n=1)
+    close = difflib.get_close_matches(name[:MAX_SHOWN_NAME * 2], known, n=1)
     hint = f" Did you mean {close[0]!r}?" if close else ""
+    shown = name if len(name) <= MAX_SHOWN_NAME else f"{name[:MAX_SHOWN_NAME - 3]}..."
     return UnknownNameError(
-        f"unknown {kind} {name!r}.{hint} Valid {_plural(kind)}: {', '.join(known) or '(none)'}."
+        f"unknown {kind} {shown!r}.{hint} Valid {_plural(kind)}: {', '.join(known) or '(none)'}."
     )
 
 

@@ -22,11 +22,11 @@ from __future__ import annotations
 
 import math
 import reprlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Protocol
 
-from azgym.errors import AzgymError, InvalidInputError
+from azgym.errors import AzgymError, InvalidInputError, unknown_name
 
 __all__ = ["FLAG", "Fields", "Flag", "Number", "Rule", "shown"]
 
@@ -151,7 +151,7 @@ class Fields:
 
     def message(self, field: str, problem: str) -> str:
         """A problem of ``field``, worded as this file's."""
-        return f"{self.origin}: {field}: {problem}" if self.origin else f"{field}: {problem}"
+        return ": ".join(part for part in (self.origin, field, problem) if part)
 
     def fail(self, field: str, problem: str) -> AzgymError:
         """The error for a problem of ``field`` (to raise)."""
@@ -166,6 +166,24 @@ class Fields:
             raise self.fail(field, problem)
         self.report(self.message(field, problem))
         return False
+
+    def keys(self, table: dict[str, object], known: Iterable[str], where: str = "") -> bool:
+        """Whether every key of the table at ``where`` is ``known``.
+
+        Each other key is a problem of ``where``, worded as every unknown name is
+        (:func:`azgym.errors.unknown_name`: the valid keys and the closest, a long key cut);
+        reported, or the first raised without a report.
+        """
+        valid = sorted(known)
+        fine = True
+        for key in table:
+            if key not in valid:
+                problem = str(unknown_name("key", key, valid))
+                if self.report is None:
+                    raise self.fail(where, problem)
+                self.report(self.message(where, problem))
+                fine = False
+        return fine
 
     def number(self, value: object, field: str, rule: Number) -> float:
         """``value`` as a float, which must satisfy ``rule`` (raised otherwise)."""

@@ -178,9 +178,7 @@ def parse_profile(data: dict[str, Any], report: Callable[[str], None]) -> Profil
         if not isinstance(given, dict):
             report(f"{section}: must be a table ([{section}])")
             given = {}
-        known = set(_NUMBERS[section]) | _OTHER[section]
-        for key in sorted(set(given) - known):
-            report(f"{section}.{key}: unknown field (known: {', '.join(sorted(known))})")
+        read.keys(given, set(_NUMBERS[section]) | _OTHER[section], section)
         values: dict[str, Any] = {}
         for key, rule in _NUMBERS[section].items():
             if key in given and read.check(given[key], f"{section}.{key}", rule):

@@ -64,3 +64,23 @@ def test_a_collecting_reader_reports_every_problem_and_goes_on() -> None:
     assert read.check(0.5, "sensor.delta_alpha_d", SHARE)
     assert found == ["sensor.delta_alpha_d: must be a finite number [rad], got nan",
                      "sensor.coverage: must be true or false, got 'no'"]
+
+
+def test_unknown_keys_are_worded_as_every_unknown_name_and_all_reported():
+    found: list[str] = []
+    fields = Fields("log.toml", report=found.append)
+    assert not fields.keys({"rate_hz": 1, "rat_hz": 2, "colour": 3}, {"rate_hz", "description"},
+                           "camera")
+    assert found == [
+        "log.toml: camera: unknown key 'rat_hz'. Did you mean 'rate_hz'? Valid keys: "
+        "description, rate_hz.",
+        "log.toml: camera: unknown key 'colour'. Valid keys: description, rate_hz."]
+
+
+def test_an_unknown_key_raises_without_a_report_and_a_huge_one_is_cut():
+    with pytest.raises(InvalidInputError, match=r"^sweep: unknown key 'seed'\. Did you mean "
+                                                r"'seeds'\?"):
+        Fields("sweep").keys({"seed": 1}, {"seeds"})
+    with pytest.raises(InvalidInputError) as raised:
+        Fields("sweep").keys({"k" * 1_000_000: 1}, {"seeds"})
+    assert len(str(raised.value)) < 200 and f"'{'k' * 37}...'" in str(raised.value)

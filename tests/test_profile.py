@@ -57,7 +57,7 @@ def test_good_profile_reads_every_field() -> None:
     ("[sensor]\ndelta_alpha_d = 'big'", "sensor.delta_alpha_d: must be a finite number [rad]"),
     ("[sensor]\nfield_of_view = 0.0", "sensor.field_of_view: must be in (0, 6.28319] rad"),
     ("[sensor]\ncoverage = 1", "sensor.coverage: must be true or false"),
-    ("[sensor]\nnoise = 1", "sensor.noise: unknown field"),
+    ("[sensor]\nnoise = 1", "sensor: unknown key 'noise'"),
     ("[vehicle]\nkind = 'tank'", "vehicle.kind: must be one of 'forklift', 'differential-drive'"),
     ("[vehicle]\nkind = 'differential-drive'\nwheelbase = 1.0", "vehicle.wheelbase: a "
      "differential-drive vehicle has no steering wheelbase"),

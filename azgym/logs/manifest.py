@@ -113,14 +113,13 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
                                f"says {shown(given)}{whole}")
         return None
     known = _KEYS | ({"": _KEYS[""] | set(SECTIONS)} if given >= 2 else {})
+    read = Fields(report=lambda problem: problems.add(MANIFEST, problem))
     for table, keys in known.items():
         section = data if not table else data.get(table, {})
         if not isinstance(section, dict):
             problems.add(MANIFEST, f"{table}: must be a table ([{table}])")
             continue
-        for key in sorted(set(section) - keys):
-            problems.add(MANIFEST, f"{f'{table}.' if table else ''}{key}: unknown field "
-                                   f"(known: {', '.join(sorted(keys))})")
+        read.keys(section, keys, table)
     camera, where, truth = (_section(data, key) for key in ("camera", "map", "truth"))
     name = _text(data, "name", problems, required=True)
     if name and (problem := name_problem(name, MAX_NAME)):
@@ -130,8 +129,7 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
         problems.add(MANIFEST, "simulated: must be true or false (is the data from a real "
                                "camera?)")
     rate = camera.get("rate_hz")
-    rate_ok = rate is None or Fields(report=lambda problem: problems.add(MANIFEST, problem)
-                                     ).check(rate, "camera.rate_hz", _CAMERA_RATE)
+    rate_ok = rate is None or read.check(rate, "camera.rate_hz", _CAMERA_RATE)
     maps = [key for key in ("scenario", "beacons") if key in where]
     if len(maps) != 1:
         problems.add(MANIFEST, "map: give exactly one of map.scenario (a shipped scenario or a "

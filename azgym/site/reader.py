@@ -16,7 +16,6 @@ short message.
 
 from __future__ import annotations
 
-import difflib
 import re
 from collections.abc import Callable
 from typing import Any, TypeVar
@@ -75,14 +74,11 @@ class Reader:
         return ScenarioError(self._fields.message(field, problem))
 
     def keys(self, table: dict[str, Any], allowed: set[str], where: str) -> None:
-        """Reject a key not in ``allowed``, suggesting the closest valid one (typos)."""
-        for key in table:
-            if key not in allowed:
-                close = difflib.get_close_matches(key[:100], sorted(allowed), n=1)
-                hint = f" Did you mean {close[0]!r}?" if close else ""
-                name = key if len(key) <= 40 else f"{key[:37]}..."
-                raise self.fail(f"{where}{name}", f"unknown key.{hint} "
-                                f"Valid keys: {', '.join(sorted(allowed))}")
+        """Reject a key not in ``allowed`` (:meth:`azgym.fields.Fields.keys`).
+
+        ``where`` is the table's path with its trailing dot (``"beacons[3]."``, ``""`` at the top).
+        """
+        self._fields.keys(table, allowed, where.rstrip("."))
 
     def table(self, value: Any, field: str, allowed: set[str]) -> dict[str, Any]:
         """``value``, checked to be a table whose keys are all in ``allowed``."""

@@ -74,7 +74,7 @@ MALFORMED_2 = {
     "sensor negative": (_manifest("delta_alpha_d = 0.01", "delta_alpha_d = -0.01"),
                         r"sensor.delta_alpha_d: must be in \[0, 1.5708\) rad, got -0.01"),
     "sensor typo": (_manifest("field_of_view", "field_of_veiw"),
-                    r"log.toml: sensor.field_of_veiw: unknown field"),
+                    r"log.toml: sensor: unknown key 'field_of_veiw'"),
     "sensor not a table": (lambda f: f.update({"log.toml": MANIFEST_2.replace(
         "[sensor]\ndelta_alpha_d = 0.01\nfield_of_view = 6.0\n", "").replace(
         "simulated = true\n", 'simulated = true\nsensor = "fisheye"\n')}),

@@ -73,9 +73,9 @@ MALFORMED = {
                        r"log.toml: format: this azgym reads log formats 1 and 2, the log says 3"),
     "profile in format 1": (_replace("log.toml", "[map]",
                                      "[sensor]\ndelta_alpha_d = 0.01\n\n[map]"),
-                            r"log.toml: sensor: unknown field"),
+                            r"log.toml: unknown key 'sensor'"),
     "manifest typo": (_replace("log.toml", "simulated =", "simulatd = true\nsimulated ="),
-                      r"log.toml: simulatd: unknown field"),
+                      r"log.toml: unknown key 'simulatd'"),
     "manifest not TOML": (_replace("log.toml", "name = ", "name = = "), r"not valid TOML"),
     "name not plain": (_replace("log.toml", 'name = "mini"', 'name = "../mini"'),
                        r"log.toml: name: must be a plain file name \(.*at most 64 characters\), "

@@ -98,7 +98,7 @@ def test_bad_intrinsics_are_refused_naming_the_field(kwargs, message):
          "fisheye.image_size[0]: must be an integer in [1, 4096], got 200000"),
         ({"focal_px": 1e300}, "fisheye.focal_px: must be in [-100000, 100000], got 1e+300"),
         ({"distortion": [-0.5, 0.0, 0.0, 0.0]}, "fisheye.distortion: (-0.5, 0.0, 0.0, 0.0) makes"),
-        ({"focal": 150.0}, "fisheye.focal: unknown key. Did you mean 'focal_px'?"),
+        ({"focal": 150.0}, "fisheye: unknown key 'focal'. Did you mean 'focal_px'?"),
     ],
 )
 def test_bad_fisheye_sections_are_reported_with_file_and_field(table, message):

@@ -112,7 +112,7 @@ def test_the_same_route_gives_a_bit_identical_trajectory():
         ({"name": "r", "waypoints": [[-5.0, -5.0]]},
          "routes[0].waypoints: must be a list of at least 2 [x, y] points"),
         ({"name": "r", "waypoints": [[-5.0, -5.0], [5.0, -5.0]], "sped": 2.0},
-         "routes[0].sped: unknown key. Did you mean 'speed'?"),
+         "routes[0]: unknown key 'sped'. Did you mean 'speed'?"),
     ],
 )
 def test_malformed_routes_are_reported(route, message):

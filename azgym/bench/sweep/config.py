@@ -100,12 +100,6 @@ class SweepConfig:
 class _Fields(Fields):
     """The config's fields (:class:`~azgym.fields.Fields`), and the checks only a sweep has."""
 
-    def keys(self, field: str, table: dict[str, Any], known: set[str]) -> None:
-        for key in table:
-            if key not in known:
-                raise self.fail(f"{field}.{key}" if field else key,
-                             str(unknown_name("key", key, known)))
-
     def names(self, field: str, value: Any, known: list[str]) -> list[str]:
         items = self.nonempty_list(field, value)
         for k, item in enumerate(items):
@@ -158,7 +152,7 @@ def parse_sweep(data: dict[str, Any], source: str = "sweep",
     from azgym.bench.suites import SUITES
 
     fields = _Fields(source)
-    fields.keys("", data, KEYS)
+    fields.keys(data, KEYS)
     if data.get("suites") is None and data.get("scenarios") is None:
         raise fields.fail("suites", "a sweep needs suites, scenarios or both")
     suites = [SUITES[name] for name in (
@@ -227,7 +221,7 @@ def _grid(fields: _Fields, field: str, table: Any) -> list[dict[str, Any]]:
     """A localizer table's grid: every combination of its values (one point without a grid)."""
     if not isinstance(table, dict):
         raise fields.fail(field, "must be a table ([[localizer]])")
-    fields.keys(field, table, LOCALIZER_KEYS)
+    fields.keys(table, LOCALIZER_KEYS, field)
     if not isinstance(table.get("name"), str) or not table["name"]:
         raise fields.fail(f"{field}.name", "a localizer's name or spec is needed")
     if not isinstance(table.get("params", {}), dict):

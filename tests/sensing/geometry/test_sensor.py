@@ -176,7 +176,7 @@ def test_noise_is_eq1_uniform_and_frames_are_repeatable():
         ({"racks": [{"center": [0.0, 0.0], "size": [0.0, 2.0], "height": 4.0}]},
          "racks[0].size: must be positive"),
         ({"racks": [{"centre": [0.0, 0.0], "size": [1.0, 2.0], "height": 4.0}]},
-         "racks[0].centre: unknown key. Did you mean 'center'?"),
+         "racks[0]: unknown key 'centre'. Did you mean 'center'?"),
         ({"racks": [{"center": [0.0, 0.0], "size": [1.0, 2.0], "height": -1.0}]},
          "racks[0].height: must be > 0"),
         ({"walls": [{"start": [0.0, 0.0], "end": [0.0, 0.0], "height": 4.0}]},
