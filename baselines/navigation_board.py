@@ -18,8 +18,12 @@ import time
 from pathlib import Path
 
 from azgym.bench.leaderboard import board
-from azgym.bench.navigation.benchmark import check_contenders, contenders_of, run_navigation
-from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS
+from azgym.bench.navigation.benchmark import (
+    check_contenders,
+    navigation_contenders,
+    run_navigation,
+)
+from azgym.bench.navigation.suites import NAVIGATION_SUITES
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -34,7 +38,7 @@ def main() -> None:
     folder.mkdir(parents=True, exist_ok=True)
     for name in args.suite or NAVIGATION_SUITES:
         suite = NAVIGATION_SUITES[name]
-        contenders = contenders_of(NAVIGATORS, suite.localizers)
+        contenders = navigation_contenders(suite, [], [])  # the command's rule, its defaults
         check_contenders(suite, contenders)
         for split in args.split or ("dev", "test"):
             started = time.perf_counter()
