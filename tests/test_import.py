@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def run(code: str) -> str:
@@ -57,3 +61,15 @@ def test_the_learned_localizers_are_made_and_run_without_torch():
         "    azgym.make_localizer(name).localize(frame, beacons)\n"
         "print(sorted(m for m in ('torch', 'tqdm', 'matplotlib') if m in sys.modules))")
     assert loaded == "[]"
+
+
+def test_every_package_is_installed_and_the_scenarios_with_it():
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    folders = {".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "azgym").rglob(
+        "__init__.py")}
+    assert set(setuptools["packages"]) == folders | {"azgym.site.scenarios"}
+    assert setuptools["package-dir"] == {"azgym.site.scenarios": "envs"}
+    assert not (ROOT / "azgym" / "site" / "scenarios").exists()  # one copy: the repository's envs/
+    shipped = run("from importlib import resources; print(sorted(p.name for p in resources.files("
+                  "'azgym.site.scenarios').iterdir() if p.name.endswith('.toml')))")
+    assert shipped == str(sorted(p.name for p in (ROOT / "envs").glob("*.toml")))
