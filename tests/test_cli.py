@@ -185,7 +185,7 @@ def test_the_bench_runners_options_are_unset_at_the_parsers_defaults():
 
 
 GIVEN = {"suite": "stress", "navigator": ["ppo"], "quick": True, "split": "test",
-         "time_limit": 3.0, "backend": "ray", "address": "auto"}
+         "time_limit": 3.0, "backend": "ray", "address": "auto", "profile": "profile.toml"}
 """A value of each option of bench.OPTIONS other than its default."""
 
 

@@ -26,7 +26,6 @@ from azgym.cli.options import (
     out_folder,
     profile_option,
     progress_printer,
-    read_profile_option,
     resolve_workers,
     seconds_option,
     workers_option,
@@ -46,7 +45,8 @@ DEFAULT_SUITE = "warehouse-static"
 OPTIONS: dict[str, tuple[str, object]] = {
     "--suite": ("suite", None), "--navigator": ("navigator", []), "--quick": ("quick", False),
     "--split": ("split", "dev"), "--time-limit": ("time_limit", None),
-    "--backend": ("backend", "local"), "--address": ("address", None)}
+    "--backend": ("backend", "local"), "--address": ("address", None),
+    "--profile": ("profile", None)}
 """The options that not every runner takes: each one's attribute and its value when not given."""
 
 
@@ -72,13 +72,13 @@ class Runner:
 
 RUNNERS = {
     "frame": Runner("a frame suite", frozenset(
-        {"--suite", "--quick", "--split", "--time-limit", "--backend", "--address"}),
+        {"--suite", "--quick", "--split", "--time-limit", "--backend", "--address", "--profile"}),
         "{each} is for the navigation suites ({navigation_suites})"),
     "navigation": Runner("a navigation suite", frozenset(
         {"--suite", "--navigator", "--quick", "--split"}),
-        "{each} are for the frame suites: a navigation suite runs each localizer in the loop "
-        "that drives the forklift, in local processes"),
-    "data": Runner("a log (--data)", frozenset({"--time-limit"}),
+        "a navigation suite runs each localizer with its own defaults, in local processes, in "
+        "the loop that drives the forklift: it takes no {either}"),
+    "data": Runner("a log (--data)", frozenset({"--time-limit", "--profile"}),
                    "--data scores a log in local worker processes: it takes no {either}"),
 }
 """``azgym bench``'s runners: a frame suite, a navigation suite and a log (``--data``)."""
@@ -158,12 +158,13 @@ def _bench(args: argparse.Namespace) -> int:
     from azgym.bench.suites import SUITES
     from azgym.errors import unknown_name
     from azgym.files import prepare_folder
+    from azgym.profile import read_profile
 
     check_backend(args)
-    profile = read_profile_option(args)
     runner = ("data" if args.data is not None
               else "navigation" if args.suite in NAVIGATION_SUITES else "frame")
     check_options(runner, args)
+    profile = None if args.profile is None else read_profile(args.profile)
     if runner == "data":
         return _bench_data(args, progress_printer(), profile)
     if runner == "navigation":

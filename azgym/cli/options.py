@@ -20,10 +20,9 @@ from azgym.errors import InvalidInputError
 
 if TYPE_CHECKING:
     from azgym.bench.run.runner import Progress
-    from azgym.profile import Profile
 
 __all__ = ["add_backend_options", "check_backend", "out_folder", "profile_option",
-           "progress_printer", "read_profile_option", "resolve_workers", "seconds_option",
+           "progress_printer", "resolve_workers", "seconds_option",
            "workers_option"]
 
 
@@ -64,25 +63,6 @@ def profile_option(text: str) -> str:
         raise argparse.ArgumentTypeError("is empty: give a profile file (PROFILE.toml, as "
                                          "azgym calibrate writes it)")
     return text
-
-
-def read_profile_option(args: argparse.Namespace) -> Profile | None:
-    """``--profile``: the profile file read (None: not given), for a frame suite or a log.
-
-    Raises:
-        InvalidInputError: With a navigation suite or ``--navigator``; a profile file that
-            cannot be read or holds a bad field (naming the file and the field).
-    """
-    from azgym.bench.navigation.suites import NAVIGATION_SUITES
-    from azgym.profile import read_profile
-
-    if args.profile is None:
-        return None
-    if args.navigator or args.suite in NAVIGATION_SUITES:
-        raise InvalidInputError("--profile sets the defaults of localizers and trackers and the "
-                                "noise of a frame suite's simulator; a navigation suite "
-                                "(--navigator) takes none")
-    return read_profile(args.profile)
 
 
 def check_backend(args: argparse.Namespace) -> None:

@@ -303,9 +303,10 @@ def test_bench_on_a_log_applies_the_file_over_the_log_s_own_profile(sensed_log, 
     (["--profile", "{missing}"], r"profile '.*missing\.toml': no such file"),
     (["--profile", "{bad}", "--data", "roh"],
      r"sensor\.delta_alpha_d: must be a finite number \[rad\], got .wide."),
-    (["--profile", "{good}", "--suite", "navigation"], "a navigation suite .--navigator. takes "
-                                                        "none"),
-    (["--profile", "{good}", "--navigator", "ppo"], "a navigation suite .--navigator. takes none"),
+    (["--profile", "{good}", "--suite", "navigation"], "--profile is not for a navigation suite: "
+                                                        "a navigation suite runs each localizer "
+                                                        "with its own defaults"),
+    (["--profile", "{good}", "--navigator", "ppo"], "--navigator is not for a frame suite"),
     (["--profile", "{robot}", "--suite", "warehouse-routes"], "vehicle.kind is "
                                                                "'differential-drive'"),
     (["--profile", "{edge}"], r"sensor\.delta_alpha_d: must be in \[0, 1\.5708\) rad"),

@@ -196,8 +196,10 @@ def test_wilson_interval_matches_hand_worked_values():
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["--suite", "navigation", "--time-limit", "3"], "--time-limit, --backend and --address"),
-    (["--suite", "navigation", "--backend", "ray"], "are for the frame suites"),
+    (["--suite", "navigation", "--time-limit", "3"],
+     "--time-limit, --backend, --address or --profile"),
+    (["--suite", "navigation", "--backend", "ray"],
+     "in the loop that drives the forklift: it takes no"),
     (["--suite", "stress", "--navigator", "ppo"], "--navigator is for the navigation suites"),
     (["--suite", "navigatoin"], "Did you mean 'navigation'"),
     (["--suite", "navigation", "--navigator", "nope.zip"], "nope.zip: no such file"),
