@@ -31,12 +31,7 @@ from azgym.bench.leaderboard import board
 from azgym.bench.leaderboard import entries as leaderboard
 from azgym.bench.report.table import ranked_table
 from azgym.bench.run.contenders import Contender, contender
-from azgym.bench.run.runner import (
-    default_contenders,
-    run_benchmark,
-    run_log_benchmark,
-    write_log_results,
-)
+from azgym.bench.run.runner import default_contenders, run_benchmark, run_log_benchmark
 from azgym.bench.suites import SUITES
 from azgym.localize.registry import list_trackers
 from azgym.logs import read_log
@@ -84,7 +79,7 @@ def main() -> None:
                                    workers=args.workers,
                                    progress=lambda line: print(line, flush=True))
         out = ROOT / "results" / f"bench-data-{log.manifest.name}"
-        write_log_results(result, log, out)
+        result.write(out)
         _submit(result.summary, out, entries, f"data-{log.manifest.name}", args.localizer)
     if args.no_board:
         return

@@ -214,7 +214,7 @@ def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile |
     """
     from azgym.bench.report.table import run_report
     from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
-    from azgym.bench.run.runner import run_log_benchmark, write_log_results
+    from azgym.bench.run.runner import run_log_benchmark
     from azgym.bench.suites.data import log_cases, log_profile
     from azgym.files import prepare_folder
     from azgym.logs import read_log
@@ -229,7 +229,7 @@ def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile |
     started = time.perf_counter()
     result = run_log_benchmark(log, contenders, workers=resolve_workers(args),
                                time_limit=time_limit, progress=progress, profile=profile)
-    written = write_log_results(result, log, Path(args.out))
+    written = result.write(Path(args.out))
     print(run_report(result.summary, time.perf_counter() - started, written))
     return 0
 

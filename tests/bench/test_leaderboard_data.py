@@ -14,7 +14,7 @@ from logs.mini_log import mini_files, write_log
 
 from azgym.bench.leaderboard import board as B
 from azgym.bench.leaderboard import entries as L
-from azgym.bench.run.runner import Contender, run_log_benchmark, write_log_results
+from azgym.bench.run.runner import Contender, run_log_benchmark
 from azgym.cli import main
 from azgym.logs import read_log
 
@@ -27,7 +27,7 @@ def mini_run(tmp_path_factory):
     out = root / "results"
     result = run_log_benchmark(read_log(log), [Contender("lsq", "lsq"),
                                                Contender("ransac", "ransac")])
-    written = write_log_results(result, read_log(log), out)
+    written = result.write(out)
     return log, out, written
 
 

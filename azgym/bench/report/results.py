@@ -17,7 +17,7 @@ import json
 import math
 import sys
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TypedDict
 
@@ -158,21 +158,23 @@ def frame_rows(label: str, cases: Sequence[Case], outcome: Outcome) -> list[list
 
 @dataclass
 class BenchResult:
-    """A benchmark run: the summary (results.json) and every case's outcome (frames.csv)."""
+    """A benchmark run: the summary (results.json) and every case's outcome (frames.csv).
+
+    ``maps`` holds, by scenario name, the beacon maps that are no shipped scenario (a log's
+    ``beacons.csv``): the figures draw them from their beacons.
+    """
 
     summary: Summary
     cases: list[Case]
     outcomes: dict[str, RunOutcome]
+    maps: dict[str, BeaconMap] = field(default_factory=dict)
 
-    def write(self, out: Path, figures: bool = True,
-              maps: dict[str, BeaconMap] | None = None) -> list[Path]:
+    def write(self, out: Path, figures: bool = True) -> list[Path]:
         """Write results.json, frames.csv and, with matplotlib installed, the figures.
 
         Args:
             out: The folder.
             figures: Draw the figures too (when matplotlib is installed).
-            maps: Beacon maps by scenario name for maps that are no shipped scenario (a log's
-                ``beacons.csv``), which the figures draw from their beacons.
         """
         prepare_folder(out)
         summary_path = write_file(out / "results.json", json.dumps(self.summary, indent=1) + "\n")
@@ -185,5 +187,5 @@ class BenchResult:
         if figures and importlib.util.find_spec("matplotlib") is not None:
             from azgym.bench.report.plots import write_figures
 
-            written += write_figures(self.summary, self.cases, self.outcomes, out, maps)
+            written += write_figures(self.summary, self.cases, self.outcomes, out, self.maps)
         return written

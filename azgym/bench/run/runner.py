@@ -16,7 +16,6 @@ import math
 import secrets
 import time
 from collections.abc import Callable, Mapping, Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -48,8 +47,7 @@ from azgym.logs.read import Log
 from azgym.profile import Profile
 from azgym.site import load_scenario
 
-__all__ = ["Progress", "batch_bounds", "run_benchmark", "run_contenders", "run_log_benchmark",
-           "write_log_results"]
+__all__ = ["Progress", "batch_bounds", "run_benchmark", "run_contenders", "run_log_benchmark"]
 
 BATCHES_PER_WORKER = 4
 """Frames go to the workers in this many batches per worker: few round trips, and a slow batch
@@ -251,15 +249,8 @@ def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *
                                "description": log.manifest.description}
     summary = summarize(data_suite(log, cases), DATA_SPLIT, 0, False, contenders, cases, outcomes,
                         reference, profile=applied, given=profile, dataset=dataset)
-    return BenchResult(summary, cases, outcomes)
-
-
-def write_log_results(result: BenchResult, log: Log, out: Path) -> list[Path]:
-    """results.json, frames.csv and, with matplotlib, the figures, on the log's own map.
-
-    A map that is no shipped scenario (``beacons.csv``) is drawn from its beacons (no racks).
-    """
-    return result.write(out, maps={} if log.shipped_map else {log.map_name: log.beacons})
+    return BenchResult(summary, cases, outcomes,
+                       maps={} if log.shipped_map else {log.map_name: log.beacons})
 
 
 def _start(backend: str, say: Progress) -> bool:
