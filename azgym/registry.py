@@ -2,10 +2,9 @@
 
 A :class:`Registry` maps names to things: an object, or a ``"module:attribute"`` reference that
 is imported only when the thing is first asked for, so that a registry costs nothing to import
-and its entries' modules (and their libraries) load only when used. An entry may carry
-defaults (keyword arguments :meth:`Registry.make` passes unless told otherwise) and a one-line
-description. A registry with an entry-point group also lists, under their own names, the
-things that installed packages declare in that group::
+and its entries' modules (and their libraries) load only when used. A registry with an
+entry-point group also lists, under their own names, the things that installed packages declare
+in that group::
 
     [project.entry-points."azgym.localizers"]
     mylocalizer = "mypackage.module:MyLocalizer"
@@ -16,19 +15,17 @@ with the valid ones and the closest (:func:`azgym.errors.unknown_name`).
 Example:
     >>> from azgym.registry import Registry
     >>> numbers = Registry("number")
-    >>> numbers.register("third", "fractions:Fraction", defaults={"numerator": 1,
-    ...                                                           "denominator": 3})
-    >>> "third" in numbers, numbers.names()  # fractions is not imported yet
-    (True, ['third'])
-    >>> numbers.make("third"), numbers.make("third", numerator=2)
-    (Fraction(1, 3), Fraction(2, 3))
+    >>> numbers.register("fraction", "fractions:Fraction")
+    >>> "fraction" in numbers, numbers.names()  # fractions is not imported yet
+    (True, ['fraction'])
+    >>> numbers.make("fraction", numerator=1, denominator=3)
+    Fraction(1, 3)
 """
 
 from __future__ import annotations
 
 import importlib
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, field
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any, TypeVar, cast
 
@@ -38,15 +35,6 @@ __all__ = ["Registry", "load_reference"]
 
 T = TypeVar("T")
 R = TypeVar("R")
-
-
-@dataclass(frozen=True)
-class _Entry:
-    """A registered thing (or the ``"module:attribute"`` that names it) and its extras."""
-
-    target: Any
-    defaults: Mapping[str, Any] = field(default_factory=dict)
-    description: str = ""
 
 
 def load_reference(reference: str) -> Any:
@@ -87,12 +75,11 @@ class Registry(Mapping[str, T]):
         self.kind = kind
         self.group = group
         self._check = check
-        self._entries: dict[str, _Entry] = {}
+        self._entries: dict[str, T | str] = {}
         for name, target in (entries or {}).items():
             self.register(name, target)
 
-    def register(self, name: str, target: T | str, *, defaults: Mapping[str, Any] | None = None,
-                 description: str = "") -> None:
+    def register(self, name: str, target: T | str) -> None:
         """Register ``target`` under ``name``: the thing itself, or a ``"module:attribute"``.
 
         A string is always a reference, imported when the entry is first looked up.
@@ -100,8 +87,6 @@ class Registry(Mapping[str, T]):
         Args:
             name: The entry's name.
             target: The thing, or where to import it from.
-            defaults: Keyword arguments :meth:`make` passes unless given others.
-            description: One line for listings.
 
         Raises:
             InvalidInputError: The name is not a non-empty string, or it is already taken.
@@ -110,7 +95,7 @@ class Registry(Mapping[str, T]):
             raise InvalidInputError(f"{self.kind} name must be a non-empty string, got {name!r}")
         if name in self._entries:
             raise InvalidInputError(f"a {self.kind} named {name!r} is already registered")
-        self._entries[name] = _Entry(target, dict(defaults or {}), description)
+        self._entries[name] = target
 
     def names(self, plugins: bool = True) -> list[str]:
         """Every name, registered ones first (in order), then the plug-ins' (without loading)."""
@@ -120,23 +105,12 @@ class Registry(Mapping[str, T]):
         return names
 
     def make(self: Registry[Callable[..., R]], name: str, /, **params: Any) -> R:
-        """Call the thing of that name with its defaults, overridden by ``params``.
+        """Call the thing of that name with ``params`` (a factory's keyword arguments).
 
         Raises:
             UnknownNameError: No such name ("Did you mean ...?").
         """
-        factory = self[name]
-        return factory(**{**self.defaults(name), **params})
-
-    def defaults(self, name: str) -> dict[str, Any]:
-        """The keyword arguments :meth:`make` passes for an entry (a plug-in has none)."""
-        entry = self._entries.get(name)
-        return dict(entry.defaults) if entry is not None else {}
-
-    def description(self, name: str) -> str:
-        """An entry's one-line description ("" if it has none, or is a plug-in)."""
-        entry = self._entries.get(name)
-        return entry.description if entry is not None else ""
+        return self[name](**params)
 
     def check_name(self, name: object) -> None:
         """Refuse a name the registry does not have, without loading anything.
@@ -148,9 +122,8 @@ class Registry(Mapping[str, T]):
             raise self._unknown(name)
 
     def __getitem__(self, name: str) -> T:
-        entry = self._entries.get(name) if isinstance(name, str) else None
-        if entry is not None:
-            target = entry.target
+        if isinstance(name, str) and name in self._entries:
+            target = self._entries[name]
             return cast(T, load_reference(target) if isinstance(target, str) else target)
         plugin = self._plugins().get(name) if isinstance(name, str) else None
         if plugin is None:

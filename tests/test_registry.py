@@ -1,4 +1,4 @@
-"""The one registry shape: names to things or lazy references, defaults, plug-ins, refusals."""
+"""The one registry shape: names to things or lazy references, plug-ins, refusals."""
 
 from __future__ import annotations
 
@@ -32,18 +32,6 @@ def test_a_reference_is_imported_only_when_its_thing_is_made(module_on_path):
     assert module_on_path not in sys.modules  # listing and looking a name up load nothing
     assert things.make("probe", x=1) == (2, 0)
     assert module_on_path in sys.modules
-
-
-def test_defaults_are_passed_unless_overridden_and_the_description_kept():
-    things = Registry("thing")
-    things.register("pair", lambda *, x, y=0: (x, y), defaults={"x": 1, "y": 2},
-                    description="two numbers")
-    assert things.make("pair") == (1, 2)
-    assert things.make("pair", y=5) == (1, 5)
-    assert things.defaults("pair") == {"x": 1, "y": 2}
-    things.defaults("pair")["x"] = 9  # a copy: the entry's defaults stay
-    assert things.make("pair") == (1, 2)
-    assert things.description("pair") == "two numbers"
 
 
 def test_an_unknown_name_suggests_the_closest_and_lists_the_valid_ones():
