@@ -1,16 +1,23 @@
-"""Fields of a parsed TOML or JSON file: one rule for a number, one reader naming the field.
+"""One rule for a number and for a flag; one reader naming the fields of a parsed file.
 
 Scenario files, sweep configurations, log manifests and profiles are all read the same way: a
 parsed mapping whose values are checked one field at a time, each problem named by its field's
 path (``racks[3].height``, ``sensor.field_of_view``) and worded here:
 
-- a number (:class:`Number`): a finite int or float (never a boolean, NaN or infinity) within
-  its bounds, each end open or closed, and within a magnitude cap; ``must be a finite number
-  [rad], got nan``, ``must be > 0, got -0.01``, ``must be in [0, 1.5708) rad, got 2.0``;
-- an integer (:class:`Number` with ``integer``): an int (never a boolean or a float, even an
-  integer-valued one) within its bounds; its message always states them: ``must be an integer
-  in [1, 4096], got 480.5``;
-- a flag (:data:`FLAG`): ``true`` or ``false``, never a string or a number.
+- a number (:class:`Number`): a finite real number (an int, a float or a NumPy scalar; never a
+  boolean, NaN or infinity, unless ``infinite`` lets +inf through) within its bounds, each end
+  open or closed, and within a magnitude cap; ``must be a finite number [rad], got nan``,
+  ``must be > 0, got -0.01``, ``must be in [0, 1.5708) rad, got 2.0``;
+- an integer (:class:`Number` with ``integer``): an int or a NumPy integer (never a boolean or
+  a float, even an integer-valued one) within its bounds; its message always states them:
+  ``must be an integer in [1, 4096], got 480.5``;
+- a flag (:class:`Flag`): ``true`` or ``false`` (:data:`FLAG`), never a string or a number;
+  a Python argument's flag (``Flag(python=True)``) is ``True``, ``False`` or a NumPy bool.
+
+The same rules check Python arguments (:mod:`azgym.arguments`, :mod:`azgym.hyperparameters`):
+there a problem is worded after the argument's name (:func:`argument_error`:
+``workers must be an integer >= 1, got 1.5``, ``Ransac.pr_hit must be in (0, 1), got 2``),
+where a file's is worded after its field's path and a colon.
 
 A :class:`Fields` reader either raises the first problem (a scenario, a sweep) or reports each
 one to a collector and goes on (a log's manifest, a profile), so a file's problems are listed
@@ -20,15 +27,19 @@ compared before it becomes a float (a 400-digit integer would overflow).
 
 from __future__ import annotations
 
+import functools
 import math
+import numbers
 import reprlib
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Protocol
 
+import numpy as np
+
 from azgym.errors import AzgymError, InvalidInputError, unknown_name
 
-__all__ = ["FLAG", "Fields", "Flag", "Number", "Rule", "shown"]
+__all__ = ["FLAG", "Fields", "Flag", "Number", "Rule", "argument_error", "require", "shown"]
 
 _SHORT = reprlib.Repr()
 _SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxstring, _SHORT.maxother = 2, 6, 40, 40
@@ -45,6 +56,23 @@ class Rule(Protocol):
 
     def problem(self, value: object) -> str | None:
         """What is wrong with ``value`` (``must be ..., got ...``), or None when it is valid."""
+
+
+def require(value: object, rule: Rule, fail: Callable[[str], Exception]) -> None:
+    """Raise ``fail(problem)`` unless ``value`` satisfies ``rule``."""
+    problem = rule.problem(value)
+    if problem is not None:
+        raise fail(problem)
+
+
+def argument_error(name: str, problem: str) -> InvalidInputError:
+    """The error for a problem of a Python argument: ``<name> <problem>``.
+
+    A function's argument or a hyperparameter is named as it is written, without a colon
+    (``workers must be an integer >= 1, got 1.5``); no name gives the problem alone (an argparse
+    type, whose option argparse names itself).
+    """
+    return InvalidInputError(" ".join(part for part in (name, problem) if part))
 
 
 def _bound(value: float) -> str:
@@ -65,7 +93,10 @@ class Number:
             the bounds: a field's own bounds say what makes sense, the cap what is safe.
         unit: The unit, quoted in messages (``rad``: ``[rad]`` after the kind, ``rad`` after
             the bounds).
-        integer: Whether only an int is a value (else an int or a float).
+        integer: Whether only an integer (an int or a NumPy integer) is a value (else any
+            real number: an int, a float, a NumPy scalar).
+        infinite: Whether +inf is a value too (a gate that refuses nothing, say; not for an
+            integer), if the bounds and the cap allow it.
     """
 
     low: float | None = None
@@ -75,6 +106,7 @@ class Number:
     cap: float | None = None
     unit: str = ""
     integer: bool = False
+    infinite: bool = False
 
     def bounds(self) -> str:
         """The bounds in words: ``in [0, 1)``, ``> 0``, ``<= 10``, or "" when there are none."""
@@ -88,45 +120,75 @@ class Number:
             return f"{'<' if self.high_open else '<='} {_bound(high)}"
         return ""
 
-    def _within(self, value: float) -> bool:
+    def _within(self, value: numbers.Real) -> bool:
         """Whether ``value`` (an int compares exactly, however large) is within the bounds."""
-        low, high = self.low, self.high
-        return not ((low is not None and (value <= low if self.low_open else value < low))
-                    or (high is not None and (value >= high if self.high_open else value > high)))
+        low, high = self.low, self.high  # the value on the left: a Real orders only by < and <=
+        return ((low is None or not (value <= low if self.low_open else value < low))
+                and (high is None or (value < high if self.high_open else value <= high)))
 
     def problem(self, value: object) -> str | None:
         """What is wrong with ``value`` as this number, or None when it is valid."""
         if self.integer:
-            if isinstance(value, bool) or not isinstance(value, int) or not self._within(value):
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) \
+                    or not self._within(value):
                 kind = " ".join(filter(None, ("an integer", self.bounds(), self.unit)))
                 return f"must be {kind}, got {shown(value)}"
             return None
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                (isinstance(value, float) and not math.isfinite(value)):
+        # A rational number (an int of any size) is finite and never made a float here (a huge
+        # one would overflow): only a float-like one can be NaN or infinite.
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
+                isinstance(value, numbers.Rational) or math.isfinite(value)
+                or (self.infinite and value == math.inf)):
+            kind = "a finite number or inf" if self.infinite else "a finite number"
             unit = f" [{self.unit}]" if self.unit else ""
-            return f"must be a finite number{unit}, got {shown(value)}"
+            return f"must be {kind}{unit}, got {shown(value)}"
         if not self._within(value):
             unit = f" {self.unit}" if self.unit else ""
             return f"must be {self.bounds()}{unit}, got {shown(value)}"
         cap = self.cap
-        if cap is not None and abs(value) > cap:
+        if cap is not None and (value < -cap or not value <= cap):
             bound = f"<= {_bound(cap)}" if self.low is not None and self.low >= 0 \
                 else f"in [{_bound(-cap)}, {_bound(cap)}]"
             return f"must be {bound}, got {shown(value)}"
         return None
 
+    def as_float(self, value: object, fail: Callable[[str], Exception]) -> float:
+        """``value`` as a float; ``fail(problem)`` is raised unless it satisfies this rule."""
+        problem = self.problem(value)
+        if problem is None and isinstance(value, numbers.Real):  # the rule checked the type
+            return float(value)
+        raise fail(str(problem))
+
+    def as_int(self, value: object, fail: Callable[[str], Exception]) -> int:
+        """``value`` (of this integer rule) as an int; ``fail(problem)`` is raised otherwise."""
+        problem = self.problem(value)
+        if problem is None and isinstance(value, numbers.Integral):  # the rule checked the type
+            return int(value)
+        raise fail(str(problem))
+
 
 @dataclass(frozen=True)
 class Flag:
-    """The rule for a flag: TOML's or JSON's ``true`` or ``false``, never a string or a number."""
+    """The rule for a flag: ``true`` or ``false``, never a string or a number.
+
+    Attributes:
+        python: Whether the flag is a Python argument (a hyperparameter): then NumPy's bool is a
+            flag too, and the message says ``True or False``; else it is a file's (TOML's or
+            JSON's ``true`` or ``false``).
+    """
+
+    python: bool = False
 
     def problem(self, value: object) -> str | None:
         """What is wrong with ``value`` as a flag, or None when it is one."""
-        return None if isinstance(value, bool) else f"must be true or false, got {shown(value)}"
+        if isinstance(value, bool) or (self.python and isinstance(value, np.bool_)):
+            return None
+        words = "True or False" if self.python else "true or false"
+        return f"must be {words}, got {shown(value)}"
 
 
 FLAG = Flag()
-"""The one flag rule."""
+"""The flag rule of a file's field."""
 
 
 class Fields:
@@ -187,17 +249,11 @@ class Fields:
 
     def number(self, value: object, field: str, rule: Number) -> float:
         """``value`` as a float, which must satisfy ``rule`` (raised otherwise)."""
-        problem = rule.problem(value)
-        if problem is None and isinstance(value, (int, float)):  # the rule checked the type
-            return float(value)
-        raise self.fail(field, str(problem))
+        return rule.as_float(value, functools.partial(self.fail, field))
 
     def integer(self, value: object, field: str, low: int, high: int) -> int:
         """``value`` as an int in [``low``, ``high``] (raised otherwise)."""
-        problem = Number(low, high, integer=True).problem(value)
-        if problem is None and isinstance(value, int):  # the rule checked the type
-            return value
-        raise self.fail(field, str(problem))
+        return Number(low, high, integer=True).as_int(value, functools.partial(self.fail, field))
 
     def boolean(self, value: object, field: str) -> bool:
         """``value`` as a flag (:data:`FLAG`; raised otherwise)."""

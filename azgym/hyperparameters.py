@@ -11,12 +11,9 @@ from __future__ import annotations
 
 import functools
 import inspect
-import math
 from typing import Any
 
-import numpy as np
-
-from azgym.errors import InvalidInputError
+from azgym.fields import Flag, Number, argument_error, require
 
 __all__ = ["Hyperparameters", "check_flag", "check_range"]
 
@@ -82,26 +79,20 @@ def check_range(
 ) -> None:
     """Raise :class:`InvalidInputError` unless ``value`` is a finite number in the given range.
 
-    ``infinite`` also accepts +inf (a gate that refuses nothing, say).
+    The rule is a :class:`azgym.fields.Number` (``integer``: an integer; ``infinite``: +inf
+    accepted too, a gate that refuses nothing, say), its problem worded after
+    ``<owner>.<name>``: ``Ransac.pr_hit must be in (0, 1), got 2``.
     """
-    kind = "an integer" if integer else "a number"
-    ok_type = isinstance(value, (int, np.integer)) if integer else isinstance(
-        value, (int, float, np.integer, np.floating)
-    )
-    finite = math.isfinite(float(value)) if ok_type else False
-    if isinstance(value, bool) or not (finite or (infinite and value == math.inf)):
-        raise InvalidInputError(f"{owner}.{name} must be {kind}, got {value!r}")
-    too_low = low is not None and (value <= low if low_open else value < low)
-    too_high = high is not None and (value >= high if high_open else value > high)
-    if too_low or too_high:
-        left = "(" if low_open else "["
-        right = ")" if high_open else "]"
-        lo = "-inf" if low is None else low
-        hi = "inf" if high is None else high
-        raise InvalidInputError(f"{owner}.{name} must be in {left}{lo}, {hi}{right}, got {value!r}")
+    rule = Number(low, high, low_open, high_open, integer=integer, infinite=infinite)
+    require(value, rule, functools.partial(argument_error, f"{owner}.{name}"))
+
+
+_FLAG = Flag(python=True)
 
 
 def check_flag(owner: str, name: str, value: Any) -> None:
-    """Raise :class:`InvalidInputError` unless ``value`` is a bool (``"no"`` is not False)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise InvalidInputError(f"{owner}.{name} must be True or False, got {value!r}")
+    """Raise :class:`InvalidInputError` unless ``value`` is a bool (``"no"`` is not False).
+
+    NumPy's bool is one too; the problem is worded ``<owner>.<name> must be True or False, ...``.
+    """
+    require(value, _FLAG, functools.partial(argument_error, f"{owner}.{name}"))

@@ -135,7 +135,7 @@ BROKEN = textwrap.dedent("""
 @pytest.mark.parametrize(("spec", "message"), [
     ("ransak", "cannot build ransak: unknown localizer 'ransak'. Did you mean 'ransac'?"),
     ("ransac:wieghted=true", "unknown hyperparameter 'wieghted'. Did you mean 'weighted'?"),
-    ("ransac:pr_hit=2", "cannot build ransac:pr_hit=2: Ransac.pr_hit must be in (0.0, 1.0)"),
+    ("ransac:pr_hit=2", "cannot build ransac:pr_hit=2: Ransac.pr_hit must be in (0, 1)"),
     ("ransac:weighted", "hyperparameters are written ransac:NAME=VALUE"),
     ("{tmp}/no_such.py:Mine", "no file"),
     ("{tmp}/broken.py:Raises:size=2", "RuntimeError: no licence file"),

@@ -78,9 +78,9 @@ class TrainConfig:
         for name in ("epochs", "hidden", "batch_size", "threads"):
             whole_number(name, getattr(self, name))
         whole_number("seed", self.seed, minimum=0)
-        positive_number("learning_rate", self.learning_rate, "1")
+        positive_number("learning_rate", self.learning_rate, "")
         if self.pos_weight is not None:
-            positive_number("pos_weight", self.pos_weight, "1")
+            positive_number("pos_weight", self.pos_weight, "")
 
 
 @dataclass

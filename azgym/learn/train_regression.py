@@ -94,8 +94,8 @@ class RegressionConfig:
         for name in ("epochs", "hidden", "batch_size", "threads"):
             whole_number(name, getattr(self, name))
         whole_number("seed", self.seed, minimum=0)
-        positive_number("learning_rate", self.learning_rate, "1")
-        positive_number("trust_weight", self.trust_weight, "1")
+        positive_number("learning_rate", self.learning_rate, "")
+        positive_number("trust_weight", self.trust_weight, "")
 
 
 def frame_arrays(batch: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -336,8 +336,8 @@ LOCALIZE, NAVIGATE = "azgym/Localize-WarehouseSmall-v1", "azgym/Navigate-Warehou
      "episode_length must be an integer >= 1, got 1.5"),
     (LOCALIZE, {"camera_rate_hz": 1e-7}, "from 0.1 to 1000.0, got 1e-07"),
     (NAVIGATE, {"n_rays": -1}, "n_rays must be an integer >= 1, got -1"),
-    (NAVIGATE, {"ray_range": 0}, "ray_range must be a finite number > 0 [m], got 0"),
-    (NAVIGATE, {"goal_radius": -1}, "goal_radius must be a finite number > 0 [m]"),
+    (NAVIGATE, {"ray_range": 0}, "ray_range must be > 0 m, got 0"),
+    (NAVIGATE, {"goal_radius": -1}, "goal_radius must be > 0 m"),
     (NAVIGATE, {"max_steps": "x"}, "max_steps must be an integer >= 1, got 'x'"),
     (NAVIGATE, {"localizer": 42}, "localizer must be a name, \"truth\" or an object"),
 ])

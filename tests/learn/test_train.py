@@ -116,8 +116,8 @@ def test_a_checkpoint_of_another_run_or_of_more_epochs_is_refused(tmp_path):
     ({"epochs": 2.5}, "epochs must be an integer >= 1, got 2.5"),
     ({"seed": -1}, "seed must be an integer >= 0, got -1"),
     ({"hidden": True}, "hidden must be an integer >= 1, got True"),
-    ({"learning_rate": float("nan")}, "learning_rate must be a finite number > 0"),
-    ({"pos_weight": 0.0}, "pos_weight must be a finite number > 0"),
+    ({"learning_rate": float("nan")}, "learning_rate must be a finite number, got nan"),
+    ({"pos_weight": 0.0}, "pos_weight must be > 0, got 0.0"),
     ({"threads": 0}, "threads must be an integer >= 1, got 0"),
 ])
 def test_bad_hyperparameters_are_refused_by_name(changes, message):

@@ -58,7 +58,7 @@ def test_the_same_frame_gets_the_same_answer_and_the_problem_path_agrees():
 
 
 @pytest.mark.parametrize(("params", "message"), [
-    ({"refine_rounds": -1}, r"Learned.refine_rounds must be in \[0, 10\]"),
+    ({"refine_rounds": -1}, r"Learned.refine_rounds must be an integer in \[0, 10\]"),
     ({"gate": 0.0}, r"Learned.gate must be in \(0"),
     ({"min_trust": math.nan}, r"Learned.min_trust"),
     ({"weights": 3}, r"Learned.weights must be a path"),

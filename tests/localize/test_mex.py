@@ -156,7 +156,7 @@ def test_bounds_from_a_spec_are_the_area_searched():
     ("mex:bounds=0,0,five,5", "bounds=0,0,five,5 is not a list of numbers separated by commas "
                               "('five' is not a number"),
     ("mex:bounds=0,0,5,5,", "a comma with nothing after it"),
-    ("mex:margin=-1", "Mex.margin must be in [0.0, inf], got -1"),
+    ("mex:margin=-1", "Mex.margin must be >= 0, got -1"),
 ])
 def test_bad_bounds_in_a_spec_name_the_field(spec, message):
     with pytest.raises(InvalidInputError, match=re.escape(message)):

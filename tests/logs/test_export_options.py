@@ -8,16 +8,17 @@ import pytest
 
 from azgym.cli import main
 
-RATE = r"motion_rate_hz must be a finite number > 0 \[Hz\], got "
-SEED = r"seed must be a whole number in \[0, 2\*\*31\), got "
+RATE = r"motion_rate_hz must be > 0 Hz, got "
+NOT_FINITE = r"motion_rate_hz must be a finite number \[Hz\], got "
+SEED = r"seed must be an integer in \[0, 2147483648\), got "
 NAME = r"name: must be a plain file name \(.*at most 64 characters\), got "
 
 
 @pytest.mark.parametrize(("options", "message"), [
     (["--motion-rate", "0"], RATE + "0.0"),
     (["--motion-rate", "-5"], RATE + "-5.0"),
-    (["--motion-rate", "nan"], RATE + "nan"),
-    (["--motion-rate", "inf"], RATE + "inf"),
+    (["--motion-rate", "nan"], NOT_FINITE + "nan"),
+    (["--motion-rate", "inf"], NOT_FINITE + "inf"),
     (["--seed", "-1"], SEED + "-1"),
     (["--seed", str(2**31)], SEED + str(2**31)),
     (["--name", "../outside"], NAME + "'../outside'"),

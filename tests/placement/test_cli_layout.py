@@ -14,8 +14,8 @@ from azgym.placement.scenario_file import file_stem, fresh_ids
 
 @pytest.mark.parametrize(("argv", "message"), [
     (["analyze", "paper-rooom"], "unknown scenario 'paper-rooom'. Did you mean 'paper-room'"),
-    (["analyze", "paper-room", "--step", "0"], "step must be a finite number > 0"),
-    (["analyze", "paper-room", "--step", "-0.5"], "step must be a finite number > 0"),
+    (["analyze", "paper-room", "--step", "0"], "step must be > 0 m"),
+    (["analyze", "paper-room", "--step", "-0.5"], "step must be > 0 m"),
     (["analyze", "paper-room", "--step", "30"], "step 30 m is larger than the room"),
     (["analyze", "paper-room", "--step", "0.02"], "use a larger step"),
     (["analyze", "paper-room", "--frames", "-1"], "frames must be an integer >= 0"),
@@ -23,9 +23,9 @@ from azgym.placement.scenario_file import file_stem, fresh_ids
     (["analyze", "paper-room", "--localizer", "ransack"], "unknown localizer 'ransack'"),
     (["optimize", "paper-room", "--add", "0"], "add must be an integer >= 1"),
     (["optimize", "paper-room", "--add", "5000"], "add must be at most"),
-    (["optimize", "paper-room", "--add", "1", "--spacing", "0"], "spacing must be a finite"),
-    (["analyze", "paper-room", "--seed=-1"], "seed must be a whole number in [0, 2**31), got -1"),
-    (["analyze", "paper-room", "--seed", str(2**31)], "seed must be a whole number in [0, 2**31)"),
+    (["optimize", "paper-room", "--add", "1", "--spacing", "0"], "spacing must be > 0 m"),
+    (["analyze", "paper-room", "--seed=-1"], "seed must be an integer in [0, 2147483648), got -1"),
+    (["analyze", "paper-room", "--seed", str(2**31)], "seed must be an integer in [0, 2147483648)"),
     (["analyze", "paper-room", "--step", "5e-324"],
      "step 4.94066e-324 m makes a grid of inf x inf cells on 'paper-room', more than 250000"),
     (["analyze", "paper-room", "--step", "1e-300"], "makes a grid of 2.1e+301 x 2.1e+301 cells"),
@@ -140,7 +140,7 @@ def test_optimize_writes_nothing_when_no_candidate_helps(tmp_path, capsys, beaco
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["--time-limit", "0"], "argument --time-limit: must be a number of seconds >= 0.01, got 0.0"),
+    (["--time-limit", "0"], "argument --time-limit: must be >= 0.01 s, got 0.0"),
     (["--workers", "-1"], "argument --workers: must be an integer >= 0 (0: one per core)"),
     (["--out", ""], "argument --out: is empty: give a folder (. for the current one)"),
 ])

@@ -36,8 +36,8 @@ def test_cells_keep_clear_of_walls_and_racks(warehouse):
 
 
 @pytest.mark.parametrize(("step", "message"), [
-    (0.0, "step must be a finite number > 0"), (-1.0, "step must be a finite number > 0"),
-    (math.nan, "step must be a finite number > 0"), (25.0, "larger than the room"),
+    (0.0, "step must be > 0 m, got 0.0"), (-1.0, "step must be > 0 m, got -1.0"),
+    (math.nan, r"step must be a finite number \[m\], got nan"), (25.0, "larger than the room"),
     (0.01, f"more than {MAX_CELLS}")])
 def test_a_bad_step_is_refused_by_name(warehouse, step, message):
     with pytest.raises(InvalidInputError, match=message):

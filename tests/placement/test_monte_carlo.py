@@ -106,6 +106,6 @@ def test_a_seed_outside_0_to_2_31_is_refused(paper_room):
     floor = floor_grid(paper_room, 10.0)
     for seed in (-1, 2**31, 1e23, True):
         with pytest.raises(InvalidInputError, match=re.escape(
-                f"seed must be a whole number in [0, 2**31), got {seed!r}")):
+                f"seed must be an integer in [0, 2147483648), got {seed!r}")):
             monte_carlo(paper_room, floor.points, predict(paper_room, floor).seen, "lsq", 1,
                         seed=seed)

@@ -42,7 +42,7 @@ def test_candidates_hang_on_walls_and_rack_ends_apart_from_the_beacons(warehouse
 
 
 def test_a_bad_spacing_or_count_is_refused_by_name(warehouse):
-    with pytest.raises(InvalidInputError, match="spacing must be a finite number > 0"):
+    with pytest.raises(InvalidInputError, match="spacing must be > 0 m"):
         candidate_places(warehouse, 0.0)
     with pytest.raises(InvalidInputError, match="candidate places; use a larger spacing"):
         candidate_places(warehouse, 1e-3)

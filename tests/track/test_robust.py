@@ -115,10 +115,10 @@ def test_a_tentative_start_the_next_frame_contradicts_is_dropped():
 
 
 @pytest.mark.parametrize(("params", "message"), [
-    ({"max_position_std": 0.0}, r"Robust.max_position_std must be in \(0.0, inf\]"),
-    ({"relocalize_after": -1.0}, r"Robust.relocalize_after must be in \[0.0, inf\]"),
-    ({"strong_fix": 3}, r"Robust.strong_fix must be in \[4, inf\]"),
-    ({"confirm_travel": -0.5}, r"Robust.confirm_travel must be in \[0.0, inf\]"),
+    ({"max_position_std": 0.0}, r"Robust.max_position_std must be > 0"),
+    ({"relocalize_after": -1.0}, r"Robust.relocalize_after must be >= 0"),
+    ({"strong_fix": 3}, r"Robust.strong_fix must be an integer >= 4"),
+    ({"confirm_travel": -0.5}, r"Robust.confirm_travel must be >= 0"),
     ({"gate_probability": 0}, r"Robust.gate_probability must be in"),
 ])
 def test_bad_hyperparameters_are_refused(params, message):

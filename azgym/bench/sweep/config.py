@@ -1,7 +1,7 @@
 """A sweep's configuration: localizers x hyperparameter grids x suites x seeds, from a TOML file.
 
 Every field is checked before anything runs, and a problem is named by the file and the field
-(``sweep.toml: localizer[0].grid.max_iter: Ransac.max_iter must be in [1, inf], got 0``). The
+(``sweep.toml: localizer[0].grid.max_iter: Ransac.max_iter must be an integer >= 1, got 0``). The
 format (docs/scaling.md)::
 
     suites = ["warehouse-static"]   # frame suites
