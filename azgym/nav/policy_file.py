@@ -7,12 +7,20 @@ are the environment's (a policy trained on another version of the observation, o
 actions for continuous ones, is refused by name rather than driven into nonsense). Each failure
 is a :class:`azgym.errors.ModelFileError` naming the file and the problem.
 
+The file is read once, as every model file is
+(:func:`azgym.localize.learned.weights.read_model_file`: a regular file, without blocking, up to
+:data:`MAX_FILE_BYTES`), and SB3 loads those very bytes.
+Before anything is unpickled, each member's compression and declared size are checked and the
+``data`` entry is inflated in chunks up to :data:`MAX_DATA_BYTES` (a zip's declared sizes can
+lie), so a zip bomb is refused by name rather than exhausting memory.
+
 An SB3 zip is unpickled when it is loaded, and unpickling runs code: load only files you trust.
 """
 
 from __future__ import annotations
 
 import importlib.util
+import io
 import json
 import warnings
 import zipfile
@@ -24,6 +32,7 @@ import gymnasium as gym
 import numpy as np
 
 from azgym.errors import DependencyNotInstalled, ModelFileError
+from azgym.localize.learned.weights import check_member, open_archive, read_member, read_model_file
 from azgym.nav.controls import Policy
 from azgym.nav.pursuit import PurePursuit
 
@@ -44,6 +53,14 @@ ALGORITHMS = {"stable_baselines3.sac.policies": "SAC",
 actor-critic policy) is PPO's or A2C's, told apart by PPO's ``clip_range``. DDPG's policy is
 TD3's, and TD3's loader predicts with it alike."""
 ACTOR_CRITIC = "stable_baselines3.common.policies"
+MAX_FILE_BYTES = 256 * 2**20
+"""A policy file larger than this is refused (the shipped ones are under 200 kB; a large
+convolutional policy with its optimizer's state, tens of MB)."""
+MAX_MEMBER_BYTES = 512 * 2**20
+"""A member of a policy file may inflate to this much (stable-baselines3 reads each whole)."""
+MAX_DATA_BYTES = 64 * 2**20
+"""The ``data`` entry may inflate to this much (SB3's JSON; the shipped ones' are 16 kB)."""
+WHAT = "policy file"
 
 
 class SB3Policy:
@@ -84,9 +101,10 @@ def load_policy(path_or_name: str | Path, env: gym.Env) -> Policy:
         return PurePursuit(discrete=discrete)
     path = MODELS / SHIPPED_FILES[discrete] if str(path_or_name) == SHIPPED_PPO else Path(
         path_or_name)
-    algorithm = _algorithm_of(path)
+    data = _read(path)
+    algorithm = _algorithm_of(path, data)
     require_rl()
-    model = _load_model(path, algorithm)
+    model = _load_model(path, data, algorithm)
     for kind in ("observation", "action"):
         saved, wanted = getattr(model, f"{kind}_space"), getattr(env, f"{kind}_space")
         if saved != wanted:
@@ -95,14 +113,20 @@ def load_policy(path_or_name: str | Path, env: gym.Env) -> Policy:
     return SB3Policy(model)
 
 
-def _algorithm_of(path: Path) -> str:
-    """The SB3 algorithm that saved ``path``, read from its ``data`` entry without unpickling."""
-    if not path.exists():
-        raise ModelFileError(f"{path}: no such file; give a stable-baselines3 .zip, "
-                             f"{PURE_PURSUIT!r} or {SHIPPED_PPO!r}")
-    if not path.is_file():
-        raise ModelFileError(f"{path}: is not a file; give a stable-baselines3 .zip")
-    data = _data_entry(path)
+def _read(path: Path) -> bytes:
+    """The policy file's bytes (:func:`~azgym.localize.learned.weights.read_model_file`)."""
+    try:
+        return read_model_file(path, MAX_FILE_BYTES, WHAT)
+    except ModelFileError:
+        if not path.exists() and not path.is_symlink():
+            raise ModelFileError(f"{path}: no such file; give a stable-baselines3 .zip, "
+                                 f"{PURE_PURSUIT!r} or {SHIPPED_PPO!r}") from None
+        raise
+
+
+def _algorithm_of(path: Path, raw: bytes) -> str:
+    """The SB3 algorithm that saved the file, read from its ``data`` entry without unpickling."""
+    data = _data_entry(path, raw)
     policy_class = data.get("policy_class")
     module = policy_class.get("__module__") if isinstance(policy_class, dict) else None
     if module == ACTOR_CRITIC:
@@ -113,26 +137,35 @@ def _algorithm_of(path: Path) -> str:
     return ALGORITHMS[module]
 
 
-def _data_entry(path: Path) -> dict[str, Any]:
-    """The JSON of SB3's ``data`` entry in the zip at ``path``, as a dict."""
+def _data_entry(path: Path, raw: bytes) -> dict[str, Any]:
+    """The JSON of SB3's ``data`` entry in the zip ``raw``, as a dict; every member checked.
+
+    Every member's compression and declared size are checked (SB3 reads each whole, and
+    Python's zip reader stops a member at its declared size); the ``data`` entry is inflated in
+    chunks, counted.
+    """
     try:
-        with zipfile.ZipFile(path) as archive:
-            raw = archive.read("data") if "data" in archive.namelist() else None
+        with open_archive(path, raw, WHAT) as archive:
+            for info in archive.infolist():
+                check_member(path, info, MAX_MEMBER_BYTES, WHAT)
+            infos = {info.filename: info for info in archive.infolist()}
+            data = read_member(path, archive, infos["data"], MAX_DATA_BYTES, WHAT) \
+                if "data" in infos else None
     except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError) as exc:
         raise ModelFileError(f"{path}: not a readable zip ({exc}); give a stable-baselines3 "
                              ".zip saved by model.save()") from None
     except (zlib.error, NotImplementedError, RuntimeError) as exc:  # a corrupt or odd entry
         raise ModelFileError(f"{path}: its 'data' entry cannot be read ({exc})") from None
-    if raw is None:
+    if data is None:
         raise ModelFileError(f"{path}: a zip without stable-baselines3's 'data' entry; not a "
                              "model saved by model.save(), or cut short")
     try:
-        data = json.loads(raw)
+        parsed = json.loads(data)
     except (ValueError, RecursionError):  # not JSON, not UTF-8, or nested beyond reason
-        data = None
-    if not isinstance(data, dict):
+        parsed = None
+    if not isinstance(parsed, dict):
         raise ModelFileError(f"{path}: its 'data' entry is not stable-baselines3's JSON object")
-    return data
+    return parsed
 
 
 def require_rl(also: tuple[tuple[str, str], ...] = ()) -> None:
@@ -151,8 +184,10 @@ def require_rl(also: tuple[tuple[str, str], ...] = ()) -> None:
                                          '(after pip install torch==2.13.0, the CPU wheel)')
 
 
-def _load_model(path: Path, algorithm: str) -> Any:
-    """``algorithm.load(path)`` on the CPU; any failure is a :class:`ModelFileError`.
+def _load_model(path: Path, raw: bytes, algorithm: str) -> Any:
+    """``algorithm.load`` of the file's bytes ``raw``, on the CPU; a failure is a ModelFileError.
+
+    The bytes checked are the bytes loaded: the file is not opened again.
 
     SB3 warns (and leaves the entry out) when it cannot unpickle an entry; those warnings are
     told with the failure they lead to, and held back when the model loads all the same.
@@ -162,7 +197,7 @@ def _load_model(path: Path, algorithm: str) -> Any:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            return getattr(stable_baselines3, algorithm).load(path, device="cpu")
+            return getattr(stable_baselines3, algorithm).load(io.BytesIO(raw), device="cpu")
         except Exception as exc:  # noqa: BLE001 - an unpickled file can fail in any way
             notes = "".join(f"; {warning.message}" for warning in caught)
             raise ModelFileError(f"{path}: stable-baselines3 cannot load it as a {algorithm} "

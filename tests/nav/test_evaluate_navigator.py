@@ -68,7 +68,7 @@ CONTINUOUS = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
 
 @pytest.mark.parametrize(("make", "message"), [
     (lambda path: path, r"no such file; give a stable-baselines3 \.zip, 'pure-pursuit' or 'ppo'"),
-    (lambda path: path.parent, "is not a file"),
+    (lambda path: path.parent, "cannot read the policy file: it is a folder, not a regular file"),
     (lambda path: written(path, b""), "not a readable zip"),
     (lambda path: written(path, np.random.default_rng(0).bytes(4096)), "not a readable zip"),
     (lambda path: write_zip(path, {"policy.pth": b"weights"}),

@@ -7,8 +7,8 @@ An entry (format in ``entry.schema.json``) is sound when:
 - its suite exists at the version it was scored on (an entry of an older version is refused:
   rerun it), a ``dev`` entry uses the suite's dev seed and a ``test`` entry another seed,
   ``azgym_version`` is a version no newer than the azgym checking it, ``timestamp`` an ISO 8601
-  time with a zone and not in the future, and a plug-in file is named relative to the entry's
-  folder, with its SHA-256;
+  time with a zone and not in the future, and a plug-in file (its spec) and a weight file (its
+  ``weights`` hyperparameter) are named relative to the entry's folder, each with its SHA-256;
 - its per-frame results match ``results_sha256``, are well formed row by row
   (:func:`~azgym.bench.leaderboard.entry_files.parse_frames`) and cover exactly the suite's
   frames: the
@@ -41,7 +41,7 @@ import jsonschema
 from azgym._version import __version__
 from azgym.bench.leaderboard.entry_data import check_data_run, dataset_cases, is_data_entry
 from azgym.bench.leaderboard.entry_files import Entry, FrameTable, LeaderboardError, parse_frames
-from azgym.bench.leaderboard.plugin_files import is_portable, plugin_path
+from azgym.bench.leaderboard.plugin_files import WEIGHTS, is_portable, is_relative, plugin_path
 from azgym.bench.report.results import cases_digest, contender_metrics, frame_number
 from azgym.bench.suites import NO_TEST_SPLIT, SUITES, Case
 
@@ -133,7 +133,7 @@ def _check_identity(entry: Entry, origin: str, stem: str) -> None:
 
 
 def _check_run(entry: Entry, origin: str) -> None:
-    """Suite (or dataset) and version, seed, azgym version, time and the plug-in's spec."""
+    """Suite (or dataset) and version, seed, azgym version, time, and the localizer's files."""
     if is_data_entry(entry):
         check_data_run(entry, origin)
     else:
@@ -149,6 +149,15 @@ def _check_run(entry: Entry, origin: str) -> None:
         if "sha256" not in localizer:
             raise LeaderboardError(f"{origin}: localizer/sha256: a plug-in file's SHA-256 is "
                                    "required (submit records it)")
+    weights = localizer["params"].get(WEIGHTS)
+    if isinstance(weights, str):
+        if not is_relative(weights):
+            raise LeaderboardError(f"{origin}: localizer/params/{WEIGHTS}: {weights!r} is an "
+                                   "absolute path; a weight file is named relative to the "
+                                   "entry's folder")
+        if "weights_sha256" not in localizer:
+            raise LeaderboardError(f"{origin}: localizer/weights_sha256: a weight file's "
+                                   "SHA-256 is required (submit records it)")
 
 
 def _check_suite_run(entry: Entry, origin: str) -> None:

@@ -5,8 +5,9 @@ metrics on one suite (or one log, ``data:NAME``), and beside it the per-frame re
 computed from (``NAME.frames.csv.gz``; the SHA-256 is of the uncompressed CSV). Every entry read is
 checked by :func:`~azgym.bench.leaderboard.checks.validate_entry`, which recomputes every figure it
 shows; ``submit`` never writes over another entry's files; ``verify`` reruns the entry's localizer
-(a plug-in file is found relative to the entry's folder, and must still have the SHA-256 it was
-scored with) and compares. :mod:`azgym.bench.leaderboard.board` publishes the entries.
+(a plug-in file and a weight file are found relative to the entry's folder, and must still have
+the SHA-256 they were scored with) and compares. :mod:`azgym.bench.leaderboard.board` publishes
+the entries.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import math
 import os
 import platform
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, TypedDict, cast
@@ -42,15 +43,20 @@ from azgym.bench.leaderboard.entry_files import (
     read_json,
 )
 from azgym.bench.leaderboard.plugin_files import (
+    WEIGHTS,
     file_sha256,
     plugin_path,
+    relative_path,
     relative_spec,
     resolve_spec,
+    weights_path,
+    weights_sha256,
 )
 from azgym.bench.report.results import FRAME_COLUMNS
 from azgym.bench.report.summary import Dataset
 from azgym.bench.run.runner import Contender, run_benchmark, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
+from azgym.errors import ModelFileError
 from azgym.files import prepare_folder, write_file
 
 __all__ = ["ENTRY_FORMAT", "SUITES", "DatasetUnavailable", "Entry", "LeaderboardError",
@@ -77,7 +83,8 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
                authors: list[str], link: str) -> tuple[Entry, str]:
     """An entry for localizer ``label`` from an ``azgym bench`` output folder, and its frames.
 
-    A plug-in file's spec is stored relative to ``entries_dir``, with the file's SHA-256.
+    A plug-in file's spec and a weight file's path are stored relative to ``entries_dir``, with
+    each file's SHA-256.
     """
     if link and not link.startswith(("http://", "https://")):
         raise LeaderboardError(f"link: must be an http:// or https:// address (or empty), got "
@@ -141,24 +148,57 @@ def _frames_of(path: Path, label: str) -> str:
 
 
 def _portable(row: dict[str, Any], entries_dir: Path) -> EntryLocalizer:
-    """The localizer as an entry stores it: a plug-in file relative to the entries folder."""
+    """The localizer as an entry stores it: its files relative to the entries folder, pinned.
+
+    A plug-in file (in the spec) and a weight file (the ``weights`` hyperparameter) must be
+    the files the run used; each is stored relative to ``entries_dir`` with its SHA-256.
+    """
     spec, params = row["spec"], row["params"]
+    localizer: EntryLocalizer = {"spec": spec, "params": params}
     file = plugin_path(spec) if isinstance(spec, str) else None
-    if file is None:
-        return {"spec": spec, "params": params}
-    path = Path(row["file"]) if "file" in row else file
+    if file is not None:
+        path = Path(row["file"]) if "file" in row else file
+        localizer["sha256"] = _as_run(path, row.get("file_sha256"), "localizer/spec",
+                                      "plug-in file", file_sha256)
+        localizer["spec"] = _relative(path, entries_dir, "localizer/spec",
+                                      lambda: relative_spec(path, spec, entries_dir))
+    weights = weights_path(params) if isinstance(params, dict) else None
+    if weights is not None:
+        where, path = f"localizer/params/{WEIGHTS}", Path(row.get("weights_file", weights))
+        localizer["weights_sha256"] = _as_run(path, row.get("weights_sha256"), where,
+                                              "weight file", weights_sha256)
+        localizer["params"] = {**params, WEIGHTS: _relative(
+            path, entries_dir, where, lambda: relative_path(path, entries_dir))}
+    return localizer
+
+
+def _as_run(path: Path, recorded: str | None, where: str, kind: str,
+            digest_of: Callable[[Path], str]) -> str:
+    """A localizer's file's SHA-256, once it is there and is the file the run used."""
     if not path.is_file():
-        raise LeaderboardError(f"localizer/spec: the plug-in file {path} the results were made "
-                               "with is missing")
-    digest = file_sha256(path)
-    if "file_sha256" in row and digest != row["file_sha256"]:
-        raise LeaderboardError(f"localizer/spec: plug-in file changed since the run: {path} has "
-                               f"sha256 {digest}, the run used {row['file_sha256']}")
+        raise LeaderboardError(f"{where}: the {kind} {path} the results were made with is "
+                               "missing")
+    digest = _digest(path, where, digest_of)
+    if recorded is not None and digest != recorded:
+        raise LeaderboardError(f"{where}: {kind} changed since the run: {path} has sha256 "
+                               f"{digest}, the run used {recorded}")
+    return digest
+
+
+def _digest(path: Path, where: str, digest_of: Callable[[Path], str]) -> str:
+    """``digest_of(path)``; a weight file that cannot be read as one is refused by name."""
     try:
-        return {"spec": relative_spec(path, spec, entries_dir), "params": params,
-                "sha256": digest}
+        return digest_of(path)
+    except ModelFileError as exc:
+        raise LeaderboardError(f"{where}: {exc}") from None
+
+
+def _relative(path: Path, entries_dir: Path, where: str, relative: Callable[[], str]) -> str:
+    """``relative()``: a file named relative to the entries folder, or the reason it cannot."""
+    try:
+        return relative()
     except ValueError as exc:
-        raise LeaderboardError(f"localizer/spec: {path} cannot be named relative to "
+        raise LeaderboardError(f"{where}: {path} cannot be named relative to "
                                f"{entries_dir}: {exc}") from None
 
 
@@ -286,24 +326,45 @@ def load_available(entries_dir: Path, datasets: Path | None = None
     return loaded, unavailable
 
 
-def runnable_spec(path: Path, entry: Entry) -> str:
-    """The entry's localizer spec, a plug-in file found relative to the entry and unchanged.
+def runnable(path: Path, entry: Entry) -> tuple[str, dict[str, Any]]:
+    """The entry's localizer spec and hyperparameters, its files found and unchanged.
+
+    A plug-in file and a weight file are found relative to the entry's folder, and must have
+    the SHA-256 the entry was scored with.
 
     Raises:
-        LeaderboardError: The plug-in file is missing, or changed since the entry was made.
+        LeaderboardError: A file is missing, or changed since the entry was made.
     """
-    spec, file = resolve_spec(entry["localizer"]["spec"], path.parent)
-    if file is None:
-        return spec
+    localizer = entry["localizer"]
+    spec, file = resolve_spec(localizer["spec"], path.parent)
+    if file is not None:
+        _unchanged(path, file, localizer["sha256"], ("localizer/spec", "localizer/sha256"),
+                   ("plug-in file", "a plug-in"), file_sha256)
+    params = localizer["params"]
+    if isinstance(params.get(WEIGHTS), str):
+        file = (path.parent / params[WEIGHTS]).resolve()
+        _unchanged(path, file, localizer["weights_sha256"],
+                   (f"localizer/params/{WEIGHTS}", "localizer/weights_sha256"),
+                   ("weight file", "a weight file"), weights_sha256)
+        params = {**params, WEIGHTS: str(file)}
+    return spec, params
+
+
+def _unchanged(path: Path, file: Path, stored: str, where: tuple[str, str],
+               kind: tuple[str, str], digest_of: Callable[[Path], str]) -> None:
+    """Refuse an entry's file that is missing or has another SHA-256 than ``stored``.
+
+    ``where`` names the field that names the file, then the field of its SHA-256; ``kind`` the
+    file's kind, then one such thing ("plug-in file", "a plug-in").
+    """
     if not file.is_file():
-        raise LeaderboardError(f"{path}: localizer/spec: the plug-in file {file} does not exist "
-                               "(a plug-in is named relative to the entry's folder); put the "
+        raise LeaderboardError(f"{path}: {where[0]}: the {kind[0]} {file} does not exist "
+                               f"({kind[1]} is named relative to the entry's folder); put the "
                                "file there to verify the entry")
-    digest, stored = file_sha256(file), entry["localizer"]["sha256"]
+    digest = _digest(file, f"{path}: {where[0]}", digest_of)
     if digest != stored:
-        raise LeaderboardError(f"{path}: localizer/sha256: plug-in file changed since the entry "
-                               f"was made: sha256 {digest}, the entry was scored with {stored}")
-    return spec
+        raise LeaderboardError(f"{path}: {where[1]}: {kind[0]} changed since the entry was made: "
+                               f"sha256 {digest}, the entry was scored with {stored}")
 
 
 def verify(path: Path, workers: int = 1, datasets: Path | None = None
@@ -322,13 +383,12 @@ def verify(path: Path, workers: int = 1, datasets: Path | None = None
     (they depend on the machine). An empty answer means the entry was reproduced.
 
     Raises:
-        LeaderboardError: The entry is not sound, its plug-in file is missing or changed, or
-            the localizer cannot be built.
+        LeaderboardError: The entry is not sound, its plug-in or weight file is missing or
+            changed, or the localizer cannot be built.
     """
     datasets = datasets or default_datasets(path.parent)
     entry = load_entry(path, datasets)
-    contender = Contender(entry["name"], runnable_spec(path, entry),
-                          entry["localizer"]["params"])
+    contender = Contender(entry["name"], *runnable(path, entry))
     test = entry["split"] == "test"
     if is_data_entry(entry):
         result = run_log_benchmark(checked_log(entry, str(path), datasets), [contender],

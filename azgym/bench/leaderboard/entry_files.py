@@ -47,12 +47,14 @@ HEADING_LIMIT = math.pi + 1e-9
 class EntryLocalizer(TypedDict):
     """An entry's localizer: its spec and hyperparameters.
 
-    A plug-in file is named relative to the entry's folder, with the file's SHA-256.
+    A plug-in file (in the spec) and a weight file (the ``weights`` hyperparameter) are named
+    relative to the entry's folder, each with its SHA-256.
     """
 
     spec: str
     params: dict[str, Any]
     sha256: NotRequired[str]
+    weights_sha256: NotRequired[str]
 
 
 class Machine(TypedDict):

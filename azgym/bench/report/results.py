@@ -74,7 +74,7 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
         outcome = outcomes[contender.label]
         results[contender.label] = {
             "spec": contender.spec, "params": contender.params,
-            **plugin_record(contender.spec),
+            **plugin_record(contender.spec, contender.params),
             **contender_metrics(outcome, cases, reference_us),
             "crashes": sum(1 for e in outcome.errors if e),
             "first_error": next((e for e in outcome.errors if e), ""),

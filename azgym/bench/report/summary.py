@@ -48,6 +48,9 @@ class ContenderRow(ContenderMetrics[float]):
         params: Its hyperparameters.
         file: A plug-in's file (absolute; absent for a built-in or a missing file).
         file_sha256: The SHA-256 of that file.
+        weights_file: The weight file its ``weights`` hyperparameter names (absolute; absent
+            for the shipped weights or a file that cannot be read).
+        weights_sha256: The SHA-256 of that file.
         crashes: The frames on which it raised.
         first_error: The first exception it raised ("" for none).
     """
@@ -56,6 +59,8 @@ class ContenderRow(ContenderMetrics[float]):
     params: dict[str, Any]
     file: NotRequired[str]
     file_sha256: NotRequired[str]
+    weights_file: NotRequired[str]
+    weights_sha256: NotRequired[str]
     crashes: int
     first_error: str
 
