@@ -23,7 +23,7 @@ from azgym import arguments
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
 from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, MAX_NAME
-from azgym.logs.read import QUALITY_PREFIX
+from azgym.logs.contents import QUALITY_PREFIX
 from azgym.profile import profile_toml
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import LABEL_NAMES

@@ -11,6 +11,14 @@ values look like:
 - the truth's x, y within the map's extent (:class:`Extent`);
 - with ``camera.rate_hz``, the median frame interval within a factor :data:`RATE_FACTOR` of
   1 / rate;
+- with the truth and odometry, the time unit: over the frame intervals the odometry says the
+  vehicle moves in (its mean |speed| over the interval at least :data:`MIN_SPEED`, which a
+  wrong time unit leaves as it is), the distance the odometry's speed integrates to over the
+  tables' times is within a factor :data:`TIME_FACTOR` of the distance the truth moves
+  (milliseconds read as seconds make it 1000 times longer, minutes 60 times shorter); the same
+  for the IMU's yaw rate against the true heading's change, where the truth has a heading
+  (:data:`MIN_YAW_RATE`). Fewer than :data:`MIN_INTERVALS` such intervals (a static log) are not
+  checked;
 - with the truth, the detections of map beacons agree with the azimuths the true poses predict
   (α = atan2(y_b − y, x_b − x) − φ, :mod:`azgym.core`): the median absolute difference at most
   :data:`MAX_AZIMUTH_RESIDUAL` (a median, since misread ids and mirror images disagree). With
@@ -57,6 +65,16 @@ SCENARIO_MARGIN = 5.0
 BEACONS_MARGIN = 50.0
 """How far outside the beacons' bounding box a true position may lie [m] (a beacons.csv map
 says nothing of the room)."""
+TIME_FACTOR = 10.0
+"""How far the motion a stream's rate integrates to over the tables' times may be from the
+truth's (either way) before the time unit is called wrong."""
+MIN_SPEED = 0.05
+"""The mean odometry |speed| over a frame interval that makes it one the vehicle moves in [m/s]."""
+MIN_YAW_RATE = 0.05
+"""The mean IMU |yaw_rate| over a frame interval that makes it one the vehicle turns in
+[rad/s]."""
+MIN_INTERVALS = 10
+"""The fewest frame intervals of motion the time unit check needs."""
 MAX_AZIMUTH_RESIDUAL = 0.2
 """The largest median |measured − predicted azimuth| over a log's detections of map beacons
 [rad] (11°: far above any camera's noise, far below a unit or sign mistake's)."""
@@ -98,6 +116,8 @@ def check_plausible(tables: dict[str, Table | None], columns: dict[str, Columns 
     if frames is None or table is None:
         return
     _frame_rate(table, frames["time"], rate_hz, problems)
+    if "x" in frames.values:
+        _time_unit(table, frames, columns, problems)
     if "x" in frames.values and extent is not None:
         _truth_in_extent(table, frames, extent, problems)
     detections = columns.get("detections")
@@ -117,6 +137,57 @@ def _frame_rate(table: Table, time: np.ndarray, rate_hz: float | None,
         problems.add(table.file, f"the median frame interval is {median:.6g} s, but "
                                  f"camera.rate_hz = {rate_hz:g} says {expected:.6g} s (times in "
                                  "seconds? the right rate?)", column="time")
+
+
+def _time_unit(table: Table, frames: Columns, columns: dict[str, Columns | None],
+               problems: Problems) -> None:
+    """The odometry's speed and the IMU's yaw rate move as far as the truth over the same times.
+
+    Each is compared over the frame intervals of one sequence in which it says the vehicle
+    moves (module docstring); the factor between the two is the time unit's mistake.
+    """
+    time = frames["time"]
+    same = np.asarray(frames["sequence"][1:]) == np.asarray(frames["sequence"][:-1])
+    truth = {"speed": np.hypot(np.diff(frames["x"]), np.diff(frames["y"]))}
+    if "heading" in frames.values:
+        truth["yaw_rate"] = np.abs(wrap_angle(np.diff(frames["heading"])))
+    for name, column, least, what in (("odometry", "speed", MIN_SPEED, ("distance", "m")),
+                                      ("imu", "yaw_rate", MIN_YAW_RATE, ("turn", "rad"))):
+        stream = columns.get(name)
+        if stream is None or column not in truth or column not in stream.values:
+            continue
+        moved = _integrated(stream["time"], stream[column], time)
+        steps = np.diff(time)
+        used = same & (steps > 0) & np.isfinite(moved) & np.isfinite(truth[column]) \
+            & (moved >= least * steps)
+        if used.sum() < MIN_INTERVALS:
+            continue
+        read, true = float(moved[used].sum()), float(truth[column][used].sum())
+        if true * TIME_FACTOR >= read >= true / TIME_FACTOR:
+            continue
+        factor = f"{read / true:.4g} times" if true > 0 else "infinitely more than"
+        problems.add(table.file, f"{name}.csv's {column}, integrated over the tables' times, "
+                                 f"gives {factor} the {what[0]} the truth covers over the same "
+                                 f"{used.sum()} frame intervals ({read:.4g} {what[1]} against "
+                                 f"{true:.4g} {what[1]}; more than {TIME_FACTOR:g} times either "
+                                 "way is refused): are the times in seconds (not milliseconds "
+                                 f"or minutes), the truth and {column} in SI units?",
+                     column="time")
+
+
+def _integrated(sample_time: np.ndarray, rate: np.ndarray, time: np.ndarray) -> np.ndarray:
+    """|∫ rate dt| over each interval between ``time``'s (NaN where the samples do not span it).
+
+    Each sample's rate holds until the next sample (the last one's until its own time).
+    """
+    ok = np.isfinite(sample_time) & np.isfinite(rate)
+    sample_time, rate = sample_time[ok], rate[ok]
+    if sample_time.size < 2 or np.any(np.diff(sample_time) < 0):  # a decrease: reported
+        return np.full(max(time.size - 1, 0), np.nan)
+    total = np.concatenate([[0.0], np.cumsum(rate[:-1] * np.diff(sample_time))])
+    at = np.interp(time, sample_time, total)
+    inside = (time >= sample_time[0]) & (time <= sample_time[-1])
+    return np.where(inside[1:] & inside[:-1], np.abs(np.diff(at)), np.nan)
 
 
 def _truth_in_extent(table: Table, frames: Columns, extent: Extent, problems: Problems) -> None:

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from azgym.errors import LogError
 
-__all__ = ["MAX_PROBLEMS", "LogError", "Problems", "cut", "places", "seconds", "shown"]
+__all__ = ["MAX_PROBLEMS", "LogChanged", "LogError", "Problems", "cut", "places", "seconds",
+           "shown"]
 
 MAX_PROBLEMS = 50
 """Problems listed before the rest are only counted."""
@@ -79,3 +80,16 @@ class Problems:
         """Raise :class:`LogError` listing every problem, if there is one."""
         if self.total:
             raise LogError(self.folder, self.found, self.total)
+
+
+class LogChanged(LogError):
+    """A log's files are not the ones expected: their SHA-256 differs (found before parsing).
+
+    Attributes:
+        sha256: The digest the files have.
+    """
+
+    def __init__(self, folder: str, sha256: str, expected: str) -> None:
+        super().__init__(folder, [f"its files' SHA-256 is {sha256}, not the {expected} "
+                                  "expected"])
+        self.sha256 = sha256

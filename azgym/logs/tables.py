@@ -15,18 +15,19 @@ import csv
 import io
 import math
 import re
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from azgym.logs.files import MAX_TABLE_CELLS, log_file, read_limited
+from azgym.logs.files import MAX_TABLE_CELLS, log_file, read_limited, wide_header
 from azgym.logs.parquet import parquet_cells
 from azgym.logs.problems import Problems, cut, shown
 
 __all__ = ["Columns", "Table", "check_columns", "find_table", "floats", "integers",
-           "read_table"]
+           "parse_table", "read_table"]
 
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _INTEGER = re.compile(r"[+-]?[0-9]{1,18}")
@@ -94,32 +95,42 @@ def find_table(folder: Path, name: str, problems: Problems) -> Path | None:
 def read_table(path: Path, problems: Problems) -> Table | None:
     """Read a table file; None (with the problem recorded) when it cannot be read at all."""
     data = read_limited(path, problems)
-    if data is None:
-        return None
-    if path.suffix == ".parquet":
-        cells = parquet_cells(data, path.name, problems)
+    return None if data is None else parse_table(path.name, data, problems)
+
+
+def parse_table(file: str, data: bytes, problems: Problems) -> Table | None:
+    """A table file's bytes as a table; None (with the problem recorded) if they cannot be.
+
+    The bytes are Parquet if ``file`` ends with ``.parquet``, else CSV.
+    """
+    if file.endswith(".parquet"):
+        cells = parquet_cells(data, file, problems)
         if cells is None:
             return None
         header, rows = cells
-        return Table(path.name, header, rows, list(range(1, len(rows) + 1)), unit="row")
+        return Table(file, header, rows, list(range(1, len(rows) + 1)), unit="row")
     try:
         text = data.decode("utf-8-sig")  # a byte-order mark, as spreadsheets write, is fine
     except UnicodeDecodeError as exc:
-        problems.add(path.name, f"not UTF-8 text: byte 0x{data[exc.start]:02x} at offset "
-                                f"{exc.start} (save the file as UTF-8)")
+        problems.add(file, f"not UTF-8 text: byte 0x{data[exc.start]:02x} at offset "
+                           f"{exc.start} (save the file as UTF-8)")
         return None
-    del data
-    return _csv_table(path.name, text, problems)
+    return _csv_table(file, text, problems)
 
 
 def _csv_table(file: str, text: str, problems: Problems) -> Table | None:
-    """A CSV text's rows, stopping as soon as it holds more than :data:`MAX_TABLE_CELLS`."""
+    """A CSV text's rows, stopping as soon as it holds more than :data:`MAX_TABLE_CELLS`.
+
+    The header's cells count too, and a header too wide (:func:`wide_header`) stops it at once.
+    """
     reader = csv.reader(io.StringIO(text, newline=""))
     rows: list[list[str]] = []
     lines: list[int] = []
-    cells = 0
     try:
         header = next(reader, None)
+        cells = len(header or ())
+        if wide_header(cells, file, problems):
+            return None
         for row in reader:
             cells += len(row)
             if cells > MAX_TABLE_CELLS:
@@ -160,15 +171,15 @@ def check_columns(table: Table, required: tuple[str, ...], optional: tuple[str, 
     A column starting with ``prefix`` (when one is given) is allowed too: quality columns.
     """
     ok = True
+    counts = Counter(table.header)
     for name in required:
         if name not in table.header:
             problems.add(table.file, f"no column {name!r} (columns: "
                                      f"{cut(', '.join(table.header), 200)})")
             ok = False
-    for name in table.header:
-        if table.header.count(name) > 1:
-            problems.add(table.file, f"column {shown(name)} appears "
-                                     f"{table.header.count(name)} times")
+    for name, count in counts.items():
+        if count > 1:
+            problems.add(table.file, f"column {shown(name)} appears {count} times")
             ok = False
         elif name not in required + optional and not (prefix and name.startswith(prefix)):
             known = ", ".join(required + optional) + (f", {prefix}*" if prefix else "")

@@ -59,8 +59,9 @@ def test_a_file_is_read_with_a_byte_limit_whatever_its_size_on_disk_says():
 
 
 def test_a_csv_table_stops_at_the_cell_limit(tmp_path, monkeypatch):
+    """The header's four cells count: 4 + 4 × 4 rows reach 20, the fifth row passes it."""
     monkeypatch.setattr(T, "MAX_TABLE_CELLS", 20)
-    with pytest.raises(LogError, match=r"detections.csv, line 7: too many cells: more than 20 "
+    with pytest.raises(LogError, match=r"detections.csv, line 6: too many cells: more than 20 "
                                        r"\(rows × columns\) by this line"):
         read_log(_log(tmp_path))
 

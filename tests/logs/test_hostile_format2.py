@@ -61,12 +61,23 @@ def test_seconds_give_the_speed_factor(tmp_path):
     assert fits["motion.turn_rate_noise"].value < 0.05
 
 
-def test_times_in_milliseconds_give_no_speed_factor(tmp_path):
-    """Times in ms make the odometry read 1000 × the distance: not written as a factor 0.001."""
-    fits, skipped = _fits(tmp_path, _files(scale=1000.0))
+def test_times_in_milliseconds_are_refused_before_any_fit(tmp_path):
+    """Times in ms make the odometry read 1000 × the distance: the reader refuses the log."""
+    with pytest.raises(LogError, match="gives 1000 times the distance the truth covers"):
+        read_log(write_log(tmp_path / "log", _files(scale=1000.0)))
+
+
+def test_a_speed_in_km_h_gives_no_speed_factor(tmp_path):
+    """km/h make the odometry read 3.6 × the distance, within what the reader lets pass (a
+    noisy odometry's): not written as a factor 1 / 3.6."""
+    files = _files()
+    rows = [line.split(",") for line in files["odometry.csv"].splitlines()]
+    files["odometry.csv"] = "\n".join([",".join(rows[0])] + [
+        ",".join([time, repr(float(speed) * 3.6), turn]) for time, speed, turn in rows[1:]]) + "\n"
+    fits, skipped = _fits(tmp_path, files)
     assert "motion.speed_factor" not in fits
     assert "another unit" in skipped["motion.speed_factor"]
-    assert "ms" in skipped["motion.speed_factor"]
+    assert "km/h" in skipped["motion.speed_factor"]
 
 
 @pytest.mark.parametrize("stamps", [

@@ -5,8 +5,9 @@ size) records its ``dataset``: name, SHA-256 of the log's files and map
 (:func:`~azgym.logs.read.log_digest`), log format and whether it is simulated. When it is read,
 the log is looked for among the logs shipped with azgym and then in the datasets folder given
 (``DATASETS/NAME/``; a folder there of a shipped log's name is refused); its digest must be the
-entry's (a log edited since the entry was made is refused), its format one this azgym reads,
-its name and ``simulated`` the entry's; the entry's cases are then the log's frames
+entry's (a log edited since the entry was made is refused; its files are hashed before any
+table is parsed, so that a replaced file costs no more than its reading), its format one this
+azgym reads, its name and ``simulated`` the entry's; the entry's cases are then the log's frames
 (:func:`~azgym.bench.suites.data.log_cases`), checked and recomputed as a suite's. A log that cannot
 be found raises :class:`DatasetUnavailable`: the entry cannot be checked, and the board leaves
 it out only when told to (``--skip-unavailable``).
@@ -23,7 +24,7 @@ from azgym.bench.suites import Case
 from azgym.bench.suites.data import SPLIT, log_cases
 from azgym.errors import DatasetUnavailable, LeaderboardError
 from azgym.logs.manifest import FORMATS, MANIFEST
-from azgym.logs.problems import LogError
+from azgym.logs.problems import LogChanged, LogError
 from azgym.logs.read import Log, read_log, shipped_logs
 
 __all__ = ["DatasetUnavailable", "check_data_run", "checked_log", "dataset_cases",
@@ -116,11 +117,6 @@ def checked_log(entry: Entry, origin: str, datasets: Path | None) -> Log:
     """
     log = _found_log(entry, origin, datasets)
     dataset = entry["dataset"]
-    if log.sha256 != dataset["sha256"]:
-        raise LeaderboardError(
-            f"{origin}: dataset/sha256: the log {log.folder} changed since the entry was made "
-            f"(its files' SHA-256 is {log.sha256}, the entry was scored on {dataset['sha256']}); "
-            "rerun the entry on it with azgym bench --data")
     for field, claimed, value in (("name", dataset["name"], log.manifest.name),
                                   ("simulated", dataset["simulated"], log.manifest.simulated),
                                   ("format", dataset["format"], log.manifest.format)):
@@ -137,15 +133,18 @@ def _stamp(folder: Path) -> tuple[tuple[str, int, int], ...]:
 
 
 @functools.lru_cache(maxsize=16)
-def _read(folder: Path, stamp: tuple[tuple[str, int, int], ...]) -> Log:
-    """A log read once while its files stay as ``stamp`` says (every entry on it is checked)."""
+def _read(folder: Path, stamp: tuple[tuple[str, int, int], ...], sha256: str) -> Log:
+    """A log of digest ``sha256``, read once while its files stay as ``stamp`` says.
+
+    Every entry on the log is checked against it.
+    """
     del stamp  # the cache's key only
-    return read_log(folder)
+    return read_log(folder, sha256)
 
 
 def _found_log(entry: Entry, origin: str, datasets: Path | None) -> Log:
-    """The entry's log read and checked (not yet compared with the entry)."""
-    name = entry["dataset"]["name"]
+    """The entry's log, its digest the entry's, read and checked (not yet compared further)."""
+    name, sha256 = entry["dataset"]["name"], entry["dataset"]["sha256"]
     folder = find_dataset(name, datasets)
     if folder is None:
         where = f"in {datasets} or " if datasets is not None else ""
@@ -155,7 +154,12 @@ def _found_log(entry: Entry, origin: str, datasets: Path | None) -> Log:
             "folder as NAME/ (--datasets DIR, default datasets/ beside the entries), or pass "
             "--skip-unavailable to leave such entries off the board", entry)
     try:
-        return _read(folder.resolve(), _stamp(folder))
+        return _read(folder.resolve(), _stamp(folder), sha256)
+    except LogChanged as exc:
+        raise LeaderboardError(
+            f"{origin}: dataset/sha256: the log {folder} changed since the entry was made "
+            f"(its files' SHA-256 is {exc.sha256}, the entry was scored on {sha256}); rerun the "
+            "entry on it with azgym bench --data") from None
     except LogError as exc:
         raise LeaderboardError(f"{origin}: dataset: the log {name!r} cannot be read: "
                                f"{exc}") from None
