@@ -17,7 +17,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "azgym"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("_version",), ("errors",), ("registry",), ("core",),
-    ("fields",), ("arguments", "hyperparameters", "files", "profile"), ("jit",), ("metrics",),
+    ("fields",), ("arguments", "hyperparameters", "files", "untrusted", "profile"), ("jit",),
+    ("metrics",),
     ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("nav",),
     ("envs",), ("bench",), ("learn", "placement", "experiments"), ("cli",), ("__init__",),
 )

@@ -8,7 +8,7 @@ actions for continuous ones, is refused by name rather than driven into nonsense
 is a :class:`azgym.errors.ModelFileError` naming the file and the problem.
 
 The file is read once, as every model file is
-(:func:`azgym.localize.learned.weights.read_model_file`: a regular file, without blocking, up to
+(:func:`azgym.untrusted.read_regular_file`: a regular file, without blocking, up to
 :data:`MAX_FILE_BYTES`), and SB3 loads those very bytes.
 Before anything is unpickled, each member's compression and declared size are checked and the
 ``data`` entry is inflated in chunks up to :data:`MAX_DATA_BYTES` (a zip's declared sizes can
@@ -32,9 +32,9 @@ import gymnasium as gym
 import numpy as np
 
 from azgym.errors import DependencyNotInstalled, ModelFileError
-from azgym.localize.learned.weights import check_member, open_archive, read_member, read_model_file
 from azgym.nav.controls import Policy
 from azgym.nav.pursuit import PurePursuit
+from azgym.untrusted import check_member, open_archive, read_member, read_regular_file
 
 __all__ = ["ALGORITHMS", "MODELS", "SB3Policy", "SHIPPED_FILES", "load_policy", "require_rl"]
 
@@ -114,9 +114,9 @@ def load_policy(path_or_name: str | Path, env: gym.Env) -> Policy:
 
 
 def _read(path: Path) -> bytes:
-    """The policy file's bytes (:func:`~azgym.localize.learned.weights.read_model_file`)."""
+    """The policy file's bytes (:func:`~azgym.untrusted.read_regular_file`)."""
     try:
-        return read_model_file(path, MAX_FILE_BYTES, WHAT)
+        return read_regular_file(path, MAX_FILE_BYTES, WHAT, ModelFileError)
     except ModelFileError:
         if not path.exists() and not path.is_symlink():
             raise ModelFileError(f"{path}: no such file; give a stable-baselines3 .zip, "
@@ -145,12 +145,12 @@ def _data_entry(path: Path, raw: bytes) -> dict[str, Any]:
     chunks, counted.
     """
     try:
-        with open_archive(path, raw, WHAT) as archive:
+        with open_archive(path, raw, WHAT, ModelFileError) as archive:
             for info in archive.infolist():
-                check_member(path, info, MAX_MEMBER_BYTES, WHAT)
+                check_member(path, info, MAX_MEMBER_BYTES, WHAT, ModelFileError)
             infos = {info.filename: info for info in archive.infolist()}
-            data = read_member(path, archive, infos["data"], MAX_DATA_BYTES, WHAT) \
-                if "data" in infos else None
+            data = None if "data" not in infos else read_member(
+                path, archive, infos["data"], MAX_DATA_BYTES, WHAT, ModelFileError)
     except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError) as exc:
         raise ModelFileError(f"{path}: not a readable zip ({exc}); give a stable-baselines3 "
                              ".zip saved by model.save()") from None

@@ -21,7 +21,7 @@ import math
 import os
 import platform
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, TypedDict, cast
@@ -36,27 +36,16 @@ from azgym.bench.leaderboard.entry_data import (
 from azgym.bench.leaderboard.entry_files import (
     MAX_FRAMES_BYTES,
     Entry,
-    EntryLocalizer,
     LeaderboardError,
     read_bytes,
     read_frames,
     read_json,
 )
-from azgym.bench.leaderboard.plugin_files import (
-    WEIGHTS,
-    file_sha256,
-    plugin_path,
-    relative_path,
-    relative_spec,
-    resolve_spec,
-    weights_path,
-    weights_sha256,
-)
+from azgym.bench.leaderboard.entry_localizer import portable_localizer, runnable_localizer
 from azgym.bench.report.results import FRAME_COLUMNS
 from azgym.bench.report.summary import Dataset
 from azgym.bench.run.runner import Contender, run_benchmark, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
-from azgym.errors import ModelFileError
 from azgym.files import prepare_folder, write_file
 
 __all__ = ["ENTRY_FORMAT", "SUITES", "DatasetUnavailable", "Entry", "LeaderboardError",
@@ -109,7 +98,7 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
         text = _frames_of(results_dir / "frames.csv", label)
         entry: Entry = {
             "format": ENTRY_FORMAT, "name": name, "version": version, "authors": authors,
-            "link": link, "localizer": _portable(row, entries_dir),
+            "link": link, "localizer": portable_localizer(row, entries_dir),
             "suite": summary["suite"], "suite_version": summary["suite_version"],
             "split": summary["split"], "seed": summary["seed"], "quick": summary["quick"],
             "n_frames": summary["n_frames"], "cases_sha256": summary["cases_sha256"],
@@ -145,61 +134,6 @@ def _frames_of(path: Path, label: str) -> str:
     except (UnicodeDecodeError, csv.Error) as exc:
         raise LeaderboardError(f"{path}: not a CSV file: {exc}") from None
     return frames_file_text([row for row in rows if row and row[0] == label])
-
-
-def _portable(row: dict[str, Any], entries_dir: Path) -> EntryLocalizer:
-    """The localizer as an entry stores it: its files relative to the entries folder, pinned.
-
-    A plug-in file (in the spec) and a weight file (the ``weights`` hyperparameter) must be
-    the files the run used; each is stored relative to ``entries_dir`` with its SHA-256.
-    """
-    spec, params = row["spec"], row["params"]
-    localizer: EntryLocalizer = {"spec": spec, "params": params}
-    file = plugin_path(spec) if isinstance(spec, str) else None
-    if file is not None:
-        path = Path(row["file"]) if "file" in row else file
-        localizer["sha256"] = _as_run(path, row.get("file_sha256"), "localizer/spec",
-                                      "plug-in file", file_sha256)
-        localizer["spec"] = _relative(path, entries_dir, "localizer/spec",
-                                      lambda: relative_spec(path, spec, entries_dir))
-    weights = weights_path(params) if isinstance(params, dict) else None
-    if weights is not None:
-        where, path = f"localizer/params/{WEIGHTS}", Path(row.get("weights_file", weights))
-        localizer["weights_sha256"] = _as_run(path, row.get("weights_sha256"), where,
-                                              "weight file", weights_sha256)
-        localizer["params"] = {**params, WEIGHTS: _relative(
-            path, entries_dir, where, lambda: relative_path(path, entries_dir))}
-    return localizer
-
-
-def _as_run(path: Path, recorded: str | None, where: str, kind: str,
-            digest_of: Callable[[Path], str]) -> str:
-    """A localizer's file's SHA-256, once it is there and is the file the run used."""
-    if not path.is_file():
-        raise LeaderboardError(f"{where}: the {kind} {path} the results were made with is "
-                               "missing")
-    digest = _digest(path, where, digest_of)
-    if recorded is not None and digest != recorded:
-        raise LeaderboardError(f"{where}: {kind} changed since the run: {path} has sha256 "
-                               f"{digest}, the run used {recorded}")
-    return digest
-
-
-def _digest(path: Path, where: str, digest_of: Callable[[Path], str]) -> str:
-    """``digest_of(path)``; a weight file that cannot be read as one is refused by name."""
-    try:
-        return digest_of(path)
-    except ModelFileError as exc:
-        raise LeaderboardError(f"{where}: {exc}") from None
-
-
-def _relative(path: Path, entries_dir: Path, where: str, relative: Callable[[], str]) -> str:
-    """``relative()``: a file named relative to the entries folder, or the reason it cannot."""
-    try:
-        return relative()
-    except ValueError as exc:
-        raise LeaderboardError(f"{where}: {path} cannot be named relative to "
-                               f"{entries_dir}: {exc}") from None
 
 
 def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, version: str,
@@ -326,47 +260,6 @@ def load_available(entries_dir: Path, datasets: Path | None = None
     return loaded, unavailable
 
 
-def runnable(path: Path, entry: Entry) -> tuple[str, dict[str, Any]]:
-    """The entry's localizer spec and hyperparameters, its files found and unchanged.
-
-    A plug-in file and a weight file are found relative to the entry's folder, and must have
-    the SHA-256 the entry was scored with.
-
-    Raises:
-        LeaderboardError: A file is missing, or changed since the entry was made.
-    """
-    localizer = entry["localizer"]
-    spec, file = resolve_spec(localizer["spec"], path.parent)
-    if file is not None:
-        _unchanged(path, file, localizer["sha256"], ("localizer/spec", "localizer/sha256"),
-                   ("plug-in file", "a plug-in"), file_sha256)
-    params = localizer["params"]
-    if isinstance(params.get(WEIGHTS), str):
-        file = (path.parent / params[WEIGHTS]).resolve()
-        _unchanged(path, file, localizer["weights_sha256"],
-                   (f"localizer/params/{WEIGHTS}", "localizer/weights_sha256"),
-                   ("weight file", "a weight file"), weights_sha256)
-        params = {**params, WEIGHTS: str(file)}
-    return spec, params
-
-
-def _unchanged(path: Path, file: Path, stored: str, where: tuple[str, str],
-               kind: tuple[str, str], digest_of: Callable[[Path], str]) -> None:
-    """Refuse an entry's file that is missing or has another SHA-256 than ``stored``.
-
-    ``where`` names the field that names the file, then the field of its SHA-256; ``kind`` the
-    file's kind, then one such thing ("plug-in file", "a plug-in").
-    """
-    if not file.is_file():
-        raise LeaderboardError(f"{path}: {where[0]}: the {kind[0]} {file} does not exist "
-                               f"({kind[1]} is named relative to the entry's folder); put the "
-                               "file there to verify the entry")
-    digest = _digest(file, f"{path}: {where[0]}", digest_of)
-    if digest != stored:
-        raise LeaderboardError(f"{path}: {where[1]}: {kind[0]} changed since the entry was made: "
-                               f"sha256 {digest}, the entry was scored with {stored}")
-
-
 def verify(path: Path, workers: int = 1, datasets: Path | None = None
            ) -> dict[str, tuple[Any, Any]]:
     """Rerun an entry's localizer on its suite, or its log; return what disagrees.
@@ -388,7 +281,7 @@ def verify(path: Path, workers: int = 1, datasets: Path | None = None
     """
     datasets = datasets or default_datasets(path.parent)
     entry = load_entry(path, datasets)
-    contender = Contender(entry["name"], *runnable(path, entry))
+    contender = Contender(entry["name"], *runnable_localizer(path, entry))
     test = entry["split"] == "test"
     if is_data_entry(entry):
         result = run_log_benchmark(checked_log(entry, str(path), datasets), [contender],

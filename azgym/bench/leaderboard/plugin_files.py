@@ -18,7 +18,8 @@ from pathlib import Path, PurePosixPath
 from typing import Any, TypedDict
 
 from azgym.errors import ModelFileError
-from azgym.localize.learned.weights import MAX_FILE_BYTES, read_model_file
+from azgym.localize.learned.weights import MAX_FILE_BYTES
+from azgym.untrusted import read_regular_file
 
 __all__ = ["WEIGHTS", "PluginRecord", "file_sha256", "is_portable", "is_relative", "plugin_path",
            "plugin_record", "relative_path", "relative_spec", "resolve_spec", "weights_path",
@@ -71,7 +72,8 @@ def weights_sha256(path: Path) -> str:
     Raises:
         ModelFileError: The file is missing, no regular file, or too large for a model file.
     """
-    return hashlib.sha256(read_model_file(path, MAX_FILE_BYTES)).hexdigest()
+    return hashlib.sha256(read_regular_file(path, MAX_FILE_BYTES, "model file",
+                                            ModelFileError)).hexdigest()
 
 
 def plugin_record(spec: str, params: Mapping[str, Any] | None = None) -> PluginRecord:

@@ -14,11 +14,10 @@ on before returning: the model name, the format, the features it was trained on,
 array's presence, shape and finiteness. Each problem is a :class:`ModelFileError` naming the
 file and what is wrong.
 
-Every model file azgym reads (these weights, and a navigator's policy zip:
-:mod:`azgym.nav.policy_file`) is read by :func:`read_model_file`, one rule: a regular file (not a
-device, FIFO, socket or folder, which could read without end or wait for ever), opened without
-blocking, its kind checked on the opened descriptor, read up to a byte cap; and its archive's
-members by :func:`read_member`, inflated in chunks up to a cap whatever their headers declare.
+The file itself is read as every file azgym did not write (:mod:`azgym.untrusted`): a regular
+file (not a device, FIFO, socket or folder, which could read without end or wait for ever),
+opened without blocking and read up to :data:`MAX_FILE_BYTES`; its members are inflated in
+chunks up to a cap whatever their headers declare.
 """
 
 from __future__ import annotations
@@ -26,8 +25,6 @@ from __future__ import annotations
 import io
 import json
 import math
-import os
-import stat
 import zipfile
 import zlib
 from pathlib import Path
@@ -36,9 +33,10 @@ from typing import Any
 import numpy as np
 
 from azgym.errors import InvalidInputError, ModelFileError
+from azgym.untrusted import open_archive, read_member, read_regular_file
 
-__all__ = ["FORMAT", "MODELS", "ModelFileError", "array_shapes", "check_member", "load_weights",
-           "model_path", "open_archive", "read_member", "read_model_file", "save_weights"]
+__all__ = ["FORMAT", "MAX_FILE_BYTES", "MODELS", "ModelFileError", "array_shapes",
+           "load_weights", "model_path", "save_weights"]
 
 MODELS = Path(__file__).resolve().parent / "models"
 """The folder of the weight files that ship with azgym (``<model>.npz``, model cards beside)."""
@@ -58,18 +56,6 @@ FIELDS = {"format": int, "model": str, "azgym_version": str, "architecture": dic
 ZIP_MAGIC = b"PK\x03\x04"
 """The first bytes of a zip archive (its first member's header)."""
 ARCHITECTURES = ("deepsets-context-1", "deepsets-regression-1")
-CENTRAL_HEADER = b"PK\x01\x02"
-"""The first bytes of each member's entry in a zip archive's central directory."""
-MAX_ENTRIES = 4096
-"""A file holding more central-directory entries than this is refused before it is opened
-(:func:`open_archive`); a policy zip's PyTorch members are archives too, an entry a tensor."""
-CHUNK_BYTES = 2**20
-"""A member is inflated this much at a time, and counted (:func:`read_member`)."""
-COMPRESSIONS = {zipfile.ZIP_STORED: "stored", zipfile.ZIP_DEFLATED: "deflated"}
-"""The compressions of the members read (what numpy and stable-baselines3 write): Python's
-bzip2 and lzma readers inflate a read's whole input at once, however much that yields."""
-_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (a pipe)"),
-          (stat.S_ISSOCK, "a socket"), (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"))
 """The kinds of architecture this azgym serves (:func:`array_shapes`)."""
 
 
@@ -123,123 +109,6 @@ def model_path(owner: str, weights: Any, shipped: Path) -> Path:
         raise InvalidInputError(f"{owner}.weights must be a path to a weight file or None, "
                                 f"got {weights!r}")
     return Path(weights)
-
-
-def read_model_file(path: Path, limit: int, what: str = "model file") -> bytes:
-    """A model file's bytes: a regular file, read without blocking and up to ``limit`` bytes.
-
-    The file is opened with ``O_NONBLOCK`` (a FIFO opens at once instead of waiting for a
-    writer) and its kind is checked on the opened descriptor, so nothing can swap the path
-    for a device between the check and the read.
-
-    Args:
-        path: The file.
-        limit: The most bytes it may hold (the largest plausible model).
-        what: What the file is, for the messages (``"model file"``, ``"policy file"``).
-
-    Raises:
-        ModelFileError: The file is missing, not a regular file, unreadable or larger than
-            ``limit``.
-    """
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
-    try:
-        descriptor = os.open(path, flags)
-    except FileNotFoundError:
-        raise ModelFileError(f"{path}: no such {what}") from None
-    except OSError as exc:  # a socket cannot be opened (ENXIO): say what it is
-        raise ModelFileError(f"{path}: cannot read the {what}: "
-                             f"{_not_regular(path) or exc.strerror or exc}") from None
-    status = os.fstat(descriptor)
-    if not stat.S_ISREG(status.st_mode):
-        os.close(descriptor)
-        kind = next((name for test, name in _KINDS if test(status.st_mode)), "not a file")
-        raise ModelFileError(f"{path}: cannot read the {what}: it is {kind}, not a "
-                             "regular file")
-    with os.fdopen(descriptor, "rb") as handle:
-        try:
-            data = handle.read(limit + 1) if status.st_size <= limit else b""
-        except OSError as exc:
-            raise ModelFileError(f"{path}: cannot read the {what}: {exc.strerror or exc}"
-                                 ) from None
-    if status.st_size > limit or len(data) > limit:
-        size = status.st_size if status.st_size > limit else f"more than {limit}"
-        raise ModelFileError(f"{path}: {size} bytes, larger than a {what} may be "
-                             f"({limit // 2**20} MiB)")
-    return data
-
-
-def _not_regular(path: Path) -> str:
-    """What ``path`` is when it is no regular file ("it is a socket, ..."), else ""."""
-    try:
-        mode = os.stat(path).st_mode
-    except OSError:
-        return ""
-    kind = next((name for test, name in _KINDS if test(mode)), "")
-    return f"it is {kind}, not a regular file" if kind else ""
-
-
-def open_archive(path: Path, data: bytes, what: str = "model file") -> zipfile.ZipFile:
-    """The zip archive in a model file's bytes, once they hold at most :data:`MAX_ENTRIES` entries.
-
-    Opening an archive builds an object for each entry its central directory lists, however
-    many a forged one lists; so the entries' signatures are counted in the bytes first (a
-    count that also finds the archives a member holds: a PyTorch file is one).
-
-    Raises:
-        ModelFileError: Too many entries.
-        zipfile.BadZipFile: Not a zip archive (the caller words it).
-    """
-    if data.count(CENTRAL_HEADER) > MAX_ENTRIES:
-        raise ModelFileError(f"{path}: more than {MAX_ENTRIES} zip entries, more than a {what} "
-                             "holds")
-    return zipfile.ZipFile(io.BytesIO(data))
-
-
-def check_member(path: Path, info: zipfile.ZipInfo, limit: int, what: str = "model file"
-                 ) -> None:
-    """Refuse a member compressed otherwise than :data:`COMPRESSIONS` or declared over ``limit``.
-
-    Python's zip reader stops a member at its declared size, so a member that passes reads no
-    more than ``limit`` bytes (:func:`read_member` counts them all the same).
-
-    Raises:
-        ModelFileError: Naming the file and the member.
-    """
-    if info.compress_type not in COMPRESSIONS:
-        method = {zipfile.ZIP_BZIP2: "bzip2", zipfile.ZIP_LZMA: "lzma"}.get(
-            info.compress_type, f"method {info.compress_type}")
-        raise ModelFileError(f"{path}: member {info.filename!r} is compressed with {method}; "
-                             f"a {what}'s members are {' or '.join(COMPRESSIONS.values())}")
-    if info.file_size > limit:
-        raise ModelFileError(f"{path}: member {info.filename!r} inflates to more than "
-                             f"{_size(limit)}, more than a {what}'s member may")
-
-
-def read_member(path: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo, limit: int,
-                what: str = "model file") -> bytes:
-    """A member's bytes, inflated in chunks and refused past ``limit`` whatever it declares.
-
-    Raises:
-        ModelFileError: Naming the file and the member (:func:`check_member`, or a member
-            that inflates past ``limit``).
-        zipfile.BadZipFile, EOFError, zlib.error: A damaged member (the caller words it).
-    """
-    check_member(path, info, limit, what)
-    chunks: list[bytes] = []
-    size = 0
-    with archive.open(info) as stream:
-        while chunk := stream.read(CHUNK_BYTES):
-            size += len(chunk)
-            if size > limit:
-                raise ModelFileError(f"{path}: member {info.filename!r} inflates to more "
-                                     f"than {_size(limit)}, more than a {what}'s member may")
-            chunks.append(chunk)
-    return b"".join(chunks)
-
-
-def _size(limit: int) -> str:
-    """A byte limit as the messages give it: whole MiB, or bytes."""
-    return f"{limit // 2**20} MiB" if limit % 2**20 == 0 else f"{limit} bytes"
 
 
 def served(arrays: dict[str, np.ndarray], manifest: dict[str, Any], kind: str, what: str,
@@ -334,13 +203,13 @@ def load_weights(path: Path | str, model: str, *, feature_layout: str | None = N
 
 def _read_members(path: Path) -> dict[str, np.ndarray]:
     """Every ``.npy`` member of the archive, read without pickle and within the size bounds."""
-    data = read_model_file(path, MAX_FILE_BYTES)
+    data = read_regular_file(path, MAX_FILE_BYTES, "model file", ModelFileError)
     if not zipfile.is_zipfile(io.BytesIO(data)):
         if data.startswith(ZIP_MAGIC):
             raise ModelFileError(f"{path}: truncated (a zip archive without its end)")
         raise ModelFileError(f"{path}: not a model file (not an .npz zip archive)")
     try:
-        with open_archive(path, data) as archive:
+        with open_archive(path, data, "model file", ModelFileError) as archive:
             infos = archive.infolist()
             if len(infos) > MAX_MEMBERS:
                 raise ModelFileError(f"{path}: {len(infos)} members, more than a model file "
@@ -364,7 +233,8 @@ def _member_name(path: Path, info: zipfile.ZipInfo) -> str:
 def _read_array(path: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo) -> np.ndarray:
     """One member as an array: its header checked before its data is used."""
     name = info.filename
-    stream = io.BytesIO(read_member(path, archive, info, MAX_ARRAY_BYTES + 4096))
+    stream = io.BytesIO(read_member(path, archive, info, MAX_ARRAY_BYTES + 4096, "model file",
+                                       ModelFileError))
     try:
         version = np.lib.format.read_magic(stream)
         reader = {(1, 0): np.lib.format.read_array_header_1_0,
