@@ -42,7 +42,8 @@ def main() -> None:
 
     run_benchmark(suite, quick=True, workers=args.workers)  # compiles or loads the kernels once
     pool = [timed(bench("local")) for _ in range(args.rounds)]
-    started, _ = timed(lambda: ray.init(num_cpus=args.workers, include_dashboard=False,
+    started, _ = timed(lambda: ray.init(address="local", num_cpus=args.workers,
+                                        include_dashboard=False,
                                         logging_level=logging.ERROR))
     remote = [timed(bench("ray")) for _ in range(args.rounds)]
     stopped, _ = timed(ray.shutdown)

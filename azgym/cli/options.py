@@ -94,7 +94,7 @@ def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None
 
 def _address(text: str) -> str:
     """``--address``: checked for its form (HOST:PORT, a port in 1-65535) as it is parsed."""
-    from azgym.bench.run.ray_backend import check_address
+    from azgym.bench.run.ray_session import check_address
 
     try:
         check_address(text)

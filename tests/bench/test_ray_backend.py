@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 import socket
 import subprocess
@@ -13,6 +14,7 @@ import numpy as np
 import pytest
 
 from azgym.bench.run.contenders import Contender, contender
+from azgym.bench.run.ray_session import ray_session
 from azgym.bench.run.runner import run_benchmark, run_contenders
 from azgym.bench.suites import get_suite
 from azgym.bench.sweep.config import parse_sweep
@@ -28,8 +30,12 @@ ACCURACY = ("all", "ci95", "by_cause", "by_group", "tracking", "crashes", "first
 
 @pytest.fixture(scope="module")
 def local_ray():
-    """A local Ray instance of two CPUs for this module, stopped at its end."""
-    ray.init(num_cpus=2, include_dashboard=False)
+    """A local Ray instance of two CPUs for this module, stopped at its end.
+
+    A new one (``local``) even where ``ray.init()`` would join ``RAY_ADDRESS`` or the cluster
+    the last ``ray start`` recorded.
+    """
+    ray.init(address="local", num_cpus=2, include_dashboard=False)
     try:
         yield
     finally:
@@ -111,6 +117,26 @@ def test_a_sweep_gives_the_same_table_on_ray_as_locally(local_ray):
     assert len(here.rows) == 6 and here.rows[0][:4] == ["warehouse-static", 7, "ransac", False]
 
 
+def test_a_session_in_a_process_that_has_ray_running_uses_it_and_says_so(local_ray):
+    said: list[str] = []
+    with ray_session(None, 0, said.append) as slots:
+        assert slots == 2
+    assert said == ["Ray: the Ray instance already running (2 CPUs)"]
+    assert ray.is_initialized()  # not the session's to shut down
+
+
+def test_a_session_without_address_starts_a_local_instance_and_says_so(tmp_path):
+    """Whatever RAY_ADDRESS names: Ray alone would join it (nothing listens there)."""
+    code = ("from azgym.bench.run.ray_session import ray_session\n"
+            "with ray_session(None, 1, print) as slots:\n"
+            "    print(slots)\n")
+    env = {**os.environ, "RAY_ADDRESS": "127.0.0.1:1"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, env=env)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout == "Ray: a local Ray instance (1 CPU)\n1\n"
+
+
 def test_bench_refuses_an_address_where_nothing_listens_by_name(tmp_path, capsys):
     begun = time.monotonic()
     code = main(["bench", "--backend", "ray", "--address", "127.0.0.1:1", "--localizer", "lsq",
@@ -142,7 +168,7 @@ def test_an_address_where_something_else_listens_fails_by_name_within_the_deadli
     """A server that accepts connections but is not Ray: Ray alone would wait for minutes."""
     with socket.create_server(("127.0.0.1", 0)) as server:
         port = server.getsockname()[1]
-        code = ("import azgym.bench.run.ray_backend as backend\n"
+        code = ("import azgym.bench.run.ray_session as backend\n"
                 "backend.JOIN_TIMEOUT = 3.0\n"
                 "from azgym.cli import main\n"
                 f"raise SystemExit(main(['bench', '--backend', 'ray', '--address', "

@@ -27,13 +27,9 @@ Ray is imported here only, and this module only when ``backend="ray"`` is asked 
 
 from __future__ import annotations
 
-import contextlib
-import logging
 import os
-import socket
-import threading
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -48,20 +44,10 @@ from azgym.bench.run.answers import (
     overrun_reason,
     record_answers,
 )
-from azgym.bench.run.processes import default_workers
 from azgym.bench.run.wire import MapData, Packed
-from azgym.errors import InvalidInputError, require
 from azgym.profile import Profile
 
-__all__ = ["JOIN_TIMEOUT", "RayRun", "check_address", "ray_session"]
-
-CONNECT_TIMEOUT = 5.0
-"""Seconds to reach a cluster's address before ``--address`` is refused (Ray itself would keep
-retrying for minutes)."""
-JOIN_TIMEOUT = 20.0
-"""Seconds ``ray.init`` may take to join the cluster at ``--address`` (joining takes seconds;
-with something else listening there, Ray would wait for minutes)."""
-
+__all__ = ["RayRun"]
 
 @cache
 def _actor_class() -> Any:
@@ -74,95 +60,6 @@ def _actor_class() -> Any:
     from azgym.bench.run.ray_actor import RayWorker
 
     return ray.remote(num_cpus=1, max_restarts=0, max_task_retries=0)(RayWorker)
-
-
-@contextlib.contextmanager
-def ray_session(address: str | None, workers: int) -> Iterator[int]:
-    """Ray, ready to run: the cluster at ``address``, else a local instance.
-
-    A local instance has ``workers`` CPUs (one per core when 0). Yields how many actors run at
-    once (``workers``, else the cluster's CPUs). Ray already initialized is used as it is; an
-    instance started here is shut down.
-
-    Raises:
-        DependencyNotInstalled: Ray is not installed.
-        InvalidInputError: Nothing answers at ``address``, or it is not a Ray cluster.
-    """
-    require("ray", "ray")
-    import ray
-
-    if address is not None and (endpoint := check_address(address)) is not None:
-        _probe(address, endpoint)
-    started = not ray.is_initialized()
-    if started:
-        _connect(ray, address, workers)
-    try:
-        yield workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
-    finally:
-        if started:
-            ray.shutdown()
-
-
-def _connect(ray: Any, address: str | None, workers: int) -> None:
-    """``ray.init`` on the cluster at ``address`` (checked to answer first), else locally."""
-    if address is None:
-        ray.init(num_cpus=workers or default_workers(), include_dashboard=False,
-                 logging_level=logging.ERROR)
-        return
-    joined: list[BaseException | None] = []
-    def join() -> None:
-        try:
-            ray.init(address=address, logging_level=logging.ERROR)
-            joined.append(None)
-        except BaseException as exc:  # noqa: BLE001 - reported by the caller's thread
-            joined.append(exc)
-
-    thread = threading.Thread(target=join, daemon=True)  # Ray has no deadline for joining
-    thread.start()
-    thread.join(JOIN_TIMEOUT)
-    if not joined:
-        raise InvalidInputError(f"--address {address}: something answers there but no Ray "
-                                f"cluster joined within {JOIN_TIMEOUT:g} s; is it a head node's "
-                                "(`ray start --head` prints it)?")
-    if (exc := joined[0]) is not None:
-        raise InvalidInputError(f"--address {address}: cannot join a Ray cluster there "
-                                f"({type(exc).__name__}: {str(exc).splitlines()[0]})")
-
-
-def check_address(address: str | None) -> tuple[str, int] | None:
-    """A cluster's address as (host, port), or None for the forms with no address to probe.
-
-    Those are None (azgym starts a local instance sized by ``--workers``), ``auto`` (Ray joins
-    the cluster already running on the node, as ``ray start`` left it) and ``local`` (Ray
-    starts a new local instance with its own defaults), passed to ``ray.init`` as they are.
-
-    Checked for its form before anything runs (frames drawn, Ray started), so a typo is named
-    at once rather than met as a connection that fails.
-
-    Raises:
-        InvalidInputError: Not HOST:PORT or ray://HOST:PORT, or a port outside 1-65535.
-    """
-    if address in (None, "auto", "local"):
-        return None
-    host, _, port = address.removeprefix("ray://").rpartition(":")
-    if not host.strip("[]") or not port.isdigit():
-        raise InvalidInputError(f"--address {address}: must be HOST:PORT (a head node's, e.g. "
-                                "127.0.0.1:6379), ray://HOST:PORT or auto")
-    if not 1 <= int(port) <= 65535:
-        raise InvalidInputError(f"--address {address}: invalid port {port}: a port is a whole "
-                                "number in 1-65535")
-    return host.strip("[]"), int(port)
-
-
-def _probe(address: str, endpoint: tuple[str, int]) -> None:
-    """Refuse, within ``CONNECT_TIMEOUT``, an address (its host and port) where none listens."""
-    try:
-        socket.create_connection(endpoint, CONNECT_TIMEOUT).close()
-    except OSError as exc:
-        raise InvalidInputError(
-            f"--address {address}: no Ray cluster answers there within {CONNECT_TIMEOUT:g} s "
-            f"({exc.strerror or exc}); start one with `ray start --head` and pass the address "
-            "it prints") from None
 
 
 @dataclass

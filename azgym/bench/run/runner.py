@@ -88,7 +88,7 @@ def run_contenders(
         address: The Ray cluster's address (``backend="ray"`` only).
         profile: Whose hyperparameters are every contender's defaults (None: none).
     """
-    Run, session = BACKENDS.make(backend, address=address, workers=workers)
+    Run, session = BACKENDS.make(backend, address=address, workers=workers, say=progress)
     time_limit = checked_time_limit("time_limit", time_limit)
     cases = list(cases)
     say = progress or (lambda _line: None)

@@ -86,9 +86,9 @@ def run_sweep(config: SweepConfig, *, backend: str = "local", address: str | Non
     """
     session: Any = contextlib.nullcontext(workers)
     if backend == "ray":
-        from azgym.bench.run.ray_backend import ray_session
+        from azgym.bench.run.ray_session import ray_session
 
-        session = ray_session(address, workers)
+        session = ray_session(address, workers, progress)
         address = None  # the session joins it; each run then uses the session
     say = progress or (lambda _line: None)
     hyper = list(dict.fromkeys(key for p in config.points for key in p.varied))
