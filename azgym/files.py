@@ -4,17 +4,24 @@ Every file azgym writes (results, entries, the board, figures) goes through :fun
 the bytes go to a temporary file beside the target, which then replaces it in one rename, so an
 interrupted run leaves the old file or the new one, never half of one. A target that is a
 symbolic link, or whose folder is one, is refused: a planted link must not redirect a write.
+
+No command replaces what is already there unless told: :func:`claim_file` and
+:func:`claim_folder` are the one rule, checked before any work starts, that an output file, or
+the files a command writes into a folder, do not exist yet (or that ``--overwrite`` was given).
+Only the files named are ever replaced; nothing else in the folder is touched or removed.
 """
 
 from __future__ import annotations
 
+import glob
 import os
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 
 from azgym.errors import InvalidInputError
 
-__all__ = ["prepare_folder", "write_file"]
+__all__ = ["claim_file", "claim_folder", "prepare_folder", "write_file"]
 
 
 def prepare_folder(folder: Path) -> Path:
@@ -31,6 +38,46 @@ def prepare_folder(folder: Path) -> Path:
             pass
     except OSError as exc:
         raise InvalidInputError(f"{folder}: cannot write there: {exc.strerror or exc}") from None
+    return folder
+
+
+def claim_file(path: Path, overwrite: bool, option: str) -> Path:
+    """``path`` as an output file: refused when it is a folder, or exists without ``overwrite``.
+
+    Args:
+        path: The file to write.
+        overwrite: Whether an existing file may be replaced.
+        option: The option or argument that named it, for the message (``--out``).
+
+    Raises:
+        InvalidInputError: ``path`` is a folder, or exists and ``overwrite`` is false.
+    """
+    if path.is_dir():
+        raise InvalidInputError(f"{option}: {path} is a folder; give a file name")
+    return claim_folder(path.parent, [glob.escape(path.name)], overwrite, option) / path.name
+
+
+def claim_folder(folder: Path, names: Iterable[str], overwrite: bool, option: str) -> Path:
+    """``folder`` as an output folder: refused when it holds a file the command would write.
+
+    Args:
+        folder: The folder written into (it need not exist yet).
+        names: The files the command writes there, as glob patterns (``error_map_k*.png``).
+        overwrite: Whether those files may be replaced (nothing else is ever removed).
+        option: The option or argument that named the folder, for the message (``--out``).
+
+    Raises:
+        InvalidInputError: Some of those files exist and ``overwrite`` is false.
+    """
+    if overwrite or not folder.is_dir():
+        return folder
+    taken = sorted({str(path) for name in names for path in folder.glob(name)})
+    if taken:
+        shown = ", ".join(taken[:5]) + (f" and {len(taken) - 5} more" if len(taken) > 5 else "")
+        them = "it" if len(taken) == 1 else "them"
+        raise InvalidInputError(f"{option}: {shown} already exist{'s' if len(taken) == 1 else ''}"
+                                f"; nothing was written (--overwrite replaces {them}, and only "
+                                "the files azgym writes)")
     return folder
 
 

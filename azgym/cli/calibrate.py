@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from azgym.cli.options import add_overwrite, out_file
 from azgym.errors import InvalidInputError
 
 if TYPE_CHECKING:
@@ -32,13 +33,12 @@ def add_calibrate(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "calibrate", help="fit a sensor, vehicle and motion profile to a log with truth")
     parser.add_argument("log", metavar="LOG", help="the log's folder (or a shipped log's name)")
-    parser.add_argument("--out", required=True, metavar="PROFILE.toml",
+    parser.add_argument("--out", required=True, metavar="PROFILE.toml", type=out_file,
                         help="the profile to write")
     parser.add_argument("--figure", metavar="PATH",
                         help="the residuals' figure (default: PROFILE-residuals.png beside "
                              "--out when matplotlib is installed; \"\" for none)")
-    parser.add_argument("--overwrite", action="store_true",
-                        help="replace an existing profile or figure")
+    add_overwrite(parser, "the profile or the figure")
     parser.add_argument("--turn-rate", choices=TURN_RATE_SOURCES, default="auto",
                         help="fit the turn rate from the odometry's yaw_rate or the IMU's "
                              "(auto: the odometry's when it reports one)")
@@ -47,13 +47,13 @@ def add_calibrate(commands: argparse._SubParsersAction) -> None:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
-    from azgym.files import prepare_folder, write_file
+    from azgym.files import claim_file, prepare_folder, write_file
     from azgym.logs import read_log
     from azgym.logs.calibrate import calibrate
     from azgym.profile import parse_profile, profile_toml
     from azgym.site.toml_writer import to_toml
 
-    out = _target("--out", args.out, args.overwrite)
+    out = claim_file(Path(args.out), args.overwrite, "--out")
     figure = _figure(args.figure, out, args.overwrite)
     if figure is not None and figure.resolve() == out.resolve():
         raise InvalidInputError("--figure: the same file as --out; give another name")
@@ -80,20 +80,10 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _target(option: str, value: str, overwrite: bool) -> Path:
-    """An output file's path, refused when empty, a folder, or existing without --overwrite."""
-    if not value.strip():
-        raise InvalidInputError(f"{option}: give a file name, got {value!r}")
-    path = Path(value)
-    if path.is_dir():
-        raise InvalidInputError(f"{option}: {value!r} is a folder; give a file name")
-    if path.exists() and not overwrite:
-        raise InvalidInputError(f"{option}: {value!r} exists; give --overwrite to replace it")
-    return path
-
-
 def _figure(value: str | None, out: Path, overwrite: bool) -> Path | None:
     """The figure's path: given, or beside the profile when matplotlib is installed."""
+    from azgym.files import claim_file
+
     if value is None:
         if importlib.util.find_spec("matplotlib") is None:
             return None
@@ -104,7 +94,7 @@ def _figure(value: str | None, out: Path, overwrite: bool) -> Path | None:
         from azgym.errors import require
 
         require("matplotlib", "plot")
-    return _target("--figure", value, overwrite)
+    return claim_file(Path(value), overwrite, "--figure")
 
 
 def draw_residuals(calibration: Calibration, path: Path) -> None:

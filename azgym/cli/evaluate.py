@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from azgym.arguments import whole_number
+from azgym.cli.options import add_overwrite, out_folder
 
 __all__ = ["DEFAULT_ENV", "DEFAULT_LOCALIZER", "TEST_SEED", "add_evaluate"]
 
@@ -33,12 +34,13 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
     from azgym.bench.navigation.benchmark import evaluate_navigator
     from azgym.bench.run.contenders import resolve_contenders
     from azgym.envs.registration import navigation_spec
-    from azgym.files import prepare_folder
+    from azgym.files import claim_folder, prepare_folder
 
     episodes = whole_number("--episodes", args.episodes, 1)
     seed = whole_number("--seed", args.seed, 0)
     env_id = navigation_spec(args.env).id
-    out = prepare_folder(Path(args.out)) if args.out else None
+    out = None if args.out is None else prepare_folder(
+        claim_folder(Path(args.out), ["navigation.json"], args.overwrite, "--out"))
     localizers = [c.label for c in resolve_contenders(  # who runs: the bench's one rule
         args.localizer, builtins=(DEFAULT_LOCALIZER,), check=None)]
     result = evaluate_navigator(args.policy, env_id, localizers, episodes=episodes, seed=seed,
@@ -84,5 +86,7 @@ def add_evaluate(commands: argparse._SubParsersAction) -> None:
                            help="the camera: exact geometry or the fisheye image path")
     navigator.add_argument("--ids", choices=("oracle", "blink"), default="oracle",
                            help="how the image sensor identifies beacons")
-    navigator.add_argument("--out", metavar="DIR", help="folder to write navigation.json in")
+    navigator.add_argument("--out", metavar="DIR", type=out_folder,
+                           help="folder to write navigation.json in")
+    add_overwrite(navigator, "navigation.json in --out")
     navigator.set_defaults(handler=_evaluate_navigator)

@@ -11,6 +11,8 @@ import argparse
 import json
 from pathlib import Path
 
+from azgym.cli.options import add_overwrite, out_file
+
 __all__ = ["add_info"]
 
 
@@ -20,8 +22,9 @@ def add_info(commands: argparse._SubParsersAction) -> None:
         handler=_scenarios)
     generate = commands.add_parser("generate", help="write a procedurally generated warehouse")
     generate.add_argument("--seed", type=int, required=True, help="the same seed, the same site")
-    generate.add_argument("--out", metavar="FILE.toml",
+    generate.add_argument("--out", metavar="FILE.toml", type=out_file,
                           help="the scenario file to write (default: generated-SEED.toml)")
+    add_overwrite(generate, "the scenario file")
     generate.add_argument("--size", type=float, nargs=2, metavar=("X", "Y"),
                           help="the room's east-west and north-south sides [m] (default: drawn)")
     generate.set_defaults(handler=_generate)
@@ -45,7 +48,8 @@ def _generate(args: argparse.Namespace) -> int:
     from azgym.site.generator import write_generated
 
     path = Path(args.out or f"generated-{args.seed}.toml")
-    scenario = write_generated(path, args.seed, size=args.size)
+    scenario = write_generated(path, args.seed, size=args.size, overwrite=args.overwrite,
+                               option="--out")
     print(f"wrote {path}: {scenario.description} (loads back to the same scenario)")
     return 0
 

@@ -7,13 +7,24 @@ before any work starts. See docs/layout.md.
 from __future__ import annotations
 
 import argparse
+import glob
 import time
 from pathlib import Path
 from typing import Any
 
-from azgym.cli.options import out_folder, resolve_workers, seconds_option, workers_option
+from azgym.cli.options import (
+    add_overwrite,
+    out_folder,
+    resolve_workers,
+    seconds_option,
+    workers_option,
+)
 
-__all__ = ["DEFAULT_FRAMES", "MAX_TOTAL_FRAMES", "add_layout"]
+__all__ = ["ANALYSIS_FILES", "DEFAULT_FRAMES", "MAX_TOTAL_FRAMES", "add_layout"]
+
+ANALYSIS_FILES = ("layout.json", "layout.npz", "layout.png")
+"""What ``layout analyze`` writes into ``--out``; ``optimize`` writes ``SCENARIO-plus-N.toml`` and
+``layout-optimized.png``."""
 
 DEFAULT_FRAMES = 100
 """Monte Carlo frames per cell by default (about 7 % sampling error on an RMS; 400: 3.5 %)."""
@@ -37,7 +48,7 @@ def _analyze(args: argparse.Namespace) -> int:
     from azgym.arguments import seed as seed_rule
     from azgym.arguments import whole_number
     from azgym.errors import InvalidInputError
-    from azgym.files import prepare_folder
+    from azgym.files import claim_folder, prepare_folder
     from azgym.localize.registry import make_localizer
     from azgym.placement.analysis import analyze, summary, write_analysis
 
@@ -51,7 +62,8 @@ def _analyze(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"frames {frames} at {cells} cells makes {cells * frames} "
                                 f"Monte Carlo frames, more than {MAX_TOTAL_FRAMES}; use fewer "
                                 "frames or a larger step")
-    prepare_folder(out)  # the last check: every other argument is good
+    # The last check: every other argument is good.
+    prepare_folder(claim_folder(out, ANALYSIS_FILES, args.overwrite, "--out"))
     print(f"{scenario.name}: {cells} cells of {floor.step:g} m, "
           f"{_count(scenario.beacons, 'beacon')}"
           + (f"; Monte Carlo: {frames} frames per cell through {args.localizer}" if frames
@@ -109,16 +121,17 @@ def _print_summary(result: dict[str, Any]) -> None:
 
 
 def _optimize(args: argparse.Namespace) -> int:
-    from azgym.files import prepare_folder
+    from azgym.files import claim_folder, prepare_folder
     from azgym.placement.candidates import candidate_places
     from azgym.placement.optimize import check_add, place_beacons
-    from azgym.placement.scenario_file import source_data
+    from azgym.placement.scenario_file import file_stem, source_data
 
     scenario, floor, out = _prepared(args)
     candidates = candidate_places(scenario, args.spacing)
     add = check_add(args.add, candidates)
     source_data(scenario)  # a scenario without a file to add to stops here
-    prepare_folder(out)  # the last check: every other argument is good
+    names = (f"{glob.escape(file_stem(scenario.name))}-plus-*.toml", "layout-optimized.png")
+    prepare_folder(claim_folder(out, names, args.overwrite, "--out"))  # the last check
     print(f"{scenario.name}: {int(floor.free.sum())} cells of {floor.step:g} m; placing "
           f"{_count(add, 'beacon')} on {len(candidates)} candidate places", flush=True)
     started = time.perf_counter()
@@ -188,6 +201,7 @@ def add_layout(commands: argparse._SubParsersAction) -> None:
         parser.add_argument("--out", metavar="DIR", type=out_folder,
                             help="output folder (default: results/layout/SCENARIO)")
         parser.add_argument("--no-figures", action="store_true", help="skip the PNG files")
+        add_overwrite(parser, "the files it writes in --out")
     analyze.add_argument("--localizer", default="ransac", metavar="SPEC",
                          help="the localizer of the Monte Carlo check")
     analyze.add_argument("--frames", type=int, default=DEFAULT_FRAMES, metavar="N",

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from azgym.cli.options import add_overwrite, out_folder
+
 if TYPE_CHECKING:
     from azgym.logs.read import Log
 
@@ -32,7 +34,9 @@ def add_logs(commands: argparse._SubParsersAction) -> None:
     route.add_argument("--scenario", required=True, help="a shipped scenario or a .toml file")
     route.add_argument("--route", help="the route's name (default: the scenario's first)")
     route.add_argument("--seed", type=int, default=0, help="the seed of every draw")
-    route.add_argument("--out", required=True, metavar="DIR", help="the log folder to write")
+    route.add_argument("--out", required=True, metavar="DIR", type=out_folder,
+                       help="the log folder to write")
+    add_overwrite(route, "a log in --out")
     route.add_argument("--name", help="the dataset's name (default: "
                                       "SCENARIO-ROUTE-sSEED-simulated)")
     route.add_argument("--motion-rate", type=float, metavar="HZ",
@@ -95,6 +99,6 @@ def _export(args: argparse.Namespace) -> int:
     from azgym.logs import export_route
 
     folder = export_route(args.scenario, args.route, args.seed, Path(args.out), name=args.name,
-                          motion_rate_hz=args.motion_rate)
+                          motion_rate_hz=args.motion_rate, overwrite=args.overwrite)
     print(f"wrote the log {folder} (simulated); check it with: azgym import {folder}")
     return 0

@@ -6,7 +6,11 @@ while the command line is read; :func:`add_backend_options` defines ``--backend`
 ``--address`` once for ``bench`` and ``sweep``, and :func:`check_backend` and
 :func:`resolve_workers` are the one reading of them and of ``--workers`` for the commands that
 run the benchmark. ``--profile PROFILE.toml`` (:func:`profile_option`) names a profile file.
-:func:`progress_printer` shows a run's progress.
+Every command that writes takes its output as ``--out DIR`` (:func:`out_folder`) or ``--out
+FILE`` (:func:`out_file`), an empty name refused by both, and replaces nothing already there
+without ``--overwrite`` (:func:`add_overwrite`, checked by :func:`azgym.files.claim_file` and
+:func:`azgym.files.claim_folder` before any work). :func:`progress_printer` shows a run's
+progress.
 """
 
 from __future__ import annotations
@@ -21,7 +25,8 @@ from azgym.errors import InvalidInputError
 if TYPE_CHECKING:
     from azgym.bench.run.runner import Progress
 
-__all__ = ["add_backend_options", "check_backend", "out_folder", "profile_option",
+__all__ = ["add_backend_options", "add_overwrite", "check_backend", "out_file", "out_folder",
+           "profile_option",
            "progress_printer", "resolve_workers", "seconds_option",
            "workers_option"]
 
@@ -57,6 +62,24 @@ def out_folder(text: str) -> str:
     return text
 
 
+def out_file(text: str) -> str:
+    """``--out FILE``: refuse an empty file name (it names no file)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty: give a file name")
+    return text
+
+
+def add_overwrite(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--overwrite``: let the command replace ``what`` it writes when it exists already.
+
+    Without it an existing output is refused before any work starts; with it only the files
+    the command writes are replaced, nothing else is removed.
+    """
+    parser.add_argument("--overwrite", action="store_true",
+                        help=f"replace {what} if it exists (only the files azgym writes; "
+                             "nothing else is removed)")
+
+
 def profile_option(text: str) -> str:
     """``--profile PROFILE.toml``: refuse an empty file name (it names no profile)."""
     if not text.strip():
@@ -88,8 +111,11 @@ def add_backend_options(parser: argparse.ArgumentParser, note: str = "") -> None
                         help="local: worker processes here; ray: Ray actors (pip install "
                              f"\"azgym[ray]\"), on --address or a local instance{note}")
     parser.add_argument("--address", metavar="ADDR", type=_address,
-                        help="--backend ray: a Ray cluster's head, HOST:PORT (see `ray start "
-                             "--head`), ray://HOST:PORT or auto (default: a local instance)")
+                        help="--backend ray: a Ray cluster's head, HOST:PORT (`ray start --head` "
+                             "prints it; a cluster with token authentication also needs "
+                             "RAY_AUTH_MODE=token, docs/scaling.md), ray://HOST:PORT, auto (the "
+                             "cluster RAY_ADDRESS names or `ray start` recorded) or local "
+                             "(default: a new local instance, whatever RAY_ADDRESS says)")
 
 
 def _address(text: str) -> str:

@@ -11,9 +11,18 @@ import json
 import time
 from pathlib import Path
 
-from azgym.cli.options import resolve_workers, workers_option
+from azgym.cli.options import add_overwrite, out_folder, resolve_workers, workers_option
+from azgym.files import claim_folder
 
-__all__ = ["add_reproduce", "add_study"]
+__all__ = ["ERROR_MODEL_FILES", "PAPER_FILES", "PLOTTER_FILES", "add_reproduce", "add_study"]
+
+PAPER_FILES = ("results.json", "results.md", "runs.npz", "error_map_k*.png", "error_cdf.png")
+"""What ``reproduce paper`` writes into ``--out`` (:func:`~azgym.experiments.paper.report.
+write_outputs`)."""
+PLOTTER_FILES = ("results.json", "errors.png")
+"""What ``reproduce plotter`` writes into ``--out``."""
+ERROR_MODEL_FILES = ("error_model.json", "error_model.png")
+"""What ``study error-model`` writes into ``--out``."""
 
 
 def _reproduce_paper(args: argparse.Namespace) -> int:
@@ -22,6 +31,7 @@ def _reproduce_paper(args: argparse.Namespace) -> int:
     from azgym.experiments.paper.reproduce import reproduce, time_exhaustive_mex
     from azgym.site import load_scenario
 
+    claim_folder(Path(args.out), PAPER_FILES, args.overwrite, "--out")
     config = ProtocolConfig.quick(seed=args.seed) if args.quick else ProtocolConfig(seed=args.seed)
     workers = resolve_workers(args)
     print(f"Reproducing Rátosi & Simon (2021) Sec. 3: grid step {config.grid_step} m, "
@@ -47,8 +57,7 @@ def _reproduce_plotter(args: argparse.Namespace) -> int:
     from azgym.experiments.plotter.reproduce import reproduce_plotter
     from azgym.files import prepare_folder, write_file
 
-    out = Path(args.out)
-    prepare_folder(out)
+    out = prepare_folder(claim_folder(Path(args.out), PLOTTER_FILES, args.overwrite, "--out"))
     result = reproduce_plotter(seed=args.seed, runs=args.runs)
     summary = {key: value for key, value in result.items() if key != "errors"}
     written = [write_file(out / "results.json", json.dumps(summary, indent=1) + "\n"),
@@ -66,6 +75,7 @@ def _reproduce_plotter(args: argparse.Namespace) -> int:
 def _study_error_model(args: argparse.Namespace) -> int:
     from azgym.experiments.error_model import run
 
+    claim_folder(Path(args.out), ERROR_MODEL_FILES, args.overwrite, "--out")
     summary = run(args.scenario, frames=args.frames, noise_sigma=args.noise,
                   calibration_px=args.calibration_px, seed=args.seed, out=Path(args.out),
                   figures=not args.no_figures)
@@ -115,7 +125,8 @@ def add_reproduce(commands: argparse._SubParsersAction) -> None:
     paper = target.add_parser("paper", help="Rátosi & Simon (2021), Sec. 3")
     paper.add_argument("--quick", action="store_true",
                        help="every other grid point, 2 realisations (about a minute)")
-    paper.add_argument("--out", default="results/paper", help="output folder")
+    paper.add_argument("--out", type=out_folder, default="results/paper", help="output folder")
+    add_overwrite(paper, "the results in --out")
     paper.add_argument("--workers", type=workers_option, default=0,
                        help="worker processes (0: one per core)")
     paper.add_argument("--seed", type=int, default=2021, help="seed of every random draw")
@@ -124,7 +135,9 @@ def add_reproduce(commands: argparse._SubParsersAction) -> None:
     plotter = target.add_parser("plotter", help="Dang et al. (2015): TKF and LPKF on a square")
     plotter.add_argument("--runs", type=int, default=100, help="simulated runs of one lap")
     plotter.add_argument("--seed", type=int, default=0, help="seed of every random draw")
-    plotter.add_argument("--out", default="results/plotter", help="output folder")
+    plotter.add_argument("--out", type=out_folder, default="results/plotter",
+                         help="output folder")
+    add_overwrite(plotter, "the results in --out")
     plotter.set_defaults(handler=_reproduce_plotter)
 
 
@@ -140,7 +153,8 @@ def add_study(commands: argparse._SubParsersAction) -> None:
     model.add_argument("--calibration-px", type=float, default=1.0,
                        help="principal point error for the calibrated comparison [px]")
     model.add_argument("--seed", type=int, default=0)
-    model.add_argument("--out", default="results/study", help="output folder")
+    model.add_argument("--out", type=out_folder, default="results/study", help="output folder")
+    add_overwrite(model, "the results in --out")
     model.add_argument("--no-figures", action="store_true")
     model.set_defaults(handler=_study_error_model)
     ids = studies.add_parser("ids", help="how well blinking ids decode along the routes")

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from azgym.cli.options import (
     add_backend_options,
+    add_overwrite,
     check_backend,
     out_folder,
     progress_printer,
@@ -20,7 +21,10 @@ from azgym.cli.options import (
     workers_option,
 )
 
-__all__ = ["add_sweep"]
+__all__ = ["SWEEP_FILES", "add_sweep"]
+
+SWEEP_FILES = ("sweep.csv", "runtimes.csv", "sweep.png")
+"""What a sweep writes into ``--out`` (:meth:`azgym.bench.sweep.run.SweepResult.write`)."""
 
 
 def add_sweep(commands: argparse._SubParsersAction) -> None:
@@ -32,17 +36,19 @@ def add_sweep(commands: argparse._SubParsersAction) -> None:
                        help="workers per localizer at a time (0: one per core, or per CPU of "
                             "the Ray cluster)")
     sweep.add_argument("--out", type=out_folder, default="results/sweep", help="output folder")
+    add_overwrite(sweep, "the results in --out")
     sweep.set_defaults(handler=_sweep)
 
 
 def _sweep(args: argparse.Namespace) -> int:
     from azgym.bench.sweep.config import load_sweep
     from azgym.bench.sweep.run import run_sweep
-    from azgym.files import prepare_folder
+    from azgym.files import claim_folder, prepare_folder
 
     check_backend(args)
     config = load_sweep(Path(args.config))
-    prepare_folder(Path(args.out))  # before the runs: a bad --out must not waste them
+    # Before the runs: a bad --out, or results it would replace, must not waste them.
+    prepare_folder(claim_folder(Path(args.out), SWEEP_FILES, args.overwrite, "--out"))
     print(f"{args.config}: {len(config.points)} grid points, {config.runs} runs", flush=True)
     workers = resolve_workers(args)
     started = time.perf_counter()

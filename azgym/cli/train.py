@@ -14,10 +14,16 @@ from collections.abc import Callable
 from pathlib import Path
 
 from azgym.arguments import whole_number
+from azgym.cli.options import add_overwrite, out_folder
 from azgym.errors import AzgymError, DependencyNotInstalled
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
 
-__all__ = ["MODELS", "add_train"]
+__all__ = ["MODELS", "NAVIGATOR_FILES", "add_train"]
+
+NAVIGATOR_FILES = ("policy.zip", "evaluations.npz", "learning-curve.png", "model-card.md",
+                   "checkpoints/*")
+"""What ``train navigator`` writes into ``--out`` (:mod:`azgym.learn.navigator.train`): a run
+there is refused without ``--overwrite`` (a navigator run is not resumed)."""
 
 MODELS = tuple(MODEL_DEFAULTS)
 """The models ``--model`` names."""
@@ -71,8 +77,10 @@ def _train_localizer(args: argparse.Namespace) -> int:
 
 
 def _train_navigator(args: argparse.Namespace) -> int:
+    from azgym.files import claim_folder
     from azgym.learn.navigator.train import prepare, run
 
+    claim_folder(Path(args.out), NAVIGATOR_FILES, args.overwrite, "--out")
     request = prepare(args.env, args.algo, args.steps, Path(args.out), seed=args.seed,
                       localizer=args.localizer, n_envs=args.envs, threads=args.threads)
     result = run(request)
@@ -99,7 +107,9 @@ def _add_navigator(targets: argparse._SubParsersAction) -> None:
                            help="a Navigate id, e.g. azgym/Navigate-WarehouseSmall-v2")
     navigator.add_argument("--algo", required=True, choices=("ppo", "sac"),
                            help="ppo, or sac (continuous actions: not the NavigateDiscrete ids)")
-    navigator.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    navigator.add_argument("--out", required=True, metavar="DIR", type=out_folder,
+                           help="output folder")
+    add_overwrite(navigator, "a trained policy in --out")
     navigator.add_argument("--steps", type=_whole(1), metavar="N",
                            help="environment steps (default: n_timesteps of the id's entry in "
                                 "azgym/learn/navigator/hyperparams.yml)")
@@ -124,7 +134,7 @@ def _add_localizer(targets: argparse._SubParsersAction) -> None:
     localizer.add_argument("--model", required=True, choices=MODELS,
                            help="ng-ransac: a network orders the measurements for the "
                                 "triplet search; learned: a network regresses the pose")
-    localizer.add_argument("--out", required=True, metavar="DIR",
+    localizer.add_argument("--out", required=True, metavar="DIR", type=out_folder,
                            help="output folder (a checkpoint there is resumed)")
     localizer.add_argument("--layouts", type=_whole(1), metavar="N",
                            help="generated warehouses trained on (default: "

@@ -1,16 +1,62 @@
-"""What the environments share: argument checks and the fixed-size view of an observation."""
+"""What the environments share: argument checks and the fixed-size view of an observation.
+
+Every argument is checked by azgym's one number rule (:class:`azgym.fields.Number`) where the
+environment is made, and refused with its name: a flag must be a bool (:func:`flag`), a reward
+weight a finite number in [0, :data:`MAX_REWARD_WEIGHT`] (:func:`reward_weights`), and a size
+(detections shown, range rays, frames of an episode) a whole number up to :data:`MAX_SIZE`
+(:func:`size`), so that no argument makes a reward infinite or a step run out of memory.
+"""
 
 from __future__ import annotations
 
-import math
+import functools
 
 import numpy as np
 
+from azgym.arguments import whole_number
 from azgym.errors import InvalidInputError
+from azgym.fields import Flag, Number, argument_error, require
 from azgym.sensing.protocol import AZIMUTH, BEACON, ID, LABEL, Observation
 from azgym.world.drive import checked_camera_rate
 
-__all__ = ["Padder", "check_camera_rate", "check_render_mode", "reward_weights"]
+__all__ = ["MAX_REWARD_WEIGHT", "MAX_SIZE", "Padder", "check_camera_rate", "check_render_mode",
+           "flag", "reward_weights", "size"]
+
+MAX_REWARD_WEIGHT = 1e6
+"""The largest weight of a reward term. Every term is a weight times a bounded quantity: a
+distance or a cost to go within a site (whose coordinates are at most 1e5 m,
+:data:`azgym.site.reader.MAX_MAGNITUDE`, so under 1e6 m even clearance-weighted), an angle up to
+π, or a count of 1; a step's reward is therefore at most a few 1e12 in magnitude, and an
+episode's return stays finite by a margin of some 1e20 even in float32 (3.4e38), the type RL
+libraries keep rewards in. Weights set the terms' relative scale (the defaults are 0.01-10):
+a million times another is already beyond any use. Without the bound a weight of 1e308 gave a
+reward of -inf."""
+
+MAX_SIZE = 65_536
+"""The largest size argument of an environment (``max_detections``, ``n_rays``,
+``episode_length``). Each unit costs arrays built on every step or reset (a detection's padded
+entries in four int64 and several float32 arrays, copied into each observation; a ray's reading,
+its observation entry, its space bounds and its field name; a frame's pose drawn at reset): under
+1 KiB, so a step stays under 64 MiB. It is far beyond any camera's detections or any range
+sensor's rays; without it ``max_detections=10**9`` asked for 30 GiB and failed with a bare
+MemoryError."""
+
+_PYTHON_FLAG = Flag(python=True)
+_WEIGHT = Number(0, MAX_REWARD_WEIGHT)
+_SIZE = Number(high=MAX_SIZE, integer=True)
+
+
+def flag(name: str, value: object) -> bool:
+    """``value`` as a flag: True or False (a NumPy bool too), never a string or a number."""
+    require(value, _PYTHON_FLAG, functools.partial(argument_error, name))
+    return bool(value)
+
+
+def size(name: str, value: object, minimum: int = 1) -> int:
+    """``value`` as a size: a whole number in [``minimum``, :data:`MAX_SIZE`]."""
+    count = whole_number(name, value, minimum)
+    return _SIZE.as_int(count, lambda problem: argument_error(
+        name, f"{problem} (every unit costs memory on each step)"))
 
 
 def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
@@ -24,12 +70,9 @@ def check_render_mode(render_mode: str | None, modes: list[str]) -> None:
 
 
 def reward_weights(**weights: float) -> dict[str, float]:
-    """The weights of named reward terms, each a finite number >= 0."""
-    for name, value in weights.items():
-        if isinstance(value, bool) or not (isinstance(value, (int, float))
-                                           and math.isfinite(value) and value >= 0):
-            raise InvalidInputError(f"{name} weight must be a number >= 0, got {value!r}")
-    return {name: float(value) for name, value in weights.items()}
+    """The weights of named reward terms, each a finite number in [0, MAX_REWARD_WEIGHT]."""
+    return {name: _WEIGHT.as_float(value, functools.partial(argument_error, f"{name} weight"))
+            for name, value in weights.items()}
 
 
 def check_camera_rate(camera_rate_hz: float | None) -> None:

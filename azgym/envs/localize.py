@@ -9,9 +9,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from azgym.arguments import whole_number
 from azgym.core import pose_error, wrap_angle
-from azgym.envs.common import Padder, check_camera_rate, check_render_mode, reward_weights
+from azgym.envs.common import Padder, check_camera_rate, check_render_mode, reward_weights, size
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.catalog import make_sensor
 from azgym.sensing.protocol import Observation
@@ -145,10 +144,10 @@ class LocalizeEnv(gym.Env):
         self._check_options(route, max_detections, ids, observation, camera_rate_hz,
                             render_mode)
         self.route = route
-        self.max_detections = whole_number("max_detections", max_detections, minimum=3)
+        self.max_detections = size("max_detections", max_detections, minimum=3)
         self.weights = reward_weights(position_error=position_error,
                                       heading_error=heading_error)
-        self.episode_length = whole_number("episode_length", episode_length)
+        self.episode_length = size("episode_length", episode_length)
         self.render_mode = render_mode
         self.observation = observation
         self.camera = make_sensor(self.scenario, "image" if observation == "image" else sensor,
@@ -156,7 +155,7 @@ class LocalizeEnv(gym.Env):
         self.camera_rate_hz = camera_rate_hz or self.camera.frame_rate_hz
         self._sway = CameraSway(self.scenario, 1.0 / self.camera_rate_hz)
         self.last_observation: Observation | None = None
-        self._padder = Padder(max_detections, len(self.camera.quality_names))
+        self._padder = Padder(self.max_detections, len(self.camera.quality_names))
         self._shown: dict[str, np.ndarray] = {}
         self._trajectories: dict[str, np.ndarray] = {}
         x_min, y_min, x_max, y_max = self.scenario.bounds

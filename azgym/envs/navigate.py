@@ -13,7 +13,7 @@ from gymnasium.utils import seeding
 
 from azgym.arguments import positive_number, whole_number
 from azgym.core import Pose, estimated_pose, pose_error, wrap_scalar
-from azgym.envs.common import check_camera_rate, check_render_mode, reward_weights
+from azgym.envs.common import check_camera_rate, check_render_mode, flag, reward_weights, size
 from azgym.localize.registry import SupportsLocalize
 from azgym.nav.controls import CONTROL_STEPS, DISCRETE_CONTROLS, controls
 from azgym.nav.estimator import feed_for, resolve_estimator
@@ -187,10 +187,10 @@ class NavigateEnv(gym.Env):
         self.localizer_name = localizer if isinstance(localizer, str) else type(localizer).__name__
         self.localizer = resolve_estimator(localizer)
         self._feed = feed_for(self.localizer, PHYSICS_DT)
-        self.discrete = bool(discrete)
+        self.discrete = flag("discrete", discrete)
         self.max_steps = whole_number("max_steps", max_steps)
         self.goal_radius = positive_number("goal_radius", goal_radius, "m")
-        self.n_rays = whole_number("n_rays", n_rays)
+        self.n_rays = size("n_rays", n_rays)
         self.ray_range = positive_number("ray_range", ray_range, "m")
         self.render_mode = render_mode
         self.camera = make_sensor(self.scenario, sensor, ids)

@@ -21,9 +21,9 @@ import numpy as np
 
 from azgym import arguments
 from azgym.errors import InvalidInputError, unknown_name
-from azgym.files import prepare_folder, write_file
-from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, MAX_NAME
+from azgym.files import claim_folder, prepare_folder, write_file
 from azgym.logs.contents import QUALITY_PREFIX
+from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, MAX_NAME
 from azgym.profile import profile_toml
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import LABEL_NAMES
@@ -34,11 +34,16 @@ from azgym.site.scenario import Scenario
 from azgym.site.toml_writer import to_toml
 from azgym.world.drive import Frame, motion_models, simulate
 
-__all__ = ["csv_text", "export_route"]
+__all__ = ["LOG_FILES", "csv_text", "export_route"]
+
+LOG_FILES = (MANIFEST, "scenario.toml", "frames.*", "detections.*", "odometry.*", "imu.*")
+"""The files of a log folder (glob patterns: a table may be CSV, gzipped or Parquet), which an
+export refuses to replace without ``overwrite``: a real camera's recording cannot be made again."""
 
 
 def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Path, *,
-                 name: str | None = None, motion_rate_hz: float | None = None) -> Path:
+                 name: str | None = None, motion_rate_hz: float | None = None,
+                 overwrite: bool = False) -> Path:
     """Drive ``route`` of ``scenario`` with ``seed`` and write it as a log folder ``out``.
 
     Args:
@@ -49,13 +54,15 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
         name: The dataset's name (default: ``SCENARIO-ROUTE-sSEED-simulated``).
         motion_rate_hz: The odometry's and IMU's rate [Hz], a finite number > 0 (default: the
             vehicle's models', :func:`azgym.world.drive.motion_models`).
+        overwrite: Whether a log already in ``out`` may be replaced (a file of it that this
+            export would not write is still refused: the folder would mix two logs).
 
     Returns:
         The folder written.
 
     Raises:
-        InvalidInputError: A seed, rate or name out of its range, named, before anything is
-            simulated or written.
+        InvalidInputError: A seed, rate or name out of its range, or a log in ``out`` (without
+            ``overwrite``), named, before anything is simulated or written.
     """
     seed = arguments.seed("seed", seed)
     if motion_rate_hz is not None:
@@ -66,6 +73,7 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
     if problem := name_problem(name, MAX_NAME):
         raise InvalidInputError(f"name: {problem}")
     odometry, imu = motion_models(scenario, motion_rate_hz)
+    _claim(out, overwrite, with_imu=imu is not None, with_map=_map_file(scenario))
     sensor = GeometrySensor(scenario)
     frames = list(simulate(scenario, chosen, seed, sensor=sensor, odometry=odometry, imu=imu))
     prepare_folder(out)
@@ -88,6 +96,24 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
     return out
 
 
+def _claim(out: Path, overwrite: bool, *, with_imu: bool, with_map: bool) -> None:
+    """Refuse a log in ``out`` unless ``overwrite``; then refuse any file the export leaves."""
+    claim_folder(out, LOG_FILES, overwrite, "out")
+    written = {MANIFEST, "frames.csv", "detections.csv", "odometry.csv",
+               *(["imu.csv"] if with_imu else []), *(["scenario.toml"] if with_map else [])}
+    left = sorted(str(path) for pattern in LOG_FILES if out.is_dir()
+                  for path in out.glob(pattern) if path.name not in written)
+    if left:
+        raise InvalidInputError(f"out: {', '.join(left)} belong to the log there and would be "
+                                "left beside the new one; move them away first (nothing was "
+                                "written)")
+
+
+def _map_file(scenario: Scenario) -> bool:
+    """Whether the log's map is a copy of the scenario's file (else the shipped name)."""
+    return not (scenario.source is None and scenario.name in list_scenarios())
+
+
 def _route(scenario: Scenario, route: str | None) -> Route:
     """The route named (or the first), its name checked."""
     names = {r.name: r for r in scenario.routes}
@@ -105,7 +131,7 @@ def _description(scenario: Scenario, route: Route, seed: int) -> str:
 
 def _map(scenario: Scenario, out: Path) -> str:
     """The manifest's map: a shipped scenario by name, a user's file copied beside the log."""
-    if scenario.source is None and scenario.name in list_scenarios():
+    if not _map_file(scenario):
         return scenario.name
     if scenario.source is None:
         raise InvalidInputError(f"scenario {scenario.name!r} is neither shipped nor read from a "

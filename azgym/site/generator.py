@@ -52,7 +52,7 @@ import numpy as np
 
 from azgym.arguments import whole_number
 from azgym.errors import InvalidInputError, ScenarioError
-from azgym.files import prepare_folder, write_file
+from azgym.files import claim_file, prepare_folder, write_file
 from azgym.site.generator_beacons import beacons_data, bumps_data, lights_data
 from azgym.site.generator_layout import (
     Plan,
@@ -119,22 +119,26 @@ def _text(seed: int, size: Sequence[float] | None, data: dict[str, Any]) -> str:
                          "the south-west corner.")
 
 
-def write_generated(path: Path, seed: int, *, size: Sequence[float] | None = None) -> Scenario:
+def write_generated(path: Path, seed: int, *, size: Sequence[float] | None = None,
+                    overwrite: bool = False, option: str = "path") -> Scenario:
     """Write :func:`generate`'s site to ``path`` (a ``.toml`` file), and load it back.
 
-    The scenario is named after the file's stem, as the shipped ones are.
+    The scenario is named after the file's stem, as the shipped ones are. An existing file is
+    replaced only with ``overwrite``; ``option`` names ``path`` in that refusal (``--out``).
 
     Returns:
         The scenario loaded from the file written.
 
     Raises:
-        InvalidInputError: A bad argument, named, or a path that does not end in ``.toml``.
+        InvalidInputError: A bad argument, named, a path that does not end in ``.toml``, or
+            an existing file without ``overwrite``.
         ScenarioError: The file does not load back to the same data (a bug in the writer).
     """
     path = Path(path)
     if path.suffix != ".toml":
         raise InvalidInputError(f"path must name a .toml file, got {str(path)!r}")
     data = generate_data(seed, size=size, name=path.stem)
+    claim_file(path, overwrite, option)
     write_file(prepare_folder(path.parent) / path.name, _text(seed, size, data))
     scenario = load_scenario(path)
     if _read_toml(path) != data:

@@ -210,7 +210,8 @@ def test_bad_arguments_are_refused_clearly(tmp_path):
         gym.make("azgym/Localize-WarehouseSmall-v1", route="aisle-lop")
     with pytest.raises(InvalidInputError, match="render_mode must be one of"):
         gym.make("azgym/Localize-WarehouseSmall-v1", render_mode="ascii")
-    with pytest.raises(InvalidInputError, match=re.escape("collision weight must be a number")):
+    with pytest.raises(InvalidInputError,
+                       match=re.escape("collision weight must be in [0, 1e+06], got -1.0")):
         gym.make("azgym/Navigate-WarehouseSmall-v2", collision=-1.0)
 
 

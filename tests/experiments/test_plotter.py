@@ -72,5 +72,7 @@ def test_the_command_writes_the_figures_and_prints_them_beside_the_papers(tmp_pa
     printed = capsys.readouterr().out
     assert "lpkf" in printed and "(paper: < 2.6 cm)" in printed
     assert {p.name for p in tmp_path.iterdir()} == {"results.json", "errors.png"}
-    assert main(["reproduce", "plotter", "--runs", "0", "--out", str(tmp_path)]) == 2
+    assert main(["reproduce", "plotter", "--runs", "3", "--out", str(tmp_path)]) == 2
+    assert "results.json" in capsys.readouterr().err  # the results there are kept
+    assert main(["reproduce", "plotter", "--runs", "0", "--out", str(tmp_path), "--overwrite"]) == 2
     assert "runs must be a whole number >= 1" in capsys.readouterr().err

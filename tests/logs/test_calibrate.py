@@ -223,8 +223,10 @@ def test_the_command_writes_the_profile_and_figure_and_keeps_what_exists(tmp_pat
     out.write_text("old", encoding="utf-8")
     assert run_cli(str(log), "--out", str(out), "--overwrite", "--figure", "") == 0
     assert read_profile(out) == calibrate(read_log(log)).profile()
-    with pytest.raises(InvalidInputError, match="--out: give a file name"):
+    with pytest.raises(SystemExit) as refused:  # refused as it is parsed, as everywhere
         run_cli(str(log), "--out", "")
+    assert refused.value.code == 2
+    assert "--out: is empty: give a file name" in capsys.readouterr().err
     far = write_log(tmp_path / "far", hand_made(ahead=10.5))  # beyond a profile's ±10 m
     with pytest.raises(InvalidInputError, match="nothing written:\n  vehicle.camera_ahead"):
         run_cli(str(far), "--out", str(tmp_path / "far.toml"), "--figure", "")
