@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from azgym.errors import InvalidInputError
 
 __all__ = ["BeaconMap", "BoolArray", "Estimate", "FloatArray", "IntArray", "Measurements", "Pose",
-           "estimated_pose", "pose_error", "wrap_angle", "wrap_scalar"]
+           "estimated_pose", "interpolate_pose", "pose_error", "wrap_angle", "wrap_scalar"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -58,6 +58,19 @@ def wrap_scalar(angle: float) -> float:
     if wrapped <= -math.pi:
         return wrapped + TWO_PI
     return wrapped - TWO_PI if wrapped > math.pi else wrapped
+
+
+def interpolate_pose(a: tuple[float, float, float], b: tuple[float, float, float],
+                     fraction: float) -> tuple[float, float, float]:
+    """The pose ``fraction`` of the way from a to b, the heading along the shorter arc.
+
+    ``fraction`` 1 gives b itself, bit for bit.
+    """
+    if fraction >= 1.0:
+        return b
+    turn = wrap_scalar(b[2] - a[2])
+    return (a[0] + fraction * (b[0] - a[0]), a[1] + fraction * (b[1] - a[1]),
+            wrap_scalar(a[2] + fraction * turn))
 
 
 def wrap_angle(angle: ArrayLike) -> Any:

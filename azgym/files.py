@@ -2,8 +2,10 @@
 
 Every file azgym writes (results, entries, the board, figures) goes through :func:`write_file`:
 the bytes go to a temporary file beside the target, which then replaces it in one rename, so an
-interrupted run leaves the old file or the new one, never half of one. A target that is a
-symbolic link, or whose folder is one, is refused: a planted link must not redirect a write.
+interrupted run leaves the old file or the new one, never half of one. A new file gets the mode
+the user's umask gives any file (0644 under umask 022); a replaced file keeps its own. A target
+that is a symbolic link, or whose folder is one, is refused: a planted link must not redirect a
+write.
 
 No command replaces what is already there unless told: :func:`claim_file` and
 :func:`claim_folder` are the one rule, checked before any work starts, that an output file, or
@@ -15,6 +17,8 @@ from __future__ import annotations
 
 import glob
 import os
+import secrets
+import stat
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
@@ -91,12 +95,21 @@ def write_file(path: Path, data: bytes | str) -> Path:
         raise InvalidInputError(f"{path}: is (or is in) a symbolic link; refusing to write "
                                 "through it")
     content = data.encode("utf-8") if isinstance(data, str) else data
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    temporary = path.parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
+    try:
+        kept = stat.S_IMODE(path.stat().st_mode) if path.is_file() else None
+        # O_EXCL: a fresh file, never one planted under the name; mode 0o666: the kernel takes
+        # the user's umask off, as for any file an ordinary open creates.
+        handle = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o666)
+    except OSError as exc:
+        raise InvalidInputError(f"{path}: cannot write: {exc.strerror or exc}") from None
     try:
         with os.fdopen(handle, "wb") as stream:
+            if kept is not None:
+                os.fchmod(stream.fileno(), kept)  # a replaced file keeps its mode
             stream.write(content)
         os.replace(temporary, path)
     except OSError as exc:
-        Path(temporary).unlink(missing_ok=True)
+        temporary.unlink(missing_ok=True)
         raise InvalidInputError(f"{path}: cannot write: {exc.strerror or exc}") from None
     return path

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import stat
 
 import pytest
 
@@ -37,3 +38,32 @@ def test_bench_refuses_an_output_folder_it_cannot_write_before_running(tmp_path,
     assert main(["bench", "--suite", "stress", "--quick", "--out", str(blocker / "out")]) == 2
     error = capsys.readouterr().err
     assert "cannot write there" in error and "frames drawn" not in error
+
+
+@pytest.fixture
+def umask():
+    """Set the process's umask for one test, and put the old one back."""
+    old = os.umask(0o022)
+    yield os.umask
+    os.umask(old)
+
+
+@pytest.mark.parametrize(("mask", "mode"), [(0o022, 0o644), (0o027, 0o640), (0o002, 0o664)])
+def test_a_new_file_gets_the_mode_the_users_umask_gives(mask, mode, umask, tmp_path):
+    umask(mask)
+    written = write_file(tmp_path / "index.html", "<p>board</p>")
+    assert stat.S_IMODE(written.stat().st_mode) == mode
+    with open(tmp_path / "plain.txt", "w") as stream:  # what an ordinary open gives
+        stream.write("x")
+    assert stat.S_IMODE((tmp_path / "plain.txt").stat().st_mode) == mode
+
+
+@pytest.mark.parametrize("kept", [0o600, 0o664, 0o640])
+def test_a_replaced_file_keeps_its_mode(kept, umask, tmp_path):
+    umask(0o022)
+    target = tmp_path / "frames.csv"
+    target.write_text("old")
+    target.chmod(kept)
+    write_file(target, "new")
+    assert target.read_text() == "new" and stat.S_IMODE(target.stat().st_mode) == kept
+    assert os.listdir(tmp_path) == ["frames.csv"]

@@ -17,10 +17,12 @@ PACKAGE = Path(__file__).resolve().parents[1] / "azgym"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("_version",), ("errors",), ("registry",), ("core",),
-    ("fields",), ("arguments", "hyperparameters", "files", "untrusted", "profile"), ("jit",),
+    ("fields",), ("arguments", "hyperparameters", "files", "untrusted", "profile", "progress"),
+    ("jit",),
     ("metrics",),
     ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("nav",),
     ("envs",), ("bench",), ("learn", "placement", "experiments"), ("cli",), ("__init__",),
+    ("__main__",),
 )
 """The units, lowest first; a unit is a top-level module or subpackage of ``azgym``."""
 

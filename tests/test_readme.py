@@ -16,6 +16,7 @@ from azgym.cli import main
 from azgym.localize.learned import NG_RANSAC_WEIGHTS as SHIPPED_WEIGHTS
 
 README = Path(__file__).parent.parent / "README.md"
+REFERENCES = Path(__file__).parent.parent / "leaderboard" / "entries"
 
 
 def plugin_source() -> str:
@@ -24,10 +25,19 @@ def plugin_source() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
-def test_the_plugin_example_checks_benchmarks_and_submits(tmp_path, monkeypatch, capsys):
+def test_the_plugin_example_checks_benchmarks_and_submits_beside_the_references(
+        tmp_path, monkeypatch, capsys):
+    """The recipe as written, run in a folder below a board holding reference entries, on the
+    full (not quick) size of a smaller suite: the entry is ranked in the references' table."""
     source = plugin_source()
     assert len(source.strip().splitlines()) <= 32
     (tmp_path / "my_localizer.py").write_text(source)
+    entries = tmp_path / "leaderboard" / "entries"
+    entries.mkdir(parents=True)
+    for reference in ("ransac", "lsq"):
+        for file in (REFERENCES / f"{reference}-stress.json",
+                     REFERENCES / f"{reference}-stress.frames.csv.gz"):
+            shutil.copy(file, entries / file.name)
     monkeypatch.chdir(tmp_path)
     monkeypatch.syspath_prepend(str(tmp_path))
     import my_localizer
@@ -37,17 +47,25 @@ def test_the_plugin_example_checks_benchmarks_and_submits(tmp_path, monkeypatch,
     shell = re.search(r"```bash\n(.*?)```", section, re.S).group(1).replace("\\\n", " ")
     commands = [shlex.split(line) for line in shell.splitlines() if line.startswith("azgym")]
     assert [c[1] for c in commands] == ["check", "bench", "leaderboard", "leaderboard"]
+    bench = commands[1]
+    assert "--quick" not in bench and bench[bench.index("--suite") + 1] == "warehouse-static"
     capsys.readouterr()
     assert main(commands[0][1:]) == 0
     assert "MedianOfTriplets passed all 6 checks" in capsys.readouterr().out
-    bench = commands[1] + ["--suite", "stress", "--quick", "--workers", "1"]
-    assert main(bench[1:]) == 0
+    bench[bench.index("--suite") + 1] = "stress"  # the full size of a smaller suite
+    assert main([*bench[1:], "--workers", "1"]) == 0
     label = "my_localizer.py:MedianOfTriplets:max_triplets=100"  # the table shows the spec
     assert re.search(rf"^ *\d+ {re.escape(label)} ", capsys.readouterr().out, re.M)
     assert main(commands[2][1:]) == 0
     assert main(commands[3][1:]) == 0
-    assert (tmp_path / "leaderboard" / "entries" / "median-of-triplets.json").is_file()
-    assert "median-of-triplets" in (tmp_path / "leaderboard" / "README.md").read_text()
+    printed = capsys.readouterr()
+    assert "warning" not in printed.err  # a full run, beside the references: nothing to warn of
+    assert (entries / "median-of-triplets.json").is_file()
+    board = (tmp_path / "leaderboard" / "README.md").read_text()
+    ranking = board.split("## stress", 1)[1].split("### dev split, full size", 1)[1]
+    ranking = ranking.split("\n#", 1)[0]  # the one table: up to the next heading
+    for name in ("median-of-triplets", "ransac-stress", "lsq-stress"):
+        assert name in ranking
     sys.modules.pop("my_localizer", None)
 
 

@@ -1,45 +1,57 @@
 """azgym: benchmark azimuth-based indoor localizers, and reproduce the papers they come from.
 
 azgym bench [--suite S | --data DIR] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
-            [--workers N] [--time-limit SECONDS] [--quick] [--out DIR] [--navigator NAME ...]
-            [--backend local|ray] [--address ADDR] [--profile PROFILE.toml]
-azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR]
+            [--workers N] [--time-limit SECONDS] [--quick] [--out DIR] [--overwrite]
+            [--navigator NAME ...] [--backend local|ray] [--address ADDR] [--profile PROFILE.toml]
+azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR] [--overwrite]
 azgym import DIR
 azgym calibrate LOG --out PROFILE.toml [--figure FILE] [--turn-rate auto|odometry|imu] [--seed N]
                 [--overwrite]
 azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [--motion-rate HZ]
+                   [--overwrite]
 azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S] [--workers N]
-                      [--time-limit SECONDS] [--out DIR]
-azgym layout optimize SCENARIO --add N [--step M] [--spacing M] [--out DIR]
-azgym leaderboard submit|build|verify ...
-azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures]
-azgym reproduce plotter [--runs N] [--seed S] [--out DIR]
+                      [--time-limit SECONDS] [--out DIR] [--overwrite]
+azgym layout optimize SCENARIO --add N [--step M] [--spacing M] [--out DIR] [--overwrite]
+azgym leaderboard submit RESULTS --localizer SPEC --name NAME --version V --authors NAME ...
+                         [--link URL] [--entries DIR] [--overwrite] [--datasets DIR]
+azgym leaderboard build [--entries DIR] [--out DIR] [--navigation DIR] [--datasets DIR]
+                        [--skip-unavailable]
+azgym leaderboard verify ENTRY [--workers N] [--datasets DIR]
+azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures] [--overwrite]
+azgym reproduce plotter [--runs N] [--seed S] [--out DIR] [--overwrite]
 azgym study error-model [--scenario S] [--frames N] [--noise SIGMA] [--calibration-px PX]
+                        [--out DIR] [--overwrite]
 azgym study ids [--scenario S] [--rate HZ] [--noise SIGMA]
+azgym suites
 azgym scenarios
-azgym generate --seed N [--out FILE.toml] [--size X Y]
+azgym show SCENARIO [--out FILE.png] [--overwrite]
+azgym generate --seed N [--out FILE.toml] [--size X Y] [--overwrite]
 azgym localizers
 azgym check SPEC
 azgym train localizer --model ng-ransac|learned --out DIR [--layouts N] [--frames-per-layout N]
-                      [--epochs N] [--seed S] [--hidden H] [--threads N]
+                      [--epochs N] [--seed S] [--hidden H] [--threads N] [--overwrite]
 azgym train navigator --env ID --algo ppo|sac --out DIR [--steps N] [--seed S] [--localizer L]
-                      [--envs N] [--threads N]
+                      [--envs N] [--threads N] [--overwrite]
 azgym evaluate navigator POLICY [--env ID] [--localizer L ...] [--episodes N] [--seed S]
-                         [--sensor geometry|image] [--ids oracle|blink] [--out DIR]
+                         [--sensor geometry|image] [--ids oracle|blink] [--out DIR] [--overwrite]
+
+Every command's ``--help`` ends with examples (:mod:`~azgym.cli.examples`);
+``python -m azgym`` runs the command too.
 
 The command's modules, one per command group: :mod:`~azgym.cli.bench` (a frame suite, a
 navigation suite or a log), :mod:`~azgym.cli.leaderboard`, :mod:`~azgym.cli.studies`
 (``reproduce``, ``study``), :mod:`~azgym.cli.train`, :mod:`~azgym.cli.evaluate`,
 :mod:`~azgym.cli.logs` (``import``, ``export``), :mod:`~azgym.cli.calibrate`,
-:mod:`~azgym.cli.layout`, :mod:`~azgym.cli.sweep` and :mod:`~azgym.cli.info` (``scenarios``,
-``localizers``, ``generate``, ``check``); :mod:`~azgym.cli.options` the options every command
-shares and the progress printer. Each module registers its parsers (``add_*``); this one builds
-the ``azgym`` parser from them and runs the handler (:func:`main`).
+:mod:`~azgym.cli.layout`, :mod:`~azgym.cli.sweep` and :mod:`~azgym.cli.info` (``suites``,
+``scenarios``, ``localizers``, ``generate``, ``check``); :mod:`~azgym.cli.options` the options
+every command shares and the progress printer. Each module registers its parsers (``add_*``);
+this one builds the ``azgym`` parser from them and runs the handler (:func:`main`).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -47,10 +59,13 @@ from typing import Any
 from azgym.cli.bench import add_bench
 from azgym.cli.calibrate import add_calibrate
 from azgym.cli.evaluate import add_evaluate
+from azgym.cli.examples import add_examples
 from azgym.cli.info import add_info
 from azgym.cli.layout import add_layout
 from azgym.cli.leaderboard import add_leaderboard
 from azgym.cli.logs import add_logs
+from azgym.cli.options import stopped
+from azgym.cli.show import add_show
 from azgym.cli.studies import add_reproduce, add_study
 from azgym.cli.sweep import add_sweep
 from azgym.cli.train import add_train
@@ -59,8 +74,11 @@ from azgym.errors import AzgymError
 __all__ = ["build_parser", "main"]
 
 
-class _DefaultsFormatter(argparse.HelpFormatter):
-    """Help that ends each option with its default, unless the text says it or there is none."""
+class _DefaultsFormatter(argparse.RawDescriptionHelpFormatter):
+    """Help that ends each option with its default, unless the text says it or there is none.
+
+    The description and the examples under it are printed as written, one command a line.
+    """
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
@@ -96,6 +114,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_layout(commands)
     add_sweep(commands)
     add_info(commands)
+    add_show(commands)
+    add_examples(parser)
     return parser
 
 
@@ -107,3 +127,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except AzgymError as exc:
         print(f"azgym: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as exc:  # Ctrl-C: one line saying what was kept
+        return stopped(exc)
+    except BrokenPipeError:  # the reader left (azgym suites | head): stop without a traceback
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 
 from azgym.cli.options import (
     add_backend_options,
+    add_overwrite,
     check_backend,
     out_folder,
     profile_option,
@@ -37,10 +38,16 @@ if TYPE_CHECKING:
     from azgym.bench.run.runner import Progress
     from azgym.profile import Profile
 
-__all__ = ["DEFAULT_SUITE", "OPTIONS", "RUNNERS", "Runner", "add_bench", "check_options"]
+__all__ = ["BENCH_FILES", "DEFAULT_SUITE", "OPTIONS", "RUNNERS", "Runner", "add_bench",
+           "check_options"]
 
 DEFAULT_SUITE = "warehouse-static"
 """The suite ``azgym bench`` runs, in its quick size, when none is named."""
+
+BENCH_FILES = ("results.json", "frames.csv", "cdf.png", "causes.png", "error_map_*.png",
+               "trajectories_*.png")
+"""What a frame suite's or a log's run writes into ``--out``
+(:meth:`~azgym.bench.report.results.BenchResult.write`): refused there without ``--overwrite``."""
 
 OPTIONS: dict[str, tuple[str, object]] = {
     "--suite": ("suite", None), "--navigator": ("navigator", []), "--quick": ("quick", False),
@@ -147,6 +154,7 @@ def add_bench(commands: argparse._SubParsersAction) -> None:
                             "win), a suite's simulated noise, or fields over a log's own")
     bench.add_argument("--quick", action="store_true", help="the suite's small version")
     bench.add_argument("--out", type=out_folder, default="results/bench", help="output folder")
+    add_overwrite(bench, "a previous run's results in --out")
     bench.set_defaults(handler=_bench)
 
 
@@ -157,7 +165,6 @@ def _bench(args: argparse.Namespace) -> int:
     from azgym.bench.run.runner import run_benchmark
     from azgym.bench.suites import SUITES
     from azgym.errors import unknown_name
-    from azgym.files import prepare_folder
     from azgym.profile import read_profile
 
     check_backend(args)
@@ -180,7 +187,7 @@ def _bench(args: argparse.Namespace) -> int:
         args.time_limit = DEFAULT_TIME_LIMIT
     contenders = _contenders(args, args.time_limit, profile)
     workers = resolve_workers(args)
-    prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
+    _claim(args, BENCH_FILES)  # before the run: a bad --out must not waste it
     started = time.perf_counter()
     result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
                            time_limit=args.time_limit, progress=progress_printer(),
@@ -188,6 +195,13 @@ def _bench(args: argparse.Namespace) -> int:
     written = result.write(Path(args.out))
     print(run_report(result.summary, time.perf_counter() - started, written))
     return 0
+
+
+def _claim(args: argparse.Namespace, names: tuple[str, ...]) -> Path:
+    """``--out``, made writable, once it is sure to replace nothing unasked (``--overwrite``)."""
+    from azgym.files import claim_folder, prepare_folder
+
+    return prepare_folder(claim_folder(Path(args.out), names, args.overwrite, "--out"))
 
 
 def _contenders(args: argparse.Namespace, time_limit: float, profile: Profile | None
@@ -216,7 +230,6 @@ def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile |
     from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
     from azgym.bench.run.runner import run_log_benchmark
     from azgym.bench.suites.data import log_cases, log_profile
-    from azgym.files import prepare_folder
     from azgym.logs import read_log
 
     log = read_log(args.data)
@@ -225,7 +238,7 @@ def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile |
         progress(f"note: {note}")
     time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
     contenders = _contenders(args, time_limit, log_profile(log, profile))
-    prepare_folder(Path(args.out))
+    _claim(args, BENCH_FILES)
     started = time.perf_counter()
     result = run_log_benchmark(log, contenders, workers=resolve_workers(args),
                                time_limit=time_limit, progress=progress, profile=profile)
@@ -241,14 +254,14 @@ def _bench_navigation(args: argparse.Namespace, progress: Progress) -> int:
         navigation_contenders,
         run_navigation,
     )
+    from azgym.bench.navigation.report import RESULTS_FILE
     from azgym.bench.navigation.suites import get_navigation_suite
-    from azgym.files import prepare_folder
 
     suite = get_navigation_suite(args.suite)
     contenders = navigation_contenders(suite, args.navigator, args.localizer,
                                        with_builtins=args.with_builtins)
     workers = resolve_workers(args)
-    out = prepare_folder(Path(args.out))  # before the run: a bad --out must not waste it
+    out = _claim(args, (RESULTS_FILE,))  # before the run: a bad --out must not waste it
     check_contenders(suite, contenders)
     started = time.perf_counter()
     result = run_navigation(suite, contenders, split=args.split, quick=args.quick,

@@ -11,12 +11,10 @@ policy trained for another observation costs nothing; :mod:`azgym.cli` adds the 
 from __future__ import annotations
 
 import argparse
-import sys
-from collections.abc import Callable
 from pathlib import Path
 
 from azgym.arguments import whole_number
-from azgym.cli.options import add_overwrite, out_folder
+from azgym.cli.options import add_overwrite, out_folder, progress_printer
 
 __all__ = ["DEFAULT_ENV", "DEFAULT_LOCALIZER", "TEST_SEED", "add_evaluate"]
 
@@ -45,20 +43,11 @@ def _evaluate_navigator(args: argparse.Namespace) -> int:
         args.localizer, builtins=(DEFAULT_LOCALIZER,), check=None)]
     result = evaluate_navigator(args.policy, env_id, localizers, episodes=episodes, seed=seed,
                                 sensor=args.sensor, ids=args.ids,
-                                progress=_progress(episodes))
+                                progress=progress_printer())
     print(result.table())
     if out is not None:
         print(f"wrote {result.write(out)}")
     return 0
-
-
-def _progress(episodes: int) -> Callable[[str, int], None]:
-    """A progress callback: a localizer's episode count redrawn in place on a terminal."""
-    def show(localizer: str, done: int) -> None:
-        if sys.stdout.isatty():
-            end = "\n" if done == episodes else ""
-            print(f"\r{localizer}: {done}/{episodes} episodes", end=end, flush=True)
-    return show
 
 
 def add_evaluate(commands: argparse._SubParsersAction) -> None:

@@ -1,14 +1,16 @@
-"""``azgym scenarios``, ``localizers``, ``generate`` and ``check``: what ships, and checks.
+"""``azgym suites``, ``scenarios``, ``localizers``, ``generate``, ``check``: what ships, checks.
 
-``scenarios`` and ``localizers`` list the shipped scenarios and the registered localizers,
-presets and trackers; ``generate`` writes a procedurally generated warehouse; ``check`` runs the
-conformance checks on a localizer or tracker.
+``suites`` lists what ``azgym bench`` scores on (the frame suites, the navigation suites and the
+shipped logs); ``scenarios`` and ``localizers`` list the shipped scenarios and the registered
+localizers, presets and trackers; ``generate`` writes a procedurally generated warehouse;
+``check`` runs the conformance checks on a localizer or tracker.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import re
 from pathlib import Path
 
 from azgym.cli.options import add_overwrite, out_file
@@ -17,7 +19,9 @@ __all__ = ["add_info"]
 
 
 def add_info(commands: argparse._SubParsersAction) -> None:
-    """``azgym scenarios``, ``azgym localizers``: what ships; ``azgym generate``, ``check``."""
+    """``azgym suites``, ``scenarios``, ``localizers``: what ships; ``generate``, ``check``."""
+    commands.add_parser("suites", help="list what azgym bench scores on: the suites (--suite) "
+                        "and the shipped logs (--data)").set_defaults(handler=_suites)
     commands.add_parser("scenarios", help="list the shipped scenarios").set_defaults(
         handler=_scenarios)
     generate = commands.add_parser("generate", help="write a procedurally generated warehouse")
@@ -34,6 +38,38 @@ def add_info(commands: argparse._SubParsersAction) -> None:
     check.add_argument("localizer", metavar="SPEC",
                        help="as for bench --localizer, e.g. path/mine.py:Mine:max_iter=20")
     check.set_defaults(handler=_check)
+
+
+def _suites(_args: argparse.Namespace) -> int:
+    from azgym.bench.navigation.suites import NAVIGATION_SUITES
+    from azgym.bench.suites import SUITES
+    from azgym.bench.suites.sizes import frames
+    from azgym.logs.manifest import read_manifest
+    from azgym.logs.problems import Problems
+    from azgym.logs.read import shipped_logs
+
+    print("frame suites (--suite NAME; frames, --quick / full; the dev split's seed; dev+test: "
+          "--split test draws a fresh one):")
+    for name in SUITES.names(plugins=False):
+        suite = SUITES[name]
+        quick, full = frames(name) or ("?", "?")
+        split = "dev only" if suite.routes else "dev+test"
+        _listed(name, f"{quick} / {full}", f"seed {suite.dev_seed}, {split}", suite.description)
+    print("\nnavigation suites (--suite NAME; episodes per contender, --quick / full):")
+    for name, navigation in NAVIGATION_SUITES.items():
+        _listed(name, f"{navigation.quick_episodes} / {navigation.episodes}",
+                f"seed {navigation.dev_seed}, dev+test", navigation.description)
+    print("\nshipped logs (--data NAME; every recorded frame, one size, no seed):")
+    for name, folder in shipped_logs().items():
+        manifest = read_manifest(folder, Problems(str(folder)))
+        _listed(name, "log", "-", "(log.toml unreadable)" if manifest is None
+                else manifest.description)
+    return 0
+
+
+def _listed(name: str, size: str, seed: str, description: str) -> None:
+    """One line of ``azgym suites``: the name, size, dev seed and split, and what it is."""
+    print(f"{name:<26}{size:<13}{seed:<22}{description}")
 
 
 def _scenarios(_args: argparse.Namespace) -> int:
@@ -55,20 +91,13 @@ def _generate(args: argparse.Namespace) -> int:
 
 
 def _localizers(_args: argparse.Namespace) -> int:
-    from azgym.localize.registry import PRESETS, build, list_localizers, list_trackers
+    from azgym.localize.registry import list_localizers, list_trackers
 
     for name in list_localizers():
-        if name in PRESETS:
-            target, params = PRESETS[name]
-            pairs = ",".join(f"{key}={json.dumps(value)}" for key, value in params.items())
-            print(f"{name:<16} {target} with {pairs}")
-            continue
-        doc = (type(build(name)).__doc__ or "").strip().splitlines()
-        print(f"{name:<16} {doc[0] if doc else ''}")
+        print(f"{name:<16} {_describe(name)}")
     print("\ntrackers (any localizer above runs as one too):")
     for name in list_trackers():
-        doc = (type(build(name)).__doc__ or "").strip().splitlines()
-        print(f"{name:<16} {doc[0] if doc else ''}")
+        print(f"{name:<16} {_describe(name)}")
     return 0
 
 
@@ -83,3 +112,25 @@ def _check(args: argparse.Namespace) -> int:
     else:
         check_tracker(built)
     return 0
+
+
+_ROLE = re.compile(r":[a-z]+:`~?(?:[\w.]+\.)?([^`<]+?)`")
+"""A Sphinx cross-reference (``:class:`~azgym.track.Tkf```): its last name is what is shown."""
+
+
+def _describe(name: str) -> str:
+    """What a localizer, preset or tracker is, in one line of plain text (for listings).
+
+    A preset is its target with its hyperparameters; any other name, the first line of its
+    class's docstring, without Sphinx markup or pointers to the module's docstring.
+    """
+    from azgym.localize.registry import PRESETS, build
+
+    if name in PRESETS:
+        target, params = PRESETS[name]
+        pairs = ",".join(f"{key}={json.dumps(value)}" for key, value in params.items())
+        return f"{target} with {pairs}"
+    lines = (type(build(name)).__doc__ or "").strip().splitlines()
+    first = lines[0] if lines else ""
+    first = _ROLE.sub(r"\1", first).replace("``", "")
+    return re.sub(r"\s*\((?:see )?(?:the )?module docstring\)", "", first)

@@ -2,17 +2,36 @@
 
 ``submit`` makes an entry from an ``azgym bench`` output folder, ``build`` writes the board,
 ``verify`` reruns an entry (or a navigation results file) and compares its figures.
+
+Without ``--entries``, ``submit`` and ``build`` use the board of the folder they are run in or of
+the nearest folder above it (``leaderboard/entries/``, as in azgym's repository), and say which;
+where there is none they refuse rather than start a new board, which only ``--entries`` does.
+``submit`` warns when its entry would stand alone in its table: a quick run (ranked apart from the
+full-size runs) or a board without another entry of its suite, split and size.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
-from azgym.cli.options import resolve_workers, workers_option
+from azgym.cli.options import (
+    add_overwrite,
+    out_folder,
+    progress_printer,
+    resolve_workers,
+    workers_option,
+)
+from azgym.errors import InvalidInputError
 
-__all__ = ["DATASETS_HELP", "add_leaderboard"]
+__all__ = ["BOARD", "DATASETS_HELP", "add_leaderboard", "find_entries"]
+
+BOARD = Path("leaderboard") / "entries"
+"""Where a board's entries are, below the folder it is found from (azgym's repository)."""
+ENTRIES_HELP = ("the board's entries folder (default: leaderboard/entries/ in this folder or the "
+                "nearest one above it, as in azgym's repository; a new folder starts a new board)")
 
 DATASETS_HELP = ("where the logs of entries scored on a log are, as DIR/NAME/ (default: "
                  "datasets/ beside the entries, if there is one; shipped logs are found by name)")
@@ -27,14 +46,17 @@ def add_leaderboard(commands: argparse._SubParsersAction) -> None:
     submit.add_argument("--localizer", required=True, help="the localizer's label in the results")
     submit.add_argument("--name", required=True, help="entry name (letters, digits, . _ -)")
     submit.add_argument("--version", required=True, help="the localizer's version")
-    submit.add_argument("--authors", required=True, nargs="+")
+    submit.add_argument("--authors", required=True, nargs="+", metavar="NAME",
+                        help="one or more authors, each a quoted name (\"Ada Lovelace\")")
     submit.add_argument("--link", default="", help="paper or code")
-    submit.add_argument("--entries", default="leaderboard/entries")
-    submit.add_argument("--overwrite", action="store_true")
+    submit.add_argument("--entries", metavar="DIR", type=out_folder, help=ENTRIES_HELP)
+    add_overwrite(submit, "an entry of that name (its NAME.json and NAME.frames.csv.gz)")
     submit.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
     build = actions.add_parser("build", help="write leaderboard/README.md and index.html")
-    build.add_argument("--entries", default="leaderboard/entries")
-    build.add_argument("--out", default="leaderboard")
+    build.add_argument("--entries", metavar="DIR", type=out_folder, help=ENTRIES_HELP)
+    build.add_argument("--out", metavar="DIR", type=out_folder,
+                       help="where README.md and index.html are written (default: the folder "
+                            "holding --entries)")
     build.add_argument("--navigation", metavar="DIR",
                        help="navigation results files (default: navigation/ beside --entries, "
                             "if there is one)")
@@ -56,18 +78,24 @@ def _leaderboard(args: argparse.Namespace) -> int:
     from azgym.bench.leaderboard import entries as leaderboard
     from azgym.bench.navigation.board import verify_navigation
     from azgym.bench.navigation.results_file import is_navigation_file
+    from azgym.localize.registry import is_builtin
 
     if args.action == "submit":
-        path = leaderboard.submit(Path(args.results), args.localizer, Path(args.entries),
+        entries = _entries(args.entries)
+        existed = {path.name for path in entries.glob("*.json")} if entries.is_dir() else set()
+        path = leaderboard.submit(Path(args.results), args.localizer, entries,
                                   name=args.name, version=args.version, authors=args.authors,
                                   link=args.link, overwrite=args.overwrite,
                                   datasets=_datasets(args))
         print(f"wrote {path}")
+        _warn_if_alone(path, bool(existed - {path.name}))
     elif args.action == "build":
-        for path in board.build(Path(args.entries), Path(args.out),
-                                _navigation_dir(args.navigation, Path(args.entries)),
+        entries = _entries(args.entries)
+        out = Path(args.out) if args.out is not None else entries.parent
+        for path in board.build(entries, out, _navigation_dir(args.navigation, entries),
                                 datasets=_datasets(args),
-                                skip_unavailable=args.skip_unavailable):
+                                skip_unavailable=args.skip_unavailable,
+                                progress=progress_printer()):
             print(f"wrote {path}")
     elif is_navigation_file(Path(args.entry)):
         print(f"{args.entry}: rerunning its navigators and localizers (azgym's own)", flush=True)
@@ -77,12 +105,58 @@ def _leaderboard(args: argparse.Namespace) -> int:
         entry = leaderboard.load_entry(Path(args.entry), _datasets(args))
         test = entry["split"] == "test"
         where = "on a fresh secret seed" if test else "on its own frames"
-        print(f"{args.entry}: rerunning its localizer {entry['localizer']['spec']!r}, which is "
-              f"the submitter's code, {where}", flush=True)
+        spec = entry["localizer"]["spec"]
+        whose = "azgym's own" if is_builtin(spec) else "the submitter's code"
+        print(f"{args.entry}: rerunning its localizer {spec!r}, which is {whose}, {where}",
+              flush=True)
         differences = leaderboard.verify(Path(args.entry), workers=resolve_workers(args),
+                                         progress=progress_printer(),
                                          datasets=_datasets(args))
         return _verdict(args.entry, differences, test)
     return 0
+
+
+def find_entries(start: Path) -> Path | None:
+    """The board's entries folder (:data:`BOARD`) in ``start`` or the nearest folder above it."""
+    start = start.resolve()
+    return next((folder / BOARD for folder in (start, *start.parents)
+                 if (folder / BOARD).is_dir()), None)
+
+
+def _entries(named: str | None) -> Path:
+    """``--entries``: the folder named, else the board found from here (said), else refused."""
+    if named is not None:
+        return Path(named)
+    found = find_entries(Path.cwd())
+    if found is None:
+        raise InvalidInputError(
+            f"--entries: no {BOARD}/ in {Path.cwd()} or any folder above it, so no board to "
+            "use; run this inside azgym's repository (its leaderboard/ holds the reference "
+            "entries), or give --entries DIR to start a board of your own there")
+    print(f"board: {found} (--entries names another)", flush=True)
+    return found
+
+
+def _warn_if_alone(path: Path, others: bool) -> None:
+    """Warn when a submitted entry will stand alone in its table on the board."""
+    from azgym.bench.leaderboard.entries import table_mates
+    from azgym.bench.leaderboard.entry_files import read_json
+
+    entry = read_json(path, "leaderboard entry")
+    warnings = []
+    if entry["quick"]:
+        warnings.append(f"{entry['name']} is a quick run: the board ranks it apart from the "
+                        "full-size runs, the reference entries' (rerun azgym bench without "
+                        "--quick to rank beside them)")
+    if not table_mates(path):
+        size = "quick" if entry["quick"] else "full"
+        warnings.append(f"{path.parent} has no other entry on {entry['suite']} ({entry['split']}"
+                        f" split, {size} size): {entry['name']} will be alone in its table" +
+                        ("" if others else f"; {path.parent} held no entries: this is a new "
+                         "board, and azgym's reference entries are in its repository's "
+                         "leaderboard/entries/ (--entries)"))
+    for warning in warnings:
+        print(f"azgym: warning: {warning}", file=sys.stderr)
 
 
 def _datasets(args: argparse.Namespace) -> Path | None:

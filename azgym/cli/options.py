@@ -10,7 +10,8 @@ Every command that writes takes its output as ``--out DIR`` (:func:`out_folder`)
 FILE`` (:func:`out_file`), an empty name refused by both, and replaces nothing already there
 without ``--overwrite`` (:func:`add_overwrite`, checked by :func:`azgym.files.claim_file` and
 :func:`azgym.files.claim_folder` before any work). :func:`progress_printer` shows a run's
-progress.
+progress; :func:`stopped` ends a command interrupted by Ctrl-C with one line (what it kept,
+:class:`Interrupted`) and exit code 130.
 """
 
 from __future__ import annotations
@@ -23,12 +24,11 @@ from azgym.arguments import time_limit
 from azgym.errors import InvalidInputError
 
 if TYPE_CHECKING:
-    from azgym.bench.run.runner import Progress
+    from azgym.progress import Meter
 
-__all__ = ["add_backend_options", "add_overwrite", "check_backend", "out_file", "out_folder",
-           "profile_option",
-           "progress_printer", "resolve_workers", "seconds_option",
-           "workers_option"]
+__all__ = ["Interrupted", "add_backend_options", "add_overwrite", "check_backend", "out_file",
+           "out_folder", "profile_option", "progress_printer", "resolve_workers",
+           "seconds_option", "stopped", "workers_option"]
 
 
 def seconds_option(text: str) -> float:
@@ -69,7 +69,7 @@ def out_file(text: str) -> str:
     return text
 
 
-def add_overwrite(parser: argparse.ArgumentParser, what: str) -> None:
+def add_overwrite(parser: argparse._ActionsContainer, what: str) -> None:
     """``--overwrite``: let the command replace ``what`` it writes when it exists already.
 
     Without it an existing output is refused before any work starts; with it only the files
@@ -129,14 +129,26 @@ def _address(text: str) -> str:
     return text
 
 
-def progress_printer() -> Progress:
-    """Print progress: a bar redrawn in place on a terminal, only finished lines otherwise."""
-    terminal = sys.stdout.isatty()
+def progress_printer() -> Meter:
+    """The progress every command shows: an :class:`azgym.progress.Meter`.
 
-    def show(text: str) -> None:
-        if not text.startswith("\r"):
-            print(("\r" if terminal else "") + text, flush=True)
-        elif terminal:
-            print(text, end="", flush=True)
+    Lines go to standard output, counts to standard error (a bar with the time left in a
+    terminal, a line at least every few seconds otherwise).
+    """
+    from azgym.progress import Meter
 
-    return show
+    return Meter()
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C while a command runs, with what it kept (its message: ``checkpoints kept in ...``)."""
+
+
+def stopped(interruption: KeyboardInterrupt) -> int:
+    """Say on one line that the command was interrupted, and what it kept; exit code 130.
+
+    Wired in :func:`azgym.cli.main` around every command, so Ctrl-C shows no traceback.
+    """
+    kept = str(interruption) if isinstance(interruption, Interrupted) else ""
+    print(f"\nazgym: interrupted{'; ' + kept if kept else ''}", file=sys.stderr, flush=True)
+    return 130

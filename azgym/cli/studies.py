@@ -147,20 +147,24 @@ def add_study(commands: argparse._SubParsersAction) -> None:
     studies = study.add_subparsers(dest="study", required=True)
     model = studies.add_parser("error-model", help="azimuth errors of beacons detected from "
                                "pixels beside the paper's eq. 1-3")
-    model.add_argument("--scenario", default="warehouse-small")
+    model.add_argument("--scenario", default="warehouse-small",
+                       help="a shipped scenario's name or a scenario file (azgym scenarios "
+                            "lists them)")
     model.add_argument("--frames", type=int, default=600, help="random poses")
     model.add_argument("--noise", type=float, default=2.0, help="sensor noise [grey levels]")
     model.add_argument("--calibration-px", type=float, default=1.0,
                        help="principal point error for the calibrated comparison [px]")
-    model.add_argument("--seed", type=int, default=0)
+    model.add_argument("--seed", type=int, default=0, help="seed of every random draw")
     model.add_argument("--out", type=out_folder, default="results/study", help="output folder")
     add_overwrite(model, "the results in --out")
-    model.add_argument("--no-figures", action="store_true")
+    model.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
     model.set_defaults(handler=_study_error_model)
     ids = studies.add_parser("ids", help="how well blinking ids decode along the routes")
-    ids.add_argument("--scenario", default="warehouse-small")
+    ids.add_argument("--scenario", default="warehouse-small",
+                     help="a shipped scenario's name or a scenario file (azgym scenarios "
+                          "lists them)")
     ids.add_argument("--rate", type=float, default=None,
                      help="camera frames per second (default: the blinking camera's 30)")
     ids.add_argument("--noise", type=float, default=2.0, help="sensor noise [grey levels]")
-    ids.add_argument("--seed", type=int, default=0)
+    ids.add_argument("--seed", type=int, default=0, help="seed of every random draw")
     ids.set_defaults(handler=_study_ids)

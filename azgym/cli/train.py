@@ -14,8 +14,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from azgym.arguments import whole_number
-from azgym.cli.options import add_overwrite, out_folder
-from azgym.errors import AzgymError, DependencyNotInstalled
+from azgym.cli.options import Interrupted, add_overwrite, out_folder
+from azgym.errors import AzgymError, DependencyNotInstalled, InvalidInputError
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
 
 __all__ = ["MODELS", "NAVIGATOR_FILES", "add_train"]
@@ -62,18 +62,53 @@ def _train_localizer(args: argparse.Namespace) -> int:
         for key, value in (("layouts", args.layouts), ("epochs", args.epochs),
                            ("hidden", args.hidden))}
     _require_training_extra()
+    from azgym.learn.train import CHECKPOINT_NAME
+
     if args.model == "learned":
+        from azgym.learn.train_regression import WEIGHTS_NAME
         from azgym.learn.train_regression import train_learned as train
     else:
+        from azgym.learn.train import WEIGHTS_NAME
         from azgym.learn.train import train_ng_ransac as train
 
+    from azgym.learn.dataset import layout_seeds
+
+    layout_seeds(settings["layouts"])  # a bad count is refused before --out is touched
+    out = Path(args.out)
+    checkpoint = _claim_run(out, out / WEIGHTS_NAME, out / CHECKPOINT_NAME, args)
     started = time.perf_counter()
-    result = train(Path(args.out), layouts=settings["layouts"], frames=args.frames_per_layout,
-                   epochs=settings["epochs"], seed=args.seed, hidden=settings["hidden"],
-                   threads=args.threads)
+    try:
+        result = train(out, layouts=settings["layouts"], frames=args.frames_per_layout,
+                       epochs=settings["epochs"], seed=args.seed, hidden=settings["hidden"],
+                       threads=args.threads)
+    except KeyboardInterrupt:
+        raise Interrupted(f"the last finished epoch is kept in {checkpoint} (the same command "
+                          "resumes from it)" if checkpoint.is_file()
+                          else "no epoch was finished, nothing was kept") from None
     print(f"{args.model}: {len(result.history)} epochs, {time.perf_counter() - started:.0f} s"
           "; wrote " + ", ".join(map(str, (result.weights, result.card, result.figure))))
     return 0
+
+
+def _claim_run(out: Path, weights: Path, checkpoint: Path, args: argparse.Namespace) -> Path:
+    """The checkpoint of ``train localizer`` in ``--out``, once the run there is claimed.
+
+    A finished run there (its weight file) is refused unless ``--resume`` (train on from its
+    checkpoint) or ``--overwrite`` (start over: its checkpoint is removed); an interrupted one
+    (a checkpoint only) is resumed.
+
+    Raises:
+        InvalidInputError: A finished run in ``out`` and neither option.
+    """
+    if args.overwrite:
+        checkpoint.unlink(missing_ok=True)
+    elif weights.is_file() and not args.resume:
+        raise InvalidInputError(
+            f"--out: {out} holds a finished run ({weights.name}"
+            f"{', ' + checkpoint.name if checkpoint.is_file() else ''}); nothing was written "
+            "(--resume trains on from its checkpoint, e.g. with more --epochs; --overwrite "
+            "starts over)")
+    return checkpoint
 
 
 def _train_navigator(args: argparse.Namespace) -> int:
@@ -83,7 +118,11 @@ def _train_navigator(args: argparse.Namespace) -> int:
     claim_folder(Path(args.out), NAVIGATOR_FILES, args.overwrite, "--out")
     request = prepare(args.env, args.algo, args.steps, Path(args.out), seed=args.seed,
                       localizer=args.localizer, n_envs=args.envs, threads=args.threads)
-    result = run(request)
+    try:
+        result = run(request)
+    except KeyboardInterrupt:
+        raise Interrupted(f"the checkpoints so far are kept in {request.out / 'checkpoints'}"
+                          ) from None
     print("wrote " + ", ".join(map(str, (result.policy, result.card, result.curve,
                                           result.evaluations))))
     return 0
@@ -135,7 +174,14 @@ def _add_localizer(targets: argparse._SubParsersAction) -> None:
                            help="ng-ransac: a network orders the measurements for the "
                                 "triplet search; learned: a network regresses the pose")
     localizer.add_argument("--out", required=True, metavar="DIR", type=out_folder,
-                           help="output folder (a checkpoint there is resumed)")
+                           help="output folder (an interrupted run there, a checkpoint, is "
+                                "resumed; a finished one is refused without --resume or "
+                                "--overwrite)")
+    claims = localizer.add_mutually_exclusive_group()
+    claims.add_argument("--resume", action="store_true",
+                        help="train on from a finished run's checkpoint in --out (e.g. with "
+                             "more --epochs)")
+    add_overwrite(claims, "a run in --out (it starts over: its checkpoint is removed)")
     localizer.add_argument("--layouts", type=_whole(1), metavar="N",
                            help="generated warehouses trained on (default: "
                                 f"{_per_model('layouts')})")

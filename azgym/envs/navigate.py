@@ -12,7 +12,7 @@ from gymnasium.error import ResetNeeded
 from gymnasium.utils import seeding
 
 from azgym.arguments import positive_number, whole_number
-from azgym.core import Pose, estimated_pose, pose_error, wrap_scalar
+from azgym.core import Pose, estimated_pose, interpolate_pose, pose_error, wrap_scalar
 from azgym.envs.common import check_camera_rate, check_render_mode, flag, reward_weights, size
 from azgym.localize.registry import SupportsLocalize
 from azgym.nav.controls import CONTROL_STEPS, DISCRETE_CONTROLS, controls
@@ -262,7 +262,7 @@ class NavigateEnv(gym.Env):
             x, y, _ = world.forklift.pose
             self._travelled += math.hypot(x - previous_x, y - previous_y)
         self._steps += 1
-        self._look([(_interpolate(states[i], states[i + 1], fraction), time)
+        self._look([(interpolate_pose(states[i], states[i + 1], fraction), time)
                     for i, fraction, time in frames])
         potential = self._cost_to_go()
         arrived = math.hypot(self._goal[0] - x, self._goal[1] - y) < self.goal_radius
@@ -377,6 +377,14 @@ class NavigateEnv(gym.Env):
         """The camera pose the navigator believes (None before the first answer)."""
         return self._pose.pose
 
+    def goal(self) -> tuple[float, float]:
+        """The episode's goal spot [m]."""
+        return float(self._goal[0]), float(self._goal[1])
+
+    def planned_path(self) -> np.ndarray:
+        """The path followed now, (N, 2) [m]: the planner's, from the start or the last replan."""
+        return self._guidance.path
+
     def render(self) -> np.ndarray | None:
         """Draw the top-down view, and the camera's last frame beside it with the image sensor.
 
@@ -385,16 +393,3 @@ class NavigateEnv(gym.Env):
         from azgym.envs.render import render_frame
 
         return render_frame(self, self.render_mode)
-
-
-def _interpolate(a: tuple[float, float, float], b: tuple[float, float, float],
-                 fraction: float) -> tuple[float, float, float]:
-    """The pose ``fraction`` of the way from a to b, the heading along the shorter arc.
-
-    ``fraction`` 1 gives b itself, bit for bit.
-    """
-    if fraction >= 1.0:
-        return b
-    turn = wrap_scalar(b[2] - a[2])
-    return (a[0] + fraction * (b[0] - a[0]), a[1] + fraction * (b[1] - a[1]),
-            wrap_scalar(a[2] + fraction * turn))

@@ -40,7 +40,7 @@ from azgym.learn.train_report import progress_bar, write_card, write_learning_cu
 
 __all__ = ["CHECKPOINT_NAME", "EVAL_BATCH", "MODEL", "TrainConfig", "TrainResult", "WEIGHTS_NAME",
            "auc", "build_data", "evaluate", "fingerprint", "finite", "fit",
-           "prepared_data", "resume", "save_checkpoint", "train_ng_ransac"]
+           "prepared_data", "resume", "resuming", "save_checkpoint", "train_ng_ransac"]
 
 MODEL = "ng-ransac"
 """The model this module trains (the name in its weight file)."""
@@ -193,6 +193,8 @@ def fit(train: Any, held_out: Any, out_dir: Path, config: TrainConfig, *,
                                 f"{config.epochs} asked for; delete it to start over")
     steps = math.ceil(len(data[0][0]) / config.batch_size)
     bar = progress_bar(config.epochs * steps, len(history) * steps, progress)
+    if history:
+        bar.write(resuming(checkpoint, len(history), config.epochs))
     for epoch in range(len(history), config.epochs):
         started = time.perf_counter()
         loss = _train_epoch(model, optimizer, data[0], config, epoch, pos_weight, bar)
@@ -346,6 +348,11 @@ def resume(path: Path, model: torch.nn.Module, optimizer: torch.optim.Optimizer,
     model.load_state_dict(state["model"])
     optimizer.load_state_dict(state["optimizer"])
     return list(state["history"]), float(state["seconds"])
+
+
+def resuming(checkpoint: Path, done: int, epochs: int) -> str:
+    """What a resumed run says first: ``resuming from out/checkpoint.pt (epoch 3 of 8 done)``."""
+    return f"resuming from {checkpoint} (epoch {done} of {epochs} done)"
 
 
 def save_checkpoint(path: Path, model: torch.nn.Module, optimizer: torch.optim.Optimizer,

@@ -45,6 +45,7 @@ from azgym.learn.train import (
     finite,
     prepared_data,
     resume,
+    resuming,
     save_checkpoint,
 )
 from azgym.learn.train import fingerprint as run_fingerprint
@@ -176,6 +177,8 @@ def fit_regression(train: Any, held_out: Any, out_dir: Path, config: RegressionC
                                 f"{config.epochs} asked for; delete it to start over")
     steps = math.ceil(len(data[0][0]) / config.batch_size)
     bar = progress_bar(config.epochs * steps, len(history) * steps, progress, desc=MODEL)
+    if history:
+        bar.write(resuming(checkpoint, len(history), config.epochs))
     for epoch in range(len(history), config.epochs):
         started = time.perf_counter()
         for group in optimizer.param_groups:

@@ -279,7 +279,7 @@ def test_missing_files_and_deep_json_are_named_errors(results, entry_path, tmp_p
 def test_the_verify_command_warns_first_and_names_a_missing_entry(entry_path, capsys):
     assert main(["leaderboard", "verify", str(entry_path)]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert "which is the submitter's code" in out[0]
+    assert "rerunning its localizer 'lsq', which is azgym's own, on its own frames" in out[0]
     assert out[-1].endswith("reproduced (every accuracy figure within 1e-6)")
     assert main(["leaderboard", "verify", str(entry_path.parent / "typo.json")]) == 2
     assert "typo.json: no such leaderboard entry" in capsys.readouterr().err

@@ -135,8 +135,10 @@ def test_rows_moved_or_relabelled_against_the_log_are_refused(board):
 
 def test_a_missing_dataset_stops_the_board_unless_it_is_left_off(board, tmp_path):
     shutil.rmtree(tmp_path / "datasets" / "mini")
-    with pytest.raises(L.DatasetUnavailable, match="dataset: the log 'mini' is not available"):
+    with pytest.raises(L.DatasetUnavailable, match="dataset: the log 'mini' is not available"
+                       ) as refused:
         L.load_entry(board)
+    assert "--skip-unavailable" not in str(refused.value)  # only build takes it
     with pytest.raises(L.DatasetUnavailable, match="--skip-unavailable"):
         B.build(board.parent, tmp_path / "out")
     assert not (tmp_path / "out").exists()

@@ -29,6 +29,7 @@ from azgym.bench.report.table import LEGEND, RANK_BY, rank_key
 from azgym.bench.report.tracking import KIDNAP_WINDOW_S, RECOVERED_CM, TrackFigures
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
+from azgym.progress import Progress, counter
 
 __all__ = ["COLUMNS", "KINDS", "REAL_NOTE", "REAL_PART", "RECOVERY_COLUMN", "TRACKS_AT",
            "TRACK_COLUMNS", "build", "markdown_cell", "web_link"]
@@ -176,7 +177,8 @@ def _header(entries: list[Entry]) -> tuple[list[str], int]:
 
 
 def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
-          datasets: Path | None = None, skip_unavailable: bool = False) -> list[Path]:
+          datasets: Path | None = None, skip_unavailable: bool = False,
+          progress: Progress | None = None) -> list[Path]:
     """Write the board: README.md (tables) and index.html (sortable, self-contained).
 
     Each suite has one table per split and size (:data:`KINDS`); only the dev split's full size is
@@ -192,6 +194,7 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
             (default: ``datasets/`` beside ``entries_dir``, if it exists).
         skip_unavailable: Leave dataset entries whose log is not found off the board (listed
             as unchecked) instead of refusing to build.
+        progress: Hears the entries checked, then the board's parts drawn.
 
     Raises:
         LeaderboardError: The entries folder is missing or holds no entry (a typo must not
@@ -201,34 +204,48 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
     if not entries_dir.is_dir() or not any(entries_dir.glob("*.json")):
         raise LeaderboardError(f"{entries_dir}: no leaderboard entries there (*.json); the "
                                "board is left as it is")
-    loaded, unavailable = load_available(entries_dir, datasets)
+    loaded, unavailable = load_available(entries_dir, datasets, progress)
     if unavailable and not skip_unavailable:
-        raise unavailable[0]
+        first = unavailable[0]
+        raise DatasetUnavailable(f"{first}; or build with --skip-unavailable to leave such "
+                                 "entries off the board", first.entry)
     lines = _intro(len(loaded))
     sections: list[Section] = []
-    for suite in SUITES:
-        tables = [(split, quick, title, _ranked(loaded, suite, split, quick))
-                  for split, quick, title in KINDS]
-        tables = [table for table in tables if table[3]]
-        if not tables:
-            continue
-        description = get_suite(suite).description
-        lines += [f"## {suite} — {description}", ""]
-        for split, quick, title, ranked in tables:
-            table_id = f"board-{suite}" if (split, quick) == ("dev", False) else \
-                f"board-{suite}-{split}-{'quick' if quick else 'full'}"
-            _add_table(lines, sections, ("", suite, description, title, table_id), ranked)
-    lines += _dataset_tables(loaded, sections, real=False)
-    real = _dataset_tables(loaded, sections, real=True)
-    lines += ([f"# {REAL_PART}", "", REAL_NOTE, "", *real] if real else []) + \
-        _unchecked_note(unavailable)
-    if navigation_dir is not None:
-        lines += _navigation_section(navigation_dir, sections)
+    with counter(progress, "drawing the board", len(SUITES) + 3, "parts") as count:
+        for done, suite in enumerate(SUITES, 1):
+            lines += _suite_tables(loaded, suite, sections)
+            count(done)
+        lines += _dataset_tables(loaded, sections, real=False)
+        count(len(SUITES) + 1)
+        real = _dataset_tables(loaded, sections, real=True)
+        lines += ([f"# {REAL_PART}", "", REAL_NOTE, "", *real] if real else []) + \
+            _unchecked_note(unavailable)
+        count(len(SUITES) + 2)
+        if navigation_dir is not None:
+            lines += _navigation_section(navigation_dir, sections)
+        count(len(SUITES) + 3)
     prepare_folder(out_dir)
     readme = write_file(out_dir / "README.md", "\n".join(lines))
     text = page(sections, len(loaded), [f"Columns: {BOARD_LEGEND}", TRACKS_NOTE],
                 {REAL_PART: REAL_NOTE, NAVIGATION_PART: NAVIGATION_NOTE})
     return [readme, write_file(out_dir / "index.html", text)]
+
+
+def _suite_tables(loaded: list[tuple[Entry, str]], suite: str, sections: list[Section]
+                  ) -> list[str]:
+    """A suite's part of the board: one table per split and size that has entries."""
+    tables = [(split, quick, title, _ranked(loaded, suite, split, quick))
+              for split, quick, title in KINDS]
+    tables = [table for table in tables if table[3]]
+    if not tables:
+        return []
+    description = get_suite(suite).description
+    lines = [f"## {suite} — {description}", ""]
+    for split, quick, title, ranked in tables:
+        table_id = f"board-{suite}" if (split, quick) == ("dev", False) else \
+            f"board-{suite}-{split}-{'quick' if quick else 'full'}"
+        _add_table(lines, sections, ("", suite, description, title, table_id), ranked)
+    return lines
 
 
 def _intro(count: int) -> list[str]:

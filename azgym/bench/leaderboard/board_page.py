@@ -18,6 +18,8 @@ import io
 import numpy as np
 
 from azgym.bench.leaderboard.entry_files import Entry
+from azgym.bench.report.plots import draw_error_cdfs
+from azgym.site.drawing import figures_skipped
 
 __all__ = ["NAME_COLUMN", "Section", "cdf_png", "page"]
 
@@ -47,6 +49,9 @@ document.querySelectorAll("table.board th").forEach(function (th) {
 def cdf_png(ranked: list[tuple[Entry, str]]) -> str | None:
     """A table's error CDFs, each from its entry's own per-frame results, as a base64 PNG.
 
+    The curves are drawn as a run's are (:func:`~azgym.bench.report.plots.draw_error_cdfs`),
+    styled in the table's order, so they stay apart past ten entries.
+
     None without matplotlib.
     """
     if importlib.util.find_spec("matplotlib") is None:
@@ -57,19 +62,13 @@ def cdf_png(ranked: list[tuple[Entry, str]]) -> str | None:
     import matplotlib.pyplot as plt
 
     figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
+    curves = []
     for entry, frames in ranked:
-        rows = list(csv.DictReader(io.StringIO(frames)))
+        rows = csv.DictReader(io.StringIO(frames))
         # A missing estimate is a failure: it sits at +inf, never at zero error.
-        errors = np.sort([float(r["position_error_m"]) * 100 if r["ok"] == "1" else np.inf
-                          for r in rows])
-        axes.step(errors, np.arange(1, errors.size + 1) / errors.size, where="post",
-                  label=entry["name"])
-    axes.set_xscale("log")
-    axes.set_xlim(left=0.1)
-    axes.set_xlabel("position error [cm]")
-    axes.set_ylabel("share of frames")
-    axes.grid(True, which="both", alpha=0.3)
-    axes.legend(fontsize=7, loc="lower right")
+        curves.append((entry["name"], np.array(
+            [float(r["position_error_m"]) * 100 if r["ok"] == "1" else np.inf for r in rows])))
+    draw_error_cdfs(axes, curves, legend_size=7)
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=90)
     plt.close(figure)
@@ -94,6 +93,8 @@ def page(sections: list[Section], count: int, intro: list[str],
          part_notes: dict[str, str]) -> str:
     """The page: a heading, ``intro``'s paragraphs, then each section's table.
 
+    Without matplotlib the tables have no error CDFs, and the page says so under ``intro``.
+
     Args:
         sections: The tables, in the board's order.
         count: How many entries the board shows.
@@ -110,6 +111,9 @@ def page(sections: list[Section], count: int, intro: list[str],
              f"<p>{count} entries, ranked by the p75 position error over every frame, a frame "
              "without an answer counting as infinitely wrong. Click a column to sort.</p>",
              *(f"<p>{_plain(paragraph)}</p>" for paragraph in intro)]
+    skipped = figures_skipped(["the tables' error CDFs"])
+    if skipped is not None:
+        parts.append(f"<p>{html.escape(skipped)}</p>")
     previous, part_before = None, ""
     for part, suite, description, title, table_id, header, rows, links, cdf in sections:
         if part != part_before:

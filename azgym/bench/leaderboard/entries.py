@@ -47,10 +47,11 @@ from azgym.bench.report.summary import Dataset
 from azgym.bench.run.runner import Contender, run_benchmark, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
+from azgym.progress import Progress, counter
 
 __all__ = ["ENTRY_FORMAT", "SUITES", "DatasetUnavailable", "Entry", "LeaderboardError",
            "frames_file_text", "load_all", "load_available", "load_entries", "load_entry",
-           "make_entry", "schema", "submit", "validate_entry", "verify"]
+           "make_entry", "schema", "submit", "table_key", "table_mates", "validate_entry", "verify"]
 
 
 class _DatasetField(TypedDict, total=False):
@@ -183,6 +184,32 @@ def _claim(entries_dir: Path, name: str, overwrite: bool) -> None:
                                "or pass --overwrite")
 
 
+def table_key(entry: Mapping[str, Any]) -> tuple[Any, ...]:
+    """What decides an entry's table on the board: its suite (a log's digest too), split, size."""
+    dataset = entry.get("dataset")
+    return (entry.get("suite"), entry.get("split"), entry.get("quick"),
+            dataset.get("sha256") if isinstance(dataset, dict) else None)
+
+
+def table_mates(path: Path) -> list[str]:
+    """The other entries of ``path``'s folder that share its table on the board.
+
+    Read from the entries' own fields, unchecked: for a warning, never for a figure.
+    """
+    key = table_key(read_json(path, "leaderboard entry"))
+    mates = []
+    for other in sorted(path.parent.glob("*.json")):
+        if other.name == path.name:
+            continue
+        try:
+            entry = read_json(other, "leaderboard entry")
+        except LeaderboardError:
+            continue
+        if isinstance(entry, dict) and table_key(entry) == key:
+            mates.append(other.name.removesuffix(".json"))
+    return mates
+
+
 def _results_file_of(path: Path) -> str | None:
     """The per-frame file an entry in the folder claims, if it can be read."""
     try:
@@ -232,36 +259,41 @@ def load_all(entries_dir: Path, datasets: Path | None = None
     return loaded
 
 
-def load_available(entries_dir: Path, datasets: Path | None = None
+def load_available(entries_dir: Path, datasets: Path | None = None,
+                   progress: Progress | None = None
                    ) -> tuple[list[tuple[Entry, str]], list[DatasetUnavailable]]:
     """Every entry that can be checked, validated, and the dataset entries that cannot.
 
     A dataset entry whose log is not found (in ``datasets``, default ``datasets/`` beside the
     entries folder, or among the shipped logs) is returned apart, unchecked; any other problem
     raises. Names must differ in more than case (unchecked entries' too): on a file system
-    that ignores case, two such entries would share their files.
+    that ignores case, two such entries would share their files. ``progress`` hears the count
+    of entries checked.
     """
     datasets = datasets or default_datasets(entries_dir)
     loaded: list[tuple[Entry, str]] = []
     unavailable: list[DatasetUnavailable] = []
     seen: dict[str, str] = {}
-    for path in sorted(entries_dir.glob("*.json")):
-        try:
-            entry, frames = _load(path, datasets)
-        except DatasetUnavailable as missing:
-            entry, frames = cast(Entry, missing.entry), None  # checked before it was raised
-            unavailable.append(missing)
-        twin = seen.setdefault(entry["name"].lower(), entry["name"])
-        if twin != entry["name"]:
-            raise LeaderboardError(f"{path}: name: {entry['name']!r} and {twin!r} differ only in "
-                                   "case; entry names must be unique")
-        if frames is not None:
-            loaded.append((entry, frames))
+    paths = sorted(entries_dir.glob("*.json"))
+    with counter(progress, "checking entries", len(paths), "entries") as count:
+        for done, path in enumerate(paths, 1):
+            try:
+                entry, frames = _load(path, datasets)
+            except DatasetUnavailable as missing:
+                entry, frames = cast(Entry, missing.entry), None  # checked before it was raised
+                unavailable.append(missing)
+            twin = seen.setdefault(entry["name"].lower(), entry["name"])
+            if twin != entry["name"]:
+                raise LeaderboardError(f"{path}: name: {entry['name']!r} and {twin!r} differ "
+                                       "only in case; entry names must be unique")
+            if frames is not None:
+                loaded.append((entry, frames))
+            count(done)
     return loaded, unavailable
 
 
-def verify(path: Path, workers: int = 1, datasets: Path | None = None
-           ) -> dict[str, tuple[Any, Any]]:
+def verify(path: Path, workers: int = 1, datasets: Path | None = None,
+           progress: Progress | None = None) -> dict[str, tuple[Any, Any]]:
     """Rerun an entry's localizer on its suite, or its log; return what disagrees.
 
     A ``dev`` entry (and an entry scored on a log) is rerun on its own frames: every accuracy
@@ -273,7 +305,8 @@ def verify(path: Path, workers: int = 1, datasets: Path | None = None
     overlap the rerun's (two intervals of one figure from independent draws miss each other
     far less than once in a hundred reruns; a claim the localizer cannot repeat misses). The
     other figures depend on the frames drawn and are not compared. Runtimes are never compared
-    (they depend on the machine). An empty answer means the entry was reproduced.
+    (they depend on the machine). An empty answer means the entry was reproduced. ``progress``
+    hears the rerun as a run's progress.
 
     Raises:
         LeaderboardError: The entry is not sound, its plug-in or weight file is missing or
@@ -285,11 +318,11 @@ def verify(path: Path, workers: int = 1, datasets: Path | None = None
     test = entry["split"] == "test"
     if is_data_entry(entry):
         result = run_log_benchmark(checked_log(entry, str(path), datasets), [contender],
-                                   workers=workers)
+                                   workers=workers, progress=progress)
     else:
         result = run_benchmark(get_suite(entry["suite"]), [contender], split=entry["split"],
                                seed=None if test else entry["seed"], quick=entry["quick"],
-                               workers=workers)
+                               workers=workers, progress=progress)
     fresh = result.summary["localizers"][entry["name"]]
     if fresh["crashes"] == entry["n_frames"]:
         raise LeaderboardError(f"{path}: the localizer could not run on any frame: "

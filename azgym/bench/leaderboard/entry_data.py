@@ -151,8 +151,7 @@ def _found_log(entry: Entry, origin: str, datasets: Path | None) -> Log:
         raise DatasetUnavailable(
             f"{origin}: dataset: the log {name!r} is not available ({where}among the logs "
             "shipped with azgym), so the entry cannot be checked; put the log in the datasets "
-            "folder as NAME/ (--datasets DIR, default datasets/ beside the entries), or pass "
-            "--skip-unavailable to leave such entries off the board", entry)
+            "folder as NAME/ (--datasets DIR, default datasets/ beside the entries)", entry)
     try:
         return _read(folder.resolve(), _stamp(folder), sha256)
     except LogChanged as exc:

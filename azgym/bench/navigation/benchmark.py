@@ -26,10 +26,9 @@ from __future__ import annotations
 import multiprocessing
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from datetime import UTC, datetime
-from functools import partial
 from typing import Any
 
 import gymnasium as gym
@@ -40,6 +39,7 @@ from azgym.bench.leaderboard.checks import clean
 from azgym.bench.navigation.report import NavigationResult
 from azgym.bench.navigation.suites import NAVIGATORS, NavigationSuite, get_navigation_suite
 from azgym.errors import InvalidInputError
+from azgym.progress import Progress, counter
 
 __all__ = ["KIND", "RESULTS_FORMAT", "Pairing", "check_contenders", "contenders_of",
            "drive_all", "drive_contender", "episode_rows", "evaluate_navigator", "make_env",
@@ -108,7 +108,7 @@ def check_contenders(suite: NavigationSuite, contenders: Sequence[Pairing]) -> N
 
 def run_navigation(suite: NavigationSuite, contenders: Sequence[Pairing], *, split: str = "dev",
                    quick: bool = False, workers: int = 1,
-                   progress: Callable[[str], None] | None = None) -> NavigationResult:
+                   progress: Progress | None = None) -> NavigationResult:
     """Drive every contender on the suite's episodes; what ``navigation.json`` holds.
 
     Args:
@@ -117,7 +117,8 @@ def run_navigation(suite: NavigationSuite, contenders: Sequence[Pairing], *, spl
         split: ``dev`` (the suite's seed) or ``test`` (a fresh seed, reported).
         quick: Run the suite's small version.
         workers: Contenders driven at a time, each in a process of its own.
-        progress: Called with a line as each contender finishes.
+        progress: Called with a line as each contender finishes (and the contenders
+            counted, :func:`azgym.progress.counter`).
     """
     if split not in ("dev", "test"):
         raise InvalidInputError(f"split must be 'dev' or 'test', got {split!r}")
@@ -135,8 +136,7 @@ def run_navigation(suite: NavigationSuite, contenders: Sequence[Pairing], *, spl
 
 def evaluate_navigator(policy: str, env_id: str, localizers: Sequence[str], *, episodes: int,
                        seed: int, sensor: str, ids: str,
-                       progress: Callable[[str, int], None] | None = None
-                       ) -> NavigationResult:
+                       progress: Progress | None = None) -> NavigationResult:
     """Drive ``policy`` on episodes seed, seed + 1, ... of ``env_id``, once per localizer.
 
     Every environment is built and the policy loaded against the first before any episode, so
@@ -150,7 +150,7 @@ def evaluate_navigator(policy: str, env_id: str, localizers: Sequence[str], *, e
         seed: The seed of the first episode.
         sensor: The camera: ``geometry`` or ``image``.
         ids: How the image sensor identifies beacons: ``oracle`` or ``blink``.
-        progress: Called with a localizer and its episodes done as each episode ends.
+        progress: Hears each localizer's episodes counted (:func:`azgym.progress.counter`).
     """
     import azgym.envs.registration  # noqa: F401 - registers the ids
     from azgym.bench.navigation.scoring import drive
@@ -162,8 +162,8 @@ def evaluate_navigator(policy: str, env_id: str, localizers: Sequence[str], *, e
     rows = []
     for name, env in envs.items():
         started = time.perf_counter()
-        done = None if progress is None else partial(progress, name)
-        result = drive(env, loaded, episodes, seed, progress=done)
+        with counter(progress, name, episodes, "episodes") as done:
+            result = drive(env, loaded, episodes, seed, progress=done)
         rows.append({"localizer": name, "runtime_s": time.perf_counter() - started,
                      "summary": {key: value for key, value in result.items()
                                  if key != "episodes"},
@@ -175,24 +175,26 @@ def evaluate_navigator(policy: str, env_id: str, localizers: Sequence[str], *, e
 
 
 def drive_all(suite: NavigationSuite, contenders: Sequence[Pairing], seed: int, episodes: int,
-              workers: int, progress: Callable[[str], None] | None = None
-              ) -> list[dict[str, Any]]:
+              workers: int, progress: Progress | None = None) -> list[dict[str, Any]]:
     """Each contender's record (:func:`drive_contender`), in the order of ``contenders``."""
     say = progress or (lambda _line: None)
     tasks = [(suite.name, navigator, localizer, seed, episodes)
              for navigator, localizer in contenders]
-    records = []
-    if workers == 1 or len(tasks) == 1:
-        for task in tasks:
-            records.append(drive_contender(*task))
-            say(_finished(records[-1]))
-        return records
-    # spawn: a worker starts clean (no forked torch or numba threads), imports what it needs.
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(min(workers, len(tasks)), mp_context=context) as pool:
-        for record in pool.map(drive_contender, *zip(*tasks, strict=True)):
-            records.append(record)
-            say(_finished(record))
+    records: list[dict[str, Any]] = []
+    with counter(progress, suite.name, len(tasks), "contenders") as count:
+        if workers == 1 or len(tasks) == 1:
+            for task in tasks:
+                records.append(drive_contender(*task))
+                say(_finished(records[-1]))
+                count(len(records))
+            return records
+        # spawn: a worker starts clean (no forked torch or numba threads), imports what it needs.
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(min(workers, len(tasks)), mp_context=context) as pool:
+            for record in pool.map(drive_contender, *zip(*tasks, strict=True)):
+                records.append(record)
+                say(_finished(record))
+                count(len(records))
     return records
 
 

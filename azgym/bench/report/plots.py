@@ -1,7 +1,8 @@
 """Figures of a benchmark run: error CDFs, fault causes, error maps and trajectories.
 
 Error CDFs and the headline by fault cause; error maps on the floor plan; and, for driven routes,
-each contender's estimates over the true routes, coloured by their error.
+each contender's estimates over the true routes, coloured by their error. :func:`draw_error_cdfs`
+is the one drawing of error CDFs, which the board's page draws too.
 """
 
 from __future__ import annotations
@@ -17,12 +18,13 @@ from azgym.core import BeaconMap
 from azgym.files import write_file
 from azgym.metrics import HEADLINE
 from azgym.site import load_scenario
+from azgym.site.drawing import draw_floor, line_styles
 
 if TYPE_CHECKING:
     from azgym.bench.report.summary import Summary
     from azgym.bench.run.outcome import RunOutcome
 
-__all__ = ["write_figures"]
+__all__ = ["draw_error_cdfs", "write_figures"]
 
 
 def write_figures(summary: Summary, frames: list[Case],
@@ -62,19 +64,30 @@ def _error_cdfs(plt: Any, summary: Summary, outcomes: dict[str, RunOutcome],
                 path: Path) -> Path:
     """One curve per localizer: the share of frames within each position error."""
     figure, axes = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
-    for label in summary["localizers"]:
-        outcome = outcomes[label]
-        # A missing estimate is a failure: it sits at +inf, never at zero error.
-        errors = np.sort(np.where(outcome.ok, outcome.position * 100, np.inf))
-        axes.step(errors, np.arange(1, errors.size + 1) / errors.size, where="post", label=label)
+    # A missing estimate is a failure: it sits at +inf, never at zero error.
+    draw_error_cdfs(axes, [(label, np.where(outcomes[label].ok, outcomes[label].position * 100,
+                                            np.inf)) for label in summary["localizers"]])
+    axes.set_title(f"{summary['suite']} ({summary['split']}): error CDF")
+    return _save(figure, path, plt)
+
+
+def draw_error_cdfs(axes: Any, curves: list[tuple[str, np.ndarray]],
+                    legend_size: float = 8) -> None:
+    """One step curve per (label, position errors [cm]): the share of frames within each error.
+
+    A frame without an answer is an infinite error. The curves take :func:`line_styles` in
+    order, so they stay apart however many there are; the error axis is logarithmic.
+    """
+    for (label, errors), style in zip(curves, line_styles(len(curves)), strict=True):
+        ordered = np.sort(errors)
+        axes.step(ordered, np.arange(1, ordered.size + 1) / ordered.size, where="post",
+                  label=label, **style)
     axes.set_xscale("log")
     axes.set_xlim(left=0.1)
     axes.set_xlabel("position error [cm]")
     axes.set_ylabel("share of frames")
-    axes.set_title(f"{summary['suite']} ({summary['split']}): error CDF")
     axes.grid(True, which="both", alpha=0.3)
-    axes.legend(fontsize=8, loc="lower right")
-    return _save(figure, path, plt)
+    axes.legend(fontsize=legend_size, loc="lower right")
 
 
 def _p75_by_cause(plt: Any, summary: Summary, path: Path) -> Path:
@@ -158,12 +171,7 @@ def _floor_plan(axes: Any, plan: str | BeaconMap) -> None:
                      label="beacons")
         axes.set_aspect("equal")
         return
-    scenario = load_scenario(plan)
-    for rack in scenario.racks:
-        axes.fill(*rack.corners().T, color="0.75")
-    for wall in scenario.walls:
-        axes.plot(*zip(wall.start, wall.end, strict=True), color="0.3")
-    axes.set_aspect("equal")
+    draw_floor(axes, load_scenario(plan))
 
 
 def _trajectories(plt: Any, summary: Summary, frames: list[Case],

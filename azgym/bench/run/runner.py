@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import secrets
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -45,6 +45,7 @@ from azgym.errors import InvalidInputError
 from azgym.jit import localizers_compiled
 from azgym.logs.read import Log
 from azgym.profile import Profile
+from azgym.progress import Progress, counter
 from azgym.site import load_scenario
 
 __all__ = ["Progress", "batch_bounds", "run_benchmark", "run_contenders", "run_log_benchmark"]
@@ -52,9 +53,6 @@ __all__ = ["Progress", "batch_bounds", "run_benchmark", "run_contenders", "run_l
 BATCHES_PER_WORKER = 4
 """Frames go to the workers in this many batches per worker: few round trips, and a slow batch
 does not leave the other workers idle for long."""
-
-Progress = Callable[[str], None]
-"""Called with text as a run advances; text starting with a carriage return redraws the line."""
 
 
 def run_contenders(
@@ -105,7 +103,8 @@ def run_contenders(
             begun = time.perf_counter()
             run = Run(contender.spec, contender.params, frames, sent_maps, workers=workers,
                       time_limit=time_limit, batches=batches, profile=profile)
-            answers = run.run(_progress_bar(contender.label, len(cases), say))
+            with counter(progress, contender.label, len(cases)) as report:
+                answers = run.run(report)
             outcomes[contender.label] = _score(answers, cases)
             say(f"  {contender.label:<20} {time.perf_counter() - begun:6.1f} s")
     return outcomes
@@ -126,19 +125,6 @@ def batch_bounds(cases: Sequence[Case], size: int) -> list[tuple[int, int]]:
             bounds.append((start, k))
             start = k
     return bounds
-
-
-def _progress_bar(label: str, total: int, say: Progress) -> Callable[[int], None]:
-    """A progress report that redraws a bar when the count of finished frames changes."""
-    shown = [-1]
-
-    def report(finished: int) -> None:
-        if finished != shown[0]:
-            shown[0] = finished
-            done = finished * 20 // max(total, 1)
-            say(f"\r  {label:<20} [{'#' * done}{'.' * (20 - done)}] {finished}/{total}")
-
-    return report
 
 
 def _score(answers: Answers, cases: Sequence[Case]) -> RunOutcome:

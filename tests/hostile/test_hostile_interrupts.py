@@ -1,0 +1,56 @@
+"""Ctrl-C and a finished run: a command interrupted ends with one line saying what it kept
+and exit code 130, never a traceback; ``train localizer`` refuses to silently "resume" a run
+that has finished."""
+
+from __future__ import annotations
+
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from azgym import cli
+
+
+def test_ctrl_c_ends_a_command_with_one_line_and_exit_code_130(tmp_path):
+    command = [sys.executable, "-m", "azgym", "evaluate", "navigator", "pure-pursuit",
+               "--episodes", "100000", "--out", str(tmp_path / "out")]
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    try:
+        with selectors.DefaultSelector() as waiting:  # its first line of progress: it is driving
+            waiting.register(child.stderr, selectors.EVENT_READ)  # type: ignore[arg-type]
+            assert waiting.select(timeout=90), "no progress within 90 s"
+        first = child.stderr.readline()  # type: ignore[union-attr]
+        time.sleep(0.5)
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=60)
+    finally:
+        child.kill()
+    assert "episodes" in first
+    assert child.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert err.strip().splitlines()[-1] == "azgym: interrupted"
+    assert not (tmp_path / "out" / "navigation.json").exists()
+
+
+@pytest.mark.parametrize("model,weights", [("ng-ransac", "ng-ransac.npz"),
+                                           ("learned", "learned.npz")])
+def test_a_finished_training_run_is_refused_unless_resumed_or_overwritten(model, weights,
+                                                                           tmp_path, capsys):
+    pytest.importorskip("torch", reason="training needs pip install torch==2.13.0")
+    (tmp_path / weights).write_bytes(b"a finished run")
+    (tmp_path / "checkpoint.pt").write_bytes(b"its checkpoint")
+    assert cli.main(["train", "localizer", "--model", model, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert f"--out: {tmp_path} holds a finished run ({weights}, checkpoint.pt); nothing was " \
+           "written (--resume trains on from its checkpoint" in err and "--overwrite" in err
+    assert (tmp_path / "checkpoint.pt").read_bytes() == b"its checkpoint"
+    with pytest.raises(SystemExit):
+        cli.main(["train", "localizer", "--model", model, "--out", str(tmp_path), "--resume",
+                  "--overwrite"])
+    assert "not allowed with argument" in capsys.readouterr().err
