@@ -11,7 +11,13 @@ import json
 import time
 from pathlib import Path
 
-from azgym.cli.options import add_overwrite, out_folder, resolve_workers, workers_option
+from azgym.cli.options import (
+    add_overwrite,
+    out_folder,
+    progress_printer,
+    resolve_workers,
+    workers_option,
+)
 from azgym.files import claim_folder
 
 __all__ = ["ERROR_MODEL_FILES", "PAPER_FILES", "PLOTTER_FILES", "add_reproduce", "add_study"]
@@ -39,7 +45,7 @@ def _reproduce_paper(args: argparse.Namespace) -> int:
           f"{workers} worker(s)", flush=True)
     started = time.perf_counter()
     reproduction = reproduce(config=config, workers=workers,
-                             progress=lambda line: print(line, flush=True))
+                             progress=progress_printer())
     mex_seconds = time_exhaustive_mex(load_scenario("paper-room"), repeats=1 if args.quick else 3)
     reproduction.results["mex_exhaustive_ms"] = mex_seconds * 1000
     written = write_outputs(reproduction, Path(args.out), figures=not args.no_figures)
@@ -58,7 +64,7 @@ def _reproduce_plotter(args: argparse.Namespace) -> int:
     from azgym.files import prepare_folder, write_file
 
     out = prepare_folder(claim_folder(Path(args.out), PLOTTER_FILES, args.overwrite, "--out"))
-    result = reproduce_plotter(seed=args.seed, runs=args.runs)
+    result = reproduce_plotter(seed=args.seed, runs=args.runs, progress=progress_printer())
     summary = {key: value for key, value in result.items() if key != "errors"}
     written = [write_file(out / "results.json", json.dumps(summary, indent=1) + "\n"),
                write_figure(result, out / "errors.png")]

@@ -15,7 +15,7 @@ from gymnasium.utils.env_checker import check_env
 
 import azgym.envs  # noqa: F401 - registers the environment ids
 from azgym import InvalidInputError, UnknownNameError
-from azgym.envs.navigate import _interpolate
+from azgym.core import interpolate_pose
 
 NAVIGATE = "azgym/Navigate-WarehouseSmall-v2"
 
@@ -180,9 +180,9 @@ def test_frames_between_physics_steps_and_control_periods_without_a_frame():
 
 def test_heading_is_interpolated_along_the_shorter_arc():
     a, b = (0.0, 0.0, math.pi - 0.1), (1.0, 2.0, -math.pi + 0.1)
-    x, y, heading = _interpolate(a, b, 0.5)
+    x, y, heading = interpolate_pose(a, b, 0.5)
     assert (x, y) == (0.5, 1.0) and abs(abs(heading) - math.pi) < 1e-12
-    assert _interpolate(a, b, 1.0) is b
+    assert interpolate_pose(a, b, 1.0) is b
 
 
 @pytest.mark.parametrize("ids", ["oracle", "blink"])

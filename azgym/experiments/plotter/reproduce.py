@@ -19,6 +19,7 @@ import numpy as np
 from azgym.core import BeaconMap
 from azgym.errors import InvalidInputError
 from azgym.experiments.plotter.trail import CAMERA_HZ, LAP, beacon_ring, imu_samples, trail_state
+from azgym.progress import Progress, counter
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 from azgym.sensing.synthetic import noisy_measurements
 from azgym.site.error_model import ErrorModel
@@ -32,8 +33,11 @@ METHODS = ("tkf", "lpkf", "naive")
 NAIVE_LAPS = 4
 
 
-def reproduce_plotter(seed: int = 0, runs: int = 100) -> dict[str, Any]:
+def reproduce_plotter(seed: int = 0, runs: int = 100, progress: Progress | None = None
+                      ) -> dict[str, Any]:
     """Run the reproduction; return each method's pooled errors and their percentiles.
+
+    ``progress`` hears the count of runs done.
 
     Returns:
         ``errors`` (method → per-frame position errors [m], every run pooled), ``p50``/``p90``
@@ -45,16 +49,19 @@ def reproduce_plotter(seed: int = 0, runs: int = 100) -> dict[str, Any]:
     beacons = beacon_ring()
     errors: dict[str, list[float]] = {method: [] for method in METHODS}
     naive_end = []
-    for stream in np.random.SeedSequence(seed).spawn(runs):
-        imu_rng, camera_rng, heading_rng = (np.random.default_rng(s) for s in stream.spawn(3))
-        heading = float(heading_rng.uniform(-math.pi, math.pi))
-        samples = imu_samples(NAIVE_LAPS * LAP, heading, imu_rng)
-        frames = _camera_frames(heading, beacons, camera_rng)
-        for name in ("tkf", "lpkf"):
-            errors[name] += _track(name, frames, samples, beacons, heading)
-        naive = _naive_positions(samples)
-        errors["naive"] += [_error(naive, samples.time, t) for t, *_ in frames]
-        naive_end.append(_error(naive, samples.time, NAIVE_LAPS * LAP))
+    with counter(progress, "plotter", runs, "runs") as count:
+        for done, stream in enumerate(np.random.SeedSequence(seed).spawn(runs), 1):
+            imu_rng, camera_rng, heading_rng = (np.random.default_rng(s)
+                                                for s in stream.spawn(3))
+            heading = float(heading_rng.uniform(-math.pi, math.pi))
+            samples = imu_samples(NAIVE_LAPS * LAP, heading, imu_rng)
+            frames = _camera_frames(heading, beacons, camera_rng)
+            for name in ("tkf", "lpkf"):
+                errors[name] += _track(name, frames, samples, beacons, heading)
+            naive = _naive_positions(samples)
+            errors["naive"] += [_error(naive, samples.time, t) for t, *_ in frames]
+            naive_end.append(_error(naive, samples.time, NAIVE_LAPS * LAP))
+            count(done)
     pooled = {name: np.array(values) for name, values in errors.items()}
     return {
         "seed": seed, "runs": runs, "lap_s": LAP, "camera_hz": CAMERA_HZ,
