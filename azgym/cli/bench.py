@@ -194,6 +194,7 @@ def _bench(args: argparse.Namespace) -> int:
                            backend=args.backend, address=args.address, profile=profile)
     written = result.write(Path(args.out))
     print(run_report(result.summary, time.perf_counter() - started, written))
+    _say_figures_skipped()
     return 0
 
 
@@ -244,6 +245,7 @@ def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile |
                                time_limit=time_limit, progress=progress, profile=profile)
     written = result.write(Path(args.out))
     print(run_report(result.summary, time.perf_counter() - started, written))
+    _say_figures_skipped()
     return 0
 
 
@@ -274,3 +276,12 @@ def _bench_navigation(args: argparse.Namespace, progress: Progress) -> int:
           f"{record['episodes']} episodes each; {time.perf_counter() - started:.1f} s; "
           f"wrote {path}")
     return 0
+
+
+def _say_figures_skipped() -> None:
+    """One line when the run's figures were not drawn (no matplotlib), saying how to get them."""
+    from azgym.site.drawing import figures_skipped
+
+    if (skipped := figures_skipped(["cdf.png", "causes.png", "error_map_*.png",
+                                    "trajectories_*.png"])) is not None:
+        print(skipped)

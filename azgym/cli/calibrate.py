@@ -86,6 +86,9 @@ def _figure(value: str | None, out: Path, overwrite: bool) -> Path | None:
 
     if value is None:
         if importlib.util.find_spec("matplotlib") is None:
+            from azgym.site.drawing import figures_skipped
+
+            print(figures_skipped([f"{out.stem}-residuals.png"]))
             return None
         value = str(out.with_name(f"{out.stem}-residuals.png"))
     elif not value:

@@ -97,6 +97,10 @@ def _leaderboard(args: argparse.Namespace) -> int:
                                 skip_unavailable=args.skip_unavailable,
                                 progress=progress_printer()):
             print(f"wrote {path}")
+        from azgym.site.drawing import figures_skipped
+
+        if (skipped := figures_skipped(["the tables' error CDFs"])) is not None:
+            print(skipped)
     elif is_navigation_file(Path(args.entry)):
         print(f"{args.entry}: rerunning its navigators and localizers (azgym's own)", flush=True)
         differences = verify_navigation(Path(args.entry), workers=resolve_workers(args))

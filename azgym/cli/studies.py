@@ -37,6 +37,7 @@ def _reproduce_paper(args: argparse.Namespace) -> int:
     from azgym.experiments.paper.reproduce import reproduce, time_exhaustive_mex
     from azgym.site import load_scenario
 
+    _figures_need_matplotlib(args.no_figures)
     claim_folder(Path(args.out), PAPER_FILES, args.overwrite, "--out")
     config = ProtocolConfig.quick(seed=args.seed) if args.quick else ProtocolConfig(seed=args.seed)
     workers = resolve_workers(args)
@@ -63,6 +64,7 @@ def _reproduce_plotter(args: argparse.Namespace) -> int:
     from azgym.experiments.plotter.reproduce import reproduce_plotter
     from azgym.files import prepare_folder, write_file
 
+    _figures_need_matplotlib(False)
     out = prepare_folder(claim_folder(Path(args.out), PLOTTER_FILES, args.overwrite, "--out"))
     result = reproduce_plotter(seed=args.seed, runs=args.runs, progress=progress_printer())
     summary = {key: value for key, value in result.items() if key != "errors"}
@@ -81,6 +83,7 @@ def _reproduce_plotter(args: argparse.Namespace) -> int:
 def _study_error_model(args: argparse.Namespace) -> int:
     from azgym.experiments.error_model import run
 
+    _figures_need_matplotlib(args.no_figures)
     claim_folder(Path(args.out), ERROR_MODEL_FILES, args.overwrite, "--out")
     summary = run(args.scenario, frames=args.frames, noise_sigma=args.noise,
                   calibration_px=args.calibration_px, seed=args.seed, out=Path(args.out),
@@ -174,3 +177,11 @@ def add_study(commands: argparse._SubParsersAction) -> None:
     ids.add_argument("--noise", type=float, default=2.0, help="sensor noise [grey levels]")
     ids.add_argument("--seed", type=int, default=0, help="seed of every random draw")
     ids.set_defaults(handler=_study_ids)
+
+
+def _figures_need_matplotlib(no_figures: bool) -> None:
+    """Refuse before the work a study whose figures cannot be drawn (no matplotlib)."""
+    from azgym.errors import require
+
+    if not no_figures:
+        require("matplotlib", "plot")

@@ -58,4 +58,8 @@ def _sweep(args: argparse.Namespace) -> int:
     print()
     print(result.text())
     print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
+    from azgym.site.drawing import figures_skipped
+
+    if (skipped := figures_skipped(["sweep.png"])) is not None:
+        print(skipped)
     return 0

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import importlib.util
 import io
 import math
 from dataclasses import dataclass
@@ -68,7 +69,7 @@ class SweepResult:
                    write_file(out / "runtimes.csv",
                               _csv(["label", "suite", "seed", "median_us", "ratio_to_ransac"],
                                    self.runtimes))]
-        with contextlib.suppress(ImportError):
+        if importlib.util.find_spec("matplotlib") is not None:
             written.append(write_sweep_figure(self, out / "sweep.png"))
         return written
 
