@@ -48,6 +48,7 @@ from azgym.localize.learned.features import (
     first_quality_column,
     measurement_features,
 )
+from azgym.progress import Progress, counter
 from azgym.sensing.geometry.sensor import GeometrySensor
 from azgym.sensing.labels import DIRECT, PARTIAL
 from azgym.sensing.protocol import Observation
@@ -251,7 +252,8 @@ def layout_seeds(layouts: int | Sequence[int]) -> list[int]:
 
 
 def make_frames(layout_seeds: Sequence[int], frames_per_layout: int, seed: int, *,
-                outlier_share: float = DEFAULT_OUTLIER_SHARE) -> FrameBatch:
+                outlier_share: float = DEFAULT_OUTLIER_SHARE,
+                progress: Progress | None = None) -> FrameBatch:
     """``frames_per_layout`` frames of each generated layout, padded into one batch.
 
     Args:
@@ -259,6 +261,7 @@ def make_frames(layout_seeds: Sequence[int], frames_per_layout: int, seed: int, 
         frames_per_layout: Frames drawn in each.
         seed: Seed of every draw (with each layout's seed, its stream).
         outlier_share: Share of frames, in [0, 1], given K = 1-5 injected outliers.
+        progress: Hears the count of layouts drawn.
 
     Raises:
         InvalidInputError: A bad argument, named.
@@ -272,10 +275,12 @@ def make_frames(layout_seeds: Sequence[int], frames_per_layout: int, seed: int, 
         raise InvalidInputError(f"outlier_share must be a number in [0, 1], got "
                                 f"{outlier_share!r}")
     frames, owners = [], []
-    for layout in layouts:
-        drawn = layout_frames(layout, count, seed, float(outlier_share))
-        frames += drawn
-        owners += [layout] * len(drawn)
+    with counter(progress, "drawing frames", len(layouts), "layouts") as counted:
+        for done, layout in enumerate(layouts, 1):
+            drawn = layout_frames(layout, count, seed, float(outlier_share))
+            frames += drawn
+            owners += [layout] * len(drawn)
+            counted(done)
     return _pack(frames, owners)
 
 

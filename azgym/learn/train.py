@@ -37,6 +37,7 @@ from azgym.files import prepare_folder, write_file
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
 from azgym.learn.torch_net import TorchInlierScorer, export
 from azgym.learn.train_report import progress_bar, write_card, write_learning_curve
+from azgym.progress import Meter, Progress
 
 __all__ = ["CHECKPOINT_NAME", "EVAL_BATCH", "MODEL", "TrainConfig", "TrainResult", "WEIGHTS_NAME",
            "auc", "build_data", "evaluate", "fingerprint", "finite", "fit",
@@ -95,14 +96,15 @@ class TrainResult:
     seconds: float = 0.0
 
 
-def build_data(layouts: Sequence[int], frames_per_layout: int, seed: int
-               ) -> tuple[Any, Any, dict[str, Any]]:
+def build_data(layouts: Sequence[int], frames_per_layout: int, seed: int,
+               progress: Progress | None = None) -> tuple[Any, Any, dict[str, Any]]:
     """The training and held-out frames (:func:`azgym.learn.dataset.make_frames`).
 
     Args:
         layouts: The generator seeds to train on (:func:`azgym.learn.dataset.layout_seeds`).
         frames_per_layout: Frames drawn in each warehouse (held-out ones too).
         seed: Seeds the frames.
+        progress: Hears the count of layouts drawn, training then held-out.
 
     Returns:
         The training FrameBatch, the held-out one (every held-out layout), and what the model
@@ -112,8 +114,8 @@ def build_data(layouts: Sequence[int], frames_per_layout: int, seed: int
     from azgym.learn.dataset import HELD_OUT_LAYOUTS, make_frames
     from azgym.learn.distribution import batch_distribution
 
-    train = make_frames(layouts, frames_per_layout, seed)
-    held_out = make_frames(HELD_OUT_LAYOUTS, frames_per_layout, seed)
+    train = make_frames(layouts, frames_per_layout, seed, progress=progress)
+    held_out = make_frames(HELD_OUT_LAYOUTS, frames_per_layout, seed, progress=progress)
     info = {"train_layouts": list(layouts),
             "held_out_layouts": [int(x) for x in HELD_OUT_LAYOUTS],
             "frames_per_layout": frames_per_layout, "data_seed": seed,
@@ -135,7 +137,7 @@ def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = _DEFA
     from azgym.localize.learned.features import FEATURE_LAYOUT
 
     config = TrainConfig(epochs=epochs, seed=seed, hidden=hidden, threads=threads)
-    out, train, held_out, info = prepared_data(out_dir, layouts, frames, seed)
+    out, train, held_out, info = prepared_data(out_dir, layouts, frames, seed, progress)
     result = fit(train, held_out, out, config, feature_layout=FEATURE_LAYOUT, data_info=info,
                  progress=progress)
     uncalibrated = hashlib.sha256(result.weights.read_bytes()).hexdigest()
@@ -146,9 +148,11 @@ def train_ng_ransac(out_dir: Path | str, *, layouts: int | Sequence[int] = _DEFA
     return result
 
 
-def prepared_data(out_dir: Path | str, layouts: int | Sequence[int], frames: int, seed: int
-                  ) -> tuple[Path, Any, Any, dict[str, Any]]:
+def prepared_data(out_dir: Path | str, layouts: int | Sequence[int], frames: int, seed: int,
+                  progress: bool = False) -> tuple[Path, Any, Any, dict[str, Any]]:
     """The output folder, made writable, and the frames drawn, once every argument is checked.
+
+    With ``progress`` the drawing shows its count of layouts (:class:`azgym.progress.Meter`).
 
     Returns the folder, the training frames, the held-out ones and what the model card says of
     them (``draw_seconds`` included).
@@ -159,7 +163,8 @@ def prepared_data(out_dir: Path | str, layouts: int | Sequence[int], frames: int
     seeds = layout_seeds(layouts)
     out = prepare_folder(Path(out_dir))
     started = time.perf_counter()
-    train, held_out, info = build_data(seeds, frames, seed)
+    with Meter() as meter:
+        train, held_out, info = build_data(seeds, frames, seed, meter if progress else None)
     info["draw_seconds"] = round(time.perf_counter() - started, 1)
     return out, train, held_out, info
 

@@ -142,7 +142,7 @@ def train_learned(out_dir: Path | str, *, layouts: int | Sequence[int] = _DEFAUL
     from azgym.localize.learned.features import FEATURE_LAYOUT
 
     config = RegressionConfig(epochs=epochs, seed=seed, hidden=hidden, threads=threads)
-    out, train, held_out, info = prepared_data(out_dir, layouts, frames, seed)
+    out, train, held_out, info = prepared_data(out_dir, layouts, frames, seed, progress)
     seeds = info["train_layouts"]
     result = fit_regression(train, held_out, out, config, feature_layout=FEATURE_LAYOUT,
                             data_info=info, progress=progress)

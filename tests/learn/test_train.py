@@ -157,9 +157,9 @@ def test_train_ng_ransac_draws_the_frames_then_trains_and_calibrates(tmp_path, m
     drawn = []
     real = dataset.make_frames
 
-    def make_frames(layout_seeds, frames_per_layout, seed):
+    def make_frames(layout_seeds, frames_per_layout, seed, progress=None):
         drawn.append((list(layout_seeds), frames_per_layout, seed))
-        return real(layout_seeds, frames_per_layout, seed)
+        return real(layout_seeds, frames_per_layout, seed, progress=progress)
 
     monkeypatch.setattr(dataset, "make_frames", make_frames)
     result = T.train_ng_ransac(tmp_path, layouts=3, frames=4, epochs=1, seed=5,
