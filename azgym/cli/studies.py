@@ -115,7 +115,8 @@ def _study_ids(args: argparse.Namespace) -> int:
     from azgym.sensing.image.blink_code import BLINK_CAMERA_RATE_HZ
 
     stats = measure_identification(args.scenario, camera_rate_hz=args.rate or BLINK_CAMERA_RATE_HZ,
-                                   noise_sigma=args.noise, seed=args.seed)
+                                   noise_sigma=args.noise, seed=args.seed,
+                                   progress=progress_printer())
     print(f"{stats.scenario}, every route, camera {stats.camera_rate_hz:g} Hz, noise "
           f"{stats.noise_sigma:g} grey levels: {stats.frames} frames")
     print(f"  beacons in view for a whole codeword: {stats.eligible} blobs; right id "

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from azgym.progress import Progress, counter
 from azgym.sensing.image.blink_code import BLINK_CAMERA_RATE_HZ
 from azgym.sensing.image.sensor import ImageSensor
 from azgym.site import Scenario, load_scenario
@@ -69,34 +70,40 @@ class IdentificationStats:
 
 def measure_identification(scenario: Scenario | str, camera_rate_hz: float = BLINK_CAMERA_RATE_HZ,
                            noise_sigma: float = 2.0, seed: int = 0,
-                           routes: list[str] | None = None) -> IdentificationStats:
-    """Drive the routes (all, or those named) and score the decoded ids (see the module)."""
+                           routes: list[str] | None = None,
+                           progress: Progress | None = None) -> IdentificationStats:
+    """Drive the routes (all, or those named) and score the decoded ids (see the module).
+
+    ``progress`` hears the count of routes driven.
+    """
     scenario = load_scenario(scenario)
     chosen = [r for r in scenario.routes if routes is None or r.name in routes]
     counts = np.zeros(7, dtype=np.int64)  # frames, eligible, correct, none, wrong, with id, bad
     ids = scenario.beacons.ids
-    for k, route in enumerate(chosen):
-        sensor = ImageSensor(scenario, ids="blink", noise_sigma=noise_sigma)
-        rows = np.arange(len(ids))
-        streak = np.zeros(len(ids), dtype=np.int64)
-        for frame in simulate(scenario, route, [seed, k], sensor=sensor,
-                              camera_rate_hz=camera_rate_hz):
-            # Frames a beacon must have been in view to have shown a whole codeword by now: a
-            # period, plus this frame's position in its codeword (the coming frame's is one on).
-            needed = sensor.code_position(rows) + sensor.code.period
-            in_view = np.zeros(len(ids), dtype=bool)
-            in_view[frame.observation.in_view] = True
-            streak = np.where(in_view, streak + 1, 0)
-            decoded = frame.measurements.ids
-            truth = frame.truth
-            row = np.maximum(truth.beacon, 0)  # blobs of no beacon are masked out below
-            true_ids = np.where(truth.beacon >= 0, ids[row], -1)
-            direct = (truth.beacon >= 0) & ~truth.mirrored
-            is_eligible = direct & (streak[row] >= needed[row])
-            counts += [1, is_eligible.sum(), (is_eligible & (decoded == true_ids)).sum(),
-                       (is_eligible & (decoded < 0)).sum(),
-                       (is_eligible & (decoded >= 0) & (decoded != true_ids)).sum(),
-                       (decoded >= 0).sum(), ((decoded >= 0) & (decoded != true_ids)).sum()]
+    with counter(progress, "routes", len(chosen), "routes") as driven:
+        for k, route in enumerate(chosen):
+            sensor = ImageSensor(scenario, ids="blink", noise_sigma=noise_sigma)
+            rows = np.arange(len(ids))
+            streak = np.zeros(len(ids), dtype=np.int64)
+            for frame in simulate(scenario, route, [seed, k], sensor=sensor,
+                                  camera_rate_hz=camera_rate_hz):
+                # Frames a beacon must have been in view to have shown a whole codeword by now: a
+                # period, plus this frame's position in its codeword (the coming frame's is one on).
+                needed = sensor.code_position(rows) + sensor.code.period
+                in_view = np.zeros(len(ids), dtype=bool)
+                in_view[frame.observation.in_view] = True
+                streak = np.where(in_view, streak + 1, 0)
+                decoded = frame.measurements.ids
+                truth = frame.truth
+                row = np.maximum(truth.beacon, 0)  # blobs of no beacon are masked out below
+                true_ids = np.where(truth.beacon >= 0, ids[row], -1)
+                direct = (truth.beacon >= 0) & ~truth.mirrored
+                is_eligible = direct & (streak[row] >= needed[row])
+                counts += [1, is_eligible.sum(), (is_eligible & (decoded == true_ids)).sum(),
+                           (is_eligible & (decoded < 0)).sum(),
+                           (is_eligible & (decoded >= 0) & (decoded != true_ids)).sum(),
+                           (decoded >= 0).sum(), ((decoded >= 0) & (decoded != true_ids)).sum()]
+            driven(k + 1)
     frames, eligible, correct, none, wrong, with_id, bad = (int(c) for c in counts)
     return IdentificationStats(scenario.name, camera_rate_hz, noise_sigma, frames, eligible,
                                correct, none, wrong, with_id, bad)
