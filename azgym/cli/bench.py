@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from azgym.cli.options import (
+    Interrupted,
     add_backend_options,
     add_overwrite,
     check_backend,
@@ -159,6 +160,13 @@ def add_bench(commands: argparse._SubParsersAction) -> None:
 
 
 def _bench(args: argparse.Namespace) -> int:
+    try:
+        return _run_bench(args)
+    except KeyboardInterrupt:
+        raise Interrupted("nothing was written: a run writes its results when it ends") from None
+
+
+def _run_bench(args: argparse.Namespace) -> int:
     from azgym.bench.navigation.suites import NAVIGATION_SUITES
     from azgym.bench.report.table import run_report
     from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT

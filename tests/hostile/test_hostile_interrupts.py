@@ -54,3 +54,26 @@ def test_a_finished_training_run_is_refused_unless_resumed_or_overwritten(model,
         cli.main(["train", "localizer", "--model", model, "--out", str(tmp_path), "--resume",
                   "--overwrite"])
     assert "not allowed with argument" in capsys.readouterr().err
+
+
+def test_ctrl_c_in_a_bench_run_stops_its_workers_too_and_says_nothing_was_written(tmp_path):
+    """A terminal sends Ctrl-C to the whole process group: the workers must not print either."""
+    command = [sys.executable, "-m", "azgym", "bench", "--suite", "stress", "--localizer",
+               "mex", "--workers", "2", "--out", str(tmp_path / "out")]
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             env={**os.environ, "PYTHONUNBUFFERED": "1"},
+                             start_new_session=True)
+    try:
+        with selectors.DefaultSelector() as waiting:  # its first count: the workers are busy
+            waiting.register(child.stderr, selectors.EVENT_READ)  # type: ignore[arg-type]
+            assert waiting.select(timeout=120), "no progress within 120 s"
+        child.stderr.readline()  # type: ignore[union-attr]
+        os.killpg(child.pid, signal.SIGINT)
+        _, err = child.communicate(timeout=60)
+    finally:
+        child.kill()
+    assert child.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert err.strip().splitlines()[-1] == ("azgym: interrupted; nothing was written: a run "
+                                            "writes its results when it ends")
+    assert not (tmp_path / "out" / "results.json").exists()
