@@ -1,6 +1,11 @@
-"""Helpers the tests share: noise-free frames seen from a known pose, small beacon maps."""
+"""Helpers the tests share: noise-free frames seen from a known pose, small beacon maps, and an
+attack run in a child process with bounded memory and time."""
 
 from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
 
 import numpy as np
 
@@ -8,7 +13,8 @@ import azgym
 from azgym.core import BeaconMap, Measurements, pose_error
 from azgym.sensing.synthetic import ideal_azimuths
 
-__all__ = ["beacon_map", "ideal_frame", "pose_error_of", "quick_navigation_run"]
+__all__ = ["beacon_map", "bounded_outcome", "ideal_frame", "pose_error_of",
+           "quick_navigation_run"]
 
 
 def ideal_frame(x: float, y: float, heading: float, beacons: BeaconMap) -> Measurements:
@@ -39,3 +45,26 @@ def quick_navigation_run(out, *localizers: str):
         argv += ["--localizer", localizer]
     assert cli.main([*argv, "--workers", "1", "--out", str(out)]) == 0
     return out / "navigation.json"
+
+
+def bounded_outcome(code: str, *, memory_bytes: int, seconds: float,
+                    stdin: int | None = None) -> str:
+    """What ``code`` ends in, run in a child process limited to ``memory_bytes`` of address
+    space and ``seconds``: the type and message of what it raises, or ``no error``.
+
+    An attack's test runs it so: a regression then fails (a MemoryError, a timeout) instead of
+    hanging the tests or exhausting the machine.
+    """
+    script = "\n".join([
+        "import resource",
+        f"resource.setrlimit(resource.RLIMIT_AS, ({memory_bytes}, {memory_bytes}))",
+        "try:",
+        textwrap.indent(textwrap.dedent(code).strip(), "    "),
+        "except BaseException as exc:  # the attack's outcome, whatever it is",
+        "    print(type(exc).__name__, exc)",
+        "else:",
+        "    print('no error')"])
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         timeout=seconds, stdin=stdin, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    return run.stdout.strip()

@@ -8,12 +8,10 @@ from __future__ import annotations
 import csv
 import re
 import shutil
-import subprocess
-import sys
-import textwrap
 from pathlib import Path
 
 import pytest
+from helpers import bounded_outcome
 from logs.mini_log import mini_files, write_log
 
 from azgym.logs import LogError, read_log
@@ -26,18 +24,8 @@ SECONDS = 60
 
 
 def _refusal(code: str) -> str:
-    """Run ``code`` (which prints the message of what it raises) bounded; its output."""
-    program = "\n".join([
-        "import resource",
-        f"resource.setrlimit(resource.RLIMIT_AS, ({MEMORY_MB} << 20, {MEMORY_MB} << 20))",
-        "try:",
-        textwrap.indent(textwrap.dedent(code).strip(), "    "),
-        "except Exception as exc:  # the attack's outcome, whatever it is",
-        "    print(type(exc).__name__, exc)",
-    ])
-    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
-                          timeout=SECONDS, check=False)
-    return done.stdout + done.stderr
+    """Run ``code`` bounded; the type and message of what it raises."""
+    return bounded_outcome(code, memory_bytes=MEMORY_MB << 20, seconds=SECONDS)
 
 
 def _simulated(tmp_path: Path) -> Path:

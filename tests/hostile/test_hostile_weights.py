@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import os
 import struct
-import subprocess
 import sys
-import textwrap
 import zipfile
 import zlib
 from pathlib import Path
 
 import pytest
+from helpers import bounded_outcome
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="devices and FIFOs are POSIX")
 
@@ -31,23 +30,8 @@ TIME_LIMIT = 60.0
 
 
 def refusal(code: str, stdin: int | None = None) -> str:
-    """What the child prints: the type and message of the error ``code`` raises.
-
-    ``code`` runs under the memory limit; the child must end within :data:`TIME_LIMIT`.
-    """
-    script = "\n".join([
-        "import resource",
-        f"resource.setrlimit(resource.RLIMIT_AS, ({MEMORY_LIMIT}, {MEMORY_LIMIT}))",
-        "try:",
-        textwrap.indent(textwrap.dedent(code).strip(), "    "),
-        "except BaseException as exc:",
-        "    print(type(exc).__name__, exc)",
-        "else:",
-        "    print('no error')"])
-    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                         timeout=TIME_LIMIT, stdin=stdin)
-    assert run.returncode == 0, run.stderr[-2000:]
-    return run.stdout.strip()
+    """What the child prints: the type and message of the error ``code`` raises."""
+    return bounded_outcome(code, memory_bytes=MEMORY_LIMIT, seconds=TIME_LIMIT, stdin=stdin)
 
 
 def ng_ransac_with(weights: str, stdin: int | None = None) -> str:
