@@ -109,7 +109,9 @@ def write_file(path: Path, data: bytes | str) -> Path:
                 os.fchmod(stream.fileno(), kept)  # a replaced file keeps its mode
             stream.write(content)
         os.replace(temporary, path)
-    except OSError as exc:
+    except BaseException as exc:  # an error or Ctrl-C: no temporary file is left behind
         temporary.unlink(missing_ok=True)
-        raise InvalidInputError(f"{path}: cannot write: {exc.strerror or exc}") from None
+        if isinstance(exc, OSError):
+            raise InvalidInputError(f"{path}: cannot write: {exc.strerror or exc}") from None
+        raise
     return path

@@ -18,7 +18,7 @@ from azgym.errors import InvalidInputError
 PARSED = [
     pytest.param(["bench"], bench._bench,
                  {"suite": None, "localizer": [], "with_builtins": False, "split": "dev",
-                  "workers": 0, "quick": False, "out": "results/bench", "profile": None},
+                  "workers": 0, "quick": False, "out": None, "profile": None},
                  id="bench"),
     pytest.param(["bench", "--localizer", "ransac", "--localizer", "lsq", "--split", "test"],
                  bench._bench, {"localizer": ["ransac", "lsq"], "split": "test"},
@@ -81,7 +81,7 @@ def test_version_and_defaults_are_shown(capsys):
     with pytest.raises(SystemExit):
         cli.main(["bench", "--help"])
     shown = " ".join(capsys.readouterr().out.split())
-    assert "(default: results/bench)" in shown
+    assert "(default: results/bench/SUITE," in shown and "data-LOG for a log)" in shown
     assert "--with-builtins run the default built-ins too" in shown
     assert "ransac:weighted=true" in shown
 

@@ -94,3 +94,24 @@ def test_verify_calls_a_built_in_azgyms_own_and_a_plug_in_the_submitters(
     assert main(["leaderboard", "verify", str(entries / "mine.json")]) == 0
     printed = capsys.readouterr().out
     assert "'ransac', which is azgym's own," in printed and "submitter" not in printed
+
+
+def test_build_never_replaces_a_readme_or_page_that_is_no_board(quick_run, tmp_path, capsys):
+    """``--entries DIR`` starts a board of one's own: its folder's own README.md is the user's."""
+    folder = tmp_path / "mine"
+    (folder / "entries").mkdir(parents=True)
+    assert main([*submit(quick_run, "mine", "--entries", str(folder / "entries"))]) == 0
+    (folder / "README.md").write_text("# My project\n")
+    capsys.readouterr()
+    assert main(["leaderboard", "build", "--entries", str(folder / "entries")]) == 2
+    assert f"--out: {folder / 'README.md'} is no azgym board's; nothing was written" in \
+        capsys.readouterr().err
+    assert (folder / "README.md").read_text() == "# My project\n"
+    assert not (folder / "index.html").exists()
+    assert main(["leaderboard", "build", "--entries", str(folder / "entries"),
+                 "--out", str(tmp_path / "board")]) == 0
+    assert main(["leaderboard", "build", "--entries", str(folder / "entries"),
+                 "--out", str(tmp_path / "board")]) == 0  # a board is rebuilt in place
+    assert main(["leaderboard", "build", "--entries", str(folder / "entries"),
+                 "--overwrite"]) == 0
+    assert (folder / "README.md").read_text().startswith("# azgym leaderboard")

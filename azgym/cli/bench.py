@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from azgym.cli.options import (
     Interrupted,
@@ -39,9 +40,13 @@ if TYPE_CHECKING:
     from azgym.bench.run.runner import Progress
     from azgym.profile import Profile
 
-__all__ = ["BENCH_FILES", "DEFAULT_SUITE", "OPTIONS", "RUNNERS", "Runner", "add_bench",
-           "check_options"]
+__all__ = ["BENCH_FILES", "DEFAULT_OUT", "DEFAULT_SUITE", "OPTIONS", "RUNNERS", "Runner",
+           "add_bench", "check_options"]
 
+T = TypeVar("T")
+
+DEFAULT_OUT = Path("results/bench")
+"""Where a run's results go unless ``--out`` says: a folder per suite and size, or log."""
 DEFAULT_SUITE = "warehouse-static"
 """The suite ``azgym bench`` runs, in its quick size, when none is named."""
 
@@ -154,19 +159,14 @@ def add_bench(commands: argparse._SubParsersAction) -> None:
                        help="a profile (docs/logs.md): every contender's defaults (a spec's own "
                             "win), a suite's simulated noise, or fields over a log's own")
     bench.add_argument("--quick", action="store_true", help="the suite's small version")
-    bench.add_argument("--out", type=out_folder, default="results/bench", help="output folder")
+    bench.add_argument("--out", type=out_folder, metavar="DIR",
+                       help=f"output folder (default: {DEFAULT_OUT}/SUITE, SUITE-quick for a quick "
+                            "run, data-LOG for a log)")
     add_overwrite(bench, "a previous run's results in --out")
     bench.set_defaults(handler=_bench)
 
 
 def _bench(args: argparse.Namespace) -> int:
-    try:
-        return _run_bench(args)
-    except KeyboardInterrupt:
-        raise Interrupted("nothing was written: a run writes its results when it ends") from None
-
-
-def _run_bench(args: argparse.Namespace) -> int:
     from azgym.bench.navigation.suites import NAVIGATION_SUITES
     from azgym.bench.report.table import run_report
     from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
@@ -195,22 +195,35 @@ def _run_bench(args: argparse.Namespace) -> int:
         args.time_limit = DEFAULT_TIME_LIMIT
     contenders = _contenders(args, args.time_limit, profile)
     workers = resolve_workers(args)
-    _claim(args, BENCH_FILES)  # before the run: a bad --out must not waste it
+    out = _claim(args, BENCH_FILES, f"{suite.name}{'-quick' if quick else ''}")
     started = time.perf_counter()
-    result = run_benchmark(suite, contenders, split=args.split, quick=quick, workers=workers,
-                           time_limit=args.time_limit, progress=progress_printer(),
-                           backend=args.backend, address=args.address, profile=profile)
-    written = result.write(Path(args.out))
+    result = _interruptible(lambda: run_benchmark(
+        suite, contenders, split=args.split, quick=quick, workers=workers,
+        time_limit=args.time_limit, progress=progress_printer(), backend=args.backend,
+        address=args.address, profile=profile))
+    written = result.write(out)
     print(run_report(result.summary, time.perf_counter() - started, written))
     _say_figures_skipped()
     return 0
 
 
-def _claim(args: argparse.Namespace, names: tuple[str, ...]) -> Path:
-    """``--out``, made writable, once it is sure to replace nothing unasked (``--overwrite``)."""
+def _claim(args: argparse.Namespace, names: tuple[str, ...], run: str) -> Path:
+    """``--out`` (default ``results/bench/RUN``), made writable, once nothing is replaced unasked.
+
+    Checked before the run (``--overwrite`` replaces), so that a bad ``--out`` wastes none.
+    """
     from azgym.files import claim_folder, prepare_folder
 
-    return prepare_folder(claim_folder(Path(args.out), names, args.overwrite, "--out"))
+    out = Path(args.out) if args.out is not None else DEFAULT_OUT / run
+    return prepare_folder(claim_folder(out, names, args.overwrite, "--out"))
+
+
+def _interruptible(run: Callable[[], T]) -> T:
+    """``run()``; Ctrl-C during it says that nothing was written (results come at its end)."""
+    try:
+        return run()
+    except KeyboardInterrupt:
+        raise Interrupted("nothing was written: a run writes its results when it ends") from None
 
 
 def _contenders(args: argparse.Namespace, time_limit: float, profile: Profile | None
@@ -247,11 +260,12 @@ def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile |
         progress(f"note: {note}")
     time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
     contenders = _contenders(args, time_limit, log_profile(log, profile))
-    _claim(args, BENCH_FILES)
+    out = _claim(args, BENCH_FILES, f"data-{log.manifest.name}")
     started = time.perf_counter()
-    result = run_log_benchmark(log, contenders, workers=resolve_workers(args),
-                               time_limit=time_limit, progress=progress, profile=profile)
-    written = result.write(Path(args.out))
+    result = _interruptible(lambda: run_log_benchmark(
+        log, contenders, workers=resolve_workers(args), time_limit=time_limit,
+        progress=progress, profile=profile))
+    written = result.write(out)
     print(run_report(result.summary, time.perf_counter() - started, written))
     _say_figures_skipped()
     return 0
@@ -271,11 +285,12 @@ def _bench_navigation(args: argparse.Namespace, progress: Progress) -> int:
     contenders = navigation_contenders(suite, args.navigator, args.localizer,
                                        with_builtins=args.with_builtins)
     workers = resolve_workers(args)
-    out = _claim(args, (RESULTS_FILE,))  # before the run: a bad --out must not waste it
+    out = _claim(args, (RESULTS_FILE,), f"{suite.name}{'-quick' if args.quick else ''}")
     check_contenders(suite, contenders)
     started = time.perf_counter()
-    result = run_navigation(suite, contenders, split=args.split, quick=args.quick,
-                            workers=workers, progress=progress)
+    result = _interruptible(lambda: run_navigation(
+        suite, contenders, split=args.split, quick=args.quick, workers=workers,
+        progress=progress))
     path = result.write(out)
     print()
     print(result.table())

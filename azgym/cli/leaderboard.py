@@ -61,6 +61,7 @@ def add_leaderboard(commands: argparse._SubParsersAction) -> None:
                        help="navigation results files (default: navigation/ beside --entries, "
                             "if there is one)")
     build.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
+    add_overwrite(build, "a README.md or index.html in --out that is no azgym board")
     build.add_argument("--skip-unavailable", action="store_true",
                        help="leave entries whose dataset is not found off the board (listed "
                             "as unchecked) instead of refusing to build")
@@ -92,6 +93,7 @@ def _leaderboard(args: argparse.Namespace) -> int:
     elif args.action == "build":
         entries = _entries(args.entries)
         out = Path(args.out) if args.out is not None else entries.parent
+        board.claim_board_folder(out, args.overwrite)
         for path in board.build(entries, out, _navigation_dir(args.navigation, entries),
                                 datasets=_datasets(args),
                                 skip_unavailable=args.skip_unavailable,

@@ -121,8 +121,10 @@ def _train_navigator(args: argparse.Namespace) -> int:
     try:
         result = run(request)
     except KeyboardInterrupt:
-        raise Interrupted(f"the checkpoints so far are kept in {request.out / 'checkpoints'}"
-                          ) from None
+        kept = request.out / "checkpoints"
+        raise Interrupted(f"the checkpoints so far are kept in {kept}"
+                          if kept.is_dir() and any(kept.iterdir())
+                          else "no checkpoint was written yet, nothing was kept") from None
     print("wrote " + ", ".join(map(str, (result.policy, result.card, result.curve,
                                           result.evaluations))))
     return 0

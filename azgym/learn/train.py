@@ -163,8 +163,7 @@ def prepared_data(out_dir: Path | str, layouts: int | Sequence[int], frames: int
     seeds = layout_seeds(layouts)
     out = prepare_folder(Path(out_dir))
     started = time.perf_counter()
-    with Meter() as meter:
-        train, held_out, info = build_data(seeds, frames, seed, meter if progress else None)
+    train, held_out, info = build_data(seeds, frames, seed, Meter() if progress else None)
     info["draw_seconds"] = round(time.perf_counter() - started, 1)
     return out, train, held_out, info
 
@@ -195,7 +194,7 @@ def fit(train: Any, held_out: Any, out_dir: Path, config: TrainConfig, *,
     history, seconds = resume(checkpoint, model, optimizer, stamp)
     if len(history) > config.epochs:
         raise InvalidInputError(f"{checkpoint}: holds {len(history)} epochs, more than the "
-                                f"{config.epochs} asked for; delete it to start over")
+                                f"{config.epochs} asked for; --overwrite starts over")
     steps = math.ceil(len(data[0][0]) / config.batch_size)
     bar = progress_bar(config.epochs * steps, len(history) * steps, progress)
     if history:
@@ -345,11 +344,11 @@ def resume(path: Path, model: torch.nn.Module, optimizer: torch.optim.Optimizer,
         found = state["fingerprint"]
     except Exception as exc:  # any unreadable checkpoint is refused alike
         reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
-        raise InvalidInputError(f"{path}: cannot read the checkpoint ({reason}); delete it "
-                                "to start over") from None
+        raise InvalidInputError(f"{path}: cannot read the checkpoint ({reason}); "
+                                "--overwrite starts over") from None
     if found != fingerprint:
         raise InvalidInputError(f"{path}: a checkpoint of another run (other data or "
-                                "settings); delete it to start over, or use another folder")
+                                "settings); --overwrite starts over, or use another folder")
     model.load_state_dict(state["model"])
     optimizer.load_state_dict(state["optimizer"])
     return list(state["history"]), float(state["seconds"])

@@ -174,7 +174,7 @@ def fit_regression(train: Any, held_out: Any, out_dir: Path, config: RegressionC
     history, seconds = resume(checkpoint, model, optimizer, stamp)
     if len(history) > config.epochs:
         raise InvalidInputError(f"{checkpoint}: holds {len(history)} epochs, more than the "
-                                f"{config.epochs} asked for; delete it to start over")
+                                f"{config.epochs} asked for; --overwrite starts over")
     steps = math.ceil(len(data[0][0]) / config.batch_size)
     bar = progress_bar(config.epochs * steps, len(history) * steps, progress, desc=MODEL)
     if history:

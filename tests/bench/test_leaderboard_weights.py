@@ -83,6 +83,11 @@ def test_submit_refuses_a_weight_file_changed_since_the_run(weights_entry, tmp_p
      "relative to the entry's folder"),
     (lambda localizer: localizer.pop("weights_sha256"),
      "localizer/weights_sha256: a weight file's SHA-256 is required"),
+    # hyperparameters in the spec would escape the checks of localizer/params
+    (lambda localizer: localizer.update(spec="ng-ransac:weights=/abs/model.npz"),
+     "localizer/spec: 'ng-ransac:weights=/abs/model.npz' carries hyperparameters"),
+    (lambda localizer: localizer.update(spec="/abs/evil.py:Evil:tag=1"),
+     "localizer/spec: '/abs/evil.py:Evil:tag=1' carries hyperparameters"),
 ])
 def test_an_entry_must_pin_its_weight_file(weights_entry, change, message):
     _, path = weights_entry

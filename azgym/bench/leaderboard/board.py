@@ -28,11 +28,13 @@ from azgym.bench.leaderboard.entry_files import Entry
 from azgym.bench.report.table import LEGEND, RANK_BY, rank_key
 from azgym.bench.report.tracking import KIDNAP_WINDOW_S, RECOVERED_CM, TrackFigures
 from azgym.bench.suites import SUITES, get_suite
+from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder, write_file
 from azgym.progress import Progress, counter
 
-__all__ = ["COLUMNS", "KINDS", "REAL_NOTE", "REAL_PART", "RECOVERY_COLUMN", "TRACKS_AT",
-           "TRACK_COLUMNS", "build", "markdown_cell", "web_link"]
+__all__ = ["BOARD_FILES", "COLUMNS", "KINDS", "REAL_NOTE", "REAL_PART", "RECOVERY_COLUMN",
+           "TRACKS_AT", "TRACK_COLUMNS", "build", "claim_board_folder", "markdown_cell",
+           "web_link"]
 
 WEB_SCHEMES = ("http://", "https://")
 """A link is shown only with one of these schemes (no ``javascript:``, no local files)."""
@@ -246,6 +248,32 @@ def _suite_tables(loaded: list[tuple[Entry, str]], suite: str, sections: list[Se
             f"board-{suite}-{split}-{'quick' if quick else 'full'}"
         _add_table(lines, sections, ("", suite, description, title, table_id), ranked)
     return lines
+
+
+BOARD_FILES = {"README.md": "# azgym leaderboard", "index.html": "<title>azgym leaderboard</title>"}
+"""The files a build writes, each with the text that marks one azgym wrote."""
+
+
+def claim_board_folder(out_dir: Path, overwrite: bool) -> None:
+    """Refuse, unless ``overwrite``, to replace a README.md or index.html azgym did not write.
+
+    A board is rebuilt in place (its files are azgym's); any other such file is the user's.
+
+    Raises:
+        InvalidInputError: A file of :data:`BOARD_FILES` in ``out_dir`` that is no board's.
+    """
+    foreign = [out_dir / name for name, mark in BOARD_FILES.items()
+               if (out_dir / name).is_file() and mark not in _opening(out_dir / name)]
+    if foreign and not overwrite:
+        raise InvalidInputError(
+            f"--out: {', '.join(map(str, foreign))} is no azgym board's; nothing was written "
+            "(--out DIR puts the board elsewhere; --overwrite replaces it)")
+
+
+def _opening(path: Path) -> str:
+    """The first few kilobytes of a file, as text (where a board's mark is)."""
+    with path.open("rb") as file:
+        return file.read(4096).decode("utf-8", errors="replace")
 
 
 def _intro(count: int) -> list[str]:

@@ -44,6 +44,8 @@ from azgym.bench.leaderboard.entry_files import Entry, FrameTable, LeaderboardEr
 from azgym.bench.leaderboard.plugin_files import WEIGHTS, is_portable, is_relative, plugin_path
 from azgym.bench.report.results import cases_digest, contender_metrics, frame_number
 from azgym.bench.suites import NO_TEST_SPLIT, SUITES, Case
+from azgym.errors import AzgymError
+from azgym.localize.registry import parse_spec
 
 __all__ = ["ENTRY_FORMAT", "clean", "close", "release", "schema", "suite_cases", "validate_entry"]
 
@@ -141,6 +143,10 @@ def _check_run(entry: Entry, origin: str) -> None:
     _check_version(entry["azgym_version"], origin)
     _check_timestamp(entry["timestamp"], origin)
     localizer = entry["localizer"]
+    if _spec_params(localizer["spec"], origin):
+        raise LeaderboardError(f"{origin}: localizer/spec: {localizer['spec']!r} carries "
+                               "hyperparameters; an entry keeps them in localizer/params, where "
+                               "its files are checked")
     if plugin_path(localizer["spec"]) is not None:
         if not is_portable(localizer["spec"]):
             raise LeaderboardError(f"{origin}: localizer/spec: {localizer['spec']!r} is an "
@@ -158,6 +164,14 @@ def _check_run(entry: Entry, origin: str) -> None:
         if "weights_sha256" not in localizer:
             raise LeaderboardError(f"{origin}: localizer/weights_sha256: a weight file's "
                                    "SHA-256 is required (submit records it)")
+
+
+def _spec_params(spec: str, origin: str) -> dict[str, object]:
+    """The hyperparameters a spec writes after its name (an entry's must write none)."""
+    try:
+        return parse_spec(spec)[1]
+    except AzgymError as exc:
+        raise LeaderboardError(f"{origin}: localizer/spec: {exc}") from None
 
 
 def _check_suite_run(entry: Entry, origin: str) -> None:

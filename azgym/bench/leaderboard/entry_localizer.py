@@ -24,7 +24,7 @@ from azgym.bench.leaderboard.plugin_files import (
     weights_path,
     weights_sha256,
 )
-from azgym.errors import ModelFileError
+from azgym.errors import InvalidInputError
 
 __all__ = ["portable_localizer", "runnable_localizer"]
 
@@ -71,7 +71,7 @@ def _digest(path: Path, where: str, digest_of: Callable[[Path], str]) -> str:
     """``digest_of(path)``; a weight file that cannot be read as one is refused by name."""
     try:
         return digest_of(path)
-    except ModelFileError as exc:
+    except InvalidInputError as exc:  # a file that cannot be read as one (a model's too)
         raise LeaderboardError(f"{where}: {exc}") from None
 
 

@@ -62,8 +62,12 @@ def weights_path(params: Mapping[str, Any]) -> Path | None:
 
 
 def file_sha256(path: Path) -> str:
-    """The SHA-256 of a file's bytes."""
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    """The SHA-256 of a plug-in file, read as every file azgym did not write is (capped).
+
+    Raises:
+        InvalidInputError: The file is missing, no regular file, or larger than a model file.
+    """
+    return hashlib.sha256(read_regular_file(path, MAX_FILE_BYTES, "plug-in file")).hexdigest()
 
 
 def weights_sha256(path: Path) -> str:
