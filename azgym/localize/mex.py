@@ -257,10 +257,13 @@ class Mex(Localizer):
 
     def _search(self, problem: Problem, map_box: Box) -> Estimate:
         """``bounds``, or the measured beacons' box, then the map's extent (class docstring)."""
-        estimate = self._solve(problem, *self.grid(problem),
-                               "bounds" if self.bounds is not None else SEEN_BOX)
-        if self.bounds is not None or "grid_point" not in estimate.diagnostics or \
-                azimuth_spread(problem.azimuth) >= math.pi:
+        estimate, on_edge = self._solve(problem, *self.grid(problem),
+                                        "bounds" if self.bounds is not None else SEEN_BOX)
+        # The map's extent is searched when the box's best point is on its edge: a refusal whose
+        # cost keeps falling outside ("grid_point"), or an answer (rising outside, it may yet be
+        # a local minimum only, next to a beacon whose direction turns fast).
+        beyond = "grid_point" in estimate.diagnostics or (estimate.ok and on_edge)
+        if self.bounds is not None or not beyond or azimuth_spread(problem.azimuth) >= math.pi:
             return estimate  # beacons on every side: the camera is inside their hull
         extent = self.extent(map_box)
         if extent == seen_box(problem):
@@ -270,12 +273,15 @@ class Mex(Localizer):
             nx, ny = self._grid_shape(extent, where)
         except InvalidInputError as exc:
             return Estimate.failure(f"{estimate.reason}; {exc}", problem.n_measurements,
-                                    estimate.diagnostics)
-        return self._solve(problem, extent[0], extent[1], nx, ny, where)
+                                    estimate.diagnostics) if not estimate.ok else estimate
+        wider, _ = self._solve(problem, extent[0], extent[1], nx, ny, where)
+        # An answer is replaced only by one of lower cost: a true answer stays bit for bit.
+        lower = wider.ok and wider.diagnostics["cost"] < estimate.diagnostics.get("cost", math.inf)
+        return wider if lower or not estimate.ok else estimate
 
     def _solve(self, problem: Problem, x0: float, y0: float, nx: int, ny: int,
-               where: str) -> Estimate:
-        """The minimum of the nx × ny grid from (x0, y0), or a refusal if it is only the edge's.
+               where: str) -> tuple[Estimate, bool]:
+        """The nx × ny grid's minimum from (x0, y0) (refused if only the edge's); if on the edge.
 
         ``where`` names the area searched in the refusal's message.
         """
@@ -287,7 +293,8 @@ class Mex(Localizer):
         else:
             i, j, cost = self._coarse_to_fine(args, self.coarse_step, x0, y0, nx, ny, no_store)
         if i < 0:
-            return Estimate.failure("no grid point has a finite cost", problem.n_measurements)
+            return Estimate.failure("no grid point has a finite cost",
+                                    problem.n_measurements), False
         x = x0 + i * step
         y = y0 + j * step
         on_edge = i in (0, nx - 1) or j in (0, ny - 1)
@@ -297,12 +304,12 @@ class Mex(Localizer):
                 f"keeps falling outside it: the camera is outside the searched area ({where}; "
                 "give bounds that contain it)", problem.n_measurements,
                 {"cost": float(cost), "grid_point": (float(x), float(y))},
-            )
+            ), True
         if singular_at(problem.bx, problem.by, np.ones(problem.size, dtype=np.bool_), x, y):
             return Estimate.failure(
                 "the measured beacons do not determine the pose at the best grid point "
                 "(e.g. all on one line through it)", problem.n_measurements,
-            )
+            ), on_edge
         dx = problem.bx - x
         dy = problem.by - y
         dist = np.hypot(dx, dy)
@@ -315,7 +322,7 @@ class Mex(Localizer):
             x=float(x), y=float(y), heading=heading,
             inliers=problem.expand(np.ones(problem.size, dtype=bool)),
             diagnostics={"cost": float(cost), "grid_shape": (ny, nx)},
-        )
+        ), on_edge
 
     def _coarse_to_fine(
         self, args: tuple[FloatArray, ...], coarse_step: float, x0: float, y0: float, nx: int,

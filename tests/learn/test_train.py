@@ -107,7 +107,8 @@ def test_a_checkpoint_of_another_run_or_of_more_epochs_is_refused(tmp_path):
     with pytest.raises(InvalidInputError, match="holds 2 epochs, more than the 1 asked for"):
         fit(tmp_path, epochs=1)
     (tmp_path / "checkpoint.pt").write_bytes(b"not a checkpoint")
-    with pytest.raises(InvalidInputError, match="cannot read the checkpoint .*; --overwrite starts over"):
+    with pytest.raises(InvalidInputError,
+                       match="cannot read the checkpoint .*; --overwrite starts over"):
         fit(tmp_path, epochs=2)
 
 

@@ -270,3 +270,20 @@ def test_coarse_step_must_be_a_multiple_of_step(paper_beacons):
     estimate = Mex(step=0.1, coarse_step=0.3, bounds=(-1, -1, 1, 1)).localize(frame,
                                                                                paper_beacons)
     assert (estimate.x, estimate.y) == pytest.approx((0.0, 0.0), abs=1e-12)
+
+
+@pytest.mark.parametrize("coarse", [False, True])
+def test_an_answer_on_the_seen_box_edge_next_to_a_beacon_is_checked_beyond_it(coarse):
+    """A camera below four beacons (azimuths spread under π): the measured beacons' box has its
+    best point on its edge, next to a beacon, with the cost rising outside; the camera is 0.2 m
+    further out. The map's extent is searched too and its lower cost wins (found by the
+    property test of mex)."""
+    beacons = azgym.BeaconMap(np.array([1, 2, 3, 4]), np.array([
+        [0.14367394, 0.14367394, 2.5], [0.23945657, 0.04789131, 2.5],
+        [-0.23945657, -0.09578263, 2.5], [0.14367394, -0.14367394, 2.5]]), width=0.03)
+    pose = (-0.09019322380503517, -0.3125037274910326, 0.0)
+    step = 0.5126323423905267 / 40
+    mex = Mex(step=step, coarse_step=4 * step if coarse else None, margin=0.5126323423905267)
+    estimate = mex.localize(ideal_frame(*pose, beacons), beacons)
+    assert estimate.ok
+    assert math.hypot(estimate.x - pose[0], estimate.y - pose[1]) < step
