@@ -177,10 +177,16 @@ def _delete_kernels(folder: Path, names: set[str]) -> bool:
 def localizers_compiled(package_dir: Path = PACKAGE_DIR) -> bool:
     """Whether the localizers' kernels are in numba's cache (False: the next run compiles them).
 
-    Looks for the index of the reference localizer's kernel, the last one a first run compiles.
+    Looks for the index of the reference localizer's kernel, the last one a first run compiles,
+    where numba will look: only in ``NUMBA_CACHE_DIR`` when that is set (numba then keeps its
+    cache there and nowhere else), else in the package's ``__pycache__`` and the user-wide cache.
     """
+    folders = _cache_dirs(package_dir)
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        root = Path(os.environ["NUMBA_CACHE_DIR"])
+        folders = [folder for folder in folders if folder.is_relative_to(root)]
     return any(folder.is_dir() and any(folder.glob("ransac._ransac_frame-*.nbi"))
-               for folder in _cache_dirs(package_dir))
+               for folder in folders)
 
 
 drop_stale_cache()

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from azgym.jit import KERNEL_MODULES, drop_stale_cache, numba_subfolder
+from azgym.jit import KERNEL_MODULES, drop_stale_cache, localizers_compiled, numba_subfolder
 
 
 def fake_package(root: Path) -> Path:
@@ -135,3 +135,11 @@ def test_a_cache_folder_whose_record_cannot_be_written_is_never_touched(package_
     for _ in range(3):
         assert drop_stale_cache(tmp_path) is False
     assert (cache / "ransac._search-10.py311.nbi").exists()
+
+
+def test_with_numba_cache_dir_set_only_that_cache_says_whether_the_kernels_are_compiled(
+        tmp_path, monkeypatch):
+    """numba keeps its cache only in NUMBA_CACHE_DIR when it is set: an empty one means the next
+    run compiles (and says so), whatever the package's own __pycache__ holds."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert not localizers_compiled()
