@@ -305,6 +305,6 @@ def _say_figures_skipped() -> None:
     """One line when the run's figures were not drawn (no matplotlib), saying how to get them."""
     from azgym.site.drawing import figures_skipped
 
-    if (skipped := figures_skipped(["cdf.png", "causes.png", "error_map_*.png",
-                                    "trajectories_*.png"])) is not None:
+    figures = [name for name in BENCH_FILES if name.endswith(".png")]
+    if (skipped := figures_skipped(figures)) is not None:
         print(skipped)
