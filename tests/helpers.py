@@ -3,6 +3,7 @@ attack run in a child process with bounded memory and time."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import textwrap
@@ -13,7 +14,7 @@ import azgym
 from azgym.core import BeaconMap, Measurements, pose_error
 from azgym.sensing.synthetic import ideal_azimuths
 
-__all__ = ["beacon_map", "bounded_outcome", "ideal_frame", "pose_error_of",
+__all__ = ["beacon_map", "bounded_outcome", "edited_json", "ideal_frame", "pose_error_of",
            "quick_navigation_run"]
 
 
@@ -45,6 +46,15 @@ def quick_navigation_run(out, *localizers: str):
         argv += ["--localizer", localizer]
     assert cli.main([*argv, "--workers", "1", "--out", str(out)]) == 0
     return out / "navigation.json"
+
+
+def edited_json(folder, path, edit, name: str = "navigation.json"):
+    """A copy of the JSON file ``path`` in ``folder``, its data changed by ``edit`` first."""
+    data = json.loads(path.read_text())
+    edit(data)
+    copy = folder / name
+    copy.write_text(json.dumps(data))
+    return copy
 
 
 def bounded_outcome(code: str, *, memory_bytes: int, seconds: float,

@@ -7,7 +7,6 @@ before any work starts. See docs/layout.md.
 from __future__ import annotations
 
 import argparse
-import glob
 import time
 from pathlib import Path
 from typing import Any
@@ -15,16 +14,13 @@ from typing import Any
 from azgym.cli.options import (
     add_overwrite,
     out_folder,
+    progress_printer,
     resolve_workers,
     seconds_option,
     workers_option,
 )
 
-__all__ = ["ANALYSIS_FILES", "DEFAULT_FRAMES", "MAX_TOTAL_FRAMES", "add_layout"]
-
-ANALYSIS_FILES = ("layout.json", "layout.npz", "layout.png")
-"""What ``layout analyze`` writes into ``--out``; ``optimize`` writes ``SCENARIO-plus-N.toml`` and
-``layout-optimized.png``."""
+__all__ = ["DEFAULT_FRAMES", "MAX_TOTAL_FRAMES", "add_layout"]
 
 DEFAULT_FRAMES = 100
 """Monte Carlo frames per cell by default (about 7 % sampling error on an RMS; 400: 3.5 %)."""
@@ -50,7 +46,7 @@ def _analyze(args: argparse.Namespace) -> int:
     from azgym.errors import InvalidInputError
     from azgym.files import claim_folder, prepare_folder
     from azgym.localize.registry import make_localizer
-    from azgym.placement.analysis import analyze, summary, write_analysis
+    from azgym.placement.analysis import ANALYSIS_FILES, analyze, summary, write_analysis
 
     frames = whole_number("frames", args.frames, minimum=0)
     seed = seed_rule("--seed", args.seed)
@@ -69,17 +65,10 @@ def _analyze(args: argparse.Namespace) -> int:
           + (f"; Monte Carlo: {frames} frames per cell through {args.localizer}" if frames
              else ""), flush=True)
     started = time.perf_counter()
-    prediction, checked = analyze(
-        scenario, floor, args.localizer, frames, seed,
-        lambda done, total: print(f"  Monte Carlo: {done}/{total} cells", flush=True),
-        workers=workers, time_limit=args.time_limit)
-    written = write_analysis(out, scenario, prediction, checked)
-    if not args.no_figures:
-        from azgym.placement.figures import analysis_figure
-
-        written.append(analysis_figure(
-            scenario, floor, prediction.sigma, prediction.visible,
-            None if checked is None else checked.rms, out / "layout.png", args.localizer))
+    prediction, checked = analyze(scenario, floor, args.localizer, frames, seed,
+                                  progress_printer(), workers=workers,
+                                  time_limit=args.time_limit)
+    written = write_analysis(out, scenario, prediction, checked, figures=not args.no_figures)
     _print_summary(summary(scenario, prediction, checked))
     print(f"{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
     return 0
@@ -124,18 +113,18 @@ def _optimize(args: argparse.Namespace) -> int:
     from azgym.files import claim_folder, prepare_folder
     from azgym.placement.candidates import candidate_places
     from azgym.placement.optimize import check_add, place_beacons
-    from azgym.placement.scenario_file import file_stem, source_data
+    from azgym.placement.scenario_file import placement_files, source_data
 
     scenario, floor, out = _prepared(args)
     candidates = candidate_places(scenario, args.spacing)
     add = check_add(args.add, candidates)
     source_data(scenario)  # a scenario without a file to add to stops here
-    names = (f"{glob.escape(file_stem(scenario.name))}-plus-*.toml", "layout-optimized.png")
-    prepare_folder(claim_folder(out, names, args.overwrite, "--out"))  # the last check
+    prepare_folder(claim_folder(out, placement_files(scenario.name), args.overwrite,
+                                "--out"))  # the last check
     print(f"{scenario.name}: {int(floor.free.sum())} cells of {floor.step:g} m; placing "
           f"{_count(add, 'beacon')} on {len(candidates)} candidate places", flush=True)
     started = time.perf_counter()
-    placement = place_beacons(scenario, floor, candidates, add)
+    placement = place_beacons(scenario, floor, candidates, add, progress_printer())
     written = _write_placement(args, scenario, floor, placement, out)
     print(f"{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
     return 0
@@ -146,7 +135,12 @@ def _write_placement(args: argparse.Namespace, scenario: Any, floor: Any, placem
     """The new scenario file and figure, and the printout; refused when nothing helps."""
     from azgym.errors import InvalidInputError
     from azgym.placement.objective import floor_figures
-    from azgym.placement.scenario_file import file_stem, with_new_beacons, write_scenario
+    from azgym.placement.scenario_file import (
+        PLACEMENT_FIGURE,
+        placed_name,
+        with_new_beacons,
+        write_scenario,
+    )
 
     placed = len(placement.chosen)
     if not placed:
@@ -156,7 +150,7 @@ def _write_placement(args: argparse.Namespace, scenario: Any, floor: Any, placem
     if placed < args.add:
         print(f"only {_count(placed, 'beacon')} of the {args.add} asked for lower the objective; "
               f"placing {placed}")
-    name = f"{file_stem(scenario.name)}-plus-{placed}"
+    name = placed_name(scenario.name, placed)
     data = with_new_beacons(scenario, placement.new_xyz, placement.width, name)
     path = out / f"{name}.toml"
     write_scenario(path, data, f"{scenario.name} with {_count(placed, 'beacon')} placed by azgym "
@@ -169,7 +163,7 @@ def _write_placement(args: argparse.Namespace, scenario: Any, floor: Any, placem
 
         written.append(placement_figure(
             scenario, floor, placement.before, placement.after, placement.new_xyz,
-            (before["sigma_p95_m"], after["sigma_p95_m"]), out / "layout-optimized.png"))
+            (before["sigma_p95_m"], after["sigma_p95_m"]), out / PLACEMENT_FIGURE))
     for beacon, index in zip(data["beacons"][-placed:], placement.chosen, strict=True):
         x, y, z = beacon["xyz"]
         print(f"  new beacon {beacon['id']}: ({x:g}, {y:g}, {z:g}) on a "

@@ -7,7 +7,6 @@ parsers to the ``azgym`` command.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
@@ -20,20 +19,12 @@ from azgym.cli.options import (
 )
 from azgym.files import claim_folder
 
-__all__ = ["ERROR_MODEL_FILES", "PAPER_FILES", "PLOTTER_FILES", "add_reproduce", "add_study"]
-
-PAPER_FILES = ("results.json", "results.md", "runs.npz", "error_map_k*.png", "error_cdf.png")
-"""What ``reproduce paper`` writes into ``--out`` (:func:`~azgym.experiments.paper.report.
-write_outputs`)."""
-PLOTTER_FILES = ("results.json", "errors.png")
-"""What ``reproduce plotter`` writes into ``--out``."""
-ERROR_MODEL_FILES = ("error_model.json", "error_model.png")
-"""What ``study error-model`` writes into ``--out``."""
+__all__ = ["add_reproduce", "add_study"]
 
 
 def _reproduce_paper(args: argparse.Namespace) -> int:
     from azgym.bench.suites.paper import ProtocolConfig
-    from azgym.experiments.paper.report import write_outputs
+    from azgym.experiments.paper.report import PAPER_FILES, write_outputs
     from azgym.experiments.paper.reproduce import reproduce, time_exhaustive_mex
     from azgym.site import load_scenario
 
@@ -60,16 +51,13 @@ def _reproduce_paper(args: argparse.Namespace) -> int:
 
 
 def _reproduce_plotter(args: argparse.Namespace) -> int:
-    from azgym.experiments.plotter.figure import write_figure
-    from azgym.experiments.plotter.reproduce import reproduce_plotter
-    from azgym.files import prepare_folder, write_file
+    from azgym.experiments.plotter import PLOTTER_FILES, reproduce_plotter, write_outputs
+    from azgym.files import prepare_folder
 
     _figures_need_matplotlib(False)
     out = prepare_folder(claim_folder(Path(args.out), PLOTTER_FILES, args.overwrite, "--out"))
     result = reproduce_plotter(seed=args.seed, runs=args.runs, progress=progress_printer())
-    summary = {key: value for key, value in result.items() if key != "errors"}
-    written = [write_file(out / "results.json", json.dumps(summary, indent=1) + "\n"),
-               write_figure(result, out / "errors.png")]
+    written = write_outputs(result, out)
     print(f"{args.runs} runs of a {result['lap_s']:g} s lap, seed {args.seed}: 90th percentile "
           "of the position error")
     for method, p90 in result["p90"].items():
@@ -81,13 +69,15 @@ def _reproduce_plotter(args: argparse.Namespace) -> int:
 
 
 def _study_error_model(args: argparse.Namespace) -> int:
-    from azgym.experiments.error_model import run
+    from azgym.experiments.error_model import ERROR_MODEL_FILES, run
+    from azgym.files import prepare_folder
 
     _figures_need_matplotlib(args.no_figures)
-    claim_folder(Path(args.out), ERROR_MODEL_FILES, args.overwrite, "--out")
+    out = prepare_folder(claim_folder(Path(args.out), ERROR_MODEL_FILES, args.overwrite,
+                                      "--out"))
     summary = run(args.scenario, frames=args.frames, noise_sigma=args.noise,
-                  calibration_px=args.calibration_px, seed=args.seed, out=Path(args.out),
-                  figures=not args.no_figures)
+                  calibration_px=args.calibration_px, seed=args.seed, out=out,
+                  figures=not args.no_figures, progress=progress_printer())
     centre, azimuth = summary["centre_error_px"], summary["azimuth_error_deg"]
     calibrated = summary["azimuth_error_calibrated_deg"]
     print(f"{summary['scenario']}: {summary['detections']} beacon detections in "
@@ -105,8 +95,8 @@ def _study_error_model(args: argparse.Namespace) -> int:
         print(f"  coverage error / eq. 2 bound ({summary['partly_covered']} partly covered): "
               f"median {summary['coverage_over_eq2_bound']['median']:.2f}, max "
               f"{summary['coverage_over_eq2_bound']['max']:.2f}")
-    print(f"Wrote {args.out}/error_model.json" + ("" if args.no_figures else
-                                                  f" and {args.out}/error_model.png"))
+    print("Wrote " + " and ".join(str(out / name) for name in ERROR_MODEL_FILES
+                                  if not (args.no_figures and name.endswith(".png"))))
     return 0
 
 

@@ -21,10 +21,7 @@ from azgym.cli.options import (
     workers_option,
 )
 
-__all__ = ["SWEEP_FILES", "add_sweep"]
-
-SWEEP_FILES = ("sweep.csv", "runtimes.csv", "sweep.png")
-"""What a sweep writes into ``--out`` (:meth:`azgym.bench.sweep.run.SweepResult.write`)."""
+__all__ = ["add_sweep"]
 
 
 def add_sweep(commands: argparse._SubParsersAction) -> None:
@@ -42,7 +39,7 @@ def add_sweep(commands: argparse._SubParsersAction) -> None:
 
 def _sweep(args: argparse.Namespace) -> int:
     from azgym.bench.sweep.config import load_sweep
-    from azgym.bench.sweep.run import run_sweep
+    from azgym.bench.sweep.run import SWEEP_FILES, run_sweep
     from azgym.files import claim_folder, prepare_folder
 
     check_backend(args)
@@ -60,6 +57,7 @@ def _sweep(args: argparse.Namespace) -> int:
     print(f"\n{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
     from azgym.site.drawing import figures_skipped
 
-    if (skipped := figures_skipped(["sweep.png"])) is not None:
+    if (skipped := figures_skipped([name for name in SWEEP_FILES
+                                    if name.endswith(".png")])) is not None:
         print(skipped)
     return 0

@@ -18,12 +18,7 @@ from azgym.cli.options import Interrupted, add_overwrite, out_folder
 from azgym.errors import AzgymError, DependencyNotInstalled, InvalidInputError
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
 
-__all__ = ["MODELS", "NAVIGATOR_FILES", "add_train"]
-
-NAVIGATOR_FILES = ("policy.zip", "evaluations.npz", "learning-curve.png", "model-card.md",
-                   "checkpoints/*")
-"""What ``train navigator`` writes into ``--out`` (:mod:`azgym.learn.navigator.train`): a run
-there is refused without ``--overwrite`` (a navigator run is not resumed)."""
+__all__ = ["MODELS", "add_train"]
 
 MODELS = tuple(MODEL_DEFAULTS)
 """The models ``--model`` names."""
@@ -113,7 +108,8 @@ def _claim_run(out: Path, weights: Path, checkpoint: Path, args: argparse.Namesp
 
 def _train_navigator(args: argparse.Namespace) -> int:
     from azgym.files import claim_folder
-    from azgym.learn.navigator.train import prepare, run
+    from azgym.learn.navigator.request import CHECKPOINTS
+    from azgym.learn.navigator.train import NAVIGATOR_FILES, prepare, run
 
     claim_folder(Path(args.out), NAVIGATOR_FILES, args.overwrite, "--out")
     request = prepare(args.env, args.algo, args.steps, Path(args.out), seed=args.seed,
@@ -121,7 +117,7 @@ def _train_navigator(args: argparse.Namespace) -> int:
     try:
         result = run(request)
     except KeyboardInterrupt:
-        kept = request.out / "checkpoints"
+        kept = request.out / CHECKPOINTS
         raise Interrupted(f"the checkpoints so far are kept in {kept}"
                           if kept.is_dir() and any(kept.iterdir())
                           else "no checkpoint was written yet, nothing was kept") from None

@@ -28,17 +28,27 @@ from typing import Any
 import numpy as np
 
 from azgym.core import FloatArray, wrap_angle
+from azgym.files import prepare_folder, write_file
+from azgym.progress import Progress, counter
 from azgym.sensing.image.sensor import ImageSensor
 from azgym.sensing.labels import MOVED
 from azgym.site import Scenario, load_scenario
 from azgym.site.sampling import random_free_pose
 
-__all__ = ["measure_detections", "plot", "run", "summarize"]
+__all__ = ["ERROR_MODEL_FILES", "measure_detections", "plot", "run", "summarize"]
+
+_SUMMARY, _FIGURE = "error_model.json", "error_model.png"
+ERROR_MODEL_FILES = (_SUMMARY, _FIGURE)
+"""What :func:`run` writes into its folder: what ``azgym study error-model`` claims in
+``--out``."""
 
 
 def measure_detections(scenario: Scenario | str, frames: int = 300, noise_sigma: float = 2.0,
-                       calibration_px: float = 1.0, seed: int = 0) -> dict[str, FloatArray]:
+                       calibration_px: float = 1.0, seed: int = 0,
+                       progress: Progress | None = None) -> dict[str, FloatArray]:
     """Per-detection errors of the image path at random poses (beacons only, ghosts left out).
+
+    ``progress`` hears the count of frames rendered (:func:`azgym.progress.counter`).
 
     Returns:
         Arrays, one entry per detected beacon: ``distance`` [m], ``radius_px`` (blob's distance
@@ -51,37 +61,44 @@ def measure_detections(scenario: Scenario | str, frames: int = 300, noise_sigma:
     scenario = load_scenario(scenario)
     sensor = ImageSensor(scenario, noise_sigma=noise_sigma)
     sensor.reset(seed)
-    camera = sensor.camera
-    cx, cy = camera.principal_point
     rng = np.random.default_rng(seed)
-    positions = scenario.beacon_positions
     rows: dict[str, list[float]] = {key: [] for key in (
         "distance", "radius_px", "visible", "centre_px", "azimuth", "coverage",
         "azimuth_calibrated")}
-    for _ in range(frames):
-        x, y, heading = random_free_pose(scenario, rng)
-        frame = sensor.observe((x, y, heading), rng)
-        truth = frame.truth
-        offset_angle = rng.uniform(-math.pi, math.pi)
-        bx, by = cx + calibration_px * math.cos(offset_angle), cy + calibration_px * math.sin(
-            offset_angle)
-        real = np.flatnonzero((truth.beacon >= 0) & ~truth.mirrored & (truth.label != MOVED))
-        for k in real:
-            blob = frame.blobs[k]
-            beacon = positions[truth.beacon[k]]
-            dx, dy = beacon[0] - x, beacon[1] - y
-            whole = math.atan2(dy, dx) - heading
-            radius = math.hypot(blob.u - cx, blob.v - cy)
-            centre = wrap_angle(blob.azimuth - truth.azimuth[k])
-            rows["distance"].append(math.hypot(dx, dy))
-            rows["radius_px"].append(radius)
-            rows["visible"].append(float(truth.visible[k]))
-            rows["centre_px"].append(centre * radius)
-            rows["azimuth"].append(wrap_angle(blob.azimuth - whole))
-            rows["coverage"].append(wrap_angle(truth.azimuth[k] - whole))
-            shifted = math.atan2(blob.v - by, blob.u - bx)
-            rows["azimuth_calibrated"].append(wrap_angle(shifted - whole))
+    with counter(progress, "rendering", frames, "frames") as rendered:
+        for done in range(1, frames + 1):
+            _measure_frame(scenario, sensor, calibration_px, rng, rows)
+            rendered(done)
     return {key: np.array(values) for key, values in rows.items()}
+
+
+def _measure_frame(scenario: Scenario, sensor: ImageSensor, calibration_px: float,
+                   rng: np.random.Generator, rows: dict[str, list[float]]) -> None:
+    """One frame at a random pose: each detected beacon's errors appended to ``rows``."""
+    cx, cy = sensor.camera.principal_point
+    positions = scenario.beacon_positions
+    x, y, heading = random_free_pose(scenario, rng)
+    frame = sensor.observe((x, y, heading), rng)
+    truth = frame.truth
+    offset_angle = rng.uniform(-math.pi, math.pi)
+    bx, by = cx + calibration_px * math.cos(offset_angle), cy + calibration_px * math.sin(
+        offset_angle)
+    real = np.flatnonzero((truth.beacon >= 0) & ~truth.mirrored & (truth.label != MOVED))
+    for k in real:
+        blob = frame.blobs[k]
+        beacon = positions[truth.beacon[k]]
+        dx, dy = beacon[0] - x, beacon[1] - y
+        whole = math.atan2(dy, dx) - heading
+        radius = math.hypot(blob.u - cx, blob.v - cy)
+        centre = wrap_angle(blob.azimuth - truth.azimuth[k])
+        rows["distance"].append(math.hypot(dx, dy))
+        rows["radius_px"].append(radius)
+        rows["visible"].append(float(truth.visible[k]))
+        rows["centre_px"].append(centre * radius)
+        rows["azimuth"].append(wrap_angle(blob.azimuth - whole))
+        rows["coverage"].append(wrap_angle(truth.azimuth[k] - whole))
+        shifted = math.atan2(blob.v - by, blob.u - bx)
+        rows["azimuth_calibrated"].append(wrap_angle(shifted - whole))
 
 
 def summarize(scenario: Scenario, errors: dict[str, FloatArray],
@@ -175,16 +192,17 @@ def plot(scenario: Scenario, errors: dict[str, FloatArray], calibration_px: floa
 
 def run(scenario: str = "warehouse-small", frames: int = 300, noise_sigma: float = 2.0,
         calibration_px: float = 1.0, seed: int = 0, out: Path | None = None,
-        figures: bool = True) -> dict[str, Any]:
-    """Measure, summarize and (with ``out``) write the study."""
+        figures: bool = True, progress: Progress | None = None) -> dict[str, Any]:
+    """Measure, summarize and (with ``out``) write the study (:data:`ERROR_MODEL_FILES`).
+
+    ``progress`` hears the count of frames rendered.
+    """
     loaded = load_scenario(scenario)
-    errors = measure_detections(loaded, frames, noise_sigma, calibration_px, seed)
+    errors = measure_detections(loaded, frames, noise_sigma, calibration_px, seed, progress)
     summary = summarize(loaded, errors, calibration_px)
     summary.update(frames=frames, noise_sigma=noise_sigma, seed=seed)
     if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "error_model.json").write_text(json.dumps(summary, indent=2) + "\n",
-                                              encoding="utf-8")
+        write_file(prepare_folder(out) / _SUMMARY, json.dumps(summary, indent=2) + "\n")
         if figures:
-            plot(loaded, errors, calibration_px, out / "error_model.png")
+            plot(loaded, errors, calibration_px, out / _FIGURE)
     return summary

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import io
 import json
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,14 +23,20 @@ from azgym.placement.information import contributions, position_sigma
 from azgym.placement.monte_carlo import MonteCarlo, monte_carlo
 from azgym.placement.objective import PENALTY_SIGMA, floor_figures
 from azgym.placement.visibility import visible_beacons
+from azgym.progress import Progress, counter
 from azgym.site import Scenario
 
-__all__ = ["Prediction", "agreement", "analyze", "predict", "summary", "write_analysis"]
+__all__ = ["ANALYSIS_FILES", "Prediction", "agreement", "analyze", "predict", "summary",
+           "write_analysis"]
 
 AGREEMENT = 0.10
 """A cell's Monte Carlo RMS agrees with the prediction within this relative difference."""
 MAX_REASONS = 5
 """The most reasons for lost frames the summary lists (a plug-in may word each one apart)."""
+_SUMMARY, _GRIDS, _FIGURE = "layout.json", "layout.npz", "layout.png"
+ANALYSIS_FILES = (_SUMMARY, _GRIDS, _FIGURE)
+"""What :func:`write_analysis` writes into its folder: what ``azgym layout analyze`` claims in
+``--out``."""
 
 
 @dataclass(frozen=True)
@@ -54,25 +59,30 @@ class Prediction:
         return self.seen.sum(axis=1)
 
 
-def predict(scenario: Scenario, floor: Floor) -> Prediction:
-    """The prediction for the scenario's own beacons (their mapped places)."""
+def predict(scenario: Scenario, floor: Floor, progress: Progress | None = None) -> Prediction:
+    """The prediction for the scenario's own beacons (their mapped places).
+
+    ``progress`` hears the count of cells whose line of sight is tested.
+    """
     points = floor.points
     beacons = scenario.beacons
-    seen = visible_beacons(scenario, points, beacons.xyz, beacons.width)
+    with counter(progress, "line of sight", len(points), "cells") as tested:
+        seen = visible_beacons(scenario, points, beacons.xyz, beacons.width, tested)
     information = contributions(points, beacons.xy, beacons.width, scenario.error_model,
                                 seen).sum(axis=1)
     return Prediction(floor, seen, position_sigma(information, seen.sum(axis=1)))
 
 
 def analyze(scenario: Scenario, floor: Floor, localizer: str, frames: int, seed: int = 0,
-            progress: Callable[[int, int], None] | None = None, *, workers: int = 1,
+            progress: Progress | None = None, *, workers: int = 1,
             time_limit: float = DEFAULT_TIME_LIMIT) -> tuple[Prediction, MonteCarlo | None]:
     """The prediction, and with ``frames`` > 0 the Monte Carlo check of ``localizer``.
 
-    ``workers`` and ``time_limit`` are the runner's
-    (:func:`~azgym.placement.monte_carlo.monte_carlo`).
+    ``progress`` hears the cells counted, as the line of sight is tested and as the Monte Carlo
+    check runs (:func:`azgym.progress.counter`); ``workers`` and ``time_limit`` are the
+    runner's (:func:`~azgym.placement.monte_carlo.monte_carlo`).
     """
-    prediction = predict(scenario, floor)
+    prediction = predict(scenario, floor, progress)
     if frames <= 0:
         return prediction, None
     checked = monte_carlo(scenario, floor.points, prediction.seen, localizer, frames, seed,
@@ -122,8 +132,12 @@ def agreement(sigma: FloatArray, checked: MonteCarlo) -> dict[str, Any]:
 
 
 def write_analysis(folder: Path, scenario: Scenario, prediction: Prediction,
-                   checked: MonteCarlo | None) -> list[Path]:
-    """``layout.json`` (the summary) and ``layout.npz`` (the grids) in ``folder``."""
+                   checked: MonteCarlo | None, figures: bool = True) -> list[Path]:
+    """``layout.json`` (the summary), ``layout.npz`` (the grids) and ``layout.png`` in ``folder``.
+
+    The figure (:func:`~azgym.placement.figures.analysis_figure`, matplotlib) only with
+    ``figures``.
+    """
     floor = prediction.floor
     grids: dict[str, Any] = {"xs": floor.xs, "ys": floor.ys, "free": floor.free,
                              "sigma": floor.to_grid(prediction.sigma),
@@ -134,5 +148,12 @@ def write_analysis(folder: Path, scenario: Scenario, prediction: Prediction,
     buffer = io.BytesIO()
     np.savez_compressed(buffer, **grids)
     text = json.dumps(summary(scenario, prediction, checked), indent=2) + "\n"
-    return [write_file(folder / "layout.json", text),
-            write_file(folder / "layout.npz", buffer.getvalue())]
+    written = [write_file(folder / _SUMMARY, text), write_file(folder / _GRIDS, buffer.getvalue())]
+    if figures:
+        from azgym.placement.figures import analysis_figure
+
+        written.append(analysis_figure(
+            scenario, floor, prediction.sigma, prediction.visible,
+            None if checked is None else checked.rms, folder / _FIGURE,
+            "" if checked is None else checked.localizer))
+    return written

@@ -24,7 +24,6 @@ stream of the seed, so a cell's figures do not depend on the grid around it.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +35,7 @@ from azgym.bench.run.runner import run_contenders
 from azgym.bench.suites import Case
 from azgym.core import BeaconMap, BoolArray, FloatArray, Measurements, wrap_angle
 from azgym.placement.information import MIN_BEACONS
+from azgym.progress import Progress, counter
 from azgym.sensing.synthetic import ideal_azimuths
 from azgym.site import Scenario
 
@@ -70,7 +70,7 @@ class MonteCarlo:
 
 def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localizer: str,
                 frames: int, seed: int = 0,
-                progress: Callable[[int, int], None] | None = None, *, workers: int = 1,
+                progress: Progress | None = None, *, workers: int = 1,
                 time_limit: float = DEFAULT_TIME_LIMIT) -> MonteCarlo:
     """Run ``frames`` frames at each point through ``localizer`` (module docstring).
 
@@ -81,7 +81,8 @@ def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localiz
         localizer: A localizer spec (``ransac``, ``ransac:weighted=true``, ...).
         frames: Frames per cell, >= 1.
         seed: Seed of every draw, in [0, 2**31).
-        progress: Called with (cells done, cells) as the cells are done.
+        progress: Hears the count of cells done (:func:`azgym.progress.counter`; the cells
+            seeing three beacons or more, a batch of them at a time).
         workers: Worker processes running the localizer.
         time_limit: Seconds the localizer may take on one frame (or to be built).
     """
@@ -93,20 +94,20 @@ def monte_carlo(scenario: Scenario, points: FloatArray, seen: BoolArray, localiz
     problems: dict[str, int] = {}
     cells = np.flatnonzero(asked)
     per_chunk = max(1, CHUNK_FRAMES // frames)
-    for start in range(0, len(cells), per_chunk):
-        part = cells[start:start + per_chunk]
-        cases = [case for p in part for case in _cases(scenario, points[p], seen[p], frames,
-                                                        np.random.default_rng([seed, p]))]
-        outcome = run_contenders(cases, [runs], workers=workers, time_limit=time_limit,
-                                 maps={scenario.name: scenario.beacons})[runs.label]
-        for error in filter(None, outcome.errors):
-            problems[error] = problems.get(error, 0) + 1
-        for k, p in enumerate(part):
-            rows = slice(k * frames, (k + 1) * frames)
-            fixed = outcome.estimate[rows][outcome.ok[rows], :2] - points[p]
-            figures[:, p] = _figures(fixed, frames)
-        if progress is not None:
-            progress(start + len(part), len(cells))
+    with counter(progress, "Monte Carlo", len(cells), "cells") as done:
+        for start in range(0, len(cells), per_chunk):
+            part = cells[start:start + per_chunk]
+            cases = [case for p in part for case in _cases(
+                scenario, points[p], seen[p], frames, np.random.default_rng([seed, p]))]
+            outcome = run_contenders(cases, [runs], workers=workers, time_limit=time_limit,
+                                     maps={scenario.name: scenario.beacons})[runs.label]
+            for error in filter(None, outcome.errors):
+                problems[error] = problems.get(error, 0) + 1
+            for k, p in enumerate(part):
+                rows = slice(k * frames, (k + 1) * frames)
+                fixed = outcome.estimate[rows][outcome.ok[rows], :2] - points[p]
+                figures[:, p] = _figures(fixed, frames)
+            done(start + len(part))
     rms, std, bias, failed = figures
     return MonteCarlo(localizer, frames, rms, std, bias, failed, asked, problems)
 

@@ -15,6 +15,7 @@ once, and trying a candidate is one addition per cell. The search:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +28,7 @@ from azgym.placement.floor import Floor
 from azgym.placement.information import contributions, position_sigma
 from azgym.placement.objective import objective
 from azgym.placement.visibility import visible_beacons
+from azgym.progress import Progress, counter
 from azgym.site import Scenario
 
 __all__ = ["MAX_ADD", "Placement", "check_add", "place_beacons"]
@@ -81,31 +83,42 @@ def check_add(add: object, candidates: Candidates) -> int:
     return count
 
 
-def place_beacons(scenario: Scenario, floor: Floor, candidates: Candidates,
-                  add: int) -> Placement:
-    """Choose ``add`` of the candidate places (module docstring)."""
+def place_beacons(scenario: Scenario, floor: Floor, candidates: Candidates, add: int,
+                  progress: Progress | None = None) -> Placement:
+    """Choose ``add`` of the candidate places (module docstring).
+
+    ``progress`` hears what is done, counted (:func:`azgym.progress.counter`): the cells whose
+    line of sight to the beacons and the candidates is tested, the beacons placed by the greedy
+    pass, the rounds of swaps (at most :data:`MAX_SWAP_ROUNDS`; the count ends early when a
+    round changes nothing).
+    """
     add = check_add(add, candidates)
     points, beacons, model = floor.points, scenario.beacons, scenario.error_model
     width = float(np.median(beacons.width))
-    seen = visible_beacons(scenario, points, beacons.xyz, beacons.width)
+    widths = np.full(len(candidates), width)
+    with counter(progress, "line of sight", len(points), "cells") as tested:
+        seen_all = visible_beacons(scenario, points, np.vstack([beacons.xyz, candidates.xyz]),
+                                   np.concatenate([beacons.width, widths]), tested)
+    seen, seen_new = seen_all[:, :len(beacons)], seen_all[:, len(beacons):]
     base = contributions(points, beacons.xy, beacons.width, model, seen).sum(axis=1)
     base_count = seen.sum(axis=1)
-    widths = np.full(len(candidates), width)
-    seen_new = visible_beacons(scenario, points, candidates.xyz, widths)
     gain = np.ascontiguousarray(contributions(
         points, candidates.xyz[:, :2], widths, model, seen_new).transpose(1, 0, 2))
     search = _Search(base, base_count, gain, np.ascontiguousarray(seen_new.T))
     chosen: list[int] = []
     current = search.score(chosen)
-    for _ in range(add):
-        scores = search.scores(chosen, chosen)
-        best = int(np.nanargmin(scores))
-        if not scores[best] < current - IMPROVEMENT:  # no candidate helps: stop
-            break
-        chosen.append(best)
-        current = float(scores[best])
+    with counter(progress, "greedy", add, "beacons") as placed:
+        for _ in range(add):
+            scores = search.scores(chosen, chosen)
+            best = int(np.nanargmin(scores))
+            if not scores[best] < current - IMPROVEMENT:  # no candidate helps: stop
+                break
+            chosen.append(best)
+            current = float(scores[best])
+            placed(len(chosen))
     greedy_score = search.score(chosen)
-    chosen = search.swap(chosen)
+    with counter(progress, "swaps", MAX_SWAP_ROUNDS, "rounds") as rounds:
+        chosen = search.swap(chosen, rounds)
     info, count = search.layout(chosen)
     return Placement(candidates, tuple(chosen), width, position_sigma(base, base_count),
                      position_sigma(info, count), base_count, count, greedy_score,
@@ -140,11 +153,14 @@ class _Search:
             result[part] = objective(sigma)
         return result
 
-    def swap(self, chosen: list[int]) -> list[int]:
-        """The swap pass (module docstring): ``chosen`` improved one swap at a time."""
+    def swap(self, chosen: list[int], rounds: Callable[[int], None]) -> list[int]:
+        """The swap pass (module docstring): ``chosen`` improved one swap at a time.
+
+        ``rounds`` is called with the number of rounds done as each ends.
+        """
         chosen = list(chosen)
         current = self.score(chosen)
-        for _ in range(MAX_SWAP_ROUNDS):
+        for done in range(1, MAX_SWAP_ROUNDS + 1):
             improved = False
             for k in range(len(chosen)):
                 others = chosen[:k] + chosen[k + 1:]
@@ -152,6 +168,7 @@ class _Search:
                 best = int(np.nanargmin(scores)) if np.isfinite(scores).any() else -1
                 if best >= 0 and scores[best] < current - IMPROVEMENT:
                     chosen[k], current, improved = best, float(scores[best]), True
+            rounds(done)
             if not improved:
                 break
         return chosen

@@ -25,7 +25,11 @@ from azgym.site.load import SCENARIO_PACKAGE
 from azgym.site.reader import MAX_INTEGER, MAX_NAME, NAME_CHARACTERS
 from azgym.site.toml_writer import to_toml
 
-__all__ = ["file_stem", "fresh_ids", "source_data", "with_new_beacons", "write_scenario"]
+__all__ = ["PLACEMENT_FIGURE", "file_stem", "fresh_ids", "placed_name", "placement_files",
+           "source_data", "with_new_beacons", "write_scenario"]
+
+PLACEMENT_FIGURE = "layout-optimized.png"
+"""The figure ``azgym layout optimize`` draws beside the new scenario file."""
 
 
 def source_data(scenario: Scenario) -> dict[str, Any]:
@@ -52,6 +56,24 @@ def file_stem(name: str) -> str:
     scenario built in memory from naming a file outside the output folder too.
     """
     return re.sub(rf"[^{NAME_CHARACTERS}]", "_", name).lstrip("._-")[:MAX_NAME] or "scenario"
+
+
+def placed_name(name: str, placed: int | str) -> str:
+    """The name of scenario ``name`` with ``placed`` beacons added: ``NAME-plus-N``.
+
+    It is also the new file's stem (``NAME-plus-N.toml``).
+    """
+    return f"{file_stem(name)}-plus-{placed}"
+
+
+def placement_files(name: str) -> tuple[str, str]:
+    """What ``azgym layout optimize`` writes for scenario ``name``, as glob patterns.
+
+    The new scenario file, however many beacons it was given, and :data:`PLACEMENT_FIGURE`:
+    what the command claims in ``--out``. A file stem holds no glob character, so the
+    pattern's stem matches only itself.
+    """
+    return f"{placed_name(name, '*')}.toml", PLACEMENT_FIGURE
 
 
 def fresh_ids(ids: IntArray, count: int) -> list[int]:

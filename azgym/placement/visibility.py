@@ -13,6 +13,8 @@ mapping is a fault, which the planner leaves out).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from azgym.core import BoolArray, FloatArray
@@ -25,14 +27,19 @@ __all__ = ["visible_beacons"]
 
 
 def visible_beacons(scenario: Scenario, points: FloatArray, beacon_xyz: FloatArray,
-                    beacon_width: FloatArray) -> BoolArray:
+                    beacon_width: FloatArray,
+                    done: Callable[[int], None] | None = None) -> BoolArray:
     """Whether the camera at each point sees each beacon directly, shape (P, B).
+
+    Each beacon is tested on its own, so the columns of one call with two sets of beacons are
+    those of a call with each set.
 
     Args:
         scenario: The site: its racks and walls, the camera's height, lowest elevation and range.
         points: Camera positions (x, y), shape (P, 2) [m].
         beacon_xyz: Beacon positions, shape (B, 3) [m] (the scenario's or candidates').
         beacon_width: Beacon widths W, shape (B,) [m].
+        done: Called with the number of points done as they are done (a progress count).
     """
     xyz = np.array(beacon_xyz, dtype=np.float64, order="C")
     xyz.setflags(write=False)  # as the sensor's: the same compiled kernel
@@ -50,4 +57,6 @@ def visible_beacons(scenario: Scenario, points: FloatArray, beacon_xyz: FloatArr
         listed = direct_view((float(x), float(y), height), lens, xyz, width, not_moved, segments,
                              found, found_ints)
         seen[p, found_ints[FOUND_BEACON, :listed]] = True
+        if done is not None:
+            done(p + 1)
     return seen

@@ -13,8 +13,9 @@ azgym's own.
 
 The result (:func:`run_navigation`, a
 :class:`~azgym.bench.navigation.report.NavigationResult`) is what ``navigation.json`` holds: the
-run's identity, then per contender the summary of
-:func:`azgym.bench.navigation.scoring.summarize`, the wall time, and each episode's figures
+run's identity, then per contender the files its localizer names, pinned by their SHA-256
+(:func:`localizer_files`), the summary of :func:`azgym.bench.navigation.scoring.summarize`,
+the wall time, and each episode's figures
 (:func:`episode_rows`), from which the board recomputes the summary
 (:mod:`azgym.bench.navigation.results_file`). A figure that does not exist (no answer, no
 success) is null. :func:`evaluate_navigator` drives one policy the same way on an environment
@@ -36,18 +37,23 @@ import gymnasium as gym
 from azgym._version import __version__
 from azgym.arguments import whole_number
 from azgym.bench.leaderboard.checks import clean
+from azgym.bench.leaderboard.plugin_files import PluginRecord, plugin_record
 from azgym.bench.navigation.report import NavigationResult
 from azgym.bench.navigation.suites import NAVIGATORS, NavigationSuite, get_navigation_suite
 from azgym.errors import InvalidInputError
+from azgym.localize.registry import parse_spec
 from azgym.progress import Progress, counter
 
 __all__ = ["KIND", "RESULTS_FORMAT", "Pairing", "check_contenders", "contenders_of",
-           "drive_all", "drive_contender", "episode_rows", "evaluate_navigator", "make_env",
-           "navigation_contenders", "run_navigation"]
+           "drive_all", "drive_contender", "episode_rows", "evaluate_navigator",
+           "localizer_files", "make_env", "navigation_contenders", "run_navigation"]
 
-RESULTS_FORMAT = 2
+RESULTS_FORMAT = 3
 """The layout of ``navigation.json`` (``format``). 2: an episode's ``shortest_path_m`` (the
-geodesic shortest path, SPL's l) replaces ``path_length_m`` (the planner's path)."""
+geodesic shortest path, SPL's l) replaces ``path_length_m`` (the planner's path). 3: a contender
+whose localizer names a file records it as a frame suite's results do (:func:`localizer_files`:
+``weights_file`` and ``weights_sha256`` for a weight file); a file of format 2 is otherwise the
+same, and still reads (:mod:`azgym.bench.navigation.results_file`)."""
 KIND = "navigation"
 """``kind`` of a navigation results file, which tells it from a frame suite's."""
 
@@ -84,6 +90,16 @@ def navigation_contenders(suite: NavigationSuite, navigators: Sequence[str],
     chosen = resolve_contenders(localizers, with_builtins=with_builtins,
                                 builtins=suite.localizers, check=None)
     return contenders_of(navigators or NAVIGATORS, [c.label for c in chosen])
+
+
+def localizer_files(localizer: str) -> PluginRecord:
+    """The files a contender's localizer names, as its results record them.
+
+    The rule of a frame suite's results (:func:`~azgym.bench.leaderboard.plugin_files.
+    plugin_record`): a plug-in's file and a weight file (``ng-ransac:weights=FILE``), each by
+    its absolute path and SHA-256; nothing for a shipped localizer, a tracker or ``truth``.
+    """
+    return plugin_record(*parse_spec(localizer))
 
 
 def make_env(suite: NavigationSuite, localizer: str) -> gym.Env:
@@ -161,10 +177,11 @@ def evaluate_navigator(policy: str, env_id: str, localizers: Sequence[str], *, e
     loaded = load_policy(policy, envs[localizers[0]])
     rows = []
     for name, env in envs.items():
+        files = localizer_files(name)
         started = time.perf_counter()
         with counter(progress, name, episodes, "episodes") as done:
             result = drive(env, loaded, episodes, seed, progress=done)
-        rows.append({"localizer": name, "runtime_s": time.perf_counter() - started,
+        rows.append({"localizer": name, **files, "runtime_s": time.perf_counter() - started,
                      "summary": {key: value for key, value in result.items()
                                  if key != "episodes"},
                      "episodes": episode_rows(result["episodes"], seed)})
@@ -200,19 +217,20 @@ def drive_all(suite: NavigationSuite, contenders: Sequence[Pairing], seed: int, 
 
 def drive_contender(suite_name: str, navigator: str, localizer: str, seed: int,
                     episodes: int) -> dict[str, Any]:
-    """One contender on episodes seed, seed + 1, ...: its summary, wall time and episodes."""
+    """One contender on episodes seed, seed + 1, ...: its files, summary, wall time, episodes."""
     from azgym.bench.navigation.scoring import drive
     from azgym.nav.policy_file import load_policy
 
     suite = get_navigation_suite(suite_name)
     env = make_env(suite, localizer)
+    files = localizer_files(localizer)  # the files the localizer was just built from
     policy = load_policy(navigator, env)
     _one_thread()
     started = time.perf_counter()
     result = drive(env, policy, episodes, seed)
     runtime = time.perf_counter() - started
     env.close()
-    return {"navigator": navigator, "localizer": localizer,
+    return {"navigator": navigator, "localizer": localizer, **files,
             "summary": {key: value for key, value in result.items() if key != "episodes"},
             "runtime_s": runtime, "episodes": episode_rows(result["episodes"], seed)}
 

@@ -14,6 +14,13 @@ show, so :func:`load_navigation` trusts nothing in it:
   hyperparameters build, or ``truth``. A plug-in
   localizer runs in the loop that simulates the world, and a policy file is unpickled: neither
   is run from a board's file;
+- a weight file a contender's localizer names (``ng-ransac:weights=FILE``) is the one the run
+  used: the file the spec names, from the working folder as the run read it (and as the
+  localizer is built here and rerun by ``azgym leaderboard verify``), still has the SHA-256 the
+  file records (``weights_sha256``, beside the run's absolute ``weights_file``), by the rule of a
+  frame suite's entries (:func:`azgym.bench.leaderboard.plugin_files.weights_sha256`). Format
+  2 recorded no such pin: a file of format 2 still reads when none of its localizers names a
+  weight file, and is refused, with the remedy, when one does;
 - each episode obeys the environment's rules: it lasted ``steps`` control periods of 0.1 s
   (``time_s``), a failed one ran to the step limit, its shortest path l is the geodesic of its
   seed's start and goal (recomputed, :meth:`~azgym.envs.navigate.NavigateEnv.shortest_path`),
@@ -36,18 +43,20 @@ An episode's refusal names the file, the contender and the episode's field.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Any
 
 from azgym import arguments
 from azgym.bench.leaderboard.checks import clean, close
 from azgym.bench.leaderboard.entry_files import LeaderboardError, read_json
+from azgym.bench.leaderboard.plugin_files import weights_path, weights_sha256
 from azgym.bench.navigation.benchmark import KIND, RESULTS_FORMAT
 from azgym.bench.navigation.scoring import wilson_interval
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, NAVIGATORS, NavigationSuite, overlap
 from azgym.envs.navigate import MAX_STEPS
 from azgym.errors import AzgymError, InvalidInputError
-from azgym.localize.registry import is_builtin
+from azgym.localize.registry import is_builtin, parse_spec
 from azgym.nav.controls import CONTROL_STEPS
 from azgym.world.forklift import ForkliftSpec
 from azgym.world.world import PHYSICS_DT
@@ -61,6 +70,15 @@ drives each one's episodes, so a padded file must not cost hours."""
 FILE_KEYS = {"kind", "format", "suite", "suite_version", "split", "seed", "quick", "episodes",
              "env", "env_kwargs", "azgym_version", "python", "timestamp", "contenders"}
 CONTENDER_KEYS = {"navigator", "localizer", "summary", "runtime_s", "episodes"}
+PIN_KEYS = {"weights_file", "weights_sha256"}
+"""A contender's keys beside :data:`CONTENDER_KEYS` when its localizer names a weight file."""
+FORMATS = (2, RESULTS_FORMAT)
+"""The formats read: this azgym's, and 2, which differs only in recording no weight file."""
+PINNED = 3
+"""The first format that pins a weight file."""
+SHA256 = re.compile(r"[0-9a-f]{64}")
+MAX_PATH = 4096
+"""The longest ``weights_file`` [characters]."""
 RECOMPUTED = ("success", "success_interval", "spl", "collisions", "collided", "time_to_goal",
               "answered")
 """The summary figures recomputed from a file's episodes when it is read."""
@@ -94,8 +112,9 @@ def load_navigation(path: Path) -> dict[str, Any]:
     data = read_json(path, "navigation results file")
     if not isinstance(data, dict) or data.get("kind") != KIND:
         raise LeaderboardError(f"{path}: not a navigation results file (kind {KIND!r})")
-    if data.get("format") != RESULTS_FORMAT:
-        raise LeaderboardError(f"{path}: format must be {RESULTS_FORMAT}, got "
+    if type(data.get("format")) is not int or data["format"] not in FORMATS:
+        raise LeaderboardError(f"{path}: format must be {' or '.join(map(str, FORMATS))} "
+                               f"(this azgym writes {RESULTS_FORMAT}), got "
                                f"{data.get('format')!r}")
     _keys(data, FILE_KEYS, str(path))
     for key in ("azgym_version", "python", "timestamp"):
@@ -182,13 +201,17 @@ def _shortest_paths(suite: NavigationSuite, data: dict[str, Any]) -> dict[int, f
 def _check_contender(contender: Any, data: dict[str, Any], shortest: dict[int, float],
                      where: str) -> None:
     """A built-in pair that drove the file's episodes, its summary matching them."""
-    _keys(contender, CONTENDER_KEYS, where)
+    weights = _named_weights(contender, data["format"], where)
+    _keys(contender, CONTENDER_KEYS | (PIN_KEYS if weights is not None else set()), where)
     navigator, localizer = contender["navigator"], contender["localizer"]
     if not isinstance(navigator, str) or navigator not in NAVIGATORS:
         raise LeaderboardError(f"{where}/navigator: {navigator!r} is not a built-in navigator "
                                f"({', '.join(NAVIGATORS)})")
+    pair = f"{where} ({navigator} + {localizer})"
+    if weights is not None:  # before the localizer is built from the file
+        _check_pin(contender, weights, pair)
     _check_localizer(localizer, f"{where}/localizer")
-    where = f"{where} ({navigator} + {localizer})"
+    where = pair
     if not _number(contender["runtime_s"], 0.0):
         raise LeaderboardError(f"{where}/runtime_s: must be a number of seconds ≥ 0")
     episodes = contender["episodes"]
@@ -207,13 +230,55 @@ def _check_contender(contender: Any, data: dict[str, Any], shortest: dict[int, f
     _check_quantiles(summary, answered, f"{where}/summary")
 
 
-def _check_localizer(localizer: Any, where: str) -> None:
-    """``truth``, or a built-in localizer or tracker whose hyperparameters build."""
+def _named_weights(contender: Any, file_format: int, where: str) -> Path | None:
+    """The weight file a contender's localizer names, resolved (None: it names none).
+
+    Raises:
+        LeaderboardError: The localizer is not ``truth`` or a built-in localizer or tracker (a
+            board runs no plug-in in the loop), or names a weight file in a file of a format
+            that pins none.
+    """
+    if not isinstance(contender, dict) or "localizer" not in contender:
+        return None  # the keys' check names what is wrong
+    localizer = contender["localizer"]
+    if not isinstance(localizer, str) or not (localizer == "truth" or is_builtin(localizer)):
+        raise LeaderboardError(f"{where}/localizer: {localizer!r} is not a built-in localizer "
+                               "or tracker (a board runs no plug-in in the loop)")
+    weights = weights_path(parse_spec(localizer)[1])
+    if weights is not None and file_format < PINNED:
+        raise LeaderboardError(
+            f"{where}/localizer: {localizer} names a weight file, and a format {file_format} "
+            "file records no SHA-256 of it: run the contender again (azgym bench --suite "
+            f"SUITE --localizer {localizer}): its file, of format {RESULTS_FORMAT}, pins it")
+    return weights
+
+
+def _check_pin(contender: dict[str, Any], weights: Path, where: str) -> None:
+    """The weight file the localizer names is there and has the SHA-256 the run recorded."""
+    recorded, named = contender["weights_sha256"], contender["weights_file"]
+    if not isinstance(recorded, str) or not SHA256.fullmatch(recorded):
+        raise LeaderboardError(f"{where}/weights_sha256: must be a SHA-256 (64 lowercase "
+                               "hexadecimal digits)")
+    if not isinstance(named, str) or not 0 < len(named) <= MAX_PATH:
+        raise LeaderboardError(f"{where}/weights_file: must be a path of at most {MAX_PATH} "
+                               "characters (the weight file the run read)")
+    if not weights.exists():
+        raise LeaderboardError(f"{where}/localizer: the weight file {weights} does not exist "
+                               "(the spec names it from the working folder, as the run did: "
+                               f"{named}); put the file there to read this file")
+    try:
+        digest = weights_sha256(weights)
+    except InvalidInputError as exc:  # no regular file, or too large for a model file
+        raise LeaderboardError(f"{where}/localizer: {exc}") from None
+    if digest != recorded:
+        raise LeaderboardError(f"{where}/weights_sha256: the weight file {weights} changed "
+                               f"since the run: sha256 {digest}, the run used {recorded}")
+
+
+def _check_localizer(localizer: str, where: str) -> None:
+    """``truth``, or a built-in localizer or tracker (:func:`_named_weights`) that builds."""
     from azgym.nav.estimator import resolve_estimator
 
-    if not isinstance(localizer, str) or not (localizer == "truth" or is_builtin(localizer)):
-        raise LeaderboardError(f"{where}: {localizer!r} is not a built-in localizer or tracker "
-                               "(a board runs no plug-in in the loop)")
     try:
         resolve_estimator(localizer)
     except AzgymError as exc:

@@ -31,7 +31,13 @@ from azgym.bench.sweep.config import GridPoint, SweepConfig
 from azgym.files import prepare_folder, write_file
 from azgym.metrics import HEADLINE
 
-__all__ = ["FIGURES", "INTERVAL", "LABELS", "SweepResult", "run_sweep", "write_sweep_figure"]
+__all__ = ["FIGURES", "INTERVAL", "LABELS", "SWEEP_FILES", "SweepResult", "run_sweep",
+           "write_sweep_figure"]
+
+_TABLE, _RUNTIMES, _FIGURE = "sweep.csv", "runtimes.csv", "sweep.png"
+SWEEP_FILES = (_TABLE, _RUNTIMES, _FIGURE)
+"""What :meth:`SweepResult.write` writes into its folder: what ``azgym sweep`` claims in
+``--out``."""
 
 FIGURES: Final = ("n", HEADLINE, "availability", "failure_rate", "median_cm", "p75_cm", "p95_cm",
            "mean_cm", "rmse_cm")
@@ -65,12 +71,12 @@ class SweepResult:
     def write(self, out: Path) -> list[Path]:
         """sweep.csv, runtimes.csv and, with matplotlib installed, sweep.png."""
         prepare_folder(out)
-        written = [write_file(out / "sweep.csv", self.csv()),
-                   write_file(out / "runtimes.csv",
+        written = [write_file(out / _TABLE, self.csv()),
+                   write_file(out / _RUNTIMES,
                               _csv(["label", "suite", "seed", "median_us", "ratio_to_ransac"],
                                    self.runtimes))]
         if importlib.util.find_spec("matplotlib") is not None:
-            written.append(write_sweep_figure(self, out / "sweep.png"))
+            written.append(write_sweep_figure(self, out / _FIGURE))
         return written
 
 

@@ -17,7 +17,13 @@ from azgym.experiments.paper.reproduce import (
     Reproduction,
 )
 
-__all__ = ["markdown_table", "paper_method", "write_outputs"]
+__all__ = ["PAPER_FILES", "markdown_table", "paper_method", "write_outputs"]
+
+_RESULTS, _TABLE, _RUNS = "results.json", "results.md", "runs.npz"
+_ERROR_MAP, _ERROR_CDF = "error_map_k{k}.png", "error_cdf.png"
+PAPER_FILES = (_RESULTS, _TABLE, _RUNS, _ERROR_MAP.format(k="*"), _ERROR_CDF)
+"""What :func:`write_outputs` writes into its folder (glob patterns): what ``azgym reproduce
+paper`` claims in ``--out``."""
 
 
 def _fmt(value: float | None, digits: int = 2) -> str:
@@ -98,7 +104,7 @@ def write_outputs(reproduction: Reproduction, out: Path, figures: bool = True) -
     """Write results.json, results.md, runs.npz and (with matplotlib) the figures into ``out``."""
     results = reproduction.results
     out.mkdir(parents=True, exist_ok=True)
-    written = [out / "results.json", out / "results.md", out / "runs.npz"]
+    written = [out / _RESULTS, out / _TABLE, out / _RUNS]
     written[0].write_text(json.dumps(results, indent=1, allow_nan=True) + "\n", encoding="utf-8")
     written[1].write_text(markdown_table(results) + "\n", encoding="utf-8")
     # Typed as Any: numpy's stub would take a key for savez's own allow_pickle flag.
@@ -123,9 +129,9 @@ def _figures(reproduction: Reproduction, out: Path) -> list[Path]:
     methods = {paper_method(entry): label
                for label, entry in reproduction.results["localizers"].items()}
     labels = [methods[m] for m in ("ransac", "mex") if methods.get(m) in per_point]
-    written = [_error_map(plt, per_point, labels, k, out / f"error_map_k{k}.png")
+    written = [_error_map(plt, per_point, labels, k, out / _ERROR_MAP.format(k=k))
                for k in ("0", "1") if labels and k in per_point[labels[0]]]
-    written.append(_error_cdfs(plt, reproduction, out / "error_cdf.png"))
+    written.append(_error_cdfs(plt, reproduction, out / _ERROR_CDF))
     return written
 
 

@@ -1,17 +1,34 @@
-"""The figure of Plotter's reproduction: each method's cumulative error distribution (Fig. 5(c))."""
+"""The outputs of Plotter's reproduction: its figures, and each method's error distribution.
+
+``results.json`` holds the figures; ``errors.png`` draws each method's cumulative error
+distribution (Fig. 5(c)).
+"""
 
 from __future__ import annotations
 
 import io
+import json
 from pathlib import Path
 from typing import Any
 
 from azgym.experiments.plotter.reproduce import METHODS
-from azgym.files import write_file
+from azgym.files import prepare_folder, write_file
 
-__all__ = ["LABELS", "write_figure"]
+__all__ = ["LABELS", "PLOTTER_FILES", "write_figure", "write_outputs"]
 
 LABELS = {"tkf": "TKF", "lpkf": "LPKF", "naive": "naive accumulation"}
+_RESULTS, _FIGURE = "results.json", "errors.png"
+PLOTTER_FILES = (_RESULTS, _FIGURE)
+"""What :func:`write_outputs` writes into its folder: what ``azgym reproduce plotter`` claims in
+``--out``."""
+
+
+def write_outputs(result: dict[str, Any], out: Path) -> list[Path]:
+    """``results.json`` (the figures, without the pooled errors) and the figure, in ``out``."""
+    prepare_folder(out)
+    summary = {key: value for key, value in result.items() if key != "errors"}
+    return [write_file(out / _RESULTS, json.dumps(summary, indent=1) + "\n"),
+            write_figure(result, out / _FIGURE)]
 
 
 def write_figure(result: dict[str, Any], path: str | Path) -> Path:

@@ -18,7 +18,7 @@ import numpy as np
 
 from azgym._version import __version__
 from azgym.files import write_file
-from azgym.learn.navigator.request import EVAL_SEED, Request
+from azgym.learn.navigator.request import CURVE, EVAL_SEED, EVALUATIONS, POLICY, Request
 
 __all__ = ["REPRODUCIBILITY", "write_card", "write_learning_curve"]
 
@@ -70,7 +70,7 @@ def write_card(request: Request, path: Path, *, wall_time: float,
     import yaml
 
 
-    digest = hashlib.sha256((request.out / "policy.zip").read_bytes()).hexdigest()
+    digest = hashlib.sha256((request.out / POLICY).read_bytes()).hexdigest()
     settings = {"n_envs": request.n_envs, "policy": request.policy,
                 "policy_kwargs": request.policy_kwargs, "env_kwargs": request.env_kwargs,
                 **request.algo_kwargs}
@@ -93,14 +93,14 @@ def write_card(request: Request, path: Path, *, wall_time: float,
         f"included; {request.threads} torch thread(s))",
         f"- versions: azgym {__version__}, torch {torch.__version__}, stable-baselines3 "
         f"{stable_baselines3.__version__}, Python {platform.python_version()}",
-        f"- policy.zip SHA-256: `{digest}`", "", REPRODUCIBILITY, "",
+        f"- {POLICY} SHA-256: `{digest}`", "", REPRODUCIBILITY, "",
         "## Hyperparameters", "", "```yaml",
         yaml.safe_dump(settings, sort_keys=False, default_flow_style=None).rstrip(), "```", "",
         "## Evaluation", "",
         f"Every {request.eval_every} steps the deterministic policy drove the same "
         f"{request.eval_episodes} episodes (seeds {EVAL_SEED} … "
-        f"{EVAL_SEED + request.eval_episodes - 1}); see `evaluations.npz` and "
-        "`learning-curve.png`. The final policy (`policy.zip`, not the best evaluation's), "
+        f"{EVAL_SEED + request.eval_episodes - 1}); see `{EVALUATIONS}` and "
+        f"`{CURVE}`. The final policy (`{POLICY}`, not the best evaluation's), "
         "scored by `azgym.bench.navigation.scoring.drive` on "
         f"{request.score_episodes} episodes (seeds "
         f"{EVAL_SEED} … {EVAL_SEED + request.score_episodes - 1}):", "",

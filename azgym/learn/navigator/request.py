@@ -10,7 +10,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["EVAL_SEED", "Request"]
+__all__ = ["CARD", "CHECKPOINTS", "CURVE", "EVALUATIONS", "EVAL_SEED", "POLICY", "Request"]
+
+POLICY, EVALUATIONS, CURVE, CARD = ("policy.zip", "evaluations.npz", "learning-curve.png",
+                                    "model-card.md")
+"""The files a run leaves in its output folder: the final policy, the evaluations (the name
+stable-baselines3's ``EvalCallback`` gives its log), the learning curve and the model card."""
+CHECKPOINTS = "checkpoints"
+"""The folder of a run's checkpoints, inside its output folder."""
 
 EVAL_SEED = 1_000_000
 """The first seed of the evaluation episodes (and of the final scoring); training starts its

@@ -34,12 +34,25 @@ from azgym.envs.registration import navigation_spec
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
 from azgym.learn.navigator.card import write_card, write_learning_curve
-from azgym.learn.navigator.request import EVAL_SEED, Request
+from azgym.learn.navigator.request import (
+    CARD,
+    CHECKPOINTS,
+    CURVE,
+    EVAL_SEED,
+    EVALUATIONS,
+    POLICY,
+    Request,
+)
 from azgym.nav import policy_file
 from azgym.nav.controls import Policy
 
-__all__ = ["ALGORITHMS", "EpisodeEnds", "HYPERPARAMS", "SETTINGS", "TrainingResult",
-           "hyperparameters", "prepare", "require_rl", "run", "train_navigator"]
+__all__ = ["ALGORITHMS", "EpisodeEnds", "HYPERPARAMS", "NAVIGATOR_FILES", "SETTINGS",
+           "TrainingResult", "hyperparameters", "prepare", "require_rl", "run", "train_navigator"]
+
+NAVIGATOR_FILES = (POLICY, EVALUATIONS, CURVE, CARD, f"{CHECKPOINTS}/*")
+"""What a run writes into its output folder (glob patterns): what ``azgym train navigator``
+claims in ``--out`` (a run there is refused without ``--overwrite``; a navigator run is not
+resumed)."""
 
 ALGORITHMS = ("ppo", "sac")
 """The algorithms ``--algo`` names (stable-baselines3's PPO and SAC)."""
@@ -116,7 +129,7 @@ def prepare(env_id: str, algo: str, steps: int | None, out: Path | str, *, seed:
         score_episodes=whole_number("score_episodes", score_episodes, 1),
         overrides=dict(overrides or {}))
     prepare_folder(request.out)
-    prepare_folder(request.out / "checkpoints")
+    prepare_folder(request.out / CHECKPOINTS)
     return request
 
 
@@ -229,12 +242,12 @@ def run(request: Request, verbose: bool = True) -> TrainingResult:
     wall_time = time.perf_counter() - started
     buffer = io.BytesIO()
     model.save(buffer)
-    policy = write_file(request.out / "policy.zip", buffer.getvalue())
+    policy = write_file(request.out / POLICY, buffer.getvalue())
     score = _score(request, policy_file.SB3Policy(model))
-    evaluations = request.out / "evaluations.npz"
-    curve = write_learning_curve(evaluations, request.out / "learning-curve.png",
+    evaluations = request.out / EVALUATIONS  # written by the evaluations' callback
+    curve = write_learning_curve(evaluations, request.out / CURVE,
                                  f"{request.algo} on {request.env_id}")
-    card = write_card(request, request.out / "model-card.md", wall_time=wall_time, score=score)
+    card = write_card(request, request.out / CARD, wall_time=wall_time, score=score)
     envs.close()
     if verbose:
         print(f"{request.algo} on {request.env_id}: {request.steps} steps in {wall_time:.0f} s; "
@@ -275,7 +288,7 @@ def _callbacks(request: Request, verbose: bool) -> Any:
         verbose=0)
     checkpoints = CheckpointCallback(
         save_freq=max(request.checkpoint_every // request.n_envs, 1),
-        save_path=str(request.out / "checkpoints"), name_prefix=request.algo)
+        save_path=str(request.out / CHECKPOINTS), name_prefix=request.algo)
     return CallbackList([evaluation, checkpoints])
 
 
