@@ -4,11 +4,13 @@ azgym bench [--suite S | --data DIR] [--localizer SPEC ...] [--with-builtins] [-
             [--workers N] [--time-limit SECONDS] [--quick] [--out DIR] [--overwrite]
             [--navigator NAME ...] [--backend local|ray] [--address ADDR] [--profile PROFILE.toml]
 azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR] [--overwrite]
-azgym import DIR
+azgym import DIR | azgym import bag BAG --out LOG [--topic KIND=TOPIC ...] [--map MAP] [--overwrite]
 azgym calibrate LOG --out PROFILE.toml [--figure FILE] [--turn-rate auto|odometry|imu] [--seed N]
                 [--overwrite]
 azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [--motion-rate HZ]
                    [--overwrite]
+azgym export bag (--data LOG | --scenario S [--route R] [--seed N]) --out BAG
+                 [--storage sqlite3|mcap] [--overwrite]
 azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S] [--workers N]
                       [--time-limit SECONDS] [--out DIR] [--overwrite]
 azgym layout optimize SCENARIO --add N [--step M] [--spacing M] [--out DIR] [--overwrite]

@@ -46,8 +46,13 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
                            "--episodes 200 --seed 2000000",
                            "azgym evaluate navigator runs/navigator/policy.zip --localizer "
                            "ransac"),
-    "import": ("azgym import roh", "azgym import path/to/log"),
-    "export": ("azgym export route --scenario robot-arena --route long --seed 99 --out long",),
+    "import": ("azgym import roh", "azgym import path/to/log",
+               "azgym import bag wander-bag --out wander-log"),
+    "export bag": ("azgym export bag --data warehouse-small-simulated --out simulated-bag",
+                   "azgym export bag --scenario robot-arena --route wander-1 --seed 3 "
+                   "--out wander-bag --storage mcap"),
+    "export": ("azgym export route --scenario robot-arena --route long --seed 99 --out long",
+               "azgym export bag --data warehouse-small-simulated --out simulated-bag"),
     "export route": ("azgym export route --scenario robot-arena --route long --seed 99 "
                      "--out long",),
     "calibrate": ("azgym calibrate long --out robot.toml",

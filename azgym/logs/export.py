@@ -12,9 +12,10 @@ Floats are written by ``repr``, which reads back to the same float, so that ``az
 from __future__ import annotations
 
 import csv
+import glob
 import io
 import math
-from collections.abc import Iterable
+from collections.abc import Collection, Iterable
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +35,7 @@ from azgym.site.scenario import Scenario
 from azgym.site.toml_writer import to_toml
 from azgym.world.drive import Frame, motion_models, simulate
 
-__all__ = ["LOG_FILES", "csv_text", "export_route"]
+__all__ = ["LOG_FILES", "claim_log", "csv_text", "export_route"]
 
 LOG_FILES = (MANIFEST, "scenario.toml", "frames.*", "detections.*", "odometry.*", "imu.*")
 """The files of a log folder (glob patterns: a table may be CSV, gzipped or Parquet), which an
@@ -73,7 +74,9 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
     if problem := name_problem(name, MAX_NAME):
         raise InvalidInputError(f"name: {problem}")
     odometry, imu = motion_models(scenario, motion_rate_hz)
-    _claim(out, overwrite, with_imu=imu is not None, with_map=_map_file(scenario))
+    claim_log(out, overwrite, [MANIFEST, "frames.csv", "detections.csv", "odometry.csv",
+                               *(["imu.csv"] if imu is not None else []),
+                               *(["scenario.toml"] if _map_file(scenario) else [])])
     sensor = GeometrySensor(scenario)
     frames = list(simulate(scenario, chosen, seed, sensor=sensor, odometry=odometry, imu=imu))
     prepare_folder(out)
@@ -96,12 +99,19 @@ def export_route(scenario: Scenario | str, route: str | None, seed: int, out: Pa
     return out
 
 
-def _claim(out: Path, overwrite: bool, *, with_imu: bool, with_map: bool) -> None:
-    """Refuse a log in ``out`` unless ``overwrite``; then refuse any file the export leaves."""
-    claim_folder(out, LOG_FILES, overwrite, "out")
-    written = {MANIFEST, "frames.csv", "detections.csv", "odometry.csv",
-               *(["imu.csv"] if with_imu else []), *(["scenario.toml"] if with_map else [])}
-    left = sorted(str(path) for pattern in LOG_FILES if out.is_dir()
+def claim_log(out: Path, overwrite: bool, written: Collection[str] | None = None) -> None:
+    """``out`` as a log folder to write: the one rule of ``export route`` and ``import bag``.
+
+    Refuses a log there (any of :data:`LOG_FILES`, and any file of ``written``) unless
+    ``overwrite``; then, once the files to write are known (``written``), any file of the log
+    there that the new one would leave beside it: the folder would mix two logs.
+
+    Raises:
+        InvalidInputError: Either, naming the files, before anything is written.
+    """
+    claim_folder(out, [*LOG_FILES, *(glob.escape(name) for name in written or ())], overwrite,
+                 "out")
+    left = sorted(str(path) for pattern in LOG_FILES if out.is_dir() and written is not None
                   for path in out.glob(pattern) if path.name not in written)
     if left:
         raise InvalidInputError(f"out: {', '.join(left)} belong to the log there and would be "
