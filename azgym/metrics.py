@@ -15,6 +15,16 @@ Intervals (:func:`confidence_intervals`) come from a bootstrap that respects how
 were drawn: frames on their own are resampled one by one, the frames of a driven route in
 blocks of :data:`BLOCK_SECONDS` (:func:`bootstrap_blocks`), since consecutive frames of a route
 share the pose, the occlusions and the tracker's state and are far from independent.
+
+Drift (:func:`relative_pose_errors`, :func:`summarize_drift`) is evo's relative pose error (RPE)
+per distance travelled, as ``evo_rpe tum TRUTH EST --delta D --delta_unit m --all_pairs
+--pairs_from_reference`` computes it (no alignment): between the poses of every pair of frames
+whose path along the truth is D metres (within :data:`DRIFT_TOLERANCE` of D, the pair nearest to
+D from each start), the error of the estimated motion against the true one, expressed in the
+first pose's frame. Pairs are chosen on the truth, so that every contender is scored over the
+same stretches, however its estimates jitter; from every start (``all_pairs``), not in
+back-to-back segments, so that a figure does not depend on where a route begins and a
+segment's path is D within the tolerance rather than D plus up to one frame's step.
 """
 
 from __future__ import annotations
@@ -28,8 +38,12 @@ import numpy as np
 import scipy.stats
 from numpy.typing import ArrayLike
 
-__all__ = ["BLOCK_SECONDS", "FAILURE_DISTANCE", "HEADLINE", "ErrorStats", "Figure", "Intervals",
-           "bootstrap_blocks", "confidence_intervals", "quantile", "summarize_errors"]
+from azgym.core import wrap_angle
+
+__all__ = ["BLOCK_SECONDS", "DRIFT_DISTANCES", "DRIFT_TOLERANCE", "FAILURE_DISTANCE", "HEADLINE",
+           "Drift", "ErrorStats", "Figure", "Intervals", "bootstrap_blocks",
+           "confidence_intervals", "path_pairs", "quantile", "relative_pose_errors",
+           "summarize_drift", "summarize_errors"]
 
 FAILURE_DISTANCE = 1.0
 """An estimate further than this from the truth [m] is a failure."""
@@ -44,6 +58,11 @@ RESAMPLES = 400
 """Bootstrap resamples per interval."""
 _BATCH = 50
 """Resamples drawn at a time, to bound memory."""
+DRIFT_DISTANCES: Final = (1.0, 5.0, 10.0)
+"""The distances travelled of the drift figures [m] (:func:`relative_pose_errors`)."""
+DRIFT_TOLERANCE: Final = 0.1
+"""A pair's path along the truth may miss its distance by this share of it (evo's
+``--delta_tol``, 0.1 by default)."""
 
 Figure = TypeVar("Figure", bound=float | None)
 """How a figure is held: ``float`` as computed (NaN where there is none, inf where it is
@@ -240,3 +259,116 @@ def _percentile_interval(values: np.ndarray) -> list[float]:
     if values.size == 0:  # no estimate in any resample: no interval either
         return [math.nan, math.nan]
     return [quantile(values, 0.025), quantile(values, 0.975)]
+
+
+class Drift(TypedDict, Generic[Figure]):
+    """The drift over one distance travelled (:func:`summarize_drift`).
+
+    Attributes:
+        distance_m: The distance D [m].
+        pairs: The pairs of frames D apart along the truth.
+        translation_pct: The mean translation error of the relative poses, as a share of D [%]
+            (NaN without pairs, or without a true heading).
+        heading_deg_per_m: The mean heading error of the relative poses over D [°/m] (NaN
+            likewise).
+    """
+
+    distance_m: float
+    pairs: int
+    translation_pct: Figure
+    heading_deg_per_m: Figure
+
+
+def path_pairs(xy: ArrayLike, distance: float, tolerance: float = DRIFT_TOLERANCE
+               ) -> np.ndarray:
+    """The pairs (i, j) of points whose path from i to j is ``distance`` long, evo's way.
+
+    evo's ``filter_pairs_by_path`` with ``all_pairs``: from each start i, the later point j
+    whose path length is nearest to ``distance`` (the first such point, e.g. where the vehicle
+    stood), kept when it misses ``distance`` by at most ``tolerance · distance``. The path
+    length is summed from straight steps between consecutive points, as evo sums it. Found by
+    bisection on the summed path (the candidates round the crossing are then compared with
+    evo's very expression), so a long recording costs n log n, not evo's n².
+
+    Args:
+        xy: The points, shape (n, 2) [m].
+        distance: The path length D [m].
+        tolerance: The share of D a pair may miss it by.
+
+    Returns:
+        The pairs, shape (P, 2), in order of their start.
+    """
+    points = np.asarray(xy, dtype=float).reshape(-1, 2)
+    count = len(points)
+    if count < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    travelled = np.concatenate(([0.0], np.cumsum(np.linalg.norm(points[:-1] - points[1:],
+                                                                axis=1))))
+    start = np.arange(count - 1)
+    crossing = np.searchsorted(travelled, travelled[start] + distance, side="right")
+    window = np.clip(crossing[:, None] + np.arange(-2, 2), start[:, None] + 1, count - 1)
+    # The first point of a stop (equal path lengths), which evo's argmin picks among them.
+    window = np.maximum(np.searchsorted(travelled, travelled[window], side="left"),
+                        start[:, None] + 1)
+    miss = np.abs((travelled[window] - travelled[start][:, None]) - distance)
+    best = np.argmin(miss, axis=1)  # the first of equal misses: the earliest point
+    rows = np.arange(count - 1)
+    keep = miss[rows, best] <= distance * tolerance
+    return np.column_stack([start[keep], window[rows, best][keep]])
+
+
+def relative_pose_errors(truth: ArrayLike, estimate: ArrayLike, distance: float
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """The relative pose errors (evo's RPE) of the pairs ``distance`` apart along the truth.
+
+    For a pair (i, j) (:func:`path_pairs` on the true positions), E = (Qᵢ⁻¹ Qⱼ)⁻¹ (Pᵢ⁻¹ Pⱼ)
+    with Q the true poses and P the estimated ones: its translation part's length is that of
+    the estimated motion minus the true one, each in its first pose's frame, and its rotation
+    angle the estimated turn minus the true one, wrapped. A true heading of NaN
+    (position-only truth) gives NaN: the translation part is not defined without it.
+
+    Args:
+        truth: The true poses (x, y, heading), shape (n, 3) [m, m, rad].
+        estimate: The estimated poses at the same frames, shape (n, 3).
+        distance: The path length D [m].
+
+    Returns:
+        Each pair's translation error [m] and rotation error [rad, in [0, π]].
+    """
+    true_poses, estimated = (np.asarray(poses, dtype=float).reshape(-1, 3)
+                             for poses in (truth, estimate))
+    first, last = path_pairs(true_poses[:, :2], distance).T
+
+    def motion(poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each pair's step in its first pose's frame, and its turn."""
+        step = poses[last, :2] - poses[first, :2]
+        cos, sin = np.cos(poses[first, 2]), np.sin(poses[first, 2])
+        return (np.column_stack([cos * step[:, 0] + sin * step[:, 1],
+                                 cos * step[:, 1] - sin * step[:, 0]]),
+                poses[last, 2] - poses[first, 2])
+
+    (true_step, true_turn), (step, turn) = motion(true_poses), motion(estimated)
+    return (np.linalg.norm(step - true_step, axis=1),
+            np.abs(wrap_angle(turn - true_turn)).reshape(-1))
+
+
+def summarize_drift(translation: ArrayLike, rotation: ArrayLike, distance: float
+                    ) -> Drift[float]:
+    """The drift over ``distance``: the mean errors of its pairs (:func:`relative_pose_errors`).
+
+    ``translation_pct`` is evo's mean translation error over D, in %; ``heading_deg_per_m``
+    its mean rotation angle in degrees over D. Pairs pooled from several routes count alike.
+
+    Args:
+        translation: Each pair's translation error [m].
+        rotation: Each pair's rotation error [rad].
+        distance: The path length D [m].
+    """
+    moved, turned = (np.asarray(values, dtype=float).reshape(-1) for values in
+                     (translation, rotation))
+    if moved.size == 0:
+        return {"distance_m": distance, "pairs": 0, "translation_pct": math.nan,
+                "heading_deg_per_m": math.nan}
+    return {"distance_m": distance, "pairs": int(moved.size),
+            "translation_pct": 100.0 * float(np.mean(moved)) / distance,
+            "heading_deg_per_m": float(np.degrees(np.mean(turned))) / distance}

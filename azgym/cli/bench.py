@@ -51,7 +51,7 @@ DEFAULT_SUITE = "warehouse-static"
 """The suite ``azgym bench`` runs, in its quick size, when none is named."""
 
 BENCH_FILES = ("results.json", "frames.csv", "cdf.png", "causes.png", "error_map_*.png",
-               "trajectories_*.png")
+               "trajectories_*.png", "trajectories/*/*.tum")
 """What a frame suite's or a log's run writes into ``--out``
 (:meth:`~azgym.bench.report.results.BenchResult.write`): refused there without ``--overwrite``."""
 

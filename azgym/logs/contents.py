@@ -4,8 +4,10 @@
 every frame or not at all, known events, each sequence in one run; ``detections.csv``: each
 detection in a listed frame, in frame order, azimuths in [−π, π], known labels, no detection
 logged twice; ``odometry.csv`` and ``imu.csv``: samples never decreasing in time, exactly one turn
-column for the odometry, as the vehicle's kind reads it. Each problem goes to the log's
-:class:`~azgym.logs.problems.Problems` with its file, line and column.
+column for the odometry, as the vehicle's kind reads it; a truth file (``[truth] file``, TUM:
+:func:`tum_truth`) instead of truth columns, its samples within the map's extent and covering
+every frame. Each problem goes to the log's :class:`~azgym.logs.problems.Problems` with its
+file, line and column.
 """
 
 from __future__ import annotations
@@ -16,14 +18,18 @@ from typing import Any
 
 import numpy as np
 
-from azgym.logs.manifest import MANIFEST, Manifest
+from azgym.errors import InvalidInputError
+from azgym.logs.manifest import MANIFEST, Manifest, TruthFile
+from azgym.logs.plausible import Extent
 from azgym.logs.problems import Problems, shown
 from azgym.logs.tables import Columns, Table, check_columns, floats, integers
+from azgym.logs.truth import truth_at
+from azgym.logs.tum import TumTrajectory, parse_tum
 from azgym.profile import DIFFERENTIAL_DRIVE
 from azgym.sensing.labels import LABEL_NAMES
 
 __all__ = ["ACCELERATIONS", "EVENTS", "QUALITY_PREFIX", "TABLES", "TRUTH", "TURNS",
-           "detections_columns", "frames_columns", "samples_columns"]
+           "detections_columns", "frames_columns", "samples_columns", "tum_truth"]
 
 TRUTH = ("x", "y", "heading")
 """The true camera pose's columns in ``frames.csv`` [m, m, rad] (format 2: heading optional)."""
@@ -215,3 +221,55 @@ def _odometry_turns(table: Table, manifest: Manifest, problems: Problems) -> boo
                                  "(write its turn rate as yaw_rate)", column="steer")
         return False
     return True
+
+
+def tum_truth(frames: Columns | None, truth: TruthFile, data: bytes, extent: Extent | None,
+              problems: Problems) -> Columns | None:
+    """The frames with their truth from a TUM file (``[truth] file``), put onto their times.
+
+    The file's poses (:func:`~azgym.logs.tum.parse_tum`; the heading only with
+    ``truth.heading``) must lie within the map's extent, and cover every frame's time
+    (:func:`~azgym.logs.truth.truth_at`: interpolated between the samples around it, within
+    ``truth.max_gap``, never extrapolated); ``frames.csv`` then has no truth columns. The
+    frames' times are as ``frames.csv`` writes them (before a repeated time is moved by the
+    reader). When the truth cannot be had (a problem recorded), the frames as they are.
+    """
+    if frames is None:
+        return None
+    if given := [key for key in TRUTH if key in frames.values]:
+        problems.add(MANIFEST, f"truth.file: {shown(truth.name)}, but frames.csv has truth "
+                               f"columns too ({', '.join(given)}): give the truth once")
+        return frames
+    samples = parse_tum(truth.name, data, problems, truth.heading)
+    if samples is None or not _within(samples, truth.name, extent, problems):
+        return frames
+    try:
+        x, y, heading = truth_at(frames["time"], samples.time, samples.x, samples.y,
+                                 samples.heading, source=truth.name, max_gap=truth.max_gap,
+                                 numbers=frames["frame"])
+    except InvalidInputError as exc:
+        problems.add(truth.name, str(exc).removeprefix(f"{truth.name}: "))
+        return frames
+    return Columns(frames.values | {"x": x, "y": y} |
+                   ({} if heading is None else {"heading": heading}))
+
+
+def _within(samples: TumTrajectory, file: str, extent: Extent | None, problems: Problems
+            ) -> bool:
+    """Whether a truth file's positions lie within the map's extent (else the first is named).
+
+    The bound of :mod:`azgym.logs.plausible`'s check of a truth column, on the file's own
+    lines: a frame's truth, interpolated between samples within it, is within it too.
+    """
+    if extent is None:
+        return True
+    x0, y0, x1, y1 = extent.box
+    x, y = samples.x, samples.y
+    outside = np.flatnonzero((x < x0) | (x > x1) | (y < y0) | (y > y1))
+    if outside.size:
+        k = int(outside[0])
+        problems.add(file, f"({float(x[k])!r}, {float(y[k])!r}) is outside the map's extent "
+                           f"[{x0:.6g}, {x1:.6g}] × [{y0:.6g}, {y1:.6g}] m ({extent.what}; "
+                           f"millimetres?); {outside.size} pose(s) are",
+                     samples.lines[k], "tx")
+    return not outside.size

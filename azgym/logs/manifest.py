@@ -4,7 +4,9 @@ The manifest says which format the log is in (:data:`FORMATS`), names and descri
 dataset, says whether it is simulated, describes the camera and where the truth came from, and
 names the map: a shipped scenario, a scenario file in the log's folder, or ``beacons.csv``. From
 format 2 on it may also state the vehicle, the camera's azimuth noise and view, and the motion
-sensors' errors (``[vehicle]``, ``[sensor]``, ``[motion]``: a profile, :mod:`azgym.profile`).
+sensors' errors (``[vehicle]``, ``[sensor]``, ``[motion]``: a profile, :mod:`azgym.profile`),
+and take the truth from a TUM file in the folder (``truth.file``, with ``truth.heading`` saying
+whether its orientations are the heading, and ``truth.max_gap``: :mod:`azgym.logs.tum`).
 """
 
 from __future__ import annotations
@@ -23,11 +25,12 @@ from azgym.logs.files import log_file
 from azgym.logs.plausible import Extent
 from azgym.logs.problems import Problems, shown
 from azgym.logs.tables import check_columns, floats, integers, read_table
+from azgym.logs.truth import MAX_GAP
 from azgym.profile import SECTIONS, Profile, parse_profile
 from azgym.site.reader import name_problem
 
-__all__ = ["FORMATS", "FORMAT_VERSION", "MANIFEST", "MAX_NAME", "Manifest", "read_manifest",
-           "read_map"]
+__all__ = ["FORMATS", "FORMAT_VERSION", "MANIFEST", "MAX_NAME", "TRUTH_SUFFIXES", "Manifest",
+           "TruthFile", "read_manifest", "read_map"]
 
 FORMAT_VERSION = 2
 """The log format this azgym writes (``format`` in ``log.toml``)."""
@@ -46,6 +49,29 @@ _KEYS = {"": {"format", "name", "description", "simulated", "sequence", "camera"
               "truth"},
          "camera": {"rate_hz", "description"}, "map": {"scenario", "beacons"},
          "truth": {"source"}}
+_TRUTH_FILE_KEYS = {"file", "heading", "max_gap"}
+"""The truth's keys from format 2 on: its TUM file."""
+TRUTH_SUFFIXES = (".tum", ".txt")
+"""What a truth file's name ends with (never a table's, the map's or the manifest's name)."""
+_MAX_GAP = Number(0.0, 60.0, low_open=True, unit="s")
+"""The rule for ``truth.max_gap``: the longest time between truth samples interpolated across."""
+
+
+@dataclass(frozen=True)
+class TruthFile:
+    """The truth as a TUM file in the log's folder (``[truth] file``, format 2).
+
+    Attributes:
+        name: The file's name.
+        heading: Whether its orientations are the true heading (else only its positions are
+            truth: a prism, one marker).
+        max_gap: The longest time between two of its samples a frame's truth is interpolated
+            across [s] (:func:`azgym.logs.truth.truth_at`).
+    """
+
+    name: str
+    heading: bool
+    max_gap: float = MAX_GAP
 
 
 @dataclass(frozen=True)
@@ -65,6 +91,7 @@ class Manifest:
         beacons: The map as a table file name in the folder (``beacons.csv``).
         truth: Where the true poses came from, in words.
         profile: The vehicle, sensor and motion sections (format 2; empty in format 1).
+        truth_file: The TUM file the truth is read from (format 2), or None.
     """
 
     format: int
@@ -78,6 +105,7 @@ class Manifest:
     beacons: str | None = None
     truth: str = ""
     profile: Profile = Profile()
+    truth_file: TruthFile | None = None
 
 
 def read_manifest(folder: Path, problems: Problems) -> Manifest | None:
@@ -112,7 +140,8 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
         problems.add(MANIFEST, f"format: this azgym reads log formats {readable}, the log "
                                f"says {shown(given)}{whole}")
         return None
-    known = _KEYS | ({"": _KEYS[""] | set(SECTIONS)} if given >= 2 else {})
+    known = _KEYS | ({"": _KEYS[""] | set(SECTIONS), "truth": _KEYS["truth"] | _TRUTH_FILE_KEYS}
+                     if given >= 2 else {})
     read = Fields(report=lambda problem: problems.add(MANIFEST, problem))
     for table, keys in known.items():
         section = data if not table else data.get(table, {})
@@ -143,7 +172,28 @@ def _fields(data: dict[str, Any], problems: Problems) -> Manifest | None:
         camera_rate_hz=float(rate) if rate is not None and rate_ok else None,
         scenario=_text(where, "scenario", problems, where="map.") or None,
         beacons=_text(where, "beacons", problems, where="map.") or None,
-        truth=_text(truth, "source", problems, where="truth."), profile=profile)
+        truth=_text(truth, "source", problems, where="truth."), profile=profile,
+        truth_file=_truth_file(truth, read, problems) if given >= 2 else None)
+
+
+def _truth_file(truth: dict[str, Any], read: Fields, problems: Problems) -> TruthFile | None:
+    """``[truth] file``, ``heading`` and ``max_gap``: the truth's TUM file, if one is named."""
+    name = _text(truth, "file", problems, where="truth.")
+    if not name:
+        for key in sorted(_TRUTH_FILE_KEYS & set(truth)):
+            if key != "file":
+                problems.add(MANIFEST, f"truth.{key}: only with truth.file (a TUM file)")
+        return None
+    if not name.endswith(TRUTH_SUFFIXES):
+        problems.add(MANIFEST, f"truth.file: {shown(name)} must end with "
+                               f"{' or '.join(TRUTH_SUFFIXES)} (a TUM file)")
+    heading = truth.get("heading")
+    if not isinstance(heading, bool):
+        problems.add(MANIFEST, "truth.heading: must be true or false, and is required with "
+                               "truth.file (are the file's orientations the true heading?)")
+    gap = truth.get("max_gap", MAX_GAP)
+    gap_ok = read.check(gap, "truth.max_gap", _MAX_GAP)
+    return TruthFile(name, bool(heading), float(gap) if gap_ok else MAX_GAP)
 
 
 def _section(data: dict[str, Any], key: str) -> dict[str, Any]:

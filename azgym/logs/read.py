@@ -5,7 +5,8 @@ lists every problem with its file, line and column). The rules (docs/logs.md): f
 strictly increasing and timed never decreasing (one clock for the whole log); each detection in
 a listed frame, the detections in frame order; azimuths in [−π, π]; the truth given on every
 frame or not at all (x and y, and in format 2 the heading optionally); motion samples never
-decreasing in time. Ids missing from the map are kept (a localizer ignores them), and so is the
+decreasing in time; a truth file (``[truth] file``, TUM) instead of truth columns, covering every
+frame. Ids missing from the map are kept (a localizer ignores them), and so is the
 same id twice in a frame at different azimuths (a mirror image carries its beacon's id); the
 very same detection twice is refused as a logging bug. What real loggers' clocks do (repeated
 time stamps, motion before the first frame or after the last) is settled, not refused, with a
@@ -29,11 +30,12 @@ from azgym.logs.contents import (
     detections_columns,
     frames_columns,
     samples_columns,
+    tum_truth,
 )
-from azgym.logs.files import read_limited
+from azgym.logs.files import log_file, read_limited
 from azgym.logs.manifest import MANIFEST, Manifest, read_manifest, read_map
 from azgym.logs.plausible import check_plausible
-from azgym.logs.problems import LogChanged, LogError, Problems
+from azgym.logs.problems import LogChanged, LogError, Problems, shown
 from azgym.logs.tables import (
     Columns,
     Table,
@@ -137,7 +139,10 @@ def read_log(folder: str | Path, sha256: str | None = None) -> Log:
     assert manifest is not None
     map_name, beacons, shipped, extent = read_map(folder, manifest, problems)
     data = _table_bytes(folder, problems)
-    named = {path.name: blob for path, blob in data.values()}
+    truth = _truth_bytes(folder, manifest, problems)
+    named = {path.name: blob for path, blob in data.values()} | \
+        ({} if truth is None or manifest.truth_file is None
+         else {manifest.truth_file.name: truth})
     if shipped and beacons:
         named[f"map:{map_name}"] = map_bytes(beacons)
     digest = "" if problems else log_digest([folder / MANIFEST, *_map_files(folder, manifest)],
@@ -152,6 +157,8 @@ def read_log(folder: str | Path, sha256: str | None = None) -> Log:
         path, blob = data.pop(name)
         tables[name] = parse_table(path.name, blob, problems)
     frames = frames_columns(tables["frames"], manifest, problems)
+    if manifest.truth_file is not None and truth is not None:
+        frames = tum_truth(frames, manifest.truth_file, truth, extent, problems)
     detections, quality = detections_columns(tables["detections"], frames, problems)
     motion = {name: samples_columns(tables[name], manifest, problems)
               for name in ("odometry", "imu")}
@@ -178,6 +185,21 @@ def _table_bytes(folder: Path, problems: Problems) -> dict[str, tuple[Path, byte
         if path is not None and blob is not None:
             data[name] = (path, blob)
     return data
+
+
+def _truth_bytes(folder: Path, manifest: Manifest, problems: Problems) -> bytes | None:
+    """The truth file's bytes (read up to the byte limit), if the manifest names one."""
+    if manifest.truth_file is None:
+        return None
+    before = problems.total
+    path = log_file(folder, manifest.truth_file.name, problems, report_as=MANIFEST) \
+        if Path(manifest.truth_file.name).name == manifest.truth_file.name else None
+    if path is None:
+        if problems.total == before:
+            problems.add(MANIFEST, f"truth.file: {shown(manifest.truth_file.name)} is not a "
+                                   "file in the log's folder")
+        return None
+    return read_limited(path, problems)
 
 
 def _settled(tables: dict[str, Table | None], frames: Columns,

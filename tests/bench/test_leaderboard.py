@@ -205,19 +205,22 @@ def test_verify_says_why_a_localizer_cannot_run(tmp_path, monkeypatch):
 
 
 def test_a_consistent_forgery_passes_the_checks_and_verify_catches_it(entry_path):
-    # Halve every error and redo the bookkeeping: the figures match the forged rows, so only a
-    # rerun can tell.
+    # Halve every error (each estimate moved halfway to the truth, so that its errors are the
+    # row's) and redo the bookkeeping: the figures match the forged rows, so only a rerun can
+    # tell.
     frames = entry_path.parent / "lsq-ref.frames.csv.gz"
     rows = list(csv.reader(io.StringIO(gzip.decompress(frames.read_bytes()).decode())))[1:]
-    for row in rows:
+    entry = json.loads(entry_path.read_text())
+    _, cases = suite_cases("stress", entry["suite_version"], entry["seed"], entry["quick"])
+    for row, case in zip(rows, cases, strict=True):
         if row[5] == "1":
             row[6] = repr(float(row[6]) / 2)
+            row[10], row[11] = (repr(true + (float(value) - true) / 2)
+                                for value, true in zip(row[10:12], case.pose[:2], strict=True))
     text = L.frames_file_text(rows)
     frames.write_bytes(gzip.compress(text.encode()))
     table = parse_frames(text, "forged")
-    entry = json.loads(entry_path.read_text())
     entry["results_sha256"] = hashlib.sha256(text.encode()).hexdigest()
-    _, cases = suite_cases("stress", entry["suite_version"], entry["seed"], entry["quick"])
     entry["metrics"] = clean(contender_metrics(table.outcome, cases,
                                                entry["metrics"]["runtime_us"]["reference_us"]))
     entry_path.write_text(json.dumps(entry))

@@ -3,8 +3,8 @@
 The board has parts: the suites' tables and the simulated logs', then the real data's (logs of
 real sensors, :data:`REAL_PART`), then the navigation suites'. The page is drawn by
 :mod:`azgym.bench.leaderboard.board_page`. A suite of driven routes adds track columns
-(:data:`TRACK_COLUMNS`) after the accuracy ones, and one with events (an outage, a kidnapping)
-the worst recovery (:data:`RECOVERY_COLUMN`).
+(:data:`TRACK_COLUMNS`: the track figures and the drift) after the accuracy ones, and one with
+events (an outage, a kidnapping) the worst recovery (:data:`RECOVERY_COLUMN`).
 
 Everything an entry's submitter wrote (name, version, authors, link) is escaped where it is
 shown: in Markdown, ``|``, backslashes, line breaks and HTML cannot forge a row or a tag; on the
@@ -26,10 +26,17 @@ from azgym.bench.leaderboard.entries import (
 )
 from azgym.bench.leaderboard.entry_files import Entry
 from azgym.bench.report.table import LEGEND, RANK_BY, rank_key
-from azgym.bench.report.tracking import KIDNAP_WINDOW_S, RECOVERED_CM, TrackFigures
+from azgym.bench.report.tracking import (
+    KIDNAP_WINDOW_S,
+    RECOVERED_CM,
+    SHOWN_DRIFT_M,
+    TrackFigures,
+    drift_at,
+)
 from azgym.bench.suites import SUITES, get_suite
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder, write_file
+from azgym.metrics import DRIFT_TOLERANCE, Drift
 from azgym.progress import Progress, counter
 
 __all__ = ["BOARD_FILES", "COLUMNS", "KINDS", "REAL_NOTE", "REAL_PART", "RECOVERY_COLUMN",
@@ -119,9 +126,11 @@ COLUMNS = [("#", None), ("name", None), ("version", None), ("authors", None),
            ("answered p75 cm", "p75_cm"), ("answered p95 cm", "p95_cm"),
            ("answered mean cm", "mean_cm"), ("µs", None), ("× ransac", None), ("split", None),
            ("azgym", None)]
-TRACK_COLUMNS = ("track avail. %", "track max cm")
+TRACK_COLUMNS = ("track avail. %", "track max cm", f"drift {SHOWN_DRIFT_M:g} m %",
+                 f"drift {SHOWN_DRIFT_M:g} m °/m")
 """A route suite's track figures: availability after the first fix, the largest error outside
-kidnapping windows (:mod:`azgym.bench.report.tracking`)."""
+kidnapping windows, and the drift over :data:`~azgym.bench.report.tracking.SHOWN_DRIFT_M`
+travelled (:mod:`azgym.bench.report.tracking`)."""
 RECOVERY_COLUMN = "worst recovery s"
 """On a suite with events: the longest recovery, or ``never (k/N)`` when k of N events had none."""
 TRACKS_AT = [c for c, _ in COLUMNS].index("answered mean cm") + 1
@@ -135,7 +144,12 @@ TRACKS_NOTE = (
     f"{KIDNAP_WINDOW_S:g} s after a kidnapping; on a suite with events (an outage, a "
     f"kidnapping), *{RECOVERY_COLUMN}* is the longest time from an event to an estimate within "
     f"{RECOVERED_CM:g} cm of the truth, *never (k/N)* when k of its N events were never "
-    "recovered from.")
+    f"recovered from. *drift {SHOWN_DRIFT_M:g} m %* and *°/m* are evo's relative pose error "
+    f"over {SHOWN_DRIFT_M:g} m travelled along the truth (every pair of answered frames whose "
+    f"true path between them is {SHOWN_DRIFT_M:g} m within {100 * DRIFT_TOLERANCE:g} %, no "
+    f"alignment): the mean error of the estimated motion against the true one, its translation "
+    f"as % of {SHOWN_DRIFT_M:g} m and its heading in degrees per metre (– without a true "
+    "heading).")
 
 
 def _percent(value: float | None) -> str:
@@ -149,23 +163,31 @@ def _cells(rank: int, entry: Entry, tracks: int) -> list[str]:
             _headline(stats[RANK_BY]), _interval(entry["metrics"]["ci95"][RANK_BY]),
             _percent(stats["availability"]), _percent(stats["failure_rate"]),
             _fmt(stats["median_cm"]), _fmt(stats["p75_cm"]), _fmt(stats["p95_cm"], 1),
-            _fmt(stats["mean_cm"]), *_track_cells(entry["metrics"]["tracking"])[:tracks],
+            _fmt(stats["mean_cm"]),
+            *_track_cells(entry["metrics"]["tracking"], drift_at(entry["metrics"].get("drift"))
+                          )[:tracks],
             _fmt(runtime["median"], 1), _fmt(runtime["ratio_to_ransac"]),
             f"{entry['split']} ({'quick' if entry['quick'] else 'full'})",
             entry["azgym_version"]]
 
 
-def _track_cells(tracking: TrackFigures[float | None] | None) -> list[str]:
-    """Availability after the first fix, the largest error outside kidnaps, worst recovery."""
+def _track_cells(tracking: TrackFigures[float | None] | None,
+                 drift: Drift[float | None] | None) -> list[str]:
+    """The track cells: availability after the first fix, worst error, drift, worst recovery.
+
+    The largest error is outside kidnaps; the drift is – for an entry without one.
+    """
     if tracking is None:
         return ["–"] * (len(TRACK_COLUMNS) + 1)
+    moved, turned = (None, None) if drift is None else \
+        (drift["translation_pct"], drift["heading_deg_per_m"])
     recoveries = [event["recovery_s"] for event in tracking["events"]]
     recovered = [seconds for seconds in recoveries if seconds is not None]
     never = len(recoveries) - len(recovered)
     worst = f"never ({never}/{len(recoveries)})" if never else \
         _fmt(max(recovered, default=None), 1)
     return [_percent(tracking["availability_after_first_fix"]),
-            _fmt(tracking["max_cm_outside_kidnaps"], 1), worst]
+            _fmt(tracking["max_cm_outside_kidnaps"], 1), _fmt(moved), _fmt(turned, 3), worst]
 
 
 def _header(entries: list[Entry]) -> tuple[list[str], int]:

@@ -16,9 +16,12 @@ An entry (format in ``entry.schema.json``) is sound when:
   ``cases_sha256`` and each row's scenario, group and cause the drawn frame's; an entry scored
   on a log (``data:NAME``) takes its cases from the log instead, found and checked unchanged by
   :mod:`~azgym.bench.leaderboard.entry_data`;
+- each estimate (its pose, in the columns a per-frame file has had since the drift figures)
+  has the row's errors against its frame's truth;
 - every figure under ``metrics`` (overall, 95 % intervals, by cause, by group, runtimes, and the
-  track figures of a suite of driven routes) equals the one recomputed from the per-frame
-  results and the suite's cases as drawn for the coverage check, and ``n_frames`` their count.
+  track figures and drift of a suite of driven routes) equals the one recomputed from the
+  per-frame results and the suite's cases as drawn for the coverage check, and ``n_frames``
+  their count.
 
 Runtimes are the submitter's measurements: they are checked for consistency with the per-frame
 results, and only a rerun (``azgym leaderboard verify``) measures them again.
@@ -37,13 +40,21 @@ from pathlib import Path
 from typing import Any
 
 import jsonschema
+import numpy as np
 
 from azgym._version import __version__
 from azgym.bench.leaderboard.entry_data import check_data_run, dataset_cases, is_data_entry
 from azgym.bench.leaderboard.entry_files import Entry, FrameTable, LeaderboardError, parse_frames
 from azgym.bench.leaderboard.plugin_files import WEIGHTS, is_portable, is_relative, plugin_path
-from azgym.bench.report.results import cases_digest, contender_metrics, frame_number
+from azgym.bench.report.results import (
+    ESTIMATE_COLUMNS,
+    cases_digest,
+    contender_metrics,
+    frame_number,
+)
+from azgym.bench.run.outcome import RunOutcome
 from azgym.bench.suites import NO_TEST_SPLIT, SUITES, Case
+from azgym.core import pose_error
 from azgym.errors import AzgymError
 from azgym.localize.registry import parse_spec
 
@@ -53,6 +64,8 @@ ENTRY_FORMAT = 4
 """The entry format this azgym writes and reads (``format`` in ``entry.schema.json``); 3 added
 the track figures (``metrics/tracking``), 4 the headline that charges every refusal
 (``p75_all_cm``) and intervals from a block bootstrap on routes."""
+ERROR_COLUMNS = ("position_error_m", "heading_error_rad")
+"""A per-frame file's columns of an estimate's errors, which its pose must give."""
 CLOCK_SLACK = timedelta(minutes=10)
 """A timestamp may be this far ahead of the checking machine's clock."""
 _VERSION = re.compile(r"^(\d+(?:\.\d+)*)(?:(?:a|b|rc)\d+)?(?:\.post\d+)?(?:\.dev\d+)?"
@@ -106,6 +119,7 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
     cases = _entry_cases(entry, origin, datasets)
     table = parse_frames(frames_text, origin, cases)
     _check_coverage(entry, table, cases, origin)
+    _check_estimates(table, cases, origin)
     _check_figures(entry, table, cases, origin)
     return frames_text
 
@@ -280,6 +294,26 @@ def _check_coverage(entry: Entry, table: FrameTable, cases: tuple[Case, ...],
     if entry["n_frames"] != len(frames):
         raise LeaderboardError(f"{origin}: n_frames: the entry says {entry['n_frames']}, its "
                                f"per-frame results hold {len(frames)}")
+
+
+def _check_estimates(table: FrameTable, cases: tuple[Case, ...], origin: str) -> None:
+    """Each estimate's errors against its frame's truth are its row's (to 1e-9 m and rad).
+
+    The drift figures come from the estimates, the others from the errors: a file whose
+    estimates do not give its errors would show figures of two different sets of answers.
+    """
+    if not isinstance(table.outcome, RunOutcome):
+        return  # a file written before the estimates were: no drift figures either
+    outcome = table.outcome
+    for k in np.flatnonzero(outcome.ok).tolist():
+        found = pose_error(tuple(outcome.estimate[k].tolist()), cases[k].pose)
+        claimed = (outcome.position[k], outcome.heading[k])
+        for value, written, column in zip(found, claimed, ERROR_COLUMNS, strict=True):
+            if not (math.isnan(value) and math.isnan(written)) and not close(value, written):
+                raise LeaderboardError(
+                    f"{origin}: per-frame results: line {k + 2}, column {column}: "
+                    f"{float(written)!r}, but the estimate ({', '.join(ESTIMATE_COLUMNS)}) is "
+                    f"{value!r} off the truth of frame {frame_number(cases[k], k)}")
 
 
 def _check_figures(entry: Entry, table: FrameTable, cases: tuple[Case, ...],

@@ -60,11 +60,11 @@ class _DatasetField(TypedDict, total=False):
     dataset: Dataset
 
 
-def frames_file_text(rows: list[list[str]]) -> str:
-    """The per-frame results file of one localizer: CSV with FRAME_COLUMNS, LF line ends."""
+def frames_file_text(rows: list[list[str]], header: list[str] = FRAME_COLUMNS) -> str:
+    """The per-frame results file of one localizer: CSV with ``header``, LF line ends."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(FRAME_COLUMNS)
+    writer.writerow(header)
     writer.writerows(rows)
     return buffer.getvalue()
 
@@ -94,7 +94,10 @@ def make_entry(results_dir: Path, label: str, entries_dir: Path, *, name: str, v
             f"({summary['profile_given']}); an entry is scored with the suite's or the log's own "
             "defaults (rerun without --profile)")
     row = localizers[label]
-    figures = schema()["properties"]["metrics"]["required"]  # all, ci95, …, tracking
+    metrics = schema()["properties"]["metrics"]
+    # the required figures (all, ci95, …, tracking), and the optional ones the run has (drift)
+    figures = [*metrics["required"], *(key for key in metrics["properties"]
+                                       if key not in metrics["required"] and key in row)]
     try:
         text = _frames_of(results_dir / "frames.csv", label)
         entry: Entry = {
@@ -128,13 +131,17 @@ def _dataset_of(summary: dict[str, Any]) -> _DatasetField:
 
 
 def _frames_of(path: Path, label: str) -> str:
-    """One localizer's rows of a run's frames.csv, as an entry's per-frame results."""
+    """One localizer's rows of a run's frames.csv, as an entry's per-frame results.
+
+    The run's columns are kept: a run of an azgym that wrote no estimates gives an entry
+    without them (and without drift figures).
+    """
     data = read_bytes(path, MAX_FRAMES_BYTES, "frames.csv of an azgym bench run")
     try:
-        rows = list(csv.reader(io.StringIO(data.decode("utf-8"), newline="")))[1:]
+        header, *rows = list(csv.reader(io.StringIO(data.decode("utf-8"), newline=""))) or [[]]
     except (UnicodeDecodeError, csv.Error) as exc:
         raise LeaderboardError(f"{path}: not a CSV file: {exc}") from None
-    return frames_file_text([row for row in rows if row and row[0] == label])
+    return frames_file_text([row for row in rows if row and row[0] == label], header)
 
 
 def submit(results_dir: Path, label: str, entries_dir: Path, *, name: str, version: str,

@@ -21,9 +21,14 @@ from typing import TYPE_CHECKING, Any, NotRequired, TypedDict
 
 import numpy as np
 
-from azgym.bench.report.results import FRAME_COLUMNS, frame_number
+from azgym.bench.report.results import (
+    ESTIMATE_COLUMNS,
+    FRAME_COLUMNS,
+    OUTCOME_COLUMNS,
+    frame_number,
+)
 from azgym.bench.report.summary import ContenderMetrics, Dataset, RunIdentity
-from azgym.bench.run.outcome import Outcome
+from azgym.bench.run.outcome import Outcome, RunOutcome
 from azgym.errors import LeaderboardError
 
 if TYPE_CHECKING:
@@ -168,7 +173,9 @@ class FrameTable:
         scenario: Each frame's scenario.
         group: Each frame's group.
         cause: Each frame's cause.
-        outcome: Each frame's outcome, as the runner recorded it.
+        outcome: Each frame's outcome, as the runner recorded it (a
+            :class:`~azgym.bench.run.outcome.RunOutcome`, with the estimates, when the file
+            has their columns).
     """
 
     label: str
@@ -186,45 +193,55 @@ def parse_frames(text: str, origin: str, cases: Sequence[Case] | None = None) ->
     log's frames), else 0, 1, …; an estimate (``ok`` 1) has finite errors, the position's
     non-negative and the heading's in [0, π] (NaN where the case's truth has no heading); a
     frame without one (``ok`` 0) has NaN errors; a runtime is NaN (the call raised) or finite
-    and non-negative; a frame that raised has no estimate. Rows beyond ``cases`` are checked as
-    numbered from 0 (the count is the coverage check's).
+    and non-negative; a frame that raised has no estimate. The estimate's columns
+    (:data:`~azgym.bench.report.results.ESTIMATE_COLUMNS`) hold a finite pose, NaN without an
+    estimate (that its errors against the truth are the row's is checked once the rows are
+    known to be the frames': :func:`~azgym.bench.leaderboard.checks.validate_entry`); a file
+    written before they were added (:data:`~azgym.bench.report.results.OUTCOME_COLUMNS` only)
+    still reads, without estimates. Rows beyond ``cases`` are checked as numbered from 0 (the
+    count is the coverage check's).
     """
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         header = next(reader, None)
-        if header != FRAME_COLUMNS:
+        if header is None or header not in (FRAME_COLUMNS, OUTCOME_COLUMNS):
             raise LeaderboardError(f"{origin}: per-frame results: the columns must be "
                                    f"{','.join(FRAME_COLUMNS)}, got {header}")
         table = FrameTable("", [], [], [], Outcome.empty(0))
-        values: list[tuple[bool, float, float, float]] = []
+        values: list[tuple[float, ...]] = []
         errors: list[str] = []
         for row in reader:
             case = cases[len(values)] if cases is not None and len(values) < len(cases) else None
-            ok, position, heading, micros = _frame_row(row, (reader.line_num, len(values)),
-                                                       case, origin, table)
-            values.append((ok, position, heading, micros))
-            errors.append(row[-1])
+            values.append(_frame_row(row, (reader.line_num, len(values)), case, origin, table,
+                                     header))
+            errors.append(row[len(OUTCOME_COLUMNS) - 1])
     except csv.Error as exc:
         raise LeaderboardError(f"{origin}: per-frame results: line {reader.line_num}: not CSV: "
                                f"{exc}") from None
-    oks, positions, headings, times = list(zip(*values, strict=True)) or [(), (), (), ()]
-    table.outcome = Outcome(np.array(oks, dtype=bool), np.array(positions, dtype=float),
-                            np.array(headings, dtype=float), np.array(times, dtype=float), errors)
+    # per row: ok, the two errors and the runtime, then the estimate's columns if there are any
+    columns = np.array(values, dtype=float).reshape(len(values),
+                                                    4 + len(header) - len(OUTCOME_COLUMNS))
+    outcome = Outcome(columns[:, 0].astype(bool), columns[:, 1], columns[:, 2], columns[:, 3],
+                      errors)
+    table.outcome = outcome if header == OUTCOME_COLUMNS else \
+        RunOutcome(**vars(outcome), estimate=columns[:, 4:].reshape(-1, 3))
     return table
 
 
 def _frame_row(row: list[str], place: tuple[int, int], case: Case | None, origin: str,
-               table: FrameTable) -> tuple[bool, float, float, float]:
-    """One row's checked values (place: its line and index); its labels are added to ``table``.
+               table: FrameTable, header: list[str]) -> tuple[float, ...]:
+    """One row's checked values: ok, errors, runtime (and the estimate, with its columns).
 
-    ``case`` is the frame the row must be (None: a frame numbered by its place, with a heading).
+    ``place`` is its line and index; its labels are added to ``table``. ``case`` is the frame
+    the row must be (None: a frame numbered by its place, with a heading).
     """
     line, index = place
     where = f"{origin}: per-frame results: line {line}"
-    if len(row) != len(FRAME_COLUMNS):
-        raise LeaderboardError(f"{where}: {len(row)} columns, expected {len(FRAME_COLUMNS)} "
-                               f"({','.join(FRAME_COLUMNS)})")
-    label, frame, scenario, group, cause, ok, position, heading, micros, error = row
+    if len(row) != len(header):
+        raise LeaderboardError(f"{where}: {len(row)} columns, expected {len(header)} "
+                               f"({','.join(header)})")
+    label, frame, scenario, group, cause, ok, position, heading, micros, error = \
+        row[:len(OUTCOME_COLUMNS)]
     if index == 0:
         table.label = label
     elif label != table.label:
@@ -250,10 +267,14 @@ def _frame_row(row: list[str], place: tuple[int, int], case: Case | None, origin
                                "(ok must be 0)")
     if not error and math.isnan(numbers[2]):
         raise LeaderboardError(f"{where}, column micros: NaN, but the frame did not raise")
+    estimate = [_number(text, name, where) for text, name in
+                zip(row[len(OUTCOME_COLUMNS):], ESTIMATE_COLUMNS, strict=False)]
+    if estimate:
+        _check_estimate(estimate, ok == "1", where)
     table.scenario.append(scenario)
     table.group.append(group)
     table.cause.append(cause)
-    return ok == "1", numbers[0], numbers[1], numbers[2]
+    return (float(ok == "1"), *numbers, *estimate)
 
 
 def _number(text: str, column: str, where: str) -> float:
@@ -284,3 +305,11 @@ def _check_errors(ok: bool, position: float, heading: float, where: str,
     if has_heading and not 0.0 <= heading <= HEADING_LIMIT:
         raise LeaderboardError(f"{where}, column heading_error_rad: must be in [0, π], got "
                                f"{heading!r}")
+
+
+def _check_estimate(estimate: list[float], ok: bool, where: str) -> None:
+    """An estimate's pose is finite; a frame without an estimate has NaN there."""
+    for value, column in zip(estimate, ESTIMATE_COLUMNS, strict=True):
+        if not (math.isfinite(value) if ok else math.isnan(value)):
+            wanted = "finite where ok is 1" if ok else "NaN where ok is 0 (no estimate)"
+            raise LeaderboardError(f"{where}, column {column}: must be {wanted}, got {value!r}")

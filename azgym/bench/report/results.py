@@ -1,10 +1,12 @@
 """A run's results: each contender's per-case outcome, the summary, and the files they are kept in.
 
-``results.json`` holds the summary (overall, by cause, by group, runtimes, tracks);
-``frames.csv`` every case's outcome, in the columns of :data:`FRAME_COLUMNS`, which the
-leaderboard's per-frame files share. A frame is numbered as its recording numbers it (a log's
-``frame`` column, ``Case.frame``), else by its place among the cases (0, 1, …). A heading error
-is NaN where the truth has no heading (position-only truth).
+``results.json`` holds the summary (overall, by cause, by group, runtimes, tracks, drift, and
+per sequence what its TUM files hold); ``frames.csv`` every case's outcome, in the columns of
+:data:`FRAME_COLUMNS`, which the leaderboard's per-frame files share; ``trajectories/`` the TUM
+files of a run with sequences (:mod:`azgym.bench.report.trajectories`). A frame is numbered as
+its recording numbers it (a log's ``frame`` column, ``Case.frame``), else by its place among
+the cases (0, 1, …). A heading error is NaN where the truth has no heading (position-only
+truth); the estimate's columns are NaN where there is no estimate.
 """
 
 from __future__ import annotations
@@ -26,7 +28,12 @@ import numpy as np
 from azgym._version import __version__
 from azgym.bench.leaderboard.plugin_files import plugin_record
 from azgym.bench.report.summary import ContenderMetrics, ContenderRow, DatasetSummary, Summary
-from azgym.bench.report.tracking import tracking_metrics
+from azgym.bench.report.tracking import drift_metrics, tracking_metrics
+from azgym.bench.report.trajectories import (
+    sequence_records,
+    trajectory_files,
+    write_trajectories,
+)
 from azgym.bench.run.contenders import Contender
 from azgym.bench.run.outcome import Outcome, RunOutcome
 from azgym.bench.suites import CAUSES, Case, Suite
@@ -35,11 +42,16 @@ from azgym.files import prepare_folder, write_file
 from azgym.metrics import bootstrap_blocks, confidence_intervals
 from azgym.profile import Profile, profile_toml
 
-__all__ = ["FRAME_COLUMNS", "BenchResult", "cases_digest", "contender_metrics", "frame_number",
-           "frame_rows", "summarize"]
+__all__ = ["ESTIMATE_COLUMNS", "FRAME_COLUMNS", "OUTCOME_COLUMNS", "BenchResult", "cases_digest",
+           "contender_metrics", "frame_number", "frame_rows", "summarize"]
 
-FRAME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
-                 "heading_error_rad", "micros", "error"]
+OUTCOME_COLUMNS = ["localizer", "frame", "scenario", "group", "cause", "ok", "position_error_m",
+                   "heading_error_rad", "micros", "error"]
+"""A frame's outcome: the columns of a per-frame results file without the estimate (all of
+them before the estimate was added: such a leaderboard entry's file still reads)."""
+ESTIMATE_COLUMNS = ["estimate_x_m", "estimate_y_m", "estimate_heading_rad"]
+"""The estimated pose (NaN without one), from which the drift figures are computed."""
+FRAME_COLUMNS = OUTCOME_COLUMNS + ESTIMATE_COLUMNS
 """The columns of a per-frame results file (``frames.csv``, and a leaderboard entry's)."""
 
 
@@ -51,9 +63,13 @@ class _DatasetField(TypedDict, total=False):
 
 def summarize(suite: Suite, split: str, seed: int, quick: bool,
               contenders: Sequence[Contender], cases: Sequence[Case],
-              outcomes: Mapping[str, Outcome], reference: str, *, profile: Profile | None,
+              outcomes: Mapping[str, RunOutcome], reference: str, *, profile: Profile | None,
               given: Profile | None, dataset: DatasetSummary | None = None) -> Summary:
-    """The metrics of every contender: overall, by cause, by group, runtimes and tracks.
+    """Every contender's figures and records of sequences, and where the run's TUM files go.
+
+    A contender's row holds its metrics (:func:`contender_metrics`: overall, by cause, by
+    group, runtimes, tracks, drift) and its record of each sequence
+    (:func:`~azgym.bench.report.trajectories.sequence_records`).
 
     Args:
         suite: The suite run.
@@ -69,6 +85,7 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
         dataset: The log a run on a log scored (None: a suite's run).
     """
     reference_us = float(np.nanmedian(outcomes[reference].micros))
+    trajectories = trajectory_files([contender.label for contender in contenders], cases)
     results: dict[str, ContenderRow] = {}
     for contender in contenders:
         outcome = outcomes[contender.label]
@@ -78,13 +95,14 @@ def summarize(suite: Suite, split: str, seed: int, quick: bool,
             **contender_metrics(outcome, cases, reference_us),
             "crashes": sum(1 for e in outcome.errors if e),
             "first_error": next((e for e in outcome.errors if e), ""),
+            "sequences": sequence_records(cases, outcome),
         }
     run_on: _DatasetField = {} if dataset is None else {"dataset": dataset}
     return {"suite": suite.name, "suite_version": suite.version, "split": split, "seed": seed,
             "quick": quick, "n_frames": len(cases), "cases_sha256": cases_digest(cases),
             "azgym_version": __version__, "python": sys.version.split()[0],
             "localizers": results, **run_on, "profile": profile_toml(profile or Profile()),
-            "profile_given": profile_toml(given or Profile())}
+            "profile_given": profile_toml(given or Profile()), "trajectories": trajectories}
 
 
 def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: float
@@ -97,7 +115,10 @@ def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: flo
     The one rule for them: the runner's summary and a leaderboard entry's check (which
     recomputes them from the entry's per-frame results and the suite's cases, drawn again) both
     call this. ``tracking`` is :func:`~azgym.bench.report.tracking.tracking_metrics` (None for cases
-    without driven sequences).
+    without driven sequences); ``drift`` is
+    :func:`~azgym.bench.report.tracking.drift_metrics`, there only when the outcome holds the
+    estimates (a :class:`RunOutcome`: a per-frame file written before the estimate was added
+    has none).
 
     Args:
         outcome: Its outcome on each case.
@@ -109,7 +130,7 @@ def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: flo
     group_of = np.array(groups, dtype=object)
     timed = outcome.micros[np.isfinite(outcome.micros)]
     median_us = float(np.median(timed)) if timed.size else math.nan
-    return {
+    metrics: ContenderMetrics[float] = {
         "all": outcome.stats(),
         "ci95": confidence_intervals(outcome.position, outcome.ok, bootstrap_blocks(
             [case.sequence for case in cases], [case.time for case in cases])),
@@ -122,6 +143,9 @@ def contender_metrics(outcome: Outcome, cases: Sequence[Case], reference_us: flo
                        "reference_us": reference_us},
         "tracking": tracking_metrics(cases, outcome),
     }
+    if isinstance(outcome, RunOutcome):
+        metrics["drift"] = drift_metrics(cases, outcome)
+    return metrics
 
 
 def cases_digest(cases: Sequence[Case]) -> str:
@@ -148,12 +172,14 @@ def frame_number(case: Case, place: int) -> int:
     return place if case.frame is None else case.frame
 
 
-def frame_rows(label: str, cases: Sequence[Case], outcome: Outcome) -> list[list[str]]:
+def frame_rows(label: str, cases: Sequence[Case], outcome: RunOutcome) -> list[list[str]]:
     """One contender's rows of a per-frame results file (:data:`FRAME_COLUMNS`)."""
     return [[label, str(frame_number(case, k)), case.scenario, case.group, case.cause,
              str(int(outcome.ok[k])),
              f"{outcome.position[k]:.17g}", f"{outcome.heading[k]:.17g}",
-             f"{outcome.micros[k]:.3f}", outcome.errors[k]] for k, case in enumerate(cases)]
+             f"{outcome.micros[k]:.3f}", outcome.errors[k],
+             *(f"{value:.17g}" for value in outcome.estimate[k].tolist())]
+            for k, case in enumerate(cases)]
 
 
 @dataclass
@@ -170,11 +196,14 @@ class BenchResult:
     maps: dict[str, BeaconMap] = field(default_factory=dict)
 
     def write(self, out: Path, figures: bool = True) -> list[Path]:
-        """Write results.json, frames.csv and, with matplotlib installed, the figures.
+        """Write results.json, frames.csv, the TUM files and, with matplotlib, the figures.
 
         Args:
             out: The folder.
             figures: Draw the figures too (when matplotlib is installed).
+
+        Returns:
+            The files written, and the folder of the TUM files (when there are sequences).
         """
         prepare_folder(out)
         summary_path = write_file(out / "results.json", json.dumps(self.summary, indent=1) + "\n")
@@ -184,6 +213,8 @@ class BenchResult:
         for label, outcome in self.outcomes.items():
             writer.writerows(frame_rows(label, self.cases, outcome))
         written = [summary_path, write_file(out / "frames.csv", table.getvalue())]
+        if (trajectories := self.summary["trajectories"]) is not None:
+            written.append(write_trajectories(out, trajectories, self.cases, self.outcomes))
         if figures and importlib.util.find_spec("matplotlib") is not None:
             from azgym.bench.report.plots import write_figures
 

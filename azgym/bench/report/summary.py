@@ -10,7 +10,8 @@ from __future__ import annotations
 from typing import Any, Generic, NotRequired, TypedDict
 
 from azgym.bench.report.tracking import TrackFigures
-from azgym.metrics import ErrorStats, Figure, Intervals
+from azgym.bench.report.trajectories import SequenceRecord, TrajectoryFiles
+from azgym.metrics import Drift, ErrorStats, Figure, Intervals
 
 __all__ = ["ContenderMetrics", "ContenderRow", "Dataset", "DatasetSummary", "RunIdentity",
            "Runtimes", "Summary"]
@@ -29,7 +30,9 @@ class ContenderMetrics(TypedDict, Generic[Figure]):
     """A contender's figures, as results.json and an entry keep them.
 
     :func:`~azgym.bench.report.results.contender_metrics` computes them; see
-    :class:`~azgym.metrics.Figure` for the type of a figure.
+    :class:`~azgym.metrics.Figure` for the type of a figure. ``drift`` (None without driven
+    sequences) is absent from an entry whose per-frame file holds no estimates (one made
+    before they were written).
     """
 
     all: ErrorStats[Figure]
@@ -38,6 +41,7 @@ class ContenderMetrics(TypedDict, Generic[Figure]):
     by_group: dict[str, ErrorStats[Figure]]
     runtime_us: Runtimes[Figure]
     tracking: TrackFigures[Figure] | None
+    drift: NotRequired[list[Drift[Figure]] | None]
 
 
 class ContenderRow(ContenderMetrics[float]):
@@ -53,6 +57,8 @@ class ContenderRow(ContenderMetrics[float]):
         weights_sha256: The SHA-256 of that file.
         crashes: The frames on which it raised.
         first_error: The first exception it raised ("" for none).
+        sequences: Its record of each sequence (its TUM file's frames and refusals, RMSE,
+            drift: :func:`~azgym.bench.report.trajectories.sequence_records`).
     """
 
     spec: str
@@ -63,6 +69,7 @@ class ContenderRow(ContenderMetrics[float]):
     weights_sha256: NotRequired[str]
     crashes: int
     first_error: str
+    sequences: dict[str, SequenceRecord[float]]
 
 
 class Dataset(TypedDict):
@@ -102,7 +109,8 @@ class Summary(RunIdentity):
 
     ``dataset`` is a run on a log's; ``profile`` the profile applied (the contenders'
     defaults, and the simulator's noise), ``profile_given`` the one given for the run
-    (:func:`~azgym.profile.profile_toml`; empty: none).
+    (:func:`~azgym.profile.profile_toml`; empty: none); ``trajectories`` where the run's TUM
+    files are (None: no sequences, none written).
     """
 
     python: str
@@ -110,3 +118,4 @@ class Summary(RunIdentity):
     dataset: NotRequired[DatasetSummary]
     profile: dict[str, dict[str, Any]]
     profile_given: dict[str, dict[str, Any]]
+    trajectories: TrajectoryFiles | None

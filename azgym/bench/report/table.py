@@ -7,6 +7,7 @@ import textwrap
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Final
 
+from azgym.bench.report.tracking import SHOWN_DRIFT_M, drift_at
 from azgym.metrics import BLOCK_SECONDS, FAILURE_DISTANCE, HEADLINE
 from azgym.profile import field_texts
 
@@ -14,7 +15,8 @@ if TYPE_CHECKING:
     from azgym.bench.report.summary import Summary
 
 __all__ = ["LEGEND", "POSITION_ONLY", "RANK_BY", "cell", "heading_scored", "interval_cell",
-           "profile_lines", "rank_key", "ranked_table", "run_report", "tracking_table"]
+           "profile_lines", "rank_key", "ranked_table", "run_report", "tracking_table",
+           "trajectory_lines"]
 
 RANK_BY: Final = HEADLINE
 """Boards rank by the p75 position error over every frame, a refusal infinite (EvAAL's rule)."""
@@ -30,7 +32,8 @@ LEGEND = (
     f"same run.")
 """What each column of a ranked table is: printed under it and shown on the board."""
 POSITION_ONLY = ("position-only truth: heading not scored (the truth has no heading; the heading "
-                 "figures are null in results.json)")
+                 "figures are null in results.json, and so is the drift: evo's relative pose "
+                 "error needs the true orientation)")
 """Printed under a ranked table when the truth has no heading (:func:`heading_scored`)."""
 
 
@@ -131,19 +134,44 @@ def tracking_table(summary: Summary) -> str:
     if not rows:
         return ""
     width = max([len("localizer"), *(len(label) for label, _ in rows)])
-    lines = ["tracks: availability after the first fix; worst error and frames over 1 m outside "
-             "2 s after a kidnapping; seconds to a fix within 10 cm after each event",
-             f"   {'localizer':<{width}} {'avail':>6} {'max cm':>9} {'>1 m':>5}  recovery s"]
+    lines = textwrap.wrap(
+        "tracks: availability after the first fix; worst error and frames over 1 m outside 2 s "
+        f"after a kidnapping; drift over {SHOWN_DRIFT_M:g} m travelled (evo's relative pose "
+        f"error: translation as % of {SHOWN_DRIFT_M:g} m, heading in °/m); seconds to a fix "
+        "within 10 cm after each event", 100)
+    lines.append(f"   {'localizer':<{width}} {'avail':>6} {'max cm':>9} {'>1 m':>5} "
+                 f"{f'{SHOWN_DRIFT_M:g} m %':>7} {'°/m':>6}  recovery s")
     for label, track in sorted(rows, key=lambda item: rank_key(summary["localizers"][item[0]][
             "all"], item[0])):
         recoveries = " ".join(
             f"{event['event']} " + ("never" if event["recovery_s"] is None
                                     else f"{event['recovery_s']:.1f}")
             for event in track["events"]) or "-"
+        drift = drift_at(summary["localizers"][label].get("drift"))
+        moved, turned = (None, None) if drift is None else \
+            (drift["translation_pct"], drift["heading_deg_per_m"])
         lines.append(f"   {label:<{width}} {100 * track['availability_after_first_fix']:5.1f}% "
                      f"{track['max_cm_outside_kidnaps']:9.1f} "
-                     f"{track['frames_over_1m_outside_kidnaps']:5d}  {recoveries}")
+                     f"{track['frames_over_1m_outside_kidnaps']:5d} {cell(moved):>7} "
+                     f"{cell(turned, 3):>6}  {recoveries}")
     return "\n".join(lines)
+
+
+def trajectory_lines(summary: Summary) -> list[str]:
+    """What a run's TUM files hold (:mod:`azgym.bench.report.trajectories`): [] without any."""
+    files = summary.get("trajectories")
+    if not files:
+        return []
+    left_out = ", ".join(
+        f"{label} {sum(record['refused'] for record in row['sequences'].values())}"
+        for label, row in summary["localizers"].items())
+    text = (f"trajectories: {files['folder']}/, TUM files that evo reads, one per sequence "
+            f"({len(files['files'])}) in {files['folder']}/{files['folders']['truth']}/ and "
+            f"in each contender's folder; refused frames left out: {left_out}")
+    if not files["truth_heading"]:
+        text += ("; the truth has no heading, so its files carry the identity orientation "
+                 "(not a measurement)")
+    return textwrap.wrap(f"{text}.", 100)
 
 
 def run_report(summary: Summary, seconds: float, written: list[Any]) -> str:
@@ -151,5 +179,7 @@ def run_report(summary: Summary, seconds: float, written: list[Any]) -> str:
     parts = ["", ranked_table(summary)]
     if tracks := tracking_table(summary):
         parts.append(f"\n{tracks}")
+    if trajectories := trajectory_lines(summary):
+        parts.append("\n" + "\n".join(trajectories))
     parts.append(f"\n{seconds:.1f} s; wrote {', '.join(map(str, written))}")
     return "\n".join(parts)
