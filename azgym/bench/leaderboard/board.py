@@ -23,6 +23,7 @@ from azgym.bench.leaderboard.entries import (
     DatasetUnavailable,
     LeaderboardError,
     load_available,
+    table_key,
 )
 from azgym.bench.leaderboard.entry_files import Entry
 from azgym.bench.report.table import LEGEND, RANK_BY, rank_key
@@ -93,10 +94,9 @@ NAVIGATION_NOTE = (
     "episodes.")
 
 
-def _ranked(loaded: list[tuple[Entry, str]], suite: str, split: str,
-            quick: bool) -> list[tuple[Entry, str]]:
-    rows = [(e, frames) for e, frames in loaded
-            if (e["suite"], e["split"], e["quick"]) == (suite, split, quick)]
+def _ranked(loaded: list[tuple[Entry, str]], key: tuple[Any, ...]) -> list[tuple[Entry, str]]:
+    """The entries of one table (:func:`~azgym.bench.leaderboard.entries.table_key`), ranked."""
+    rows = [(e, frames) for e, frames in loaded if table_key(e) == key]
     return sorted(rows, key=lambda pair: rank_key(pair[0]["metrics"]["all"], pair[0]["name"]))
 
 
@@ -258,7 +258,7 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
 def _suite_tables(loaded: list[tuple[Entry, str]], suite: str, sections: list[Section]
                   ) -> list[str]:
     """A suite's part of the board: one table per split and size that has entries."""
-    tables = [(split, quick, title, _ranked(loaded, suite, split, quick))
+    tables = [(split, quick, title, _ranked(loaded, (suite, split, quick, None)))
               for split, quick, title in KINDS]
     tables = [table for table in tables if table[3]]
     if not tables:
@@ -339,8 +339,7 @@ def _dataset_tables(loaded: list[tuple[Entry, str]], sections: list[Section],
         kind = "simulated data" if dataset["simulated"] else "real data"
         description = (f"the log {name}: {kind} (log format {dataset['format']}, sha256 "
                        f"{sha256[:12]})")
-        ranked = [(e, frames) for e, frames in _ranked(loaded, suite, "data", False)
-                  if e["dataset"]["sha256"] == sha256]
+        ranked = _ranked(loaded, (suite, "data", False, sha256))
         lines += [f"## {suite} — {description}", ""]
         _add_table(lines, sections,
                    (part, suite, description, DATA_TITLE, f"board-data-{name}"), ranked)
