@@ -20,7 +20,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("fields",), ("arguments", "hyperparameters", "files", "untrusted", "profile", "progress"),
     ("jit",),
     ("metrics",),
-    ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("nav",),
+    ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("mapping",),
+    ("nav",),
     ("envs",), ("bench",), ("learn", "placement", "experiments"), ("cli",), ("__init__",),
     ("__main__",),
 )
