@@ -7,6 +7,7 @@ azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out D
 azgym import DIR | azgym import bag BAG --out LOG [--topic KIND=TOPIC ...] [--map MAP] [--overwrite]
 azgym calibrate LOG --out PROFILE.toml [--figure FILE] [--turn-rate auto|odometry|imu] [--seed N]
                 [--overwrite]
+azgym survey LOG [--prior MAP] [--anchor ID ...] --out DIR [--figure FILE] [--overwrite]
 azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [--motion-rate HZ]
                    [--overwrite]
 azgym export bag (--data LOG | --scenario S [--route R] [--seed N]) --out BAG
@@ -69,6 +70,7 @@ from azgym.cli.logs import add_logs
 from azgym.cli.options import stopped
 from azgym.cli.show import add_show
 from azgym.cli.studies import add_reproduce, add_study
+from azgym.cli.survey import add_survey
 from azgym.cli.sweep import add_sweep
 from azgym.cli.train import add_train
 from azgym.errors import AzgymError
@@ -113,6 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_evaluate(commands)
     add_logs(commands)
     add_calibrate(commands)
+    add_survey(commands)
     add_layout(commands)
     add_sweep(commands)
     add_info(commands)

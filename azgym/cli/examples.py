@@ -55,6 +55,7 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
                "azgym export bag --data warehouse-small-simulated --out simulated-bag"),
     "export route": ("azgym export route --scenario robot-arena --route long --seed 99 "
                      "--out long",),
+    "survey": ("azgym survey drive --anchor 1 2 --out surveyed --figure survey.png",),
     "calibrate": ("azgym calibrate long --out robot.toml",
                   "azgym calibrate roh --out roh.toml --figure roh.png"),
     "layout": ("azgym layout analyze warehouse-small",

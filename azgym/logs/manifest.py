@@ -30,7 +30,7 @@ from azgym.profile import SECTIONS, Profile, parse_profile
 from azgym.site.reader import name_problem
 
 __all__ = ["FORMATS", "FORMAT_VERSION", "MANIFEST", "MAX_NAME", "TRUTH_SUFFIXES", "Manifest",
-           "TruthFile", "read_manifest", "read_map"]
+           "TruthFile", "read_beacons", "read_manifest", "read_map"]
 
 FORMAT_VERSION = 2
 """The log format this azgym writes (``format`` in ``log.toml``)."""
@@ -257,6 +257,19 @@ def _inside(folder: Path, name: str, problems: Problems) -> Path | None:
         problems.add(MANIFEST, f"map: {shown(name)} is not a file in the log's folder (give a "
                                "file name in it, or a shipped scenario's name)")
     return path
+
+
+def read_beacons(path: Path) -> BeaconMap:
+    """A beacon table (``beacons.csv``'s form, docs/logs.md) read on its own, checked.
+
+    Raises:
+        LogError: Every problem of the table, with its line and column.
+    """
+    problems = Problems(str(path.parent))
+    beacons = _beacon_table(path, problems)
+    problems.check()
+    assert beacons is not None  # no problem was found, so the table was read
+    return beacons
 
 
 def _beacon_table(path: Path, problems: Problems) -> BeaconMap | None:

@@ -27,11 +27,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from azgym.bench.suites.base import Case, Suite, frame_cause
-from azgym.logs.frames import frame_measurements
+from azgym.logs.frames import frame_measurements, frame_motions
 from azgym.logs.problems import LogError
-from azgym.logs.read import Columns, Log
+from azgym.logs.read import Log
 from azgym.profile import Profile
-from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
+from azgym.sensing.motion import Motion
 
 __all__ = ["SPLIT", "UNLABELLED", "data_suite", "log_cases", "log_profile"]
 
@@ -67,7 +67,8 @@ def log_cases(log: Log) -> list[Case]:
             "not scored"])
     frames = log.frames
     times = frames["time"]
-    motions = _motions(log, times)
+    motions: Sequence[Motion | None] = frame_motions(log) if log.driven else \
+        [None] * len(times)
     labels = log.detections["label"]
     bounds = np.searchsorted(log.detections["frame"], np.arange(len(times) + 1))
     cases = []
@@ -86,44 +87,3 @@ def log_cases(log: Log) -> list[Case]:
                           time=float(times[k]), event=frames["event"][k],
                           frame=int(frames["frame"][k])))
     return cases
-
-
-def _motions(log: Log, times: np.ndarray) -> list[Motion | None]:
-    """Each frame's motion samples: after the previous frame's time, up to its own."""
-    if not log.driven:
-        return [None] * len(times)
-    odometry, imu = log.odometry, log.imu
-    odometry_time = np.zeros(0) if odometry is None else odometry["time"]
-    imu_time = np.zeros(0) if imu is None else imu["time"]
-    odometry_ends = np.searchsorted(odometry_time, times, side="right")
-    imu_ends = np.searchsorted(imu_time, times, side="right")
-    motions: list[Motion | None] = []
-    for k, time in enumerate(times):
-        o = slice(odometry_ends[k - 1] if k else 0, odometry_ends[k])
-        i = slice(imu_ends[k - 1] if k else 0, imu_ends[k])
-        motions.append(Motion(float(time), _odometry(odometry, o), _imu(imu, i)))
-    return motions
-
-
-def _odometry(columns: Columns | None, rows: slice) -> OdometrySamples:
-    """Odometry samples of some rows: turning ones with ``yaw_rate`` (none without odometry)."""
-    if columns is None:
-        empty = np.zeros(0)
-        return OdometrySamples(empty, empty.copy(), empty.copy())
-    time, speed = columns["time"][rows].copy(), columns["speed"][rows].copy()
-    if "yaw_rate" in columns.values:
-        return OdometrySamples.turning(time, speed, columns["yaw_rate"][rows].copy())
-    return OdometrySamples(time, speed, columns["steer"][rows].copy())
-
-
-def _imu(columns: Columns | None, rows: slice) -> ImuSamples:
-    """IMU samples of some rows (NaN where not given; none without an IMU)."""
-    if columns is None:
-        return ImuSamples(np.zeros(0), np.zeros(0), np.zeros((0, 2)), np.zeros(0))
-    time = columns["time"][rows].copy()
-    absent = np.full(time.size, np.nan)
-    given = columns.values
-    return ImuSamples(time, columns["yaw_rate"][rows].copy(),
-                      np.column_stack([given[key][rows] if key in given else absent
-                                       for key in ("ax", "ay")]),
-                      given["heading"][rows].copy() if "heading" in given else absent.copy())

@@ -1,0 +1,328 @@
+"""``survey``: every beacon's position from drives, as bearing-only SLAM (docs/mapping.md).
+
+1. Odometry: each drive's relative camera poses and their covariances
+   (:mod:`azgym.mapping.odometry`), dead-reckoned from its known start, or from the origin.
+2. First guess: each id's rays from the dead-reckoned poses, intersected
+   (:func:`~azgym.mapping.rays.intersect`); an id whose rays do not spread enough (or too few)
+   is unobservable, its detections left out. A drive without a known start is placed by the
+   anchors it observes (at least two: a rigid fit of their guesses onto their map positions).
+3. The factor graph (:mod:`azgym.mapping.graph`), solved; a beacon whose azimuths then mostly
+   disagree with it (robust outliers), or whose agreeing rays no longer spread enough, is
+   reported unobservable too.
+4. With a prior map, each surveyed beacon's move is tested (:func:`moved`).
+
+The map frame is fixed by a known start pose or by at least two anchors; anything less leaves it
+free, and is refused by name.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from azgym.core import BeaconMap, FloatArray, IntArray
+from azgym.errors import InvalidInputError
+from azgym.mapping.graph import Graph, solve
+from azgym.mapping.odometry import compose, relative_poses
+from azgym.mapping.problem import Drive, Prior, Settings, drive_list
+from azgym.mapping.rays import MIN_RAYS, MIN_SPREAD, intersect, spread
+from azgym.site.error_model import ErrorModel
+
+__all__ = ["DEFAULT_WIDTH", "MIN_MOVE", "MOVE_CHI2", "Survey", "moved", "survey"]
+
+DEFAULT_WIDTH = 0.03
+"""Width of a beacon the prior map does not hold [m] (docs/logs.md's default)."""
+MIN_MOVE = 0.10
+"""Least distance between a beacon's prior and surveyed positions to call it moved [m]."""
+MOVE_CHI2 = 13.8155
+"""... and the least squared Mahalanobis distance (χ², 2 degrees of freedom, 0.999): both must
+hold, so that neither a tiny but certain shift nor a large but uncertain one counts."""
+
+
+@dataclass(frozen=True, eq=False)
+class Survey:
+    """A survey's answer.
+
+    Attributes:
+        ids: Every id detected (N,), sorted.
+        xy: (N, 2) surveyed positions [m]; NaN for an unobservable beacon.
+        covariances: (N, 2, 2) their covariances [m²]; NaN likewise.
+        observable: (N,) whether each was surveyed.
+        reasons: (N,) why not ('' when it was).
+        rays: (N,) detections of each id; ``outliers`` (N,) those the robust loss set aside.
+        anchors: Ids held at their map positions.
+        moved: Ids whose prior position the survey contradicts (:func:`moved`).
+        poses: Per drive, the camera poses (K, 3) solved.
+        outliers: Detections set aside by the robust loss, in all.
+        iterations: Levenberg-Marquardt's iterations.
+    """
+
+    ids: IntArray
+    xy: FloatArray
+    covariances: FloatArray
+    observable: np.ndarray
+    reasons: tuple[str, ...]
+    rays: IntArray
+    outlier_rays: IntArray
+    anchors: tuple[int, ...]
+    moved: tuple[int, ...]
+    poses: tuple[FloatArray, ...]
+    outliers: int
+    iterations: int
+
+    def beacon_map(self, prior: BeaconMap | None = None) -> BeaconMap:
+        """The observable beacons as a map (z and width from ``prior`` where it has them)."""
+        keep = np.flatnonzero(self.observable)
+        z = np.zeros(keep.size)
+        width = np.full(keep.size, DEFAULT_WIDTH)
+        if prior is not None:
+            for n, k in enumerate(keep.tolist()):
+                index = np.flatnonzero(prior.ids == self.ids[k])
+                if index.size:
+                    z[n], width[n] = prior.xyz[index[0], 2], prior.width[index[0]]
+        return BeaconMap(self.ids[keep], np.column_stack([self.xy[keep], z]), width)
+
+
+def survey(drives: Drive | Sequence[Drive], prior: Prior | None = None,
+           settings: Settings | None = None) -> Survey:
+    """Survey the beacons seen along ``drives`` (module docstring).
+
+    Raises:
+        InvalidInputError: No frames; the map frame not fixed (no known start pose and fewer
+            than two anchors); a drive without a start that observes fewer than two anchors.
+        DependencyNotInstalled: gtsam is missing.
+    """
+    drives = drive_list(drives)
+    prior = Prior() if prior is None else prior
+    settings = Settings() if settings is None else settings
+    if not drives or not any(d.frames for d in drives):
+        raise InvalidInputError("the survey got no frames")
+    if len(prior.anchors) < 2 and all(d.start is None for d in drives):
+        raise InvalidInputError(
+            f"the map frame is free: give the start pose or at least two anchors (surveyed "
+            f"beacons), got {len(prior.anchors)} anchor{'' if len(prior.anchors) == 1 else 's'}"
+            " and no start pose")
+    odometry = [relative_poses(d, settings) for d in drives]
+    reckoned = [compose(np.zeros(3) if d.start is None else np.array(d.start), moves)
+                for d, (moves, _) in zip(drives, odometry, strict=True)]
+    ids, pose_rows, beacon_of, azimuths = _detections(drives)
+    guesses, reasons = _first_guesses(drives, reckoned, prior, ids, pose_rows, beacon_of,
+                                      azimuths)
+    return _solved(drives, odometry, reckoned, prior, settings, ids, pose_rows, beacon_of,
+                   azimuths, guesses, reasons)
+
+
+def _detections(drives: list[Drive]) -> tuple[IntArray, IntArray, IntArray, FloatArray]:
+    """Every id (sorted) and each detection's global pose index, id index and azimuth."""
+    pose_rows, id_values, azimuths = [], [], []
+    base = 0
+    for drive in drives:
+        for k, frame in enumerate(drive.frames):
+            m = frame.measurements
+            pose_rows.append(np.full(len(m), base + k))
+            id_values.append(m.ids)
+            azimuths.append(m.azimuth)
+        base += len(drive.frames)
+    all_ids = np.concatenate(id_values) if id_values else np.zeros(0, np.int64)
+    ids, beacon_of = np.unique(all_ids, return_inverse=True)
+    return (ids, np.concatenate(pose_rows).astype(np.int64) if pose_rows else
+            np.zeros(0, np.int64), beacon_of.astype(np.int64),
+            np.concatenate(azimuths) if azimuths else np.zeros(0))
+
+
+def _first_guesses(drives: list[Drive], reckoned: list[FloatArray], prior: Prior,
+                   ids: IntArray, pose_rows: IntArray, beacon_of: IntArray,
+                   azimuths: FloatArray) -> tuple[FloatArray, list[str]]:
+    """Each id's first guess (NaN: unobservable, with the reason), drives placed in the map."""
+    offsets = np.cumsum([0, *(len(d.frames) for d in drives)])
+    anchors = _anchor_positions(prior)
+    for n, drive in enumerate(drives):
+        if drive.start is None:
+            reckoned[n] = _placed(drive, reckoned[n], anchors, ids, pose_rows - offsets[n],
+                                  beacon_of, azimuths, offsets[n + 1] - offsets[n])
+    poses = np.concatenate(reckoned)
+    guesses = np.full((len(ids), 2), np.nan)
+    reasons = [""] * len(ids)
+    for b, beacon in enumerate(ids.tolist()):
+        rows = np.flatnonzero(beacon_of == b)
+        if beacon in anchors:
+            guesses[b] = anchors[beacon]
+            continue
+        guesses[b], reasons[b] = _guess(poses[pose_rows[rows]], azimuths[rows])
+    return guesses, reasons
+
+
+def _guess(poses: FloatArray, azimuths: FloatArray) -> tuple[FloatArray, str]:
+    """One id's guess from its rays, or NaN and why it is unobservable."""
+    directions = poses[:, 2] + azimuths
+    if len(directions) < MIN_RAYS:
+        return np.full(2, np.nan), (f"seen {len(directions)} time{'s' * (len(directions) != 1)},"
+                                    f" fewer than {MIN_RAYS}")
+    angle = spread(directions)
+    if angle < MIN_SPREAD:
+        return np.full(2, np.nan), _narrow(angle)
+    point, weights = intersect(poses[:, :2], directions)
+    agreeing = weights > 0.5
+    if not np.isfinite(point).all() or agreeing.sum() < MIN_RAYS:
+        return np.full(2, np.nan), (f"its rays do not meet: {int(agreeing.sum())} of "
+                                    f"{len(directions)} agree on a point")
+    angle = spread(directions[agreeing])
+    if angle < MIN_SPREAD:
+        return np.full(2, np.nan), _narrow(angle) + " among the rays that agree"
+    return point, ""
+
+
+def _narrow(angle: float) -> str:
+    """The reason of a beacon whose rays spread too little."""
+    return (f"its rays spread {math.degrees(angle):.1f}°, less than "
+            f"{math.degrees(MIN_SPREAD):.0f}° (too narrow a baseline)")
+
+
+def _anchor_positions(prior: Prior) -> dict[int, FloatArray]:
+    """Each anchor's map position (x, y)."""
+    if prior.beacons is None:
+        return {}
+    index = {int(i): k for k, i in enumerate(prior.beacons.ids.tolist())}
+    return {a: prior.beacons.xyz[index[a], :2].copy() for a in prior.anchors}
+
+
+def _placed(drive: Drive, poses: FloatArray, anchors: dict[int, FloatArray], ids: IntArray,
+            local_rows: IntArray, beacon_of: IntArray, azimuths: FloatArray,
+            count: int) -> FloatArray:
+    """A drive without a start, moved onto the map by the anchors it observes (rigid fit)."""
+    inside = (local_rows >= 0) & (local_rows < count)
+    seen, wanted = [], []
+    for beacon, position in anchors.items():
+        match = np.flatnonzero(ids == beacon)
+        if not match.size:
+            continue
+        rows = np.flatnonzero(inside & (beacon_of == match[0]))
+        if not rows.size:
+            continue
+        guess, _ = _guess(poses[local_rows[rows]], azimuths[rows])
+        if np.isfinite(guess).all():
+            seen.append(guess)
+            wanted.append(position)
+    if len(seen) < 2:
+        raise InvalidInputError(
+            f"{drive.name} has no known start pose and observes {len(seen)} anchor"
+            f"{'' if len(seen) == 1 else 's'} from a wide enough baseline; it needs its start "
+            "pose or at least two observed anchors to be placed on the map")
+    turn, shift = _rigid(np.array(seen), np.array(wanted))
+    placed = poses.copy()
+    placed[:, :2] = poses[:, :2] @ turn.T + shift
+    placed[:, 2] = np.remainder(poses[:, 2] + math.atan2(turn[1, 0], turn[0, 0]) + math.pi,
+                                2.0 * math.pi) - math.pi
+    return placed
+
+
+def _rigid(source: FloatArray, target: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The rotation and shift that best carry ``source`` points onto ``target`` (Kabsch)."""
+    a, b = source - source.mean(axis=0), target - target.mean(axis=0)
+    u, _, vt = np.linalg.svd(a.T @ b)
+    d = np.sign(np.linalg.det(vt.T @ u.T))
+    turn = vt.T @ np.diag([1.0, d]) @ u.T
+    return turn, target.mean(axis=0) - source.mean(axis=0) @ turn.T
+
+
+def _solved(drives: list[Drive], odometry: list[tuple[FloatArray, FloatArray]],
+            reckoned: list[FloatArray], prior: Prior, settings: Settings, ids: IntArray,
+            pose_rows: IntArray, beacon_of: IntArray, azimuths: FloatArray,
+            guesses: FloatArray, reasons: list[str]) -> Survey:
+    """The graph of the observable beacons, solved, and the answer."""
+    used: np.ndarray = np.asarray(np.isfinite(guesses).all(axis=1))
+    column = np.cumsum(used) - 1
+    keep = used[beacon_of]
+    poses = np.concatenate(reckoned)
+    sigmas = _sigmas(settings, poses[pose_rows[keep]], guesses[beacon_of[keep]],
+                     _widths(prior, ids)[beacon_of[keep]])
+    offsets = np.cumsum([0, *(len(d.frames) for d in drives)])
+    links = np.concatenate([np.column_stack([np.arange(o, o + len(m)), np.arange(o + 1,
+                                                                              o + len(m) + 1)])
+                            for o, (m, _) in zip(offsets[:-1], odometry, strict=True)])
+    starts = np.array([o for o, d in zip(offsets[:-1], drives, strict=True)
+                       if d.start is not None], dtype=np.int64)
+    anchor_ids = set(prior.anchors)
+    graph = Graph(
+        poses=poses, links=links.astype(np.int64),
+        moves=np.concatenate([m for m, _ in odometry]).reshape(-1, 3),
+        move_cov=np.concatenate([c for _, c in odometry]).reshape(-1, 3, 3),
+        starts=starts,
+        start_poses=np.array([d.start for d in drives if d.start is not None]).reshape(-1, 3),
+        beacons=guesses[used],
+        anchors=np.array([column[b] for b, i in enumerate(ids.tolist())
+                          if used[b] and i in anchor_ids], dtype=np.int64),
+        rows=np.column_stack([pose_rows[keep], column[beacon_of[keep]]]).astype(np.int64),
+        azimuths=azimuths[keep], sigmas=sigmas)
+    solution = solve(graph, settings)
+    outlying = np.abs(solution.residuals) > settings.loss_scale * sigmas
+    xy = np.full((len(ids), 2), np.nan)
+    covariances = np.full((len(ids), 2, 2), np.nan)
+    xy[used] = solution.beacons
+    covariances[used] = solution.covariances
+    rays = np.bincount(beacon_of, minlength=len(ids))
+    outlier_rays = np.bincount(beacon_of[keep][outlying], minlength=len(ids))
+    observable = used.copy()
+    for b in np.flatnonzero(used).tolist():
+        if ids[b] in anchor_ids:
+            continue
+        mine = np.flatnonzero(beacon_of[keep] == b)
+        good = mine[~outlying[mine]]
+        directions = solution.poses[graph.rows[good, 0], 2] + graph.azimuths[good]
+        if good.size < MIN_RAYS or spread(directions) < MIN_SPREAD:
+            observable[b] = False
+            reasons[b] = (f"its azimuths disagree: {outlier_rays[b]} of {mine.size} set aside "
+                          "as outliers, the rest too few or too narrow a baseline")
+    xy[~observable] = np.nan
+    covariances[~observable] = np.nan
+    result = Survey(ids=ids, xy=xy, covariances=covariances, observable=observable,
+                    reasons=tuple(reasons), rays=rays, outlier_rays=outlier_rays,
+                    anchors=tuple(sorted(anchor_ids)), moved=(),
+                    poses=tuple(np.split(solution.poses, offsets[1:-1])),
+                    outliers=int(outlying.sum()), iterations=solution.iterations)
+    if prior.beacons is None:
+        return result
+    return Survey(**{**result.__dict__, "moved": moved(result, prior.beacons, anchor_ids)})
+
+
+def _widths(prior: Prior, ids: IntArray) -> FloatArray:
+    """Each id's width: the prior map's, else :data:`DEFAULT_WIDTH`."""
+    widths = np.full(len(ids), DEFAULT_WIDTH)
+    if prior.beacons is not None:
+        for b, beacon in enumerate(ids.tolist()):
+            index = np.flatnonzero(prior.beacons.ids == beacon)
+            if index.size:
+                widths[b] = prior.beacons.width[index[0]]
+    return widths
+
+
+def _sigmas(settings: Settings, poses: FloatArray, points: FloatArray,
+            widths: FloatArray) -> FloatArray:
+    """Each detection's azimuth standard deviation: eq. 1-3 at the first guess's distance."""
+    distance = np.hypot(*(points - poses[:, :2]).T)
+    model = ErrorModel(settings.delta_alpha_d, settings.coverage)
+    return np.sqrt(model.variance(np.maximum(distance, 0.1), widths) + settings.extra_sigma**2)
+
+
+def moved(result: Survey, prior: BeaconMap, anchors: set[int] | None = None) -> tuple[int, ...]:
+    """The surveyed beacons whose prior position the survey contradicts.
+
+    A beacon moved when its surveyed position is at least :data:`MIN_MOVE` from its prior one
+    and the squared Mahalanobis distance under its covariance is at least :data:`MOVE_CHI2`.
+    Anchors are held, never tested.
+    """
+    found = []
+    held = anchors or set()
+    for b in np.flatnonzero(result.observable).tolist():
+        beacon = int(result.ids[b])
+        index = np.flatnonzero(prior.ids == beacon)
+        if beacon in held or not index.size:
+            continue
+        offset = result.xy[b] - prior.xyz[index[0], :2]
+        distance2 = float(offset @ np.linalg.solve(result.covariances[b], offset))
+        if math.hypot(*offset) >= MIN_MOVE and distance2 >= MOVE_CHI2:
+            found.append(beacon)
+    return tuple(found)
