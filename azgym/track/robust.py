@@ -26,15 +26,18 @@ On top of :class:`~azgym.track.gated_ekf.GatedEkf`:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose
-from azgym.hyperparameters import check_range
+from azgym.hyperparameters import check_flag, check_range
 from azgym.profile import FORKLIFT
+from azgym.site.error_model import ErrorModel
 from azgym.track.gated_ekf import DEFAULT_NOISE, GatedEkf, subset
 from azgym.track.kinematics import WHEELBASE
+from azgym.track.repair import MapRepair, Repair
 from azgym.track.unicycle import IPHI, IX, IY
 
 __all__ = ["Robust"]
@@ -54,6 +57,11 @@ class Robust(GatedEkf):
         strong_fix: Inliers of a per-frame fix that restart an inconsistent track at once.
         confirm_travel: Distance from a tentative start after which a frame whose three (or
             more) beacons all pass the gate confirms it [m].
+        repair: Whether to repair the map while tracking (:mod:`azgym.track.repair`).
+        repair_sightings: Rejected sightings of a beacon in a row that make it a suspect.
+        repair_after: Shortest time those sightings span [s].
+        repair_span: Smallest angle a suspect's rays must span to locate it [rad].
+        repair_std: Largest standard deviation of a new position along its worst axis [m].
         **others: As :class:`~azgym.track.gated_ekf.GatedEkf` (``min_init_inliers`` 3).
     """
 
@@ -73,8 +81,15 @@ class Robust(GatedEkf):
                  position_walk: float = DEFAULT_NOISE.position_walk, initializer: str = "ransac",
                  min_init_inliers: int = 3, max_position_std: float = 0.5,
                  relocalize_after: float = 0.5, strong_fix: int = 6,
-                 confirm_travel: float = 1.0) -> None:
+                 confirm_travel: float = 1.0, repair: bool = False,
+                 repair_sightings: int = 5, repair_after: float = 1.0,
+                 repair_span: float = math.radians(20.0), repair_std: float = 0.1) -> None:
         self.max_position_std = max_position_std
+        self.repair = repair
+        self.repair_sightings = repair_sightings
+        self.repair_after = repair_after
+        self.repair_span = repair_span
+        self.repair_std = repair_std
         self.confirm_travel = confirm_travel
         self.relocalize_after = relocalize_after
         self.strong_fix = strong_fix
@@ -94,6 +109,12 @@ class Robust(GatedEkf):
         check_range(name, "relocalize_after", self.relocalize_after, low=0.0)
         check_range(name, "strong_fix", self.strong_fix, low=4, integer=True)
         check_range(name, "confirm_travel", self.confirm_travel, low=0.0)
+        check_flag(name, "repair", self.repair)
+        check_range(name, "repair_sightings", self.repair_sightings, low=2, high=1000,
+                    integer=True)
+        check_range(name, "repair_after", self.repair_after, low=0.0, high=3600.0)
+        check_range(name, "repair_span", self.repair_span, low=0.0, high=math.pi, low_open=True)
+        check_range(name, "repair_std", self.repair_std, low=0.0, low_open=True)
 
     def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:
         super()._reset(rng, initial)
@@ -101,6 +122,18 @@ class Robust(GatedEkf):
         self._bad_since: float | None = None
         self._started_at = np.zeros(2)
         self._checked = 0
+        self._repair = MapRepair(
+            sightings=int(self.repair_sightings), after=float(self.repair_after),
+            span=float(self.repair_span), max_std=float(self.repair_std),
+            threshold=self._threshold,
+            error_model=ErrorModel(float(self.delta_alpha_d), bool(self.coverage)),
+            extra_sigma=float(self.extra_sigma)) if self.repair else None
+
+    @property
+    def repairs(self) -> tuple[Repair, ...]:
+        """The repairs made since ``reset`` (none unless ``repair``)."""
+        repair = self.__dict__.get("_repair")
+        return () if repair is None else tuple(repair.repairs)
 
     def _now(self) -> float:
         return self._steps.time if self._steps.time is not None else 0.0
@@ -115,6 +148,39 @@ class Robust(GatedEkf):
         return self._answer(fix.inliers, {"initialized": True})
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        if self._repair is None:
+            return self._track(measurements, beacons)
+        return self._track_and_repair(self._repair, measurements, beacons)
+
+    def _track_and_repair(self, repair: MapRepair, measurements: Measurements,
+                          beacons: BeaconMap) -> Estimate:
+        """Track on the repaired map without the suspects' detections, then take the sightings.
+
+        The sightings go to :mod:`azgym.track.repair`.
+        """
+        beacons = repair.begin_frame(beacons)
+        rows = repair.usable(measurements)
+        if rows is None:
+            estimate = self._track(measurements, beacons)
+            inliers = estimate.inliers
+        else:
+            estimate = self._track(subset(measurements, rows), beacons)
+            inliers = np.zeros(len(measurements), dtype=bool)
+            inliers[rows[estimate.inliers]] = True
+        confident = estimate.ok and self._running and self._bad_since is None
+        suspected, repaired = repair.observe(self._now(), measurements, inliers, beacons,
+                                             self._state, self._cov, confident)
+        if rows is None and not suspected and not repaired:
+            return estimate
+        diagnostics = dict(estimate.diagnostics)
+        if suspected:
+            diagnostics["suspected"] = tuple(suspected)
+        if repaired:
+            diagnostics["repaired"] = tuple(repaired)
+        return dataclasses.replace(estimate, inliers=inliers, diagnostics=diagnostics)
+
+    def _track(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        """One frame of the tracker without map repair (module docstring)."""
         if not self._running:
             found = self._fix(measurements, beacons)
             if found is None:
@@ -128,7 +194,7 @@ class Robust(GatedEkf):
         if self._tentative:
             if accepted < distinct:
                 self._running = False  # a tentative start the frame contradicts
-                return self._update(measurements, beacons)
+                return self._track(measurements, beacons)
             self._tentative = not self._confirms(accepted)
         self._bad_since = (self._bad_since if self._bad_since is not None else self._now()) \
             if inconsistent else None

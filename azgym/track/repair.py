@@ -1,0 +1,330 @@
+"""Map repair while tracking: a beacon that moved is noticed, set aside, located again and used.
+
+:class:`~azgym.track.robust.Robust` with ``repair=True`` hands every frame it has corrected to a
+:class:`MapRepair`, which keeps a record per beacon (docs/trackers.md, "Map repair"):
+
+* **A sighting** is one frame's detections of one beacon. It *agrees* when one of them passed
+  the tracker's gate and leave-one-out test (:mod:`azgym.track.azimuth_update`), and is
+  *rejected* when none did. Under the error model a good beacon's sighting is rejected with
+  probability 1 − ``gate_probability`` (0.001), so a run of n rejections has probability about
+  0.001ⁿ; ghosts and misread ids are rarer than one in two frames of one beacon and do not
+  come in runs that last.
+* **Suspected**: a beacon is suspected after ``sightings`` rejected sightings in a row (none
+  agreeing between, none more than :data:`STREAK_GAP_S` after the one before) spanning at
+  least ``after`` seconds, while the other beacons agree: since its run began they agreed in
+  at least :data:`OTHERS_AGREE` sightings and in at least twice as many as they were rejected
+  in. A track that is wrong sees every beacon rejected, so its error is not taken for a move.
+  Only sightings of a confident track count (running, confirmed, not lost, consistent).
+* **Set aside**: from then on its detections are removed before the correction.
+* **Located again**: each of its sightings is a ray from the tracker's camera position along
+  the tracker's heading plus the azimuth, with the azimuth's variance (eq. 3 at the range to
+  the map position, plus ``extra_sigma``² and the heading's variance) and the position's
+  covariance. The rays since its run began are intersected (:mod:`azgym.localize.bearings`);
+  rays missing the point by more than the gate are dropped and the rest intersected again.
+  The point is taken once at least :data:`KEPT_SHARE` of the rays agree with it, they span at
+  least ``span`` radians, its position's standard deviation along its worst axis is within
+  ``max_std``, it lies ahead of every ray and within :data:`OUTSIDE_M` of the box of the
+  map's beacons (beyond it lies a mirror's image), and it is not within :data:`CLEARANCE_M`
+  (or three standard deviations) of another beacon of the map: rays that meet on another
+  beacon are that beacon's detections under a misread id, and the suspicion is dropped. So is
+  one whose point is within three standard deviations of its map position (it did not move).
+* **Used again**: the map the tracker corrects with has the beacon at its new position (its
+  height and width kept), and the repair is reported (:class:`Repair`). A suspected beacon
+  whose map position agrees again in ``sightings`` sightings in a row is cleared.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from azgym.core import BeaconMap, FloatArray, Measurements
+from azgym.localize.base import ROW_BEACON_INDEX, Problem
+from azgym.localize.bearings import angular_span, intersect_rays, ray_misses
+from azgym.site.error_model import ErrorModel
+from azgym.track.azimuth_update import gated_update
+from azgym.track.gated_ekf import subset
+from azgym.track.unicycle import IPHI, IX, IY
+
+__all__ = ["CANDIDATES", "CLEARANCE_M", "KEPT_SHARE", "MAX_RAYS", "OTHERS_AGREE", "OUTSIDE_M",
+           "STREAK_GAP_S", "MapRepair", "Repair"]
+
+STREAK_GAP_S = 2.0
+"""Longest time between two rejected sightings of one run [s]: a beacon out of sight longer
+starts a new run (its earlier rays are from a track that has moved on)."""
+OTHERS_AGREE = 2
+"""Fewest agreeing sightings of other beacons since a run began that let it make a suspect."""
+KEPT_SHARE = 0.8
+"""Smallest share of a suspect's rays that must meet its new position."""
+CLEARANCE_M = 0.25
+"""A new position closer than this (or three standard deviations) to another beacon is that
+beacon's, seen under a misread id [m]."""
+OUTSIDE_M = 1.0
+"""A new position further than this outside the box of the map's beacons is a mirror's image
+(beacons hang on the walls and racks; what lies behind a wall is seen in it) [m]."""
+MAX_RAYS = 400
+"""Rays kept per beacon (the latest): bounds the memory and the least squares."""
+CANDIDATES = 24
+"""Pairs of rays whose crossings are tried as a suspect's new position, at most."""
+
+
+@dataclass(frozen=True, eq=False)
+class Repair:
+    """A beacon found moved and put at its new position.
+
+    Attributes:
+        time: When [s] (the frame's time).
+        frame: Which frame, counted from 0 since ``reset``.
+        beacon: The beacon's id.
+        old: Its map position (x, y) [m].
+        new: Its new position (x, y) [m].
+        covariance: The new position's covariance (2, 2) [m²].
+        rays: How many rays located it.
+    """
+
+    time: float
+    frame: int
+    beacon: int
+    old: tuple[float, float]
+    new: tuple[float, float]
+    covariance: FloatArray
+    rays: int
+
+    @property
+    def std(self) -> float:
+        """The new position's standard deviation along its worst axis [m]."""
+        return float(math.sqrt(np.linalg.eigvalsh(self.covariance)[-1]))
+
+
+@dataclass(eq=False)
+class _Run:
+    """One beacon's run of rejected sightings, and its rays."""
+
+    since: float
+    last: float
+    others_accepted: int
+    others_rejected: int
+    rejected: int = 0
+    suspected: bool = False
+    agreed: int = 0
+    rays: deque[FloatArray] = field(default_factory=lambda: deque(maxlen=MAX_RAYS))
+
+
+class MapRepair:
+    """The per-beacon records of a tracker's map repair (module docstring).
+
+    Args:
+        sightings: Rejected sightings in a row that make a suspect (and agreeing ones that
+            clear it).
+        after: Shortest time those rejected sightings span [s].
+        span: Smallest angle a suspect's rays must span [rad].
+        max_std: Largest standard deviation of a new position along its worst axis [m].
+        threshold: The tracker's gate (chi-square, one degree of freedom).
+        error_model: The azimuth error model (eq. 1-3).
+        extra_sigma: Azimuth noise beyond it [rad].
+    """
+
+    def __init__(self, *, sightings: int, after: float, span: float, max_std: float,
+                 threshold: float, error_model: ErrorModel, extra_sigma: float) -> None:
+        self.sightings = sightings
+        self.after = after
+        self.span = span
+        self.max_std = max_std
+        self.threshold = threshold
+        self.error_model = error_model
+        self.extra_sigma = extra_sigma
+        self.repairs: list[Repair] = []
+        self._runs: dict[int, _Run] = {}
+        self._moved: dict[int, FloatArray] = {}
+        self._accepted = 0
+        self._rejected = 0
+        self._frame = -1
+        self._given: BeaconMap | None = None
+        self._current: BeaconMap | None = None
+
+    @property
+    def suspects(self) -> tuple[int, ...]:
+        """The ids of the beacons set aside now."""
+        return tuple(beacon for beacon, run in self._runs.items() if run.suspected)
+
+    def begin_frame(self, beacons: BeaconMap) -> BeaconMap:
+        """Count a frame; the map to correct it with.
+
+        That is ``beacons`` with every repaired beacon at its new position (``beacons`` itself
+        when none is).
+        """
+        self._frame += 1
+        if not self._moved:
+            return beacons
+        if beacons is not self._given or self._current is None:
+            xyz = beacons.xyz.copy()
+            for row, beacon in enumerate(beacons.ids.tolist()):
+                if beacon in self._moved:
+                    xyz[row, :2] = self._moved[beacon]
+            self._given, self._current = beacons, BeaconMap(beacons.ids, xyz, beacons.width)
+        return self._current
+
+    def usable(self, measurements: Measurements) -> np.ndarray | None:
+        """The rows of the detections not of a suspect, or None when every row is."""
+        suspects = self.suspects
+        if not suspects:
+            return None
+        return np.flatnonzero(~np.isin(measurements.ids, suspects))
+
+    def observe(self, time: float, measurements: Measurements, inliers: np.ndarray,
+                beacons: BeaconMap, state: FloatArray, cov: FloatArray,
+                confident: bool) -> tuple[list[int], list[Repair]]:
+        """Take a corrected frame: its sightings, rays and verdicts.
+
+        Args:
+            time: The frame's time [s].
+            measurements: All its detections, the suspects' included.
+            inliers: Which of them the tracker used (M,).
+            beacons: The map the tracker corrected with (:meth:`begin_frame`).
+            state: The tracker's state after the correction.
+            cov: Its covariance.
+            confident: Whether the track is confident enough for its sightings to count.
+
+        Returns:
+            The beacons newly suspected, and the repairs made, in this frame.
+        """
+        known = np.isin(measurements.ids, beacons.ids)
+        ids = measurements.ids[known]
+        suspected: list[int] = []
+        if ids.size == 0:
+            return suspected, []
+        if not self._runs and inliers[known].all():
+            self._accepted += confident * np.unique(ids).size
+            return suspected, []
+        touched: list[int] = []
+        for beacon in np.unique(ids).tolist():
+            rows = np.flatnonzero(measurements.ids == beacon)
+            run = self._runs.get(beacon)
+            if run is not None and run.suspected:
+                self._suspect_sighting(beacon, run, measurements, rows, beacons, state, cov)
+                touched.append(beacon)
+            elif inliers[rows].any():
+                self._accepted += confident
+                self._runs.pop(beacon, None)
+            elif confident:
+                if run is None or time - run.last > STREAK_GAP_S:
+                    run = self._runs[beacon] = _Run(time, time, self._accepted, self._rejected)
+                self._rejected += 1
+                run.rejected += 1
+                run.last = time
+                self._add_rays(run, measurements, rows, beacons, state, cov)
+                if self._suspicious(run, time):
+                    run.suspected = True
+                    suspected.append(beacon)
+                    touched.append(beacon)
+        repairs = [found for beacon in touched
+                   if (found := self._try_repair(beacon, time, beacons)) is not None]
+        return suspected, repairs
+
+    def _suspicious(self, run: _Run, time: float) -> bool:
+        """Whether a run makes its beacon a suspect (module docstring)."""
+        if run.rejected < self.sightings or time - run.since < self.after:
+            return False
+        accepted = self._accepted - run.others_accepted
+        rejected = self._rejected - run.others_rejected - run.rejected
+        return accepted >= OTHERS_AGREE and accepted >= 2 * rejected
+
+    def _suspect_sighting(self, beacon: int, run: _Run, measurements: Measurements,
+                          rows: np.ndarray, beacons: BeaconMap, state: FloatArray,
+                          cov: FloatArray) -> None:
+        """A suspect's sighting: cleared after ``sightings`` agreeing ones in a row, else a ray."""
+        problem = Problem.from_frame(subset(measurements, rows), beacons)
+        passed, _ = gated_update(state.copy(), cov.copy(), problem.floats,
+                                 problem.ints[ROW_BEACON_INDEX],
+                                 self.error_model.delta_alpha_d, self.error_model.coverage,
+                                 self.extra_sigma, self.threshold)
+        if passed.any():
+            run.agreed += 1
+            if run.agreed >= self.sightings:
+                del self._runs[beacon]
+            return
+        run.agreed = 0
+        self._add_rays(run, measurements, rows, beacons, state, cov)
+
+    def _add_rays(self, run: _Run, measurements: Measurements, rows: np.ndarray,
+                  beacons: BeaconMap, state: FloatArray, cov: FloatArray) -> None:
+        """Each detection's ray: x, y, bearing, its variance, the position's covariance."""
+        row = int(np.flatnonzero(beacons.ids == measurements.ids[rows[0]])[0])
+        at = beacons.xyz[row, :2]
+        distance = math.hypot(*(at - state[[IX, IY]]))
+        variance = float(self.error_model.variance(distance, beacons.width[row])) \
+            + self.extra_sigma ** 2 + cov[IPHI, IPHI]
+        for azimuth in measurements.azimuth[rows].tolist():
+            run.rays.append(np.array([state[IX], state[IY], state[IPHI] + azimuth, variance,
+                                      cov[IX, IX], cov[IX, IY], cov[IY, IY]]))
+
+    def _try_repair(self, beacon: int, time: float, beacons: BeaconMap) -> Repair | None:
+        """Locate a suspect from its rays; its repair, or None (module docstring)."""
+        run = self._runs.get(beacon)
+        if run is None or len(run.rays) < 3:
+            return None
+        rays = np.array(run.rays)
+        if angular_span(rays[:, 2]) < self.span:
+            return None
+        kept = self._consensus(rays)
+        if kept.sum() < max(3, KEPT_SHARE * kept.size):
+            return None
+        rays = rays[kept]
+        if angular_span(rays[:, 2]) < self.span:
+            return None
+        point, covariance, _ = _intersect(rays)
+        std = math.sqrt(np.linalg.eigvalsh(covariance)[-1])
+        ahead = np.cos(rays[:, 2]) * (point[0] - rays[:, 0]) \
+            + np.sin(rays[:, 2]) * (point[1] - rays[:, 1])
+        inside = (point >= beacons.xyz[:, :2].min(axis=0) - OUTSIDE_M).all() and \
+            (point <= beacons.xyz[:, :2].max(axis=0) + OUTSIDE_M).all()
+        if std > self.max_std or (ahead <= 0.0).any() or not inside:
+            return None
+        gaps = np.hypot(*(beacons.xyz[:, :2] - point).T)
+        own = beacons.ids == beacon
+        old = beacons.xyz[own, :2][0]
+        if (gaps[~own] < max(CLEARANCE_M, 3.0 * std)).any() or gaps[own][0] < 3.0 * std:
+            del self._runs[beacon]  # another beacon under a misread id, or not moved at all
+            return None
+        del self._runs[beacon]
+        self._moved[beacon] = point
+        self._current = None
+        repair = Repair(time=time, frame=self._frame, beacon=beacon,
+                        old=(float(old[0]), float(old[1])),
+                        new=(float(point[0]), float(point[1])), covariance=covariance,
+                        rays=len(rays))
+        self.repairs.append(repair)
+        return repair
+
+    def _consensus(self, rays: FloatArray) -> np.ndarray:
+        """The rays that meet, within the gate, the point most of them meet.
+
+        A mirror ghost's rays meet at its image, and a track's first rays may be off: each ray
+        k is paired with ray k + K/2, the two's crossing scored by the rays it gathers, and the
+        best one kept.
+        """
+        half = len(rays) // 2
+        best = np.zeros(len(rays), dtype=bool)
+        for k in range(0, half, max(1, half // CANDIDATES)):
+            pair = rays[[k, k + half]]
+            if abs(math.sin(pair[1, 2] - pair[0, 2])) < math.sin(0.5 * self.span):
+                continue
+            point, _, _ = _intersect(pair)
+            kept = ray_misses(point, rays[:, :2], rays[:, 2], rays[:, 3],
+                              _origin_covariance(rays)) ** 2 < self.threshold
+            if kept.sum() > best.sum():
+                best = kept
+        return best
+
+
+def _origin_covariance(rays: FloatArray) -> FloatArray:
+    """The camera positions' covariances (K, 2, 2) of packed rays."""
+    return np.stack((rays[:, 4:6], rays[:, 5:7]), axis=1)
+
+
+def _intersect(rays: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`intersect_rays` on packed rays (x, y, bearing, variance, σxx, σxy, σyy)."""
+    return intersect_rays(rays[:, :2], rays[:, 2], rays[:, 3], _origin_covariance(rays))
