@@ -18,11 +18,22 @@ from azgym.core import interpolate_pose
 from azgym.errors import InvalidInputError
 from azgym.logs.problems import seconds
 
-__all__ = ["MAX_GAP", "truth_at"]
+__all__ = ["MAX_GAP", "covered", "truth_at"]
 
 MAX_GAP = 0.5
 """The longest time between two truth samples a frame's truth is interpolated across [s]:
 a vehicle at 2 m/s turning at 1 rad/s strays about 6 cm from the chord over half a second."""
+
+
+def covered(frame_times: np.ndarray, stamps: np.ndarray) -> np.ndarray:
+    """Whether each frame lies within the samples' span (from the first sample to the last).
+
+    Args:
+        frame_times: The frames' times [s].
+        stamps: The samples' times [s], increasing.
+    """
+    frame_times = np.asarray(frame_times, dtype=np.float64)
+    return (frame_times >= stamps[0]) & (frame_times <= stamps[-1])
 
 
 def truth_at(frame_times: np.ndarray, stamps: np.ndarray, x: np.ndarray, y: np.ndarray,
@@ -97,7 +108,7 @@ def _check_samples(stamps: np.ndarray, columns: dict[str, np.ndarray], source: s
 def _check_covered(frame_times: np.ndarray, stamps: np.ndarray, before: np.ndarray,
                    exact: np.ndarray, max_gap: float, source: str, numbers: np.ndarray) -> None:
     """Refuse frames outside the samples' span, or between samples more than max_gap apart."""
-    outside = ~exact & ((before < 0) | (before >= stamps.size - 1))
+    outside = ~covered(frame_times, stamps)
     if outside.any():
         k = int(np.flatnonzero(outside)[0])
         raise InvalidInputError(

@@ -26,7 +26,8 @@ from azgym.logs.files import MAX_TABLE_CELLS
 from azgym.logs.problems import Problems, places, seconds
 from azgym.logs.tables import Table, floats
 
-__all__ = ["TUM_COLUMNS", "UNIT_TOLERANCE", "TumTrajectory", "parse_tum", "tum_text"]
+__all__ = ["TUM_COLUMNS", "UNIT_TOLERANCE", "TumTrajectory", "not_unit", "parse_tum",
+           "quaternion_yaw", "tum_text"]
 
 TUM_COLUMNS = ("timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw")
 """A TUM line's values, in order."""
@@ -75,6 +76,32 @@ def tum_text(time: ArrayLike, x: ArrayLike, y: ArrayLike, heading: ArrayLike | N
         times.tolist(), xs.tolist(), ys.tolist(), np.sin(half).tolist(), np.cos(half).tolist(),
         strict=True)]
     return "\n".join(lines) + "\n"
+
+
+def quaternion_yaw(qx: np.ndarray, qy: np.ndarray, qz: np.ndarray, qw: np.ndarray
+                   ) -> np.ndarray:
+    """The yaw of quaternions [rad]: the heading of the rotated x-axis projected on the floor.
+
+    ``atan2(2 (w z + x y), w² + x² − y² − z²)``, the heading itself for a pure yaw; a
+    quaternion's length scales both arguments alike, so one a little off unit length (a file's
+    few decimals) gives its rotation's yaw all the same. The one rule of TUM files and ROS
+    messages (:mod:`azgym.logs.ros.messages`).
+    """
+    with np.errstate(invalid="ignore"):
+        yaw: np.ndarray = np.arctan2(2.0 * (qw * qz + qx * qy),
+                                     qw * qw + qx * qx - qy * qy - qz * qz)
+    return yaw
+
+
+def not_unit(qx: np.ndarray, qy: np.ndarray, qz: np.ndarray, qw: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Each quaternion's norm, and the rows of those that are no rotation.
+
+    A rotation's quaternion has norm 1; one further than :data:`UNIT_TOLERANCE` from it is not
+    an orientation (Euler angles written into its fields, say), whatever its yaw would be.
+    """
+    norm = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    return norm, np.flatnonzero(~(np.abs(norm - 1.0) <= UNIT_TOLERANCE))
 
 
 def parse_tum(file: str, data: bytes, problems: Problems, heading: bool) -> TumTrajectory | None:
@@ -144,14 +171,13 @@ def _table(file: str, data: bytes, problems: Problems) -> Table | None:
 
 def _yaw(table: Table, values: dict[str, np.ndarray], problems: Problems) -> np.ndarray | None:
     """The quaternions' yaw [rad], or None when one is not a unit quaternion (recorded)."""
-    qx, qy, qz, qw = (values[column] for column in TUM_COLUMNS[4:])
-    norm = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-    off = np.flatnonzero(~(np.abs(norm - 1.0) <= UNIT_TOLERANCE))
+    quaternion = [values[column] for column in TUM_COLUMNS[4:]]
+    norm, off = not_unit(*quaternion)
     if off.size:
         k = int(off[0])
         problems.add(table.file, f"the quaternion's norm is {float(norm[k])!r}, not 1 (within "
                                  f"{UNIT_TOLERANCE:g}): not an orientation ({off.size} such "
                                  f"line(s))", table.lines[k], "qw")
         return None
-    yaw: np.ndarray = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    yaw = quaternion_yaw(*quaternion)
     return np.where(yaw == -math.pi, math.pi, yaw)

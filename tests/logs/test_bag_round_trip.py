@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -66,7 +67,9 @@ def test_a_differential_drive_route_round_trips_with_its_camera_mount(tmp_path):
     (mount,) = static[0].transforms
     assert (mount.header.frame_id, mount.child_frame_id) == ("base_link", "camera")
     assert mount.transform.translation.x == log.manifest.profile.vehicle.camera_ahead
-    same_logs(log, import_bag(bag, tmp_path / "back"))
+    back = import_bag(bag, tmp_path / "back")
+    same_logs(log, back)
+    assert back.notes == ()  # the mount read from /tf_static is the profile's
 
 
 def test_a_forklift_route_gives_its_turn_rate_from_the_steering_angle_and_wheelbase(tmp_path):
@@ -173,3 +176,16 @@ def test_a_users_detection_type_is_read_through_a_field_mapping(tmp_path):
                           found["quality"][:, 0].astype(np.float32).astype(np.float64))
     assert np.array_equal(log.frames["x"], frames["x"])
     assert log.manifest.name == "blobs" and log.manifest.scenario == "warehouse-small"
+
+
+@pytest.mark.parametrize("heading", [True, False])
+def test_a_log_whose_truth_is_a_tum_file_round_trips_with_the_truth_on_its_frames(tmp_path,
+                                                                                 heading):
+    from logs.test_tum import tum_log
+
+    source = read_log(tum_log(tmp_path, heading=heading, every=2))
+    assert source.manifest.truth_file is not None and source.has_heading == heading
+    back = import_bag(export_bag(source, tmp_path / "bag"), tmp_path / "back")
+    assert back.manifest.truth_file is None  # the bag's truth is on the frames, not a file
+    assert back.manifest.truth == source.manifest.truth
+    same_logs(dataclasses.replace(source, manifest=back.manifest), back)

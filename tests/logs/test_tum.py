@@ -105,3 +105,26 @@ def test_azgym_import_accepts_a_log_whose_truth_is_a_tum_file(tmp_path, capsys):
     assert main(["import", str(tum_log(tmp_path, heading=False, every=2))]) == 0
     assert "truth: x, y on every frame (position only: heading not scored)" in \
         capsys.readouterr().out
+
+
+@pytest.mark.parametrize("style", ["evo", "crlf", "tabs", "bom and comments"])
+def test_a_truth_file_as_evo_and_other_tools_write_it_is_read(tmp_path, style):
+    from evo.core.trajectory import PoseTrajectory3D
+    from evo.tools import file_interface
+
+    folder = tum_log(tmp_path)
+    ours = parse_tum("t", (folder / "truth.tum").read_bytes(), Problems("t"), heading=True)
+    half = ours.heading / 2  # evo writes '%.18e' (scientific notation), qw last
+    file_interface.write_tum_trajectory_file(str(folder / "truth.tum"), PoseTrajectory3D(
+        np.column_stack([ours.x, ours.y, np.zeros_like(ours.x)]),
+        np.column_stack([np.cos(half), 0 * half, 0 * half, np.sin(half)]), ours.time))
+    data = (folder / "truth.tum").read_bytes()
+    assert b"e+00" in data
+    data = {"evo": data, "crlf": data.replace(b"\n", b"\r\n"), "tabs": data.replace(b" ", b"\t"),
+            "bom and comments": b"\xef\xbb\xbf# evo_traj\n\n" + data.replace(b"\n", b"\n# -\n", 3)
+            }[style]
+    (folder / "truth.tum").write_bytes(data)
+    original = read_log(SHIPPED)
+    log = read_log(folder)
+    assert log.frames["x"].tolist() == original.frames["x"].tolist()
+    assert np.abs(log.frames["heading"] - original.frames["heading"]).max() < 1e-12

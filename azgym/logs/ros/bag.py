@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from azgym.errors import InvalidInputError
 from azgym.logs.problems import cut
-from azgym.logs.ros.messages import DETECTIONS_TYPE
+from azgym.logs.ros.messages import DETECTIONS_TYPE, DETECTIONS_VERSION
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
@@ -37,12 +37,15 @@ class Bag:
         path: The bag.
         reader: rosbags' reader.
         cdr: Whether its messages are ROS 2's CDR (else ROS 1's serialization).
+        notes: What the import changed of what the bag says, each a sentence naming the topic
+            (a robot's quirks that are read, not refused: docs/ros2.md).
     """
 
     def __init__(self, path: Path, reader: AnyReader) -> None:
         self.path = path
         self.reader = reader
         self.cdr = bool(reader.is2)
+        self.notes: list[str] = []
 
     def topics(self) -> dict[str, tuple[str | None, int]]:
         """Each topic's type (None: several) and message count, by name."""
@@ -106,11 +109,16 @@ class Bag:
         if typename == DETECTIONS_TYPE and known[typename] != store.fielddefs[typename]:
             version = dict((name, value) for name, _, value in known[typename][0]).get(
                 "VERSION", "unknown")
+            fields = ", ".join(name for name, _ in known[typename][1])
+            if version == DETECTIONS_VERSION:
+                raise InvalidInputError(
+                    f"{self.path}: the bag's {DETECTIONS_TYPE} says version {version} but its "
+                    f"fields are {fields}; version {version}'s are "
+                    f"{', '.join(name for name, _ in store.fielddefs[typename][1])} "
+                    "(docs/ros2.md)")
             raise InvalidInputError(
                 f"{self.path}: the bag's {DETECTIONS_TYPE} is version {version}, with fields "
-                f"{', '.join(name for name, _ in known[typename][1])}; this azgym reads "
-                f"version {dict((n, v) for n, _, v in store.fielddefs[typename][0])['VERSION']} "
-                "(docs/ros2.md)")
+                f"{fields}; this azgym reads version {DETECTIONS_VERSION} (docs/ros2.md)")
 
 
 def _with_parts(store: Typestore, typename: str) -> dict[str, Any]:

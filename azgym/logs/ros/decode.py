@@ -94,10 +94,18 @@ def field_values(message: object, path: FieldPath) -> np.ndarray:
     """The numbers at ``path`` in a deserialized message, as a 1-D array.
 
     A path through a sequence of messages gives one number per element.
+
+    Raises:
+        InvalidInputError: An element number past the end of a sequence (the message does not
+            say where: its caller does).
     """
     items: list[Any] = [message]
-    for part in path:
+    for k, part in enumerate(path):
         if isinstance(part, int):
+            short = [len(item) for item in items if part >= len(item)]
+            if short:
+                raise InvalidInputError(f"no element {part} ({shown_path(path[:k])} has "
+                                        f"{short[0]})")
             items = [item[part] for item in items]
             continue
         values = [getattr(item, part) for item in items]

@@ -78,8 +78,8 @@ class Detections(Stream):
         else:
             names, labels, sequence, event = tuple(n for n, _ in self.mapping.quality), [], "", ""
             number = index if self.mapping.frame is None else \
-                self._number(index, field_values(message, self.mapping.frame))
-            ids, azimuths = (field_values(message, path)
+                self._number(index, self._values(index, message, self.mapping.frame))
+            ids, azimuths = (self._values(index, message, path)
                              for path in (self.mapping.ids, self.mapping.azimuths))
             quality = self._mapped_quality(index, message, len(ids))
         ids = self._ids(index, np.asarray(ids))
@@ -103,14 +103,27 @@ class Detections(Stream):
             return ns // 1_000_000_000, ns % 1_000_000_000
         return int(header.stamp.sec), int(header.stamp.nanosec)
 
+    def _values(self, index: int, message: Any, path: FieldPath) -> np.ndarray:
+        """The numbers at a user type's ``path`` in message ``index``, or an error naming it."""
+        try:
+            return field_values(message, path)
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"{self.where(index, shown_path(path))}: {exc}") from None
+
     def _number(self, index: int, values: np.ndarray) -> int:
+        """The frame number: the one whole number at the mapping's frame path."""
         assert self.mapping is not None and self.mapping.frame is not None
-        return int(self._whole(index, values[:1], shown_path(self.mapping.frame), 1)[0])
+        field = shown_path(self.mapping.frame)
+        if values.size != 1:
+            raise InvalidInputError(f"{self.where(index, field)}: {values.size} values, a frame "
+                                    "number is one (a path through a sequence gives one per "
+                                    "element)")
+        return int(self._whole(index, values, field, 1)[0])
 
     def _mapped_quality(self, index: int, message: Any, count: int) -> np.ndarray:
         """A user type's quality values as a (count, Q) array."""
         assert self.mapping is not None
-        columns = [field_values(message, path) for _, path in self.mapping.quality]
+        columns = [self._values(index, message, path) for _, path in self.mapping.quality]
         for (name, path), column in zip(self.mapping.quality, columns, strict=True):
             if column.size != count:
                 raise InvalidInputError(f"{self.where(index, shown_path(path))}: {column.size} "

@@ -2,9 +2,12 @@
 
 The frames come from the detections (:class:`~azgym.logs.ros.detections.Detections`), their
 truth from a pose, odometry or tf topic put onto the frames' times
-(:func:`~azgym.logs.truth.truth_at`), the odometry's turn from a steering joint when there is
-one (else its turn rate), the IMU's accelerations and heading where the messages give them
-(a covariance's first element −1: not measured). The manifest and the map are an azgym bag's
+(:func:`~azgym.logs.truth.truth_at`; the frames outside its span left out), the odometry's turn
+from a steering joint when there is one (else its turn rate), the IMU's turn rate,
+accelerations and heading where the messages give them (a covariance's first element −1: not
+measured; an IMU without a turn rate is left out). A truth or steering message repeating the
+one before is read once; a quaternion must be a rotation's. What is changed is noted
+(``Bag.notes``). The manifest and the map are an azgym bag's
 own (topics ``/azgym/log`` and ``/azgym/map``: the log's files as they were) or, for any other
 bag, made from :class:`Options`.
 """
@@ -23,13 +26,16 @@ from azgym.logs.contents import QUALITY_PREFIX
 from azgym.logs.export import csv_text
 from azgym.logs.files import MAX_TABLE_BYTES
 from azgym.logs.manifest import FORMAT_VERSION, MANIFEST, MAX_NAME, read_manifest
-from azgym.logs.problems import Problems
+from azgym.logs.problems import Problems, places
+from azgym.logs.problems import seconds as shown_seconds
 from azgym.logs.ros.bag import Bag
+from azgym.logs.ros.decode import shown_path
 from azgym.logs.ros.detections import Detections
 from azgym.logs.ros.messages import yaw
 from azgym.logs.ros.streams import Fields, Joint, Stream, Text, Transforms
 from azgym.logs.ros.topics import TOPICS
-from azgym.logs.truth import truth_at
+from azgym.logs.truth import covered, truth_at
+from azgym.logs.tum import UNIT_TOLERANCE, not_unit
 from azgym.profile import profile_toml, read_profile
 from azgym.site import list_scenarios
 from azgym.site.reader import name_problem
@@ -68,7 +74,7 @@ def log_files(bag: Bag, streams: dict[str, Stream], options: Options, max_gap: f
     detections = streams["detections"]
     assert isinstance(detections, Detections)
     frames, found = detections.columns()
-    truth = _truth(bag, streams.get("truth"), frames, max_gap)
+    truth, frames, found = _truth(streams.get("truth"), frames, found, max_gap)
     files = _manifest(bag, streams, options, truth is not None)
     files["frames.csv"] = csv_text(
         ["frame", "time", *(truth or {}), *(k for k in ("sequence", "event") if frames[k])],
@@ -87,30 +93,108 @@ def log_files(bag: Bag, streams: dict[str, Stream], options: Options, max_gap: f
         files["odometry.csv"] = _odometry(bag, odometry, streams.get("steering"),
                                           explicit_steering)
     imu = streams.get("imu")
-    if isinstance(imu, Fields) and imu.count:
-        files["imu.csv"] = _imu(imu, imu_heading)
+    if isinstance(imu, Fields) and imu.count and (text := _imu(imu, imu_heading)) is not None:
+        files["imu.csv"] = text
     return files
 
 
-def _truth(bag: Bag, stream: Stream | None, frames: dict[str, Any], max_gap: float
-           ) -> dict[str, np.ndarray] | None:
-    """x, y (and heading) on every frame, or None without a truth topic."""
+def _truth(stream: Stream | None, frames: dict[str, Any], found: dict[str, Any],
+           max_gap: float) -> tuple[dict[str, np.ndarray] | None, dict[str, Any], dict[str, Any]]:
+    """x, y (and heading) on every frame (None without a truth topic), and the frames kept.
+
+    A message repeating the one before is read once; the frames before the truth's first sample
+    and after its last are left out, with a note, when the samples cover some frame (else
+    :func:`~azgym.logs.truth.truth_at` refuses them all).
+    """
     if stream is None:
-        return None
+        return None, frames, found
     assert isinstance(stream, (Fields, Transforms))
     columns = stream.columns()
     if isinstance(stream, Fields):
         stream.check_finite(columns, "x", "y", "qx", "qy", "qz", "qw")
-    heading = yaw(*(columns[f"q{axis}"] for axis in "xyzw"))
+    columns = _once(stream, columns, "another pose: which is the truth?")
+    quaternion = [columns[f"q{axis}"] for axis in "xyzw"]
+    heading = yaw(*quaternion)
     given = np.isfinite(heading)
+    field = shown_path(stream.paths["qx"][:-1]) if isinstance(stream, Fields) else \
+        "transforms.transform.rotation"
     if given.any() and not given.all():
         k = int(np.flatnonzero(~given)[0])
-        raise InvalidInputError(f"{stream.where(int(columns['index'][k]), 'orientation')}: a "
-                                "zero quaternion (no orientation) while other poses have one")
+        raise InvalidInputError(f"{stream.where(int(columns['index'][k]), field)}: a zero "
+                                "quaternion (no orientation) while other poses have one")
+    if given.all():
+        _rotations(stream, columns["index"], quaternion, field)
+    keep = covered(frames["time"], columns["time"])
+    if keep.any() and not keep.all():
+        frames, found = _trim(stream, frames, found, keep)
     x, y, h = truth_at(frames["time"], columns["time"], columns["x"], columns["y"],
                        heading if given.all() else None, source=stream.where(),
                        max_gap=max_gap, numbers=frames["frame"])
-    return {"x": x, "y": y} | ({"heading": h} if h is not None else {})
+    return {"x": x, "y": y} | ({"heading": h} if h is not None else {}), frames, found
+
+
+def _once(stream: Stream, columns: dict[str, np.ndarray], other: str
+          ) -> dict[str, np.ndarray]:
+    """A topic's samples, each message that repeats the one before read once, with a note.
+
+    A message stamped like the one before with every value the same is a driver publishing its
+    last sample again.
+
+    Raises:
+        InvalidInputError: A message stamped like the one before with another value (``other``
+            says what, and asks which is right).
+    """
+    time, index = columns["time"], columns["index"]
+    repeated = np.flatnonzero(time[1:] == time[:-1]) + 1
+    if not repeated.size:
+        return columns
+    for k in repeated:
+        if any(values[k] != values[k - 1] for name, values in columns.items() if name != "index"):
+            raise InvalidInputError(f"{stream.where(int(index[k]))}: the same stamp as message "
+                                    f"{int(index[k - 1])} ({shown_seconds(time[k])}), {other}")
+    stream.bag.notes.append(f"{stream.where()}: {repeated.size} message(s) with the same stamp "
+                            "and values as the message before "
+                            f"({places(index[repeated].tolist(), 'message')}) read once")
+    kept = np.ones(time.size, dtype=bool)
+    kept[repeated] = False
+    return {name: values[kept] for name, values in columns.items()}
+
+
+def _rotations(stream: Stream, index: np.ndarray, quaternion: list[np.ndarray], field: str
+               ) -> None:
+    """Refuse a quaternion that is no rotation (:func:`~azgym.logs.tum.not_unit`)."""
+    norm, off = not_unit(*quaternion)
+    if off.size:
+        k = int(off[0])
+        raise InvalidInputError(f"{stream.where(int(index[k]), field)}: the quaternion's norm is "
+                                f"{float(norm[k])!r}, not 1 (within {UNIT_TOLERANCE:g}): not an "
+                                f"orientation ({off.size} such message(s))")
+
+
+def _trim(stream: Stream, frames: dict[str, Any], found: dict[str, Any], keep: np.ndarray
+          ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The frames within the truth's span and their detections, with a note on those left out.
+
+    ``keep`` is a run (the frames' times increase): the frames before it and after it go.
+    """
+    first, last = int(np.argmax(keep)), int(keep.size - np.argmax(keep[::-1]))
+    numbers = frames["frame"]
+    stream.bag.notes.append(
+        f"{stream.where()}: {first} frame(s) before its first sample and {keep.size - last} "
+        f"after its last left out (frames {numbers[0]} to {numbers[-1]} became "
+        f"{numbers[first]} to {numbers[last - 1]}): a frame's truth is interpolated, never "
+        "extrapolated")
+    rows = (found["row"] >= first) & (found["row"] < last)
+    annotations = {key: (value[first:last] if value is not None and any(value[first:last])
+                         else None) for key, value in frames.items()
+                   if key in ("sequence", "event")}
+    return frames | {"frame": numbers[first:last], "time": frames["time"][first:last]} | \
+        annotations, found | {"row": found["row"][rows] - first, "id": found["id"][rows],
+                              "azimuth": found["azimuth"][rows],
+                              "quality": found["quality"][rows],
+                              "label": None if found["label"] is None else
+                              [label for label, kept in zip(found["label"], rows, strict=True)
+                               if kept]}
 
 
 def _odometry(bag: Bag, odometry: Fields, steering: Stream | None, explicit: bool) -> str:
@@ -134,11 +218,8 @@ def _odometry(bag: Bag, odometry: Fields, steering: Stream | None, explicit: boo
 
 def _steer_at(steering: Joint, joint: dict[str, np.ndarray], times: np.ndarray) -> np.ndarray:
     """The steering angle at each odometry time: linear between the joint states around it."""
+    joint = _once(steering, joint, "another steering angle: which is it?")
     stamps = joint["time"]
-    same = np.flatnonzero(np.diff(stamps) <= 0)
-    if same.size:
-        raise InvalidInputError(f"{steering.where(int(joint['index'][same[0] + 1]))}: the same "
-                                "stamp as the message before (a joint's stamps increase)")
     outside = np.flatnonzero((times < stamps[0]) | (times > stamps[-1]))
     if outside.size:
         raise InvalidInputError(f"{steering.where()}: odometry at "
@@ -149,16 +230,22 @@ def _steer_at(steering: Joint, joint: dict[str, np.ndarray], times: np.ndarray) 
     return np.interp(times, stamps, joint["position"])
 
 
-def _imu(imu: Fields, with_heading: bool) -> str:
-    """imu.csv: the turn rate, the accelerations if measured, the heading where given."""
+def _imu(imu: Fields, with_heading: bool) -> str | None:
+    """imu.csv: the turn rate, the accelerations if measured, the heading where given.
+
+    None, with a note, for an IMU that measures no turn rate (an AHRS giving its orientation
+    only): a log's IMU gives one.
+    """
     columns = imu.columns()
-    imu.check_finite(columns, "yaw_rate", "accelerations", "orientation")
-    measured = columns["accelerations"] != NOT_MEASURED
-    if measured.any() and not measured.all():
-        k = int(np.flatnonzero(measured != measured[0])[0])
-        raise InvalidInputError(f"{imu.where(k, 'linear_acceleration_covariance')}: "
-                                "accelerations measured in some messages only (element 0 is -1 "
-                                "in the others)")
+    imu.check_finite(columns, "rate", "accelerations", "orientation")
+    if not _measured(imu, columns, "rate", "angular_velocity_covariance", "a yaw rate").any():
+        imu.bag.notes.append(f"{imu.where(field='angular_velocity_covariance')}: no yaw rate "
+                             "(element 0 is -1 in every message): a log's IMU gives one, so "
+                             "the IMU is left out (no imu.csv)")
+        return None
+    imu.check_finite(columns, "yaw_rate")
+    measured = _measured(imu, columns, "accelerations", "linear_acceleration_covariance",
+                         "accelerations")
     header = ["time", "yaw_rate"]
     values = [columns["time"], columns["yaw_rate"]]
     if measured.all() and measured.size:
@@ -170,9 +257,25 @@ def _imu(imu: Fields, with_heading: bool) -> str:
         quaternion = [np.where(given, columns[f"q{axis}"], 0.0) for axis in "xyzw"]
         imu.finite(quaternion[0] + quaternion[1] + quaternion[2] + quaternion[3],
                    columns["index"], "orientation")
+        _rotations(imu, columns["index"][given], [q[given] for q in quaternion], "orientation")
         header.append("heading")
         values.append(yaw(*quaternion))
     return csv_text(header, zip(*(column.tolist() for column in values), strict=True))
+
+
+def _measured(imu: Fields, columns: dict[str, np.ndarray], name: str, field: str, what: str
+              ) -> np.ndarray:
+    """Whether each message measures ``what`` (its covariance's element 0 is not -1).
+
+    Raises:
+        InvalidInputError: Some messages do and others do not.
+    """
+    measured = columns[name] != NOT_MEASURED
+    if measured.any() and not measured.all():
+        k = int(np.flatnonzero(measured != measured[0])[0])
+        raise InvalidInputError(f"{imu.where(k, field)}: {what} measured in some messages only "
+                                "(element 0 is -1 in the others)")
+    return measured
 
 
 def _manifest(bag: Bag, streams: dict[str, Stream], options: Options, truth: bool

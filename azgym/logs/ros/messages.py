@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from azgym.errors import InvalidInputError, require
+from azgym.logs.tum import quaternion_yaw
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
@@ -121,12 +122,9 @@ def yaw_quaternion(heading: float) -> tuple[float, float, float, float]:
 
 
 def yaw(x: np.ndarray, y: np.ndarray, z: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """The yaw of quaternions (any length but zero; NaN for a zero quaternion: no orientation).
+    """The yaw of quaternions (:func:`~azgym.logs.tum.quaternion_yaw`); NaN for a zero one.
 
-    ``atan2(2 (w z + x y), w² + x² − y² − z²)``: the heading of the rotated x-axis projected on
-    the floor, which is the heading itself for a pure yaw.
+    A zero quaternion (all four zero) is how a message says it has no orientation.
     """
-    with np.errstate(invalid="ignore"):
-        angle = np.arctan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z)
     zero = (x == 0) & (y == 0) & (z == 0) & (w == 0)
-    return np.where(zero, np.nan, angle)
+    return np.where(zero, np.nan, quaternion_yaw(x, y, z, w))

@@ -2,12 +2,16 @@
 
 :func:`import_bag` reads the topics :data:`~azgym.logs.ros.topics.TOPICS` names (or those
 :class:`BagImport` names instead): the frames and their detections, the truth, odometry (and a
-steering angle), the IMU, and an azgym bag's manifest and map. A default topic the bag lacks
-leaves its table out; a topic named and missing, or of another type, is refused, listing the
-bag's topics with their types. Each message is checked as it is read
-(:mod:`azgym.logs.ros.streams`, :mod:`azgym.logs.ros.detections`), the log's files are made
-(:mod:`azgym.logs.ros.log_files`) and read back with :func:`~azgym.logs.read_log` in a
-scratch folder, and only a log that passes is written to ``out``: a refused bag writes nothing.
+steering angle), the IMU, and an azgym bag's manifest and map; and the camera's mount in
+``/tf_static``, compared with the log's profile. A default topic the bag lacks leaves its table
+out; a topic named and missing, or of another type, is refused, listing the bag's topics with
+their types. What a robot's recording does that a log does not (stamps never filled, a message
+recorded twice, frames outside the truth's span, an IMU without a yaw rate) is read, not
+refused, each change noted (:attr:`Bag.notes <azgym.logs.ros.bag.Bag>`, the log's notes).
+Each message is checked as it is read (:mod:`azgym.logs.ros.streams`,
+:mod:`azgym.logs.ros.detections`), the log's files are made (:mod:`azgym.logs.ros.log_files`)
+and read back with :func:`~azgym.logs.read_log` in a scratch folder, and only a log that passes
+is written to ``out``: a refused bag writes nothing.
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ from azgym.logs.ros.decode import FieldPath, field_problem, shown_path
 from azgym.logs.ros.detections import Detections, Mapping
 from azgym.logs.ros.log_files import Options, log_files
 from azgym.logs.ros.messages import (
+    BASE_LINK,
+    CAMERA,
     DETECTIONS_TYPE,
     MAP,
     ODOMETRY,
@@ -34,9 +40,10 @@ from azgym.logs.ros.messages import (
     TF,
     require_rosbags,
     typestore,
+    yaw,
 )
 from azgym.logs.ros.streams import Fields, Joint, Stream, Text, Transforms
-from azgym.logs.ros.topics import TF_TOPIC, TOPICS
+from azgym.logs.ros.topics import MAX_MESSAGE_BYTES, TF_STATIC_TOPIC, TF_TOPIC, TOPICS
 from azgym.logs.truth import MAX_GAP
 from azgym.untrusted import read_regular_file
 
@@ -47,12 +54,16 @@ __all__ = ["BagImport", "import_bag"]
 
 MAX_MSG_FILE_BYTES = 64 * 1024
 """The largest ``.msg`` file read [bytes]."""
+MOUNT_TOLERANCE = 1e-6
+"""How far a camera mount in ``/tf_static`` may be from the profile's before a note says so
+[m, rad]."""
 _POSES: dict[str, FieldPath] = {"x": ("position", "x"), "y": ("position", "y"),
                                **{f"q{axis}": ("orientation", axis) for axis in "xyzw"}}
 _FIELDS: dict[str, dict[str, FieldPath]] = {
     "odometry": {"speed": ("twist", "twist", "linear", "x"),
                  "yaw_rate": ("twist", "twist", "angular", "z")},
-    "imu": {"yaw_rate": ("angular_velocity", "z"), "ax": ("linear_acceleration", "x"),
+    "imu": {"yaw_rate": ("angular_velocity", "z"), "rate": ("angular_velocity_covariance", 0),
+            "ax": ("linear_acceleration", "x"),
             "ay": ("linear_acceleration", "y"),
             "accelerations": ("linear_acceleration_covariance", 0),
             "orientation": ("orientation_covariance", 0),
@@ -107,7 +118,9 @@ def import_bag(bag: str | Path, out: str | Path, options: BagImport = BagImport(
         overwrite: Whether a log already in ``out`` may be replaced.
 
     Returns:
-        The log written, as :func:`~azgym.logs.read_log` reads it.
+        The log written, as :func:`~azgym.logs.read_log` reads it, its notes preceded by what
+        the import changed of what the bag says (``Bag.notes``: a robot's quirks read, not
+        refused).
 
     Raises:
         DependencyNotInstalled: rosbags is missing (``pip install "azgym[ros]"``).
@@ -130,6 +143,7 @@ def import_bag(bag: str | Path, out: str | Path, options: BagImport = BagImport(
         files = log_files(opened, streams, options.log, options.max_gap,
                           explicit_steering="steering" in options.topics,
                           imu_heading=options.imu_heading)
+        notes = tuple(opened.notes)
     with tempfile.TemporaryDirectory(prefix="azgym-bag-") as scratch:
         for name, text in files.items():
             (Path(scratch) / name).write_text(text, encoding="utf-8")
@@ -138,11 +152,14 @@ def import_bag(bag: str | Path, out: str | Path, options: BagImport = BagImport(
         except LogError as exc:
             raise InvalidInputError(f"{bag}: the log made of it is refused (nothing was written "
                                     f"to {out}):\n  " + "\n  ".join(exc.problems)) from None
+    mount = streams.get("mount")
+    if isinstance(mount, Transforms) and mount.rows:
+        notes += _mount_notes(mount, log.manifest.profile.vehicle.camera_ahead)
     claim_log(out, overwrite, files)
     prepare_folder(out)
     for name, text in files.items():
         write_file(out / name, text)
-    return dataclasses.replace(log, folder=out)
+    return dataclasses.replace(log, folder=out, notes=notes + log.notes)
 
 
 def _msg_types(options: BagImport) -> dict[str, object] | None:
@@ -183,7 +200,36 @@ def _streams(bag: Bag, options: BagImport, store: Typestore) -> dict[str, Stream
                                     f"({topic.what}); {bag.listing()}")
         bag.define(found[0], store)
         streams[kind] = _stream(bag, kind, name, found[0], options)
+    if bag.topics().get(TF_STATIC_TOPIC, (None,))[0] == TF and \
+            all(stream.topic != TF_STATIC_TOPIC for stream in streams.values()):
+        bag.define(TF, store)
+        streams["mount"] = Transforms(bag, TF_STATIC_TOPIC, TF, MAX_MESSAGE_BYTES, CAMERA,
+                                      BASE_LINK)
     return streams
+
+
+def _mount_notes(mount: Transforms, ahead: float | None) -> tuple[str, ...]:
+    """Notes on what the bag's camera mount says that the log's profile does not.
+
+    The mount is ``base_link`` to ``camera`` in ``/tf_static`` (the last one given); noted: an
+    offset ahead other than ``ahead`` (``vehicle.camera_ahead``) or none there, and any offset
+    to the side or turn (a profile holds the offset ahead only).
+    """
+    columns = mount.columns()
+    x, y = float(columns["x"][-1]), float(columns["y"][-1])
+    turn = float(yaw(*(columns[f"q{axis}"][-1:] for axis in "xyzw"))[0])
+    where = f"{mount.where()}: the camera's mount puts the camera {x!r} m ahead of {BASE_LINK}"
+    notes = []
+    if ahead is None:
+        notes.append(f"{where}; the log's profile has none (give it with --profile)")
+    elif abs(x - ahead) > MOUNT_TOLERANCE:
+        notes.append(f"{where}, the log's profile {ahead!r} m (vehicle.camera_ahead, which the "
+                     "log keeps)")
+    if abs(y) > MOUNT_TOLERANCE or abs(turn) > MOUNT_TOLERANCE:
+        notes.append(f"{where}, {y!r} m to its left, turned by {turn!r} rad: a log's profile "
+                     "holds the camera's offset ahead only (the truth and the azimuths are the "
+                     "camera's own: only a tracker's motion model assumes it faces ahead)")
+    return tuple(notes)
 
 
 def _stream(bag: Bag, kind: str, topic: str, typename: str, options: BagImport) -> Stream:

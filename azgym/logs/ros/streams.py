@@ -6,12 +6,15 @@ message larger than its topic allows, before deserializing it. :class:`Fields` g
 at fixed paths (odometry, IMU, a pose) in batches through the fast path of
 :mod:`azgym.logs.ros.decode`; :class:`Transforms` a tf child frame's pose; :class:`Joint` one
 joint's position; :class:`Text` the one string of a manifest or map topic. Every stream's
-header stamps must not run back (:meth:`Stream.times`); a stamp becomes float seconds
-(:func:`~azgym.logs.ros.messages.seconds`).
+header stamps must not run back nor lie before 1970 (:meth:`Stream.times`); a stamp becomes float
+seconds (:func:`~azgym.logs.ros.messages.seconds`). A topic none of whose stamps is filled (all
+0) is timed by the bag's time of each message, with a note (:attr:`Bag.notes
+<azgym.logs.ros.bag.Bag>`).
 """
 
 from __future__ import annotations
 
+from array import array
 from typing import Any
 
 import numpy as np
@@ -35,11 +38,16 @@ STAMP: dict[str, FieldPath] = {"sec": ("header", "stamp", "sec"),
 
 
 class Stream:
-    """A topic's messages, counted and bounded; subclasses gather what they need of each."""
+    """A topic's messages, counted and bounded; subclasses gather what they need of each.
+
+    Attributes:
+        received: Each message's time in the bag [ns] (when it was recorded).
+    """
 
     def __init__(self, bag: Bag, topic: str, typename: str, max_bytes: int) -> None:
         self.bag, self.topic, self.typename, self.max_bytes = bag, topic, typename, max_bytes
         self.count = 0
+        self.received = array("q")
 
     def add(self, ns: int, raw: bytes) -> None:
         """Take the next message (its time in the bag [ns] and bytes)."""
@@ -51,6 +59,7 @@ class Stream:
         if len(raw) > self.max_bytes:
             raise InvalidInputError(f"{self.where(index)}: {len(raw)} bytes, more than the "
                                     f"{self.max_bytes} a message of it may have")
+        self.received.append(ns)
         self.take(index, ns, raw)
 
     def take(self, index: int, ns: int, raw: bytes) -> None:
@@ -67,7 +76,10 @@ class Stream:
 
     def times(self, sec: np.ndarray, nanosec: np.ndarray, index: np.ndarray,
               field: str = "header.stamp") -> np.ndarray:
-        """Stamps as float seconds; refused when a nanosec is 1e9 or more, or time runs back.
+        """Stamps as float seconds, refused before 1970, with a nanosec of 1e9, or running back.
+
+        Stamps that are all 0 were never filled (a driver that leaves the header as it is made):
+        the messages are timed by their times in the bag instead, with a note.
 
         Args:
             sec: Each stamp's whole seconds.
@@ -76,6 +88,17 @@ class Stream:
             field: The stamp's field, for messages.
         """
         sec, nanosec = sec.astype(np.int64), nanosec.astype(np.int64)
+        received = np.frombuffer(self.received, dtype=np.int64)[index]
+        if sec.size and not (sec.any() or nanosec.any()) and received.any():
+            self.bag.notes.append(f"{self.where(field=field)}: every header stamp is 0 (never "
+                                  "filled): each message is timed by its time in the bag (when "
+                                  "it was recorded) instead")
+            sec, nanosec = np.divmod(received, 1_000_000_000)
+        before = np.flatnonzero(sec < 0)
+        if before.size:
+            raise InvalidInputError(f"{self.where(int(index[before[0]]), field + '.sec')}: "
+                                    f"{sec[before[0]]} is negative (a ROS time counts from "
+                                    "1970)")
         bad = np.flatnonzero((nanosec < 0) | (nanosec >= 1_000_000_000))
         if bad.size:
             raise InvalidInputError(f"{self.where(int(index[bad[0]]), field + '.nanosec')}: "

@@ -17,6 +17,7 @@ import heapq
 import math
 import os
 import tempfile
+import tomllib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
@@ -49,6 +50,7 @@ from azgym.logs.ros.messages import (
 )
 from azgym.logs.ros.topics import TF_STATIC_TOPIC, TF_TOPIC, TOPICS
 from azgym.sensing.labels import LABEL_NAMES
+from azgym.site.toml_writer import to_toml
 from azgym.untrusted import read_regular_file
 
 if TYPE_CHECKING:
@@ -170,8 +172,20 @@ def _streams(log: Log, store: Typestore) -> dict[str, tuple[str, Iterator[Messag
 
 
 def _manifest_text(log: Log) -> str:
-    """The log's manifest file, as text."""
-    return read_regular_file(log.folder / MANIFEST, MAX_MANIFEST_BYTES, "manifest").decode()
+    """The log's manifest file, as text: as it is, unless it takes the truth from a TUM file.
+
+    The bag carries the truth on the frames (topic ``/azgym/truth``), where the reader put it,
+    and no TUM file: the manifest then keeps the truth's ``source`` alone, written anew.
+    """
+    text = read_regular_file(log.folder / MANIFEST, MAX_MANIFEST_BYTES, "manifest").decode()
+    if log.manifest.truth_file is None:
+        return text
+    data = tomllib.loads(text)
+    source = {key: value for key, value in data.pop("truth").items() if key == "source"}
+    file = log.manifest.truth_file.name
+    return to_toml(data | ({"truth": source} if source else {}),
+                   f"An azgym log (docs/logs.md); its truth, read from {file}, is on the frames "
+                   "of the bag (docs/ros2.md).")
 
 
 def _map_text(log: Log) -> str | None:
