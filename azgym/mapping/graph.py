@@ -4,8 +4,10 @@ One ``Pose2`` per frame (the camera's), one ``Point2`` per observable beacon; a 
 per pair of consecutive frames (:mod:`azgym.mapping.odometry`); a ``BearingFactor2D`` per
 detection, its azimuth the bearing in the camera frame with eq. 1-3's standard deviation at the
 first guess's distance, behind a robust loss (Cauchy by default: docs/mapping.md); a prior on
-each drive's known start pose and on each anchor. Levenberg-Marquardt solves it, and GTSAM's
-marginals give each beacon's covariance. gtsam is imported here only, when a survey runs.
+each drive's known start pose and on each anchor. Levenberg-Marquardt solves it
+(:func:`solve`), and GTSAM's marginals give each beacon's covariance (:func:`covariances`), once
+the beacons found unobservable after the solve are left out. gtsam is imported here only, when
+a survey runs.
 """
 
 from __future__ import annotations
@@ -17,10 +19,11 @@ from typing import Any
 import numpy as np
 
 from azgym.core import FloatArray, IntArray
-from azgym.errors import require
+from azgym.errors import InvalidInputError, require
 from azgym.mapping.problem import Settings
 
-__all__ = ["ANCHOR_STD", "START_STD", "Graph", "Solution", "solve"]
+__all__ = ["ANCHOR_STD", "START_STD", "Graph", "Solution", "covariances", "residuals",
+           "solve"]
 
 START_STD = (0.005, 0.005, math.radians(0.05))
 """Standard deviations of a known start pose (x, y [m], heading [rad]): a dock's survey. The
@@ -63,19 +66,18 @@ class Graph:
 class Solution:
     """What the solver found.
 
-    Poses (K, 3), beacons (B, 2), their covariances (B, 2, 2), each detection's residual
-    [rad] (D,) and Levenberg-Marquardt's iterations.
+    Poses (K, 3), beacons (B, 2), each detection's residual [rad] (D,) and
+    Levenberg-Marquardt's iterations.
     """
 
     poses: FloatArray
     beacons: FloatArray
-    covariances: FloatArray
     residuals: FloatArray
     iterations: int
 
 
 def solve(graph: Graph, settings: Settings) -> Solution:
-    """Build the graph in GTSAM, solve it, and take each beacon's marginal covariance.
+    """Build the graph in GTSAM and solve it.
 
     Raises:
         DependencyNotInstalled: gtsam is missing (``pip install "azgym[mapping]"``).
@@ -83,44 +85,96 @@ def solve(graph: Graph, settings: Settings) -> Solution:
     require("gtsam", "mapping")
     import gtsam
 
-    factors = gtsam.NonlinearFactorGraph()
+    every = np.ones(len(graph.beacons), dtype=bool)
+    params = gtsam.LevenbergMarquardtParams()
+    params.setMaxIterations(MAX_ITERATIONS)
+    optimizer = gtsam.LevenbergMarquardtOptimizer(
+        _factors(gtsam, graph, settings, every), _values(gtsam, graph.poses, graph.beacons, every),
+        params)
+    result = optimizer.optimize()
+    poses = np.array([[p.x(), p.y(), p.theta()] for p in
+                      (result.atPose2(_pose_key(gtsam, k)) for k in range(len(graph.poses)))]
+                     ).reshape(-1, 3)
+    beacons = np.array([result.atPoint2(_beacon_key(gtsam, b))
+                        for b in range(len(graph.beacons))]).reshape(-1, 2)
+    return Solution(poses, beacons, residuals(poses, beacons, graph),
+                    int(optimizer.iterations()))
+
+
+def covariances(graph: Graph, solution: Solution, settings: Settings,
+                kept: np.ndarray) -> FloatArray:
+    """GTSAM's marginal covariance (B, 2, 2) of each ``kept`` beacon at ``solution``.
+
+    The beacons not kept (found unobservable once solved) and their azimuths are left out of
+    the graph first: a beacon whose rays no longer spread leaves it indeterminate. Theirs are
+    NaN.
+
+    Raises:
+        InvalidInputError: The graph is indeterminate even so (GTSAM's message quoted).
+    """
+    import gtsam
+
+    found = np.full((len(graph.beacons), 2, 2), np.nan)
+    if not kept.any():
+        return found
+    try:
+        marginals = gtsam.Marginals(
+            _factors(gtsam, graph, settings, kept),
+            _values(gtsam, solution.poses, solution.beacons, kept))
+    except RuntimeError as error:
+        raise InvalidInputError(
+            "the survey's solved graph is indeterminate, so its covariances are unknown: "
+            + " ".join(str(error).split())) from None
+    for b in np.flatnonzero(kept).tolist():
+        found[b] = marginals.marginalCovariance(_beacon_key(gtsam, b))
+    return found
+
+
+def _pose_key(gtsam: Any, k: int) -> int:
+    """The GTSAM key of camera pose ``k``."""
+    return int(gtsam.symbol("x", k))
+
+
+def _beacon_key(gtsam: Any, b: int) -> int:
+    """The GTSAM key of beacon ``b``."""
+    return int(gtsam.symbol("l", b))
+
+
+def _values(gtsam: Any, poses: FloatArray, beacons: FloatArray, kept: np.ndarray) -> Any:
+    """Every camera pose and each kept beacon as GTSAM values."""
     values = gtsam.Values()
-    pose_key = [gtsam.symbol("x", k) for k in range(len(graph.poses))]
-    beacon_key = [gtsam.symbol("l", b) for b in range(len(graph.beacons))]
-    for k, (x, y, phi) in enumerate(graph.poses.tolist()):
-        values.insert(pose_key[k], gtsam.Pose2(x, y, phi))
-    for b, (x, y) in enumerate(graph.beacons.tolist()):
-        values.insert(beacon_key[b], gtsam.Point2(x, y))
+    for k, (x, y, phi) in enumerate(poses.tolist()):
+        values.insert(_pose_key(gtsam, k), gtsam.Pose2(x, y, phi))
+    for b in np.flatnonzero(kept).tolist():
+        values.insert(_beacon_key(gtsam, b), gtsam.Point2(*beacons[b]))
+    return values
+
+
+def _factors(gtsam: Any, graph: Graph, settings: Settings, kept: np.ndarray) -> Any:
+    """The factor graph (module docstring), with the azimuths and anchors of kept beacons."""
+    factors = gtsam.NonlinearFactorGraph()
     start_noise = gtsam.noiseModel.Diagonal.Sigmas(np.array(START_STD))
     for k, pose in zip(graph.starts.tolist(), graph.start_poses.tolist(), strict=True):
-        factors.add(gtsam.PriorFactorPose2(pose_key[k], gtsam.Pose2(*pose), start_noise))
+        factors.add(gtsam.PriorFactorPose2(_pose_key(gtsam, k), gtsam.Pose2(*pose),
+                                           start_noise))
     anchor_noise = gtsam.noiseModel.Isotropic.Sigma(2, ANCHOR_STD)
     for b in graph.anchors.tolist():
-        factors.add(gtsam.PriorFactorPoint2(beacon_key[b], gtsam.Point2(*graph.beacons[b]),
-                                            anchor_noise))
+        if kept[b]:
+            factors.add(gtsam.PriorFactorPoint2(_beacon_key(gtsam, b),
+                                                gtsam.Point2(*graph.beacons[b]), anchor_noise))
     for (i, j), move, cov in zip(graph.links.tolist(), graph.moves, graph.move_cov, strict=True):
-        factors.add(gtsam.BetweenFactorPose2(pose_key[i], pose_key[j], gtsam.Pose2(*move),
+        factors.add(gtsam.BetweenFactorPose2(_pose_key(gtsam, i), _pose_key(gtsam, j),
+                                             gtsam.Pose2(*move),
                                              gtsam.noiseModel.Gaussian.Covariance(cov)))
     loss = _loss(gtsam, settings)
     for (k, b), azimuth, sigma in zip(graph.rows.tolist(), graph.azimuths.tolist(),
                                       graph.sigmas.tolist(), strict=True):
-        noise = gtsam.noiseModel.Robust.Create(loss, gtsam.noiseModel.Isotropic.Sigma(1, sigma))
-        factors.add(gtsam.BearingFactor2D(pose_key[k], beacon_key[b], gtsam.Rot2(azimuth),
-                                          noise))
-    params = gtsam.LevenbergMarquardtParams()
-    params.setMaxIterations(MAX_ITERATIONS)
-    optimizer = gtsam.LevenbergMarquardtOptimizer(factors, values, params)
-    result = optimizer.optimize()
-    poses = np.array([[p.x(), p.y(), p.theta()] for p in
-                      (result.atPose2(key) for key in pose_key)]).reshape(-1, 3)
-    beacons = np.array([result.atPoint2(key) for key in beacon_key]).reshape(-1, 2)
-    covariances = np.full((len(beacon_key), 2, 2), np.nan)
-    if beacon_key:
-        marginals = gtsam.Marginals(factors, result)
-        for b, key in enumerate(beacon_key):
-            covariances[b] = marginals.marginalCovariance(key)
-    return Solution(poses, beacons, covariances, residuals(poses, beacons, graph),
-                    int(optimizer.iterations()))
+        if kept[b]:
+            noise = gtsam.noiseModel.Robust.Create(loss,
+                                                   gtsam.noiseModel.Isotropic.Sigma(1, sigma))
+            factors.add(gtsam.BearingFactor2D(_pose_key(gtsam, k), _beacon_key(gtsam, b),
+                                              gtsam.Rot2(azimuth), noise))
+    return factors
 
 
 def residuals(poses: FloatArray, beacons: FloatArray, graph: Graph) -> FloatArray:

@@ -3,12 +3,14 @@
 1. Odometry: each drive's relative camera poses and their covariances
    (:mod:`azgym.mapping.odometry`), dead-reckoned from its known start, or from the origin.
 2. First guess: each id's rays from the dead-reckoned poses, intersected
-   (:func:`~azgym.mapping.rays.intersect`); an id whose rays do not spread enough (or too few)
-   is unobservable, its detections left out. A drive without a known start is placed by the
-   anchors it observes (at least two: a rigid fit of their guesses onto their map positions).
+   (:func:`~azgym.localize.bearings.intersect_robustly`); an id whose rays do not spread enough
+   (:func:`~azgym.localize.bearings.spread`) or are too few is unobservable, its detections
+   left out. A drive without a known start is placed by the anchors it observes (at least
+   two: a rigid fit of their guesses onto their map positions).
 3. The factor graph (:mod:`azgym.mapping.graph`), solved; a beacon whose azimuths then mostly
    disagree with it (robust outliers), or whose agreeing rays no longer spread enough, is
-   reported unobservable too.
+   reported unobservable too, and left out of the graph whose marginals give the others'
+   covariances.
 4. With a prior map, each surveyed beacon's move is tested (:func:`moved`).
 
 The map frame is fixed by a known start pose or by at least two anchors; anything less leaves it
@@ -25,10 +27,11 @@ import numpy as np
 
 from azgym.core import BeaconMap, FloatArray, IntArray
 from azgym.errors import InvalidInputError
+from azgym.localize.bearings import MIN_RAYS, MIN_SPREAD, intersect_robustly, spread
 from azgym.mapping.graph import Graph, solve
+from azgym.mapping.graph import covariances as graph_covariances
 from azgym.mapping.odometry import compose, relative_poses
 from azgym.mapping.problem import Drive, Prior, Settings, drive_list
-from azgym.mapping.rays import MIN_RAYS, MIN_SPREAD, intersect, spread
 from azgym.site.error_model import ErrorModel
 
 __all__ = ["DEFAULT_WIDTH", "MIN_MOVE", "MOVE_CHI2", "Survey", "moved", "survey"]
@@ -164,7 +167,7 @@ def _guess(poses: FloatArray, azimuths: FloatArray) -> tuple[FloatArray, str]:
     angle = spread(directions)
     if angle < MIN_SPREAD:
         return np.full(2, np.nan), _narrow(angle)
-    point, weights = intersect(poses[:, :2], directions)
+    point, weights = intersect_robustly(poses[:, :2], directions)
     agreeing = weights > 0.5
     if not np.isfinite(point).all() or agreeing.sum() < MIN_RAYS:
         return np.full(2, np.nan), (f"its rays do not meet: {int(agreeing.sum())} of "
@@ -260,9 +263,7 @@ def _solved(drives: list[Drive], odometry: list[tuple[FloatArray, FloatArray]],
     solution = solve(graph, settings)
     outlying = np.abs(solution.residuals) > settings.loss_scale * sigmas
     xy = np.full((len(ids), 2), np.nan)
-    covariances = np.full((len(ids), 2, 2), np.nan)
     xy[used] = solution.beacons
-    covariances[used] = solution.covariances
     rays = np.bincount(beacon_of, minlength=len(ids))
     outlier_rays = np.bincount(beacon_of[keep][outlying], minlength=len(ids))
     observable = used.copy()
@@ -277,7 +278,8 @@ def _solved(drives: list[Drive], odometry: list[tuple[FloatArray, FloatArray]],
             reasons[b] = (f"its azimuths disagree: {outlier_rays[b]} of {mine.size} set aside "
                           "as outliers, the rest too few or too narrow a baseline")
     xy[~observable] = np.nan
-    covariances[~observable] = np.nan
+    covariances = np.full((len(ids), 2, 2), np.nan)
+    covariances[used] = graph_covariances(graph, solution, settings, observable[used])
     result = Survey(ids=ids, xy=xy, covariances=covariances, observable=observable,
                     reasons=tuple(reasons), rays=rays, outlier_rays=outlier_rays,
                     anchors=tuple(sorted(anchor_ids)), moved=(),

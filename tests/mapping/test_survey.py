@@ -8,10 +8,10 @@ import sys
 import numpy as np
 import pytest
 
+from azgym.localize.bearings import MIN_SPREAD, intersect_robustly, spread
 from azgym.mapping import Prior, Settings, simulated_drive, survey
 from azgym.mapping.graph import Graph, residuals
 from azgym.mapping.odometry import compose
-from azgym.mapping.rays import MIN_SPREAD, intersect, spread
 from azgym.mapping.survey import MIN_MOVE, _guess
 from azgym.site import load_scenario
 from azgym.world.drive import simulate
@@ -77,7 +77,7 @@ def test_observability_threshold_and_the_covariance_along_the_rays() -> None:
         information = normals.T @ normals
         along = np.linalg.inv(information)[0, 0]
         assert along == pytest.approx(1.0 / (2 * math.sin(angle / 2) ** 2), rel=1e-9)
-        point, _ = intersect(origins, directions)
+        point, _ = intersect_robustly(origins, directions)
         np.testing.assert_allclose(point, beacon, atol=1e-9)
     poses = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [1.0, 0.0, 0.0]])
     narrow = np.arctan2(0.0 - poses[:, 1], 20.0 - poses[:, 0]) + 0.001 * np.arange(3)
