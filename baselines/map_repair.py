@@ -101,6 +101,13 @@ def moved_world(scenario, rng: np.random.Generator, count: int):
             BeaconMap(scenario.beacons.ids, xyz, scenario.beacons.width), chosen)
 
 
+def p95_of(errors: np.ndarray) -> float:
+    """The 95th percentile of position errors, inf when it falls among unanswered frames."""
+    with np.errstate(invalid="ignore"):  # inf - inf between two unanswered frames
+        p95 = float(np.percentile(errors, 95))
+    return math.inf if math.isnan(p95) else p95
+
+
 def two_places(frames, beacon: int) -> float | None:
     """When a beacon was first seen from two camera positions TWO_PLACES_M apart [s]."""
     seen = [f for f in frames if beacon in f.measurements.ids]
@@ -141,7 +148,7 @@ def moved(seeds: int) -> None:
                     delay = found.time - (since if since is not None else found.time)
                     delays.append(delay)
                     parts.append(f"{beacon}: {delay:+.1f} s, {100 * error:.1f} cm")
-                p95 = [float(np.percentile(e, 95)) for e in (with_repair, stale, true)]
+                p95 = [p95_of(e) for e in (with_repair, stale, true)]
                 ratios.append(p95[0] / p95[2])
                 print(f"{name}/{route.name} seed {seed}: moved {parts}; false "
                       f"{sorted(repaired)}; p95 repair {p95[0]:.3f} stale {p95[1]:.3f} true "

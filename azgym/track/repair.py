@@ -12,8 +12,9 @@
 * **Suspected**: a beacon is suspected after ``sightings`` rejected sightings in a row (none
   agreeing between, none more than :data:`STREAK_GAP_S` after the one before) spanning at
   least ``after`` seconds, while the other beacons agree: since its run began they agreed in
-  at least :data:`OTHERS_AGREE` sightings and in at least twice as many as they were rejected
-  in. A track that is wrong sees every beacon rejected, so its error is not taken for a move.
+  at least :data:`OTHERS_AGREE` sightings, of at least :data:`OTHERS_DISTINCT` beacons, and in
+  at least twice as many as they were rejected in. A track that is wrong sees every beacon
+  rejected, so its error is not taken for a move.
   Only sightings of a confident track count (running, confirmed, not lost, consistent).
 * **Set aside**: from then on its detections are removed before the correction.
 * **Located again**: each of its sightings is a ray from the tracker's camera position along
@@ -36,27 +37,32 @@
 from __future__ import annotations
 
 import math
-from collections import deque
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from azgym.core import BeaconMap, FloatArray, Measurements
 from azgym.localize.base import ROW_BEACON_INDEX, Problem
-from azgym.localize.bearings import angular_span, intersect_rays, ray_misses
+from azgym.localize.bearings import angular_span
 from azgym.site.error_model import ErrorModel
 from azgym.track.azimuth_update import gated_update
 from azgym.track.gated_ekf import subset
+from azgym.track.repair_rays import RayStore, consensus, intersect
 from azgym.track.unicycle import IPHI, IX, IY
 
-__all__ = ["CANDIDATES", "CLEARANCE_M", "KEPT_SHARE", "MAX_RAYS", "OTHERS_AGREE", "OUTSIDE_M",
-           "STREAK_GAP_S", "MapRepair", "Repair"]
+__all__ = ["CLEARANCE_M", "KEPT_SHARE", "OTHERS_AGREE",
+           "OTHERS_DISTINCT", "OUTSIDE_M", "RETRY_GROWTH", "STREAK_GAP_S", "MapRepair", "Repair"]
 
 STREAK_GAP_S = 2.0
 """Longest time between two rejected sightings of one run [s]: a beacon out of sight longer
 starts a new run (its earlier rays are from a track that has moved on)."""
 OTHERS_AGREE = 2
 """Fewest agreeing sightings of other beacons since a run began that let it make a suspect."""
+OTHERS_DISTINCT = 2
+"""Fewest distinct other beacons that must have agreed since a run began: with one other in
+view (a narrow camera), a beacon that moved a little drags the track and the one that did not
+is rejected, so one other's agreement cannot tell which of the two moved."""
 KEPT_SHARE = 0.8
 """Smallest share of a suspect's rays that must meet its new position."""
 CLEARANCE_M = 0.25
@@ -65,10 +71,11 @@ beacon's, seen under a misread id [m]."""
 OUTSIDE_M = 1.0
 """A new position further than this outside the box of the map's beacons is a mirror's image
 (beacons hang on the walls and racks; what lies behind a wall is seen in it) [m]."""
-MAX_RAYS = 400
-"""Rays kept per beacon (the latest): bounds the memory and the least squares."""
-CANDIDATES = 24
-"""Pairs of rays whose crossings are tried as a suspect's new position, at most."""
+RETRY_GROWTH = 0.125
+"""A suspect is located again only once its rays have grown by this share (at least one ray)
+since the last try, or span a wider angle than then: rays that never meet (random azimuths,
+one standing place) cost a bounded share of the tracker's time, not a least squares over all
+of them every frame, while a beacon the camera sweeps past is tried at every widening."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,10 +114,16 @@ class _Run:
     last: float
     others_accepted: int
     others_rejected: int
+    others_by: dict[int, int]
+    """Each beacon's agreeing sightings when the run began."""
     rejected: int = 0
     suspected: bool = False
     agreed: int = 0
-    rays: deque[FloatArray] = field(default_factory=lambda: deque(maxlen=MAX_RAYS))
+    rays: RayStore = field(default_factory=RayStore)
+    tried: int = 0
+    """Rays added when the suspect was last located (or not) from them."""
+    tried_span: float = 0.0
+    """The angle its rays spanned then [rad]."""
 
 
 class MapRepair:
@@ -140,10 +153,13 @@ class MapRepair:
         self._runs: dict[int, _Run] = {}
         self._moved: dict[int, FloatArray] = {}
         self._accepted = 0
+        self._agreed_by: dict[int, int] = {}
         self._rejected = 0
         self._frame = -1
         self._given: BeaconMap | None = None
         self._current: BeaconMap | None = None
+        self._rows_of: BeaconMap | None = None
+        self._rows: dict[int, int] = {}
 
     @property
     def suspects(self) -> tuple[int, ...]:
@@ -172,12 +188,17 @@ class MapRepair:
         suspects = self.suspects
         if not suspects:
             return None
-        return np.flatnonzero(~np.isin(measurements.ids, suspects))
+        ids = measurements.ids.tolist()
+        rows = [row for row, beacon in enumerate(ids) if beacon not in suspects]
+        return None if len(rows) == len(ids) else np.array(rows, dtype=np.intp)
 
     def observe(self, time: float, measurements: Measurements, inliers: np.ndarray,
                 beacons: BeaconMap, state: FloatArray, cov: FloatArray,
                 confident: bool) -> tuple[list[int], list[Repair]]:
         """Take a corrected frame: its sightings, rays and verdicts.
+
+        A frame all of whose detections the tracker used, with no record open, is only
+        counted: the per-beacon work is for frames with a rejected or unknown detection.
 
         Args:
             time: The frame's time [s].
@@ -191,31 +212,39 @@ class MapRepair:
         Returns:
             The beacons newly suspected, and the repairs made, in this frame.
         """
-        known = np.isin(measurements.ids, beacons.ids)
-        ids = measurements.ids[known]
         suspected: list[int] = []
-        if ids.size == 0:
+        if self._runs:
+            self._forget_lapsed(time)
+        if not self._runs and inliers.all():  # every detection used, so every one known
+            if confident:
+                self._agree(set(measurements.ids.tolist()))
             return suspected, []
-        if not self._runs and inliers[known].all():
-            self._accepted += confident * np.unique(ids).size
-            return suspected, []
+        map_rows = self._map_rows(beacons)
+        sightings: dict[int, list[int]] = {}
+        for row, beacon in enumerate(measurements.ids.tolist()):
+            if beacon in map_rows:
+                sightings.setdefault(beacon, []).append(row)
+        used = inliers.tolist()
         touched: list[int] = []
-        for beacon in np.unique(ids).tolist():
-            rows = np.flatnonzero(measurements.ids == beacon)
+        for beacon, rows in sorted(sightings.items()):
             run = self._runs.get(beacon)
             if run is not None and run.suspected:
-                self._suspect_sighting(beacon, run, measurements, rows, beacons, state, cov)
+                self._suspect_sighting(beacon, run, measurements, np.array(rows), beacons,
+                                       state, cov)
                 touched.append(beacon)
-            elif inliers[rows].any():
-                self._accepted += confident
+            elif any(used[row] for row in rows):
+                if confident:
+                    self._agree((beacon,))
                 self._runs.pop(beacon, None)
             elif confident:
-                if run is None or time - run.last > STREAK_GAP_S:
-                    run = self._runs[beacon] = _Run(time, time, self._accepted, self._rejected)
+                if run is None:
+                    run = self._runs[beacon] = _Run(time, time, self._accepted, self._rejected,
+                                                    dict(self._agreed_by))
                 self._rejected += 1
                 run.rejected += 1
                 run.last = time
-                self._add_rays(run, measurements, rows, beacons, state, cov)
+                self._add_rays(run, measurements, np.array(rows), map_rows[beacon], beacons,
+                               state, cov)
                 if self._suspicious(run, time):
                     run.suspected = True
                     suspected.append(beacon)
@@ -224,13 +253,40 @@ class MapRepair:
                    if (found := self._try_repair(beacon, time, beacons)) is not None]
         return suspected, repairs
 
+    def _agree(self, beacons: Collection[int]) -> None:
+        """Count an agreeing sighting of each of ``beacons``."""
+        self._accepted += len(beacons)
+        for beacon in beacons:
+            self._agreed_by[beacon] = self._agreed_by.get(beacon, 0) + 1
+
+    def _map_rows(self, beacons: BeaconMap) -> dict[int, int]:
+        """Each of the map's beacon ids' row (kept while the map is the same object)."""
+        if beacons is not self._rows_of:
+            self._rows_of = beacons
+            self._rows = {beacon: row for row, beacon in enumerate(beacons.ids.tolist())}
+        return self._rows
+
+    def _forget_lapsed(self, time: float) -> None:
+        """Drop the runs not suspected and lapsed (none rejected for :data:`STREAK_GAP_S`).
+
+        Its beacon's next rejection starts a new run: so the records held are the suspects'
+        and those of beacons rejected lately, however many ids were seen, and a frame whose
+        detections were all used is only counted.
+        """
+        self._runs = {beacon: run for beacon, run in self._runs.items()
+                      if run.suspected or time - run.last <= STREAK_GAP_S}
+
     def _suspicious(self, run: _Run, time: float) -> bool:
         """Whether a run makes its beacon a suspect (module docstring)."""
         if run.rejected < self.sightings or time - run.since < self.after:
             return False
         accepted = self._accepted - run.others_accepted
         rejected = self._rejected - run.others_rejected - run.rejected
-        return accepted >= OTHERS_AGREE and accepted >= 2 * rejected
+        if accepted < OTHERS_AGREE or accepted < 2 * rejected:
+            return False
+        others = sum(count > run.others_by.get(beacon, 0)
+                     for beacon, count in self._agreed_by.items())
+        return others >= OTHERS_DISTINCT
 
     def _suspect_sighting(self, beacon: int, run: _Run, measurements: Measurements,
                           rows: np.ndarray, beacons: BeaconMap, state: FloatArray,
@@ -247,35 +303,43 @@ class MapRepair:
                 del self._runs[beacon]
             return
         run.agreed = 0
-        self._add_rays(run, measurements, rows, beacons, state, cov)
+        self._add_rays(run, measurements, rows, self._rows[beacon], beacons, state, cov)
 
-    def _add_rays(self, run: _Run, measurements: Measurements, rows: np.ndarray,
+    def _add_rays(self, run: _Run, measurements: Measurements, rows: np.ndarray, row: int,
                   beacons: BeaconMap, state: FloatArray, cov: FloatArray) -> None:
         """Each detection's ray: x, y, bearing, its variance, the position's covariance."""
-        row = int(np.flatnonzero(beacons.ids == measurements.ids[rows[0]])[0])
         at = beacons.xyz[row, :2]
         distance = math.hypot(*(at - state[[IX, IY]]))
         variance = float(self.error_model.variance(distance, beacons.width[row])) \
             + self.extra_sigma ** 2 + cov[IPHI, IPHI]
-        for azimuth in measurements.azimuth[rows].tolist():
-            run.rays.append(np.array([state[IX], state[IY], state[IPHI] + azimuth, variance,
-                                      cov[IX, IX], cov[IX, IY], cov[IY, IY]]))
+        rays = np.empty((rows.size, RayStore.WIDTH))
+        rays[:] = (state[IX], state[IY], state[IPHI], variance, cov[IX, IX], cov[IX, IY],
+                   cov[IY, IY])
+        rays[:, 2] += measurements.azimuth[rows]
+        run.rays.add(rays)
 
     def _try_repair(self, beacon: int, time: float, beacons: BeaconMap) -> Repair | None:
-        """Locate a suspect from its rays; its repair, or None (module docstring)."""
+        """Locate a suspect from its rays; its repair, or None (module docstring).
+
+        Tried once its rays span ``span``, and again whenever they span more than at the last
+        try or have grown by :data:`RETRY_GROWTH` since it.
+        """
         run = self._runs.get(beacon)
         if run is None or len(run.rays) < 3:
             return None
-        rays = np.array(run.rays)
-        if angular_span(rays[:, 2]) < self.span:
+        rays = run.rays.latest()
+        span = angular_span(rays[:, 2])
+        if span < self.span or (span <= run.tried_span and run.rays.added - run.tried
+                                < max(1.0, RETRY_GROWTH * len(rays))):
             return None
-        kept = self._consensus(rays)
+        run.tried, run.tried_span = run.rays.added, span
+        kept = consensus(rays, self.span, self.threshold)
         if kept.sum() < max(3, KEPT_SHARE * kept.size):
             return None
         rays = rays[kept]
         if angular_span(rays[:, 2]) < self.span:
             return None
-        point, covariance, _ = _intersect(rays)
+        point, covariance, _ = intersect(rays)
         std = math.sqrt(np.linalg.eigvalsh(covariance)[-1])
         ahead = np.cos(rays[:, 2]) * (point[0] - rays[:, 0]) \
             + np.sin(rays[:, 2]) * (point[1] - rays[:, 1])
@@ -298,33 +362,3 @@ class MapRepair:
                         rays=len(rays))
         self.repairs.append(repair)
         return repair
-
-    def _consensus(self, rays: FloatArray) -> np.ndarray:
-        """The rays that meet, within the gate, the point most of them meet.
-
-        A mirror ghost's rays meet at its image, and a track's first rays may be off: each ray
-        k is paired with ray k + K/2, the two's crossing scored by the rays it gathers, and the
-        best one kept.
-        """
-        half = len(rays) // 2
-        best = np.zeros(len(rays), dtype=bool)
-        for k in range(0, half, max(1, half // CANDIDATES)):
-            pair = rays[[k, k + half]]
-            if abs(math.sin(pair[1, 2] - pair[0, 2])) < math.sin(0.5 * self.span):
-                continue
-            point, _, _ = _intersect(pair)
-            kept = ray_misses(point, rays[:, :2], rays[:, 2], rays[:, 3],
-                              _origin_covariance(rays)) ** 2 < self.threshold
-            if kept.sum() > best.sum():
-                best = kept
-        return best
-
-
-def _origin_covariance(rays: FloatArray) -> FloatArray:
-    """The camera positions' covariances (K, 2, 2) of packed rays."""
-    return np.stack((rays[:, 4:6], rays[:, 5:7]), axis=1)
-
-
-def _intersect(rays: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """:func:`intersect_rays` on packed rays (x, y, bearing, variance, σxx, σxy, σyy)."""
-    return intersect_rays(rays[:, :2], rays[:, 2], rays[:, 3], _origin_covariance(rays))

@@ -200,3 +200,21 @@ def test_repair_is_off_by_default_and_its_options_are_checked():
         azgym.make_tracker("robust", repair=True, repair_span=0.0)
     with pytest.raises(InvalidInputError, match="repair"):
         azgym.make_tracker("robust", repair="yes")
+
+
+def test_a_beacon_keeps_its_latest_rays_oldest_first():
+    from azgym.track.repair_rays import MAX_RAYS, RayStore
+    rays = RayStore()
+    for k in range(MAX_RAYS + 10):
+        rays.add(np.full((1, 7), float(k)))
+    assert len(rays) == MAX_RAYS and rays.added == MAX_RAYS + 10
+    assert rays.latest()[:, 0].tolist() == [float(k) for k in range(10, MAX_RAYS + 10)]
+
+
+def test_one_other_beacon_agreeing_cannot_tell_which_of_the_two_moved():
+    repair = watcher()
+    for k in range(6):  # beacon 1 always rejected, beacon 2 alone agreeing
+        sighting(repair, 0.1 * k, {1: False, 2: True})
+    assert repair.suspects == ()
+    sighting(repair, 0.6, {1: False, 3: True})  # a second beacon agrees too (counted after 1)
+    assert sighting(repair, 0.7, {1: False, 3: True})[0] == [1]
