@@ -13,7 +13,7 @@ azgym export route --scenario S [--route R] [--seed N] --out DIR [--name NAME] [
 azgym export bag (--data LOG | --scenario S [--route R] [--seed N]) --out BAG
                  [--storage sqlite3|mcap] [--overwrite]
 azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S] [--workers N]
-                      [--time-limit SECONDS] [--out DIR] [--overwrite]
+                      [--survey DIR] [--time-limit SECONDS] [--out DIR] [--overwrite]
 azgym layout optimize SCENARIO --add N [--step M] [--spacing M] [--out DIR] [--overwrite]
 azgym leaderboard submit RESULTS --localizer SPEC --name NAME --version V --authors NAME ...
                          [--link URL] [--entries DIR] [--overwrite] [--datasets DIR]

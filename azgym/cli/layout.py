@@ -53,6 +53,12 @@ def _analyze(args: argparse.Namespace) -> int:
     workers = resolve_workers(args)
     make_localizer(args.localizer)  # a bad spec stops here, before any work
     scenario, floor, out = _prepared(args)
+    covariance: Any = None
+    absent: tuple[int, ...] = ()
+    if args.survey is not None:
+        from azgym.placement.surveyed import read_survey, surveyed_scenario
+
+        scenario, covariance, absent = surveyed_scenario(scenario, read_survey(args.survey))
     cells = int(floor.free.sum())
     if cells * frames > MAX_TOTAL_FRAMES:
         raise InvalidInputError(f"frames {frames} at {cells} cells makes {cells * frames} "
@@ -64,12 +70,17 @@ def _analyze(args: argparse.Namespace) -> int:
           f"{_count(scenario.beacons, 'beacon')}"
           + (f"; Monte Carlo: {frames} frames per cell through {args.localizer}" if frames
              else ""), flush=True)
+    if args.survey is not None:
+        print(f"surveyed map {args.survey}: " + (
+            f"{_count(absent, 'beacon')} absent (unobservable or not detected): "
+            f"{', '.join(map(str, absent))}" if absent else "every beacon surveyed"), flush=True)
     started = time.perf_counter()
     prediction, checked = analyze(scenario, floor, args.localizer, frames, seed,
                                   progress_printer(), workers=workers,
-                                  time_limit=args.time_limit)
-    written = write_analysis(out, scenario, prediction, checked, figures=not args.no_figures)
-    _print_summary(summary(scenario, prediction, checked))
+                                  time_limit=args.time_limit, covariance=covariance)
+    written = write_analysis(out, scenario, prediction, checked, figures=not args.no_figures,
+                             absent=absent)
+    _print_summary(summary(scenario, prediction, checked, absent))
     print(f"{time.perf_counter() - started:.1f} s; wrote {', '.join(map(str, written))}")
     return 0
 
@@ -89,6 +100,15 @@ def _print_summary(result: dict[str, Any]) -> None:
           " m)")
     print(f"cells with < 3 beacons seen: {predicted['cells_under_3_beacons']}; "
           f"undetermined: {predicted['cells_undetermined']}")
+    if "survey" in result:
+        survey = result["survey"]
+        for label, figures in (("map's bias floor σ_map", survey["map_bias_floor"]),
+                               ("σ_total with the map's error", survey["total"])):
+            print(f"{label}: median {100 * figures['sigma_median_m']:.2f} cm, p95 "
+                  f"{100 * figures['sigma_p95_m']:.2f} cm")
+        if survey["map_share_of_variance_median"] is not None:
+            print(f"the map's share of σ_total²: median "
+                  f"{100 * survey['map_share_of_variance_median']:.1f} % of the cells with a fix")
     if "monte_carlo" in result:
         check = result["monte_carlo"]
         rms = check["rms"]
@@ -196,6 +216,9 @@ def add_layout(commands: argparse._SubParsersAction) -> None:
                             help="output folder (default: results/layout/SCENARIO)")
         parser.add_argument("--no-figures", action="store_true", help="skip the PNG files")
         add_overwrite(parser, "the files it writes in --out")
+    analyze.add_argument("--survey", type=Path, metavar="DIR",
+                         help="an azgym survey output folder (or its survey.csv): predict with "
+                         "the surveyed beacons only and add their covariances' bias floor")
     analyze.add_argument("--localizer", default="ransac", metavar="SPEC",
                          help="the localizer of the Monte Carlo check")
     analyze.add_argument("--frames", type=int, default=DEFAULT_FRAMES, metavar="N",

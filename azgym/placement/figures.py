@@ -57,10 +57,10 @@ def _site(axes: Any, scenario: Scenario, new_xyz: FloatArray | None = None) -> N
 
 
 def _sigma_norm(*maps: FloatArray) -> Any:
-    """A logarithmic scale [cm] over the finite values under the penalty of ``maps``."""
+    """A logarithmic scale [cm] over the positive finite values under the penalty of ``maps``."""
     from matplotlib.colors import LogNorm
 
-    values = np.concatenate([m[np.isfinite(m) & (m < PENALTY_SIGMA)] for m in maps])
+    values = np.concatenate([m[np.isfinite(m) & (m > 0) & (m < PENALTY_SIGMA)] for m in maps])
     low, high = (values.min(), values.max()) if values.size else (0.01, PENALTY_SIGMA)
     return LogNorm(vmin=100 * low, vmax=100 * max(high, 1.01 * low))
 
@@ -86,13 +86,19 @@ def _sigma_cmap() -> Any:
 
 
 def analysis_figure(scenario: Scenario, floor: Floor, sigma: FloatArray, visible: FloatArray,
-                    rms: FloatArray | None, path: Path, localizer: str = "") -> Path:
-    """σ, beacons seen and (with ``rms``) the Monte Carlo RMS and its ratio to σ, per cell."""
+                    rms: FloatArray | None, path: Path, localizer: str = "",
+                    map_sigma: FloatArray | None = None) -> Path:
+    """σ, beacons seen, (with ``rms``) the Monte Carlo RMS and its ratio to σ, per cell.
+
+    With ``map_sigma`` (a surveyed map's bias floor) a last row shows it and
+    σ_total = sqrt(σ² + σ_map²), on the σ maps' colour scale.
+    """
     plt = _pyplot()
-    rows = 1 if rms is None else 2
+    extra = () if map_sigma is None else (map_sigma, np.hypot(sigma, map_sigma))
+    rows = 1 + (rms is not None) + (map_sigma is not None)
     figure, grid = plt.subplots(rows, 2, figsize=(10.4, 4.6 * rows), squeeze=False)
     axes = grid.ravel()
-    norm = _sigma_norm(sigma, *(() if rms is None else (rms,)))
+    norm = _sigma_norm(sigma, *(() if rms is None else (rms,)), *extra)
     _panel(figure, axes[0], floor, floor.to_grid(100 * sigma), "predicted σ_pos (black: no fix "
            f"or ≥ {PENALTY_SIGMA:g} m)", "σ_pos [cm]", norm=norm, cmap=_sigma_cmap())
     _panel(figure, axes[1], floor, floor.to_grid(visible.astype(float)), "beacons seen",
@@ -104,6 +110,11 @@ def analysis_figure(scenario: Scenario, floor: Floor, sigma: FloatArray, visible
             ratio = np.where(np.isfinite(sigma), rms / sigma, np.nan)
         _panel(figure, axes[3], floor, floor.to_grid(ratio), "Monte Carlo RMS / predicted σ",
                "ratio", cmap="coolwarm", vmin=0.8, vmax=1.2)
+    for a, values, title in zip(axes[-2:], extra, ("the surveyed map's bias floor σ_map",
+                                                   "σ_total = sqrt(σ_pos² + σ_map²)"),
+                                strict=False):
+        _panel(figure, a, floor, floor.to_grid(100 * values), title, "σ [cm]", norm=norm,
+               cmap=_sigma_cmap())
     for a in axes:
         _site(a, scenario)
     figure.suptitle(f"{scenario.name}: {len(scenario.beacons)} beacons, {floor.step:g} m grid")
