@@ -1,6 +1,8 @@
 """robust's map repair (``robust:repair=true``): false repairs, moved beacons found, its cost.
 
-    python baselines/map_repair.py [--part clean|moved|speed|all] [--seeds 3]
+    python baselines/map_repair.py [--part clean|moved|speed|all] [--seeds 3] [--span DEGREES]
+
+``--span`` sets robust's ``repair_span`` (the least spread of a suspect's rays) to try another.
 
 1. **clean**: every route of warehouse-routes and robot-routes (their dev seeds, as the suites
    draw them) through ``robust:repair=true``: the repairs made. warehouse-small ships with one
@@ -34,6 +36,8 @@ from azgym.core import BeaconMap, pose_error  # noqa: E402
 from azgym.world.drive import simulate  # noqa: E402
 
 MOVED_BY = (0.5, 3.0)
+REPAIR: dict = {"repair": True}
+"""robust's options for its map repair (``--span`` adds ``repair_span``)."""
 TWO_PLACES_M = 0.5
 
 
@@ -71,7 +75,7 @@ def clean() -> None:
     for suite in ("warehouse-routes", "robot-routes"):
         for name, cases in sequences(suite):
             scenario = azgym.load_scenario(cases[0].scenario)
-            tracker = azgym.make_tracker("robust", repair=True, **params_for(scenario.name))
+            tracker = azgym.make_tracker("robust", **REPAIR, **params_for(scenario.name))
             replay(tracker, [(c.motion, c.measurements, c.pose) for c in cases], scenario.beacons)
             moved = scenario.beacon_positions[:, :2] != scenario.beacons.xyz[:, :2]
             really = set(scenario.beacons.ids[moved.any(axis=1)].tolist())
@@ -129,7 +133,7 @@ def moved(seeds: int) -> None:
                 world, truth, chosen = moved_world(scenario, rng, 1 + (seed + k) % 3)
                 frames = list(simulate(world, route, seed=seed + k, **extra))
                 steps = [(f.motion, f.measurements, f.pose) for f in frames]
-                tracker = azgym.make_tracker("robust", repair=True, **params_for(name))
+                tracker = azgym.make_tracker("robust", **REPAIR, **params_for(name))
                 with_repair, _ = replay(tracker, steps, scenario.beacons)
                 stale, _ = replay(azgym.make_tracker("robust", **params_for(name)), steps,
                                   scenario.beacons)
@@ -166,7 +170,7 @@ def speed(rounds: int = 5) -> None:
         for spec in ("robust", "repair"):
             total = 0.0
             for scenario, cases in runs:
-                extra = {"repair": True} if spec == "repair" else {}
+                extra = REPAIR if spec == "repair" else {}
                 tracker = azgym.make_tracker("robust", **extra, **params_for(scenario.name))
                 total += replay(tracker, [(c.motion, c.measurements, c.pose) for c in cases],
                                 scenario.beacons)[1]
@@ -181,7 +185,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--part", choices=("clean", "moved", "speed", "all"), default="all")
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--span", type=float, metavar="DEGREES")
     args = parser.parse_args()
+    if args.span is not None:
+        REPAIR["repair_span"] = math.radians(args.span)
     if args.part in ("clean", "all"):
         clean()
     if args.part in ("moved", "all"):

@@ -22,8 +22,9 @@ rays' mean direction, so the variance there is (σ d)² / (N λ): for two rays a
 λ = sin²(Δ/2), and the position along the rays grows as 1/sin² of half their spread. The
 **spread** of rays (:func:`spread`) is Δ = 2 asin √λ (for two rays, the angle between them); a
 point is observable when its rays spread at least :data:`MIN_SPREAD` and number at least
-:data:`MIN_RAYS`. Unlike the arc the directions cover (:func:`angular_span`), the spread is not
-widened by one stray ray among many parallel ones.
+:data:`MIN_RAYS`. Unlike the arc the directions cover, the spread is not widened by one stray
+ray among many parallel ones: it is the one rule of "enough angle", the survey's and the map
+repair's (whose least spread is robust's ``repair_span``).
 """
 
 from __future__ import annotations
@@ -36,8 +37,7 @@ from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 
 __all__ = ["MIN_RAYS", "MIN_SPREAD", "PARALLEL_CONDITION", "ROBUST_PASSES", "STRAY_SCALE",
-           "angular_span", "intersect_rays", "intersect_robustly", "meeting_point", "ray_misses",
-           "spread"]
+           "intersect_rays", "intersect_robustly", "meeting_point", "ray_misses", "spread"]
 
 MIN_SPREAD = math.radians(10.0)
 """Least spread of a point's rays [rad] for it to be observable (module docstring): at 10° the
@@ -66,20 +66,6 @@ def spread(bearings: FloatArray) -> float:
         return 0.0
     resultant = abs(complex(np.mean(np.exp(2j * bearings))))
     return 2.0 * math.asin(math.sqrt(max(0.0, (1.0 - min(resultant, 1.0)) / 2.0)))
-
-
-def angular_span(bearings: FloatArray) -> float:
-    """The smallest arc of the circle holding every direction in ``bearings`` [rad], in [0, 2π).
-
-    Example:
-        >>> round(math.degrees(angular_span(np.radians([350.0, 10.0, 5.0]))), 6)
-        20.0
-    """
-    if bearings.size < 2:
-        return 0.0
-    ordered = np.sort(np.mod(bearings, 2.0 * math.pi))
-    gaps = np.diff(ordered, append=ordered[0] + 2.0 * math.pi)
-    return float(2.0 * math.pi - gaps.max())
 
 
 def intersect_rays(origins: FloatArray, bearings: FloatArray, bearing_variance: FloatArray,

@@ -69,7 +69,9 @@ class Prior:
 
     Attributes:
         beacons: A map (positions possibly stale), or None. Its widths are the beacons' widths;
-            with ``check_moved`` its positions are tested against the survey's.
+            with ``check_moved`` its positions are tested against the survey's. When it holds
+            beacons beyond the anchors it is the site's map, and an id it lacks is a misread
+            one (:attr:`ids`).
         anchors: Ids of beacons whose map positions are surveyed (held fixed); each must be in
             ``beacons``.
     """
@@ -90,6 +92,18 @@ class Prior:
                     f"(its ids: {sorted(known)[:20]}{' ...' if len(known) > 20 else ''})")
         if len(set(self.anchors)) != len(self.anchors):
             raise InvalidInputError(f"anchors repeat an id: {list(self.anchors)}")
+
+    @property
+    def ids(self) -> frozenset[int] | None:
+        """The ids a survey may answer, or None for any.
+
+        The map's, when it holds beacons beyond the anchors (the site's map: an id it lacks is
+        a misread one, not a beacon); None without a map or with one of the anchors alone (the
+        map unknown but for them, every other beacon to be found).
+        """
+        if self.beacons is None or len(self.beacons.ids) <= len(self.anchors):
+            return None
+        return frozenset(self.beacons.ids.tolist())
 
 
 @dataclass(frozen=True)

@@ -5,12 +5,14 @@
 2. First guess: each id's rays from the dead-reckoned poses, intersected
    (:func:`~azgym.localize.bearings.intersect_robustly`); an id whose rays do not spread enough
    (:func:`~azgym.localize.bearings.spread`) or are too few is unobservable, its detections
-   left out. A drive without a known start is placed by the anchors it observes (at least
-   two: a rigid fit of their guesses onto their map positions).
+   left out. With the site's map as the prior, an id it does not hold (a misread id) is not
+   surveyed, only counted (:attr:`~azgym.mapping.problem.Prior.ids`). A drive without a known
+   start is placed by the anchors it observes (at least two: a rigid fit of their guesses onto
+   their map positions).
 3. The factor graph (:mod:`azgym.mapping.graph`), solved; a beacon whose azimuths then mostly
-   disagree with it (robust outliers), or whose agreeing rays no longer spread enough, is
-   reported unobservable too, and left out of the graph whose marginals give the others'
-   covariances.
+   disagree with it (robust outliers: fewer than :data:`MIN_AGREEING` of them agree), or whose
+   agreeing rays no longer spread enough, is reported unobservable too, and left out of the
+   graph whose marginals give the others' covariances.
 4. With a prior map, each surveyed beacon's move is tested (:func:`moved`).
 
 The map frame is fixed by a known start pose or by at least two anchors; anything less leaves it
@@ -34,10 +36,16 @@ from azgym.mapping.odometry import compose, relative_poses
 from azgym.mapping.problem import Drive, Prior, Settings, drive_list
 from azgym.site.error_model import ErrorModel
 
-__all__ = ["DEFAULT_WIDTH", "MIN_MOVE", "MOVE_CHI2", "Survey", "moved", "survey"]
+__all__ = ["DEFAULT_WIDTH", "MIN_AGREEING", "MIN_MOVE", "MOVE_CHI2", "Survey", "moved", "survey"]
 
 DEFAULT_WIDTH = 0.03
 """Width of a beacon the prior map does not hold [m] (docs/logs.md's default)."""
+MIN_AGREEING = 0.5
+"""Least share of an id's detections the solved graph must agree with (and at least
+:data:`~azgym.localize.bearings.MIN_RAYS` of them): among a beacon's detections, ghosts and
+misread ones are the few; an id whose azimuths are scattered (a misread id seen here and there)
+has a handful that pass near some point by chance, and is no beacon. (The first guess, from
+dead-reckoned poses that drift, cannot ask as much.)"""
 MIN_MOVE = 0.10
 """Least distance between a beacon's prior and surveyed positions to call it moved [m]."""
 MOVE_CHI2 = 13.8155
@@ -149,10 +157,14 @@ def _first_guesses(drives: list[Drive], reckoned: list[FloatArray], prior: Prior
     poses = np.concatenate(reckoned)
     guesses = np.full((len(ids), 2), np.nan)
     reasons = [""] * len(ids)
+    known = prior.ids
     for b, beacon in enumerate(ids.tolist()):
         rows = np.flatnonzero(beacon_of == b)
         if beacon in anchors:
             guesses[b] = anchors[beacon]
+            continue
+        if known is not None and beacon not in known:
+            reasons[b] = f"not in the prior map: {_seen(rows.size)}"
             continue
         guesses[b], reasons[b] = _guess(poses[pose_rows[rows]], azimuths[rows])
     return guesses, reasons
@@ -162,8 +174,7 @@ def _guess(poses: FloatArray, azimuths: FloatArray) -> tuple[FloatArray, str]:
     """One id's guess from its rays, or NaN and why it is unobservable."""
     directions = poses[:, 2] + azimuths
     if len(directions) < MIN_RAYS:
-        return np.full(2, np.nan), (f"seen {len(directions)} time{'s' * (len(directions) != 1)},"
-                                    f" fewer than {MIN_RAYS}")
+        return np.full(2, np.nan), f"{_seen(len(directions))}, fewer than {MIN_RAYS}"
     angle = spread(directions)
     if angle < MIN_SPREAD:
         return np.full(2, np.nan), _narrow(angle)
@@ -176,6 +187,11 @@ def _guess(poses: FloatArray, azimuths: FloatArray) -> tuple[FloatArray, str]:
     if angle < MIN_SPREAD:
         return np.full(2, np.nan), _narrow(angle) + " among the rays that agree"
     return point, ""
+
+
+def _seen(detections: int) -> str:
+    """How many times an id was detected, in words."""
+    return f"seen {detections} time{'s' * (detections != 1)}"
 
 
 def _narrow(angle: float) -> str:
@@ -273,7 +289,8 @@ def _solved(drives: list[Drive], odometry: list[tuple[FloatArray, FloatArray]],
         mine = np.flatnonzero(beacon_of[keep] == b)
         good = mine[~outlying[mine]]
         directions = solution.poses[graph.rows[good, 0], 2] + graph.azimuths[good]
-        if good.size < MIN_RAYS or spread(directions) < MIN_SPREAD:
+        if good.size < max(MIN_RAYS, MIN_AGREEING * mine.size) \
+                or spread(directions) < MIN_SPREAD:
             observable[b] = False
             reasons[b] = (f"its azimuths disagree: {outlier_rays[b]} of {mine.size} set aside "
                           "as outliers, the rest too few or too narrow a baseline")

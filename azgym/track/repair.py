@@ -22,8 +22,9 @@
   the map position, plus ``extra_sigma``² and the heading's variance) and the position's
   covariance. The rays since its run began are intersected (:mod:`azgym.localize.bearings`);
   rays missing the point by more than the gate are dropped and the rest intersected again.
-  The point is taken once at least :data:`KEPT_SHARE` of the rays agree with it, they span at
-  least ``span`` radians, its position's standard deviation along its worst axis is within
+  The point is taken once at least :data:`KEPT_SHARE` of the rays agree with it, they spread
+  (:func:`~azgym.localize.bearings.spread`, not widened by one stray ray among parallel ones)
+  at least ``span`` radians, its position's standard deviation along its worst axis is within
   ``max_std``, it lies ahead of every ray and within :data:`OUTSIDE_M` of the box of the
   map's beacons (beyond it lies a mirror's image), and it is not within :data:`CLEARANCE_M`
   (or three standard deviations) of another beacon of the map: rays that meet on another
@@ -44,7 +45,7 @@ import numpy as np
 
 from azgym.core import BeaconMap, FloatArray, Measurements
 from azgym.localize.base import ROW_BEACON_INDEX, Problem
-from azgym.localize.bearings import angular_span
+from azgym.localize.bearings import spread
 from azgym.site.error_model import ErrorModel
 from azgym.track.azimuth_update import gated_update
 from azgym.track.gated_ekf import subset
@@ -72,10 +73,11 @@ OUTSIDE_M = 1.0
 """A new position further than this outside the box of the map's beacons is a mirror's image
 (beacons hang on the walls and racks; what lies behind a wall is seen in it) [m]."""
 RETRY_GROWTH = 0.125
-"""A suspect is located again only once its rays have grown by this share (at least one ray)
-since the last try, or span a wider angle than then: rays that never meet (random azimuths,
-one standing place) cost a bounded share of the tracker's time, not a least squares over all
-of them every frame, while a beacon the camera sweeps past is tried at every widening."""
+"""A suspect is located again only once its rays, or their spread, have grown by this share
+(at least one ray) since the last try: rays that never meet (random azimuths, one standing
+place) cost a bounded share of the tracker's time, not a least squares over all of them every
+frame (random rays' spread jitters just below its bound, π/2), while a beacon the camera sweeps
+past is tried as its rays widen."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,7 +125,7 @@ class _Run:
     tried: int = 0
     """Rays added when the suspect was last located (or not) from them."""
     tried_span: float = 0.0
-    """The angle its rays spanned then [rad]."""
+    """Its rays' spread then [rad]."""
 
 
 class MapRepair:
@@ -133,7 +135,7 @@ class MapRepair:
         sightings: Rejected sightings in a row that make a suspect (and agreeing ones that
             clear it).
         after: Shortest time those rejected sightings span [s].
-        span: Smallest angle a suspect's rays must span [rad].
+        span: Smallest spread of a suspect's rays [rad].
         max_std: Largest standard deviation of a new position along its worst axis [m].
         threshold: The tracker's gate (chi-square, one degree of freedom).
         error_model: The azimuth error model (eq. 1-3).
@@ -321,15 +323,16 @@ class MapRepair:
     def _try_repair(self, beacon: int, time: float, beacons: BeaconMap) -> Repair | None:
         """Locate a suspect from its rays; its repair, or None (module docstring).
 
-        Tried once its rays span ``span``, and again whenever they span more than at the last
-        try or have grown by :data:`RETRY_GROWTH` since it.
+        Tried once its rays spread ``span``, and again whenever they or their spread have grown
+        by :data:`RETRY_GROWTH` since the last try.
         """
         run = self._runs.get(beacon)
         if run is None or len(run.rays) < 3:
             return None
         rays = run.rays.latest()
-        span = angular_span(rays[:, 2])
-        if span < self.span or (span <= run.tried_span and run.rays.added - run.tried
+        span = spread(rays[:, 2])
+        if span < self.span or (span <= (1.0 + RETRY_GROWTH) * run.tried_span
+                                and run.rays.added - run.tried
                                 < max(1.0, RETRY_GROWTH * len(rays))):
             return None
         run.tried, run.tried_span = run.rays.added, span
@@ -337,7 +340,7 @@ class MapRepair:
         if kept.sum() < max(3, KEPT_SHARE * kept.size):
             return None
         rays = rays[kept]
-        if angular_span(rays[:, 2]) < self.span:
+        if spread(rays[:, 2]) < self.span:
             return None
         point, covariance, _ = intersect(rays)
         std = math.sqrt(np.linalg.eigvalsh(covariance)[-1])

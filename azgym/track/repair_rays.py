@@ -7,12 +7,10 @@ variance and the position's covariance. The geometry is :mod:`azgym.localize.bea
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from azgym.core import FloatArray
-from azgym.localize.bearings import intersect_rays, ray_misses
+from azgym.localize.bearings import intersect_rays, ray_misses, spread
 
 __all__ = ["CANDIDATES", "MAX_RAYS", "RayStore", "consensus", "intersect", "origin_covariance"]
 
@@ -61,13 +59,14 @@ def consensus(rays: FloatArray, span: float, threshold: float) -> np.ndarray:
 
     A mirror ghost's rays meet at its image, and a track's first rays may be off: each ray
     k is paired with ray k + K/2, the two's crossing scored by the rays it gathers, and the
-    best one kept.
+    best one kept. A pair whose rays spread (:func:`~azgym.localize.bearings.spread`) less than
+    half ``span`` crosses too uncertainly to be tried.
     """
     half = len(rays) // 2
     best = np.zeros(len(rays), dtype=bool)
     for k in range(0, half, max(1, half // CANDIDATES)):
         pair = rays[[k, k + half]]
-        if abs(math.sin(pair[1, 2] - pair[0, 2])) < math.sin(0.5 * span):
+        if spread(pair[:, 2]) < 0.5 * span:
             continue
         point, _, _ = intersect(pair)
         kept = ray_misses(point, rays[:, :2], rays[:, 2], rays[:, 3],

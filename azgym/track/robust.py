@@ -60,7 +60,8 @@ class Robust(GatedEkf):
         repair: Whether to repair the map while tracking (:mod:`azgym.track.repair`).
         repair_sightings: Rejected sightings of a beacon in a row that make it a suspect.
         repair_after: Shortest time those sightings span [s].
-        repair_span: Smallest angle a suspect's rays must span to locate it [rad].
+        repair_span: Smallest spread a suspect's rays must have to locate it [rad], at most π/2
+            (:func:`~azgym.localize.bearings.spread`).
         repair_std: Largest standard deviation of a new position along its worst axis [m].
         **others: As :class:`~azgym.track.gated_ekf.GatedEkf` (``min_init_inliers`` 3).
     """
@@ -113,7 +114,8 @@ class Robust(GatedEkf):
         check_range(name, "repair_sightings", self.repair_sightings, low=2, high=1000,
                     integer=True)
         check_range(name, "repair_after", self.repair_after, low=0.0, high=3600.0)
-        check_range(name, "repair_span", self.repair_span, low=0.0, high=math.pi, low_open=True)
+        check_range(name, "repair_span", self.repair_span, low=0.0, high=math.pi / 2,
+                    low_open=True)
         check_range(name, "repair_std", self.repair_std, low=0.0, low_open=True)
 
     def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:

@@ -14,7 +14,7 @@ import azgym
 from azgym import InvalidInputError, Measurements
 from azgym.bench.suites.warehouse import fault_levels
 from azgym.core import BeaconMap
-from azgym.localize.bearings import angular_span, intersect_rays
+from azgym.localize.bearings import intersect_rays
 from azgym.site.error_model import ErrorModel
 from azgym.track.repair import STREAK_GAP_S, MapRepair
 from azgym.world.drive import simulate
@@ -24,12 +24,6 @@ NO_ORIGIN_ERROR = np.zeros((2, 2, 2))
 
 
 # -- the rays, by hand ----------------------------------------------------------------------
-
-def test_the_span_of_bearings_is_the_smallest_arc_holding_them():
-    assert math.degrees(angular_span(np.radians([350.0, 10.0, 5.0]))) == pytest.approx(20.0)
-    assert math.degrees(angular_span(np.radians([0.0, 90.0, 180.0]))) == pytest.approx(180.0)
-    assert angular_span(np.array([1.0])) == 0.0
-
 
 def test_two_rays_meet_where_they_cross_with_the_covariance_of_their_spread():
     origins = np.array([[0.0, 0.0], [2.0, 0.0]])
