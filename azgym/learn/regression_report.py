@@ -18,7 +18,7 @@ import numpy as np
 
 from azgym.files import write_file
 from azgym.learn.distribution import card_section
-from azgym.learn.train_report import bullets, show
+from azgym.learn.train_report import bullets, run_setup, show
 from azgym.localize.learned.pose_network import PoseRegressor
 
 __all__ = ["GENERALIZATION_SEED", "SolverSettings", "VARIANTS", "generalization", "localize_frames",
@@ -111,8 +111,8 @@ def write_regression_card(result: Any, seeds: list[int], frames: int, seed: int)
           for key, name in (("train", "training set"), ("held_out", "held-out set"))],
         "", "## Seeds and hyperparameters", "", *bullets(settings, ()), "",
         "## Training", "",
-        f"- {len(info['history'])} epochs in {info['seconds']:.1f} s (torch "
-        f"{info['torch_version']}, {settings['threads']} thread(s)); command: `azgym train "
+        f"- {len(info['history'])} epochs in {info['seconds']:.1f} s ({run_setup(info)}); "
+        "command: `azgym train "
         f"localizer --model learned --out DIR --layouts {len(seeds)} --frames-per-layout "
         f"{frames} --epochs {len(info['history'])} --seed {seed} --hidden {settings['hidden']}`",
         "", "| epoch | train loss | held-out loss | median [m] | p75 [m] | trust AUC |",

@@ -8,11 +8,12 @@ a batch is masked out), with positives weighted by negatives / positives of the 
 so that both classes count alike whatever the frames' outlier share; what NG-RANSAC needs
 from the scores is their order, which the held-out AUC and top-3 figures measure.
 
-Runs are reproducible: torch's initialisation is seeded, batches are shuffled by a generator
-seeded with (seed, epoch), and torch runs on one thread by default. A checkpoint is written
-after every epoch; a run started again with the same data and settings resumes from it (and
-ends with the very weights of a run never interrupted). At the end: the weight file
-(``ng-ransac.npz``), the learning curve and the model card (:mod:`azgym.learn.train_report`).
+Runs are reproducible: seeded initialisation and shuffling, one torch thread by default, and
+the CPU kernels every x86-64 processor computes alike (:mod:`azgym.learn.kernels`). Batches are
+counted on the shared meter (:mod:`azgym.progress`). A checkpoint after every epoch is resumed
+by a run with the same data and settings (ending with the very weights of one never
+interrupted). At the end: ``ng-ransac.npz``, the learning curve and the model card
+(:mod:`azgym.learn.train_report`).
 """
 
 from __future__ import annotations
@@ -35,19 +36,19 @@ from azgym.arguments import positive_number, whole_number
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder, write_file
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
+from azgym.learn.kernels import pin_kernels
 from azgym.learn.torch_net import TorchInlierScorer, export
-from azgym.learn.train_report import progress_bar, write_card, write_learning_curve
+from azgym.learn.train_report import Batches, write_card, write_learning_curve
 from azgym.progress import Meter, Progress
 
 __all__ = ["CHECKPOINT_NAME", "EVAL_BATCH", "MODEL", "TrainConfig", "TrainResult", "WEIGHTS_NAME",
-           "auc", "build_data", "evaluate", "fingerprint", "finite", "fit",
-           "prepared_data", "resume", "resuming", "save_checkpoint", "train_ng_ransac"]
+           "auc", "build_data", "evaluate", "fingerprint", "finite", "fit", "prepared_data",
+           "resume", "resuming", "save_checkpoint", "train_ng_ransac"]
 
 MODEL = "ng-ransac"
 """The model this module trains (the name in its weight file)."""
 _DEFAULTS = MODEL_DEFAULTS[MODEL]
-WEIGHTS_NAME = "ng-ransac.npz"
-CHECKPOINT_NAME = "checkpoint.pt"
+WEIGHTS_NAME, CHECKPOINT_NAME = "ng-ransac.npz", "checkpoint.pt"
 EVAL_BATCH = 1024
 """Frames per forward pass when scoring the held-out set (bounds the memory it takes)."""
 
@@ -180,8 +181,9 @@ def fit(train: Any, held_out: Any, out_dir: Path, config: TrainConfig, *,
         config: The hyperparameters.
         feature_layout: The layout of ``features`` (goes into the weight file).
         data_info: What the model card says of the data (seeds, layouts).
-        progress: Show a progress bar and a line per epoch.
+        progress: Count the batches on the meter and write a line per epoch.
     """
+    kernels = pin_kernels()
     out_dir = prepare_folder(Path(out_dir))
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
@@ -189,26 +191,25 @@ def fit(train: Any, held_out: Any, out_dir: Path, config: TrainConfig, *,
     model = TorchInlierScorer(data[0][0].shape[-1], config.hidden)
     optimizer = torch.optim.Adam(model.parameters(), lr=config.learning_rate)
     pos_weight = torch.tensor(config.pos_weight or _balanced_weight(data[0][2], data[0][1]))
-    stamp = fingerprint(data, config, feature_layout)
+    stamp = fingerprint(data, config, feature_layout, kernels)
     checkpoint = out_dir / CHECKPOINT_NAME
     history, seconds = resume(checkpoint, model, optimizer, stamp)
     if len(history) > config.epochs:
         raise InvalidInputError(f"{checkpoint}: holds {len(history)} epochs, more than the "
                                 f"{config.epochs} asked for; --overwrite starts over")
     steps = math.ceil(len(data[0][0]) / config.batch_size)
-    bar = progress_bar(config.epochs * steps, len(history) * steps, progress)
-    if history:
-        bar.write(resuming(checkpoint, len(history), config.epochs))
-    for epoch in range(len(history), config.epochs):
-        started = time.perf_counter()
-        loss = _train_epoch(model, optimizer, data[0], config, epoch, pos_weight, bar)
-        history.append({"epoch": epoch + 1, "train_loss": loss,
-                        **evaluate(model, data[1], pos_weight)})
-        seconds += time.perf_counter() - started
-        save_checkpoint(checkpoint, model, optimizer, history, seconds, stamp)
-        bar.write(_epoch_line(history[-1]))
-    bar.close()
-    info = _training_info(config, float(pos_weight), data, data_info, history, seconds)
+    with Batches(MODEL, (config.epochs - len(history)) * steps, progress) as batches:
+        if history:
+            batches.say(resuming(checkpoint, len(history), config.epochs))
+        for epoch in range(len(history), config.epochs):
+            started = time.perf_counter()
+            loss = _train_epoch(model, optimizer, data[0], config, epoch, pos_weight, batches)
+            history.append({"epoch": epoch + 1, "train_loss": loss,
+                            **evaluate(model, data[1], pos_weight)})
+            seconds += time.perf_counter() - started
+            save_checkpoint(checkpoint, model, optimizer, history, seconds, stamp)
+            batches.say(_epoch_line(history[-1]))
+    info = _training_info(config, float(pos_weight), data, data_info, history, seconds, kernels)
     weights = export(model, out_dir / WEIGHTS_NAME, info, feature_layout=feature_layout,
                      name=MODEL)
     figure = write_learning_curve(history, out_dir / "learning-curve.png")
@@ -250,7 +251,7 @@ def _loss(model: TorchInlierScorer, batch: tuple[torch.Tensor, ...],
 
 def _train_epoch(model: TorchInlierScorer, optimizer: torch.optim.Optimizer,
                  data: tuple[torch.Tensor, ...], config: TrainConfig, epoch: int,
-                 pos_weight: torch.Tensor, bar: Any) -> float:
+                 pos_weight: torch.Tensor, batches: Batches) -> float:
     """One pass over the training frames in a (seed, epoch)-seeded order; the mean loss."""
     model.train()
     order = np.random.default_rng([config.seed, epoch]).permutation(len(data[0]))
@@ -265,8 +266,7 @@ def _train_epoch(model: TorchInlierScorer, optimizer: torch.optim.Optimizer,
             optimizer.step()
             total += float(loss.detach()) * len(logits)
             count += len(logits)
-        bar.update(1)
-        bar.set_postfix(loss=f"{total / max(count, 1):.4f}")
+        batches.step()
     return total / max(count, 1)
 
 
@@ -319,12 +319,15 @@ def finite(value: float) -> float | None:
 
 
 def fingerprint(data: tuple[tuple[torch.Tensor, ...], ...], config: Any,
-                feature_layout: str) -> str:
+                feature_layout: str, kernels: str) -> str:
     """SHA-256 of the data and every setting a resumed run must share (not epochs, threads).
 
-    ``config`` is a dataclass of the run's hyperparameters (any model's).
+    ``config`` is a dataclass of the run's hyperparameters (any model's); ``kernels`` the CPU
+    kernels torch computes with (:func:`azgym.learn.kernels.pin_kernels`): a run resumed on
+    other kernels would not end with the weights of one never interrupted.
     """
     digest = hashlib.sha256(feature_layout.encode())
+    digest.update(kernels.encode())
     settings = {k: v for k, v in asdict(config).items() if k not in ("epochs", "threads")}
     digest.update(json.dumps(settings, sort_keys=True).encode())
     for split in data:
@@ -347,8 +350,9 @@ def resume(path: Path, model: torch.nn.Module, optimizer: torch.optim.Optimizer,
         raise InvalidInputError(f"{path}: cannot read the checkpoint ({reason}); "
                                 "--overwrite starts over") from None
     if found != fingerprint:
-        raise InvalidInputError(f"{path}: a checkpoint of another run (other data or "
-                                "settings); --overwrite starts over, or use another folder")
+        raise InvalidInputError(f"{path}: a checkpoint of another run (other data, settings "
+                                "or CPU kernels); --overwrite starts over, or use another "
+                                "folder")
     model.load_state_dict(state["model"])
     optimizer.load_state_dict(state["optimizer"])
     return list(state["history"]), float(state["seconds"])
@@ -382,8 +386,8 @@ def _epoch_line(figures: dict[str, Any]) -> str:
 def _training_info(config: TrainConfig, pos_weight: float,
                    data: tuple[tuple[torch.Tensor, ...], ...],
                    data_info: dict[str, Any] | None, history: list[dict[str, Any]],
-                   seconds: float) -> dict[str, Any]:
-    """The weight file's ``training``: data, seeds, hyperparameters, time, figures."""
+                   seconds: float, kernels: str) -> dict[str, Any]:
+    """The weight file's ``training``: data, seeds, hyperparameters, kernels, time, figures."""
     counts = {}
     for name, (_, mask, inlier) in zip(("train", "held_out"), data, strict=True):
         counts[name] = {"frames": len(mask), "measurements": int(mask.sum()),
@@ -391,5 +395,6 @@ def _training_info(config: TrainConfig, pos_weight: float,
     return {"data": {**(data_info or {}), **counts},
             "hyperparameters": {**asdict(config), "pos_weight": pos_weight,
                                 "optimizer": "Adam", "loss": "masked BCE on inlier"},
-            "torch_version": torch.__version__, "seconds": round(seconds, 3),
-            "history": history, "final": history[-1] if history else {}}
+            "torch_version": torch.__version__, "kernels": kernels,
+            "seconds": round(seconds, 3), "history": history,
+            "final": history[-1] if history else {}}

@@ -15,8 +15,9 @@ way and the network must not learn the generated warehouses' axes. The learning 
 cosine from ``learning_rate`` to 5 % of it, a function of the epoch, so a resumed run needs no
 scheduler state.
 
-Reproducible and resumable as the inlier scorer's training is (seeds, one thread, a checkpoint
-per epoch, the same fingerprint rule: :func:`azgym.learn.train.fingerprint`). Batches group
+Reproducible and resumable as the inlier scorer's training is (seeds, one thread, the portable
+CPU kernels of :mod:`azgym.learn.kernels`, a checkpoint per epoch, the same fingerprint rule:
+:func:`azgym.learn.train.fingerprint`), with the same progress. Batches group
 frames of similar size (shuffled within groups of 16 batches, the batches then shuffled), so
 little padding is computed.
 """
@@ -37,6 +38,7 @@ from azgym.arguments import positive_number, whole_number
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
+from azgym.learn.kernels import pin_kernels
 from azgym.learn.torch_regression import TorchPoseRegressor, export
 from azgym.learn.train import (
     EVAL_BATCH,
@@ -49,7 +51,7 @@ from azgym.learn.train import (
     save_checkpoint,
 )
 from azgym.learn.train import fingerprint as run_fingerprint
-from azgym.learn.train_report import progress_bar
+from azgym.learn.train_report import Batches
 from azgym.localize.learned.pose_network import N_TOKENS, frame_tokens
 
 __all__ = ["CHECKPOINT_NAME", "MODEL", "RegressionConfig", "WEIGHTS_NAME", "epoch_line", "evaluate",
@@ -160,6 +162,7 @@ def fit_regression(train: Any, held_out: Any, out_dir: Path, config: RegressionC
     """
     from azgym.learn.train_report import write_learning_curve
 
+    kernels = pin_kernels()
     out_dir = prepare_folder(Path(out_dir))
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
@@ -169,34 +172,34 @@ def fit_regression(train: Any, held_out: Any, out_dir: Path, config: RegressionC
     positives = float(data[0][2].sum())
     pos_weight = torch.tensor(float(np.clip((float(data[0][1].sum()) - positives)
                                             / max(positives, 1.0), 0.05, 20.0)))
-    stamp = run_fingerprint(data, config, feature_layout)
+    stamp = run_fingerprint(data, config, feature_layout, kernels)
     checkpoint = out_dir / CHECKPOINT_NAME
     history, seconds = resume(checkpoint, model, optimizer, stamp)
     if len(history) > config.epochs:
         raise InvalidInputError(f"{checkpoint}: holds {len(history)} epochs, more than the "
                                 f"{config.epochs} asked for; --overwrite starts over")
     steps = math.ceil(len(data[0][0]) / config.batch_size)
-    bar = progress_bar(config.epochs * steps, len(history) * steps, progress, desc=MODEL)
-    if history:
-        bar.write(resuming(checkpoint, len(history), config.epochs))
-    for epoch in range(len(history), config.epochs):
-        started = time.perf_counter()
-        for group in optimizer.param_groups:
-            group["lr"] = learning_rate(config, epoch)
-        loss = _train_epoch(model, optimizer, data[0], config, epoch, pos_weight, bar)
-        history.append({"epoch": epoch + 1, "train_loss": loss,
-                        **evaluate(model, data[1], pos_weight, config.trust_weight)})
-        seconds += time.perf_counter() - started
-        save_checkpoint(checkpoint, model, optimizer, history, seconds, stamp)
-        bar.write(epoch_line(history[-1]))
-    bar.close()
+    with Batches(MODEL, (config.epochs - len(history)) * steps, progress) as batches:
+        if history:
+            batches.say(resuming(checkpoint, len(history), config.epochs))
+        for epoch in range(len(history), config.epochs):
+            started = time.perf_counter()
+            for group in optimizer.param_groups:
+                group["lr"] = learning_rate(config, epoch)
+            loss = _train_epoch(model, optimizer, data[0], config, epoch, pos_weight, batches)
+            history.append({"epoch": epoch + 1, "train_loss": loss,
+                            **evaluate(model, data[1], pos_weight, config.trust_weight)})
+            seconds += time.perf_counter() - started
+            save_checkpoint(checkpoint, model, optimizer, history, seconds, stamp)
+            batches.say(epoch_line(history[-1]))
     info = {"data": {**(data_info or {}), "train": _counts(data[0]),
                      "held_out": _counts(data[1])},
             "hyperparameters": {**asdict(config), "pos_weight": float(pos_weight),
                                 "optimizer": "Adam, cosine learning rate",
                                 "loss": "Gaussian NLL of the position + BCE of the trust",
                                 "augmentation": "a random world rotation per frame"},
-            "torch_version": torch.__version__, "seconds": round(seconds, 3),
+            "torch_version": torch.__version__, "kernels": kernels,
+            "seconds": round(seconds, 3),
             "history": history, "final": history[-1] if history else {}}
     weights = export(model, out_dir / WEIGHTS_NAME, info, feature_layout=feature_layout,
                      name=MODEL)
@@ -257,7 +260,7 @@ def loss_terms(model: TorchPoseRegressor, batch: tuple[torch.Tensor, ...],
 
 def _train_epoch(model: TorchPoseRegressor, optimizer: torch.optim.Optimizer,
                  data: tuple[torch.Tensor, ...], config: RegressionConfig, epoch: int,
-                 pos_weight: torch.Tensor, bar: Any) -> float:
+                 pos_weight: torch.Tensor, batches: Batches) -> float:
     """One pass over the training frames; the mean loss over its batches."""
     model.train()
     sizes = data[1].sum(dim=1).numpy()
@@ -277,8 +280,7 @@ def _train_epoch(model: TorchPoseRegressor, optimizer: torch.optim.Optimizer,
         optimizer.step()
         total += loss.item()
         count += 1
-        bar.update(1)
-        bar.set_postfix(loss=f"{loss.item():.4f}")
+        batches.step()
     return total / max(count, 1)
 
 

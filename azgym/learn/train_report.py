@@ -1,10 +1,11 @@
 """What a training run shows and leaves behind: its progress, learning curve and model card.
 
-The progress is a tqdm bar when tqdm is installed (plain lines, one per epoch, otherwise); the
-learning curve is a PNG of the training and held-out loss and the held-out figures per epoch;
-the model card is a markdown page of everything needed to judge and redo the run: the data
-and its seeds, the hyperparameters, the time it took, the figures and the weight file's
-SHA-256.
+The progress is the run's batches counted on the shared meter (:mod:`azgym.progress`: a bar with
+the time left in a terminal, a plain line every few seconds when piped) with a line per epoch;
+the learning curve is a PNG of the training and held-out loss and the held-out figures per
+epoch; the model card is a markdown page of everything needed to judge and redo the run: the
+data and its seeds, the hyperparameters, the CPU kernels and the time it took, the figures and
+the weight file's SHA-256.
 """
 
 from __future__ import annotations
@@ -13,50 +14,70 @@ import hashlib
 import io
 import json
 from pathlib import Path
+from types import TracebackType
 from typing import Any
 
 from azgym.files import write_file
 from azgym.learn.distribution import card_section
+from azgym.learn.kernels import PORTABLE
+from azgym.progress import Meter, Progress, counter
 
-__all__ = ["FIGURES", "bullets", "progress_bar", "show", "write_card", "write_learning_curve"]
+__all__ = ["FIGURES", "Batches", "bullets", "run_setup", "show", "write_card",
+           "write_learning_curve"]
 
 FIGURES = (("held_out_accuracy", "accuracy"), ("held_out_auc", "AUC"),
            ("held_out_top3", "top-3 all inliers"))
 """The held-out figures plotted and tabled, each with its label."""
 
 
-class _Lines:
-    """The progress of a run without tqdm: only the lines it writes (one per epoch)."""
+class Batches:
+    """A run's progress: its batches counted with the time left, and the lines it writes.
 
-    def __init__(self, enabled: bool) -> None:
-        self.enabled = enabled
+    A context manager: the count of the batches still to train (a resumed run counts only
+    those) is drawn on a :class:`azgym.progress.Meter` while it is open, and ends when it
+    closes.
 
-    def update(self, _steps: int) -> None:
-        """Nothing to draw between epochs."""
+    Args:
+        model: The model trained (the count's label says it).
+        total: The batches the run will train.
+        enabled: Whether anything is shown (off: nothing is counted or written).
+    """
 
-    def set_postfix(self, **_values: Any) -> None:
-        """Nothing to draw between epochs."""
+    def __init__(self, model: str, total: int, enabled: bool) -> None:
+        meter = Meter() if enabled else None
+        self.say: Progress = meter if meter is not None else _silent
+        """Write a line (between the count's redraws)."""
+        self.count = counter(meter, f"training {model}", total, "batches")
+        self.done = 0
 
-    def write(self, text: str) -> None:
-        """Print a finished line."""
-        if self.enabled:
-            print(text, flush=True)
+    def step(self) -> None:
+        """One more batch trained."""
+        self.done += 1
+        self.count(self.done)
 
-    def close(self) -> None:
-        """Nothing to close."""
+    def __enter__(self) -> Batches:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
+                 trace: TracebackType | None) -> None:
+        self.count.close()
 
 
-def progress_bar(total: int, initial: int, enabled: bool, desc: str = "ng-ransac") -> Any:
-    """A tqdm bar of ``total`` steps starting at ``initial``, or plain lines without tqdm."""
-    try:
-        from tqdm import tqdm
-    except ImportError:
-        return _Lines(enabled)
-    if not enabled:
-        return _Lines(False)
-    # disable=None: no bar where it cannot redraw in place (a log file); the lines still show
-    return tqdm(total=total, initial=initial, unit="batch", desc=desc, leave=False,
-                disable=None, mininterval=0.5)
+def _silent(_text: str) -> None:
+    """A run without progress writes nothing."""
+
+
+def run_setup(info: dict[str, Any]) -> str:
+    """How a run computed, for its card: ``torch 2.13.0+cpu, portable CPU kernels, 1 thread(s)``.
+
+    A run on the processor's own kernels says that its weights repeat only on a like one
+    (:mod:`azgym.learn.kernels`).
+    """
+    kernels = info["kernels"]
+    described = ("portable CPU kernels" if kernels == PORTABLE else
+                 f"{kernels} CPU kernels: the weights repeat only on a like processor")
+    return (f"torch {info['torch_version']}, {described}, "
+            f"{info['hyperparameters']['threads']} thread(s)")
 
 
 def write_learning_curve(history: list[dict[str, Any]], path: Path,
@@ -114,8 +135,8 @@ def write_card(path: Path, info: dict[str, Any], weights: Path, figure: Path) ->
                for key, name in (("train", "training set"), ("held_out", "held-out set"))],
              "", "## Seeds and hyperparameters", "", *bullets(settings, ()), "",
              "## Training", "",
-             f"- {len(info['history'])} epochs in {info['seconds']:.1f} s "
-             f"(torch {info['torch_version']}, {settings['threads']} thread(s))", "",
+             f"- {len(info['history'])} epochs in {info['seconds']:.1f} s ({run_setup(info)})",
+             "",
              "| epoch | train loss | held-out loss | "
              + " | ".join(label for _, label in FIGURES) + " |",
              "|---:|---:|---:|" + "---:|" * len(FIGURES),
