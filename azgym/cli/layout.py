@@ -56,7 +56,8 @@ def _analyze(args: argparse.Namespace) -> int:
     covariance: Any = None
     absent: tuple[int, ...] = ()
     if args.survey is not None:
-        from azgym.placement.surveyed import read_survey, surveyed_scenario
+        from azgym.mapping.survey_file import read_survey
+        from azgym.placement.surveyed import surveyed_scenario
 
         scenario, covariance, absent = surveyed_scenario(scenario, read_survey(args.survey))
     cells = int(floor.free.sum())

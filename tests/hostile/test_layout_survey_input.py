@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from azgym import cli
-from azgym.placement import surveyed
+from azgym.mapping import survey_file
 
 HEADER = "id,x,y,sxx,sxy,syy,observable,anchor,moved,rays,outliers,reason"
 
@@ -38,12 +38,27 @@ def test_a_missing_binary_or_huge_survey_is_refused(tmp_path, capsys, monkeypatc
     out = tmp_path / "out"
     argv = ["layout", "analyze", "paper-room", "--frames", "0", "--out", str(out), "--survey"]
     assert cli.main([*argv, str(tmp_path / "nowhere")]) == 2
-    assert "cannot be read" in capsys.readouterr().err
+    assert "--survey" in (err := capsys.readouterr().err) and "no such survey table" in err
     (tmp_path / "survey.csv").write_bytes(b"\xff\xfe\x00garbage")
     assert cli.main([*argv, str(tmp_path)]) == 2
     assert "not UTF-8 text" in capsys.readouterr().err
-    monkeypatch.setattr(surveyed, "MAX_SURVEY_BYTES", 64)
+    monkeypatch.setattr(survey_file, "MAX_SURVEY_BYTES", 64)
     (tmp_path / "survey.csv").write_text(HEADER + "\n" + "1,1,2,0,0,0,1,0,0,9,0,\"\"\n" * 10)
     assert cli.main([*argv, str(tmp_path)]) == 2
-    assert "larger than 64 bytes" in capsys.readouterr().err
+    assert "larger than a survey table may be" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_fifo_for_a_survey_is_refused_at_once(tmp_path):
+    """A FIFO named survey.csv must not block the analysis waiting for a writer."""
+    import os
+    import subprocess
+    import sys
+
+    os.mkfifo(tmp_path / "survey.csv")
+    done = subprocess.run([sys.executable, "-m", "azgym", "layout", "analyze", "paper-room",
+                           "--frames", "0", "--out", str(tmp_path / "out"), "--survey",
+                           str(tmp_path)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    assert "--survey" in done.stderr and "not a regular file" in done.stderr
+    assert not (tmp_path / "out").exists()
