@@ -3,12 +3,12 @@
 ``survey.csv`` is read by :func:`azgym.mapping.survey_file.read_survey`. The analysis takes the
 scenario's beacons that the survey placed (observable) with their covariances; every other
 beacon of the scenario (unobservable, or never detected) is absent from the surveyed map, so a
-localizer cannot use it and the prediction leaves it out. An id the scenario does not have is refused: the survey is
-not of this site. The kept beacons stay at the scenario's places: the geometry (visibility,
-distances) is the site's, and the surveyed places differ from it by the very error the
-covariance describes. Taking the surveyed places instead would let a millimetre of that error
-put a wall-mounted beacon behind its wall, out of every cell's sight. A beacon the survey found
-moved is therefore analysed where the scenario puts it.
+localizer cannot use it and the prediction leaves it out. An id the scenario does not have is
+refused: the survey is not of this site. The kept beacons stay at the scenario's places: the
+geometry (visibility, distances) is the site's, and the surveyed places differ from it by the
+very error the covariance describes. Taking the surveyed places instead would let a millimetre
+of that error put a wall-mounted beacon behind its wall, out of every cell's sight. A beacon the
+survey found moved is therefore analysed where the scenario puts it.
 """
 
 from __future__ import annotations
