@@ -265,7 +265,8 @@ def _within(samples: TumTrajectory, file: str, extent: Extent | None, problems: 
         return True
     x0, y0, x1, y1 = extent.box
     x, y = samples.x, samples.y
-    outside = np.flatnonzero((x < x0) | (x > x1) | (y < y0) | (y > y1))
+    outside_x, outside_y = extent.outside(x, y)
+    outside = np.flatnonzero(outside_x | outside_y)
     if outside.size:
         k = int(outside[0])
         problems.add(file, f"({float(x[k])!r}, {float(y[k])!r}) is outside the map's extent "

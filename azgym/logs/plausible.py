@@ -94,6 +94,11 @@ class Extent:
         m = SCENARIO_MARGIN
         return cls((x0 - m, y0 - m, x1 + m, y1 + m), f"the scenario's bounds and {m:g} m")
 
+    def outside(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Which values of ``x`` and of ``y`` lie outside the box: two boolean masks."""
+        x0, y0, x1, y1 = self.box
+        return (x < x0) | (x > x1), (y < y0) | (y > y1)
+
     @classmethod
     def of_beacons(cls, beacons: BeaconMap) -> Extent:
         """The beacons' bounding box and :data:`BEACONS_MARGIN`."""
@@ -193,9 +198,10 @@ def _integrated(sample_time: np.ndarray, rate: np.ndarray, time: np.ndarray) -> 
 def _truth_in_extent(table: Table, frames: Columns, extent: Extent, problems: Problems) -> None:
     """Each true x, y within the map's extent (a truth in millimetres is far outside)."""
     x0, y0, x1, y1 = extent.box
-    for column, lo, hi in (("x", x0, x1), ("y", y0, y1)):
+    masks = extent.outside(frames["x"], frames["y"])
+    for (column, lo, hi), outside in zip((("x", x0, x1), ("y", y0, y1)), masks, strict=True):
         values = frames[column]
-        for k in np.flatnonzero((values < lo) | (values > hi)):
+        for k in np.flatnonzero(outside):
             table.report(problems, f"{float(values[k])!r} is outside the map's extent "
                                    f"[{lo:.6g}, {hi:.6g}] m ({extent.what}; millimetres?)",
                          int(k), column)
