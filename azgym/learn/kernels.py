@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["PORTABLE", "PORTABLE_KERNELS", "pin_kernels"]
+__all__ = ["PORTABLE", "PORTABLE_KERNELS", "describe_kernels", "pin_kernels"]
 
 PORTABLE_KERNELS = {"ATEN_CPU_CAPABILITY": "default", "MKL_CBWR": "COMPATIBLE"}
 """The environment that asks torch (ATen, oneMKL) for the kernels every x86-64 processor runs."""
@@ -43,3 +43,12 @@ def pin_kernels() -> str:
 
     capability = torch.backends.cpu.get_cpu_capability()
     return PORTABLE if capability == "DEFAULT" else f"native {capability}"
+
+
+def describe_kernels(kernels: str) -> str:
+    """What a card says of the kernels :func:`pin_kernels` named.
+
+    ``portable CPU kernels``, or the processor's own, whose results repeat only on a like one.
+    """
+    return ("portable CPU kernels" if kernels == PORTABLE else
+            f"{kernels} CPU kernels: the results repeat only on a like processor")

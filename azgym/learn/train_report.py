@@ -19,7 +19,7 @@ from typing import Any
 
 from azgym.files import write_file
 from azgym.learn.distribution import card_section
-from azgym.learn.kernels import PORTABLE
+from azgym.learn.kernels import describe_kernels
 from azgym.progress import Meter, Progress, counter
 
 __all__ = ["FIGURES", "Batches", "bullets", "run_setup", "show", "write_card",
@@ -73,10 +73,7 @@ def run_setup(info: dict[str, Any]) -> str:
     A run on the processor's own kernels says that its weights repeat only on a like one
     (:mod:`azgym.learn.kernels`).
     """
-    kernels = info["kernels"]
-    described = ("portable CPU kernels" if kernels == PORTABLE else
-                 f"{kernels} CPU kernels: the weights repeat only on a like processor")
-    return (f"torch {info['torch_version']}, {described}, "
+    return (f"torch {info['torch_version']}, {describe_kernels(info['kernels'])}, "
             f"{info['hyperparameters']['threads']} thread(s)")
 
 

@@ -218,6 +218,8 @@ def test_a_tiny_run_writes_a_policy_that_loads_and_drives(tmp_path):
             f"2048 --out {tmp_path} --seed 0 --localizer ransac --envs 2 --threads 1") in card
     assert "overrides={'n_steps': 256}" in card and "n_steps: 256" in card
     assert train_card.REPRODUCIBILITY in card
+    assert re.search(r"^- CPU kernels: (portable CPU kernels|native \w+ CPU kernels: )", card,
+                     re.MULTILINE)  # native when torch ran before in this process
     assert f"| success rate | {result.score['success']:.1%} |" in card
     env = gym.make(SMALL, max_steps=20)
     navigator = load_policy(result.policy, env)

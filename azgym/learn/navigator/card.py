@@ -18,6 +18,7 @@ import numpy as np
 
 from azgym._version import __version__
 from azgym.files import write_file
+from azgym.learn.kernels import describe_kernels
 from azgym.learn.navigator.request import CURVE, EVAL_SEED, EVALUATIONS, POLICY, Request
 
 __all__ = ["REPRODUCIBILITY", "write_card", "write_learning_curve"]
@@ -26,10 +27,12 @@ REPRODUCIBILITY = (
     "Runs are repeatable on one machine: the same command, with the same versions of azgym, "
     "torch and stable-baselines3 on the CPU, gives a policy with bit-identical parameters "
     "(azgym's tests train twice with one seed and compare every parameter; policy.zip itself "
-    "differs, as it records when it was written). stable-baselines3 promises no more than that: "
-    "other hardware, another number of torch threads, or other versions of torch, numpy "
-    "or numba (the localizer's kernels) may change the floating-point sums, and a policy trained "
-    "on them differs, though it should score alike.")
+    "differs, as it records when it was written). torch computes with the CPU kernels every "
+    "x86-64 processor computes alike (azgym.learn.kernels), but stable-baselines3 promises no "
+    "more than repeatability on one machine: another number of torch threads, other versions of "
+    "torch, numpy or numba, or the localizer's compiled kernels on another processor may change "
+    "the floating-point sums, and a policy trained on them differs, though it should score "
+    "alike.")
 """What the card says of repeating a run (checked by tests/nav/test_train_navigator.py)."""
 
 
@@ -63,12 +66,14 @@ def write_learning_curve(evaluations: Path, path: Path, title: str) -> Path:
 
 
 def write_card(request: Request, path: Path, *, wall_time: float,
-               score: dict[str, float]) -> Path:
-    """The model card of a finished run, beside its policy."""
+               score: dict[str, float], kernels: str) -> Path:
+    """The model card of a finished run, beside its policy.
+
+    ``kernels`` names the CPU kernels torch computed with (:func:`azgym.learn.kernels.pin_kernels`).
+    """
     import stable_baselines3
     import torch
     import yaml
-
 
     digest = hashlib.sha256((request.out / POLICY).read_bytes()).hexdigest()
     settings = {"n_envs": request.n_envs, "policy": request.policy,
@@ -91,6 +96,7 @@ def write_card(request: Request, path: Path, *, wall_time: float,
         f"- steps: {request.steps}",
         f"- wall time: {wall_time:.1f} s ({request.steps / wall_time:.0f} steps/s, evaluations "
         f"included; {request.threads} torch thread(s))",
+        f"- CPU kernels: {describe_kernels(kernels)}",
         f"- versions: azgym {__version__}, torch {torch.__version__}, stable-baselines3 "
         f"{stable_baselines3.__version__}, Python {platform.python_version()}",
         f"- {POLICY} SHA-256: `{digest}`", "", REPRODUCIBILITY, "",

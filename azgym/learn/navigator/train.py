@@ -33,6 +33,7 @@ from azgym.arguments import whole_number
 from azgym.envs.registration import navigation_spec
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
+from azgym.learn.kernels import pin_kernels
 from azgym.learn.navigator.card import write_card, write_learning_curve
 from azgym.learn.navigator.request import (
     CARD,
@@ -226,9 +227,9 @@ class EpisodeEnds(gym.Wrapper):
 
 def run(request: Request, verbose: bool = True) -> TrainingResult:
     """Train what ``request`` says (checked by :func:`prepare`); write the output files."""
+    kernels = pin_kernels()  # before torch's first operation
     import torch
     from stable_baselines3.common.env_util import make_vec_env
-
 
     torch.set_num_threads(request.threads)
     envs = make_vec_env(request.env_id, n_envs=request.n_envs, seed=request.seed,
@@ -247,7 +248,8 @@ def run(request: Request, verbose: bool = True) -> TrainingResult:
     evaluations = request.out / EVALUATIONS  # written by the evaluations' callback
     curve = write_learning_curve(evaluations, request.out / CURVE,
                                  f"{request.algo} on {request.env_id}")
-    card = write_card(request, request.out / CARD, wall_time=wall_time, score=score)
+    card = write_card(request, request.out / CARD, wall_time=wall_time, score=score,
+                      kernels=kernels)
     envs.close()
     if verbose:
         print(f"{request.algo} on {request.env_id}: {request.steps} steps in {wall_time:.0f} s; "
