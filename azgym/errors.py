@@ -12,9 +12,9 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 __all__ = ["AzgymError", "DatasetUnavailable", "DependencyNotInstalled", "InvalidInputError",
-           "LeaderboardError", "LocalizerCheckError", "LogError", "ModelFileError",
-           "ProtocolError", "ScenarioError", "TrackerCheckError", "UnknownNameError", "require",
-           "unknown_name"]
+           "LeaderboardError", "LocalizerCheckError", "LogError", "MapperCheckError",
+           "ModelFileError", "ProtocolError", "ScenarioError", "TrackerCheckError",
+           "UnknownNameError", "require", "unknown_name"]
 
 
 MAX_SHOWN_NAME = 40
@@ -54,6 +54,10 @@ class LocalizerCheckError(AzgymError, AssertionError):
 
 class TrackerCheckError(AzgymError, AssertionError):
     """A tracker failed one of the conformance checks (:mod:`azgym.track.checks`)."""
+
+
+class MapperCheckError(AzgymError, AssertionError):
+    """A mapper failed one of the conformance checks (:mod:`azgym.mapping.checks`)."""
 
 
 class LogError(InvalidInputError):

@@ -10,10 +10,10 @@ the field) and, if one was set afterwards, again before the next use, with
 from __future__ import annotations
 
 import functools
-import inspect
 from typing import Any
 
 from azgym.fields import Flag, Number, argument_error, require
+from azgym.registry import hyperparameter_names
 
 __all__ = ["Hyperparameters", "check_flag", "check_range"]
 
@@ -57,12 +57,8 @@ class Hyperparameters:
 
 @functools.cache
 def _param_names(cls: type[Hyperparameters]) -> tuple[str, ...]:
-    """Names of the keyword-only ``__init__`` arguments of a class."""
-    signature = inspect.signature(cls.__init__)
-    return tuple(
-        name for name, parameter in signature.parameters.items()
-        if parameter.kind is parameter.KEYWORD_ONLY
-    )
+    """Names of the keyword-only ``__init__`` arguments of a class (remembered per class)."""
+    return hyperparameter_names(cls)
 
 
 def check_range(

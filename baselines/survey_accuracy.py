@@ -10,7 +10,8 @@ folder. It is surveyed by the command itself, run as a process:
 map is unknown but for beacons 1 and 2), and the ``beacons.csv`` it writes is read back.
 
 Printed: each surveyed beacon's error against the world's true positions (beacon 9 stands
-1.5 m from where the shipped map has it), their median, p95 and worst; then ransac (its
+1.5 m from where the shipped map has it), their median, p95 and worst, and the mean of their
+normalized errors squared under the covariances ``survey.csv`` gives (NEES); then ransac (its
 defaults) on every frame of the same drive, its headline p75 (a refusal counts as infinite)
 on the surveyed map, on the true map and on the stale map the log ships with, and the
 surveyed map's p75 over the true map's. The acceptance: median <= 3 cm, p95 <= 8 cm, ratio
@@ -37,6 +38,7 @@ from azgym.core import BeaconMap, pose_error  # noqa: E402
 from azgym.logs import export_route, read_log  # noqa: E402
 from azgym.logs.frames import frame_measurements  # noqa: E402
 from azgym.logs.manifest import read_beacons  # noqa: E402
+from azgym.mapping.survey_file import read_survey  # noqa: E402
 from azgym.metrics import quantile  # noqa: E402
 
 SCENARIO = "warehouse-small"
@@ -84,6 +86,19 @@ def beacon_errors(surveyed: BeaconMap) -> dict[int, float]:
             if i not in ANCHORS}
 
 
+def nees(out: Path) -> float:
+    """The surveyed beacons' mean normalized error squared under the covariances ``survey.csv``
+    gives (anchors aside)."""
+    scenario = azgym.load_scenario(SCENARIO)
+    truth = dict(zip(scenario.beacons.ids.tolist(), scenario.beacon_positions[:, :2],
+                     strict=True))
+    surveyed = read_survey(out)
+    found = [float((xy - truth[i]) @ np.linalg.solve(cov, xy - truth[i]))
+             for i, xy, cov in zip(surveyed.ids.tolist(), surveyed.xy, surveyed.covariance,
+                                   strict=True) if i not in ANCHORS]
+    return float(np.mean(found))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
@@ -105,7 +120,8 @@ def main() -> None:
         values = np.array(list(errors.values()))
         print(f"{len(values)} surveyed beacons (anchors aside): median "
               f"{100 * np.median(values):.1f} cm, p95 {100 * np.percentile(values, 95):.1f} cm, "
-              f"worst {100 * values.max():.1f} cm")
+              f"worst {100 * values.max():.1f} cm; NEES {nees(Path(folder) / 'surveyed'):.2f} "
+              "(2 when the covariances are honest)")
         on_survey = ransac_p75(log_folder, surveyed)
         on_truth = ransac_p75(log_folder, true_map)
         on_stale = ransac_p75(log_folder, log.beacons)

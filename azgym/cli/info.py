@@ -3,7 +3,7 @@
 ``suites`` lists what ``azgym bench`` scores on (the frame suites, the navigation suites and the
 shipped logs); ``scenarios`` and ``localizers`` list the shipped scenarios and the registered
 localizers, presets and trackers; ``generate`` writes a procedurally generated warehouse;
-``check`` runs the conformance checks on a localizer or tracker.
+``check`` runs the conformance checks on a localizer, tracker or mapper.
 """
 
 from __future__ import annotations
@@ -34,9 +34,11 @@ def add_info(commands: argparse._SubParsersAction) -> None:
     generate.set_defaults(handler=_generate)
     commands.add_parser("localizers", help="list the registered localizers and presets"
                         ).set_defaults(handler=_localizers)
-    check = commands.add_parser("check", help="run the conformance checks on a localizer")
+    check = commands.add_parser("check", help="run the conformance checks on a localizer, "
+                                "tracker or mapper")
     check.add_argument("localizer", metavar="SPEC",
-                       help="as for bench --localizer, e.g. path/mine.py:Mine:max_iter=20")
+                       help="as for bench --localizer, e.g. path/mine.py:Mine:max_iter=20; a "
+                       "mapper's: survey, path/mine.py:MyMapper (docs/mappers.md)")
     check.set_defaults(handler=_check)
 
 
@@ -98,15 +100,37 @@ def _localizers(_args: argparse.Namespace) -> int:
     print("\ntrackers (any localizer above runs as one too):")
     for name in list_trackers():
         print(f"{name:<16} {_describe(name)}")
+    from azgym.mapping.registry import MAPPERS, list_mappers
+
+    print("\nmappers (the mapping suite's contenders: docs/mappers.md):")
+    for name in list_mappers():
+        print(f"{name:<16} {_first_line(MAPPERS[name].__doc__)}")
     return 0
 
 
 def _check(args: argparse.Namespace) -> int:
+    from azgym.errors import UnknownNameError, unknown_name
     from azgym.localize.checks import check_localizer
-    from azgym.localize.registry import SupportsLocalize, build
+    from azgym.localize.registry import (
+        SupportsLocalize,
+        build,
+        list_localizers,
+        list_trackers,
+        parse_spec,
+    )
+    from azgym.mapping.checks import check_mapper
+    from azgym.mapping.registry import is_mapper_spec, list_mappers, make_mapper
     from azgym.track.checks import check_tracker
 
-    built = build(args.localizer)  # raises (exit code 2) on a failed check, as the checks do
+    # each raises (exit code 2) on a failed check, as the checks do
+    if is_mapper_spec(args.localizer):
+        check_mapper(make_mapper(args.localizer))
+        return 0
+    try:
+        built = build(args.localizer)
+    except UnknownNameError:
+        raise unknown_name("localizer, tracker or mapper name", parse_spec(args.localizer)[0],
+                           list_localizers() + list_trackers() + list_mappers()) from None
     if isinstance(built, SupportsLocalize):
         check_localizer(built)
     else:
@@ -130,7 +154,11 @@ def _describe(name: str) -> str:
         target, params = PRESETS[name]
         pairs = ",".join(f"{key}={json.dumps(value)}" for key, value in params.items())
         return f"{target} with {pairs}"
-    lines = (type(build(name)).__doc__ or "").strip().splitlines()
-    first = lines[0] if lines else ""
-    first = _ROLE.sub(r"\1", first).replace("``", "")
+    return _first_line(type(build(name)).__doc__)
+
+
+def _first_line(doc: str | None) -> str:
+    """A docstring's first line in plain text: no Sphinx markup, no pointer to the module's."""
+    lines = (doc or "").strip().splitlines()
+    first = _ROLE.sub(r"\1", lines[0] if lines else "").replace("``", "")
     return re.sub(r"\s*\((?:see )?(?:the )?module docstring\)", "", first)

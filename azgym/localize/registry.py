@@ -23,26 +23,20 @@ Third-party packages register a name by declaring, in their pyproject.toml::
 
 from __future__ import annotations
 
-import hashlib
-import importlib
-import importlib.util
-import inspect
 import json
-import re
-import sys
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 from azgym.core import BeaconMap, Estimate, Measurements
 from azgym.errors import AzgymError, InvalidInputError, unknown_name
-from azgym.registry import Registry
+from azgym.profile import Profile, profile_defaults
+from azgym.registry import Registry, construct, hyperparameter_names, split_spec
 
 __all__ = ["ENTRY_POINT_GROUP", "LOCALIZERS", "PRESETS", "TRACKERS", "TRACKER_ENTRY_POINT_GROUP",
            "TRACKER_METHODS", "Factory", "SupportsLocalize", "build", "has_tracker_methods",
            "is_builtin", "list_localizers",
-           "list_trackers", "make_localizer", "parse_spec", "register_localizer", "resolve",
-           "spec_label"]
+           "list_trackers", "make_localizer", "parse_spec", "profile_params",
+           "register_localizer", "resolve", "spec_label"]
 
 ENTRY_POINT_GROUP = "azgym.localizers"
 TRACKER_ENTRY_POINT_GROUP = "azgym.trackers"
@@ -155,39 +149,6 @@ def list_trackers() -> list[str]:
     return sorted(TRACKERS)
 
 
-def _load_attribute(spec: str) -> Factory:
-    """Resolve ``"module:Class"`` or ``"path/file.py:Class"``."""
-    target, _, attribute = spec.rpartition(":")
-    if target.endswith(".py"):
-        path = Path(target).expanduser().resolve()
-        if not path.is_file():
-            raise InvalidInputError(f"localizer spec {spec!r}: no file {path}")
-        digest = hashlib.sha1(str(path).encode()).hexdigest()[:10]  # stable across processes
-        module_name = f"azgym_plugin_{path.stem}_{digest}"
-        module = sys.modules.get(module_name)
-        if module is None:
-            module_spec = importlib.util.spec_from_file_location(module_name, path)
-            if module_spec is None or module_spec.loader is None:
-                raise InvalidInputError(f"localizer spec {spec!r}: cannot import {path}")
-            module = importlib.util.module_from_spec(module_spec)
-            sys.modules[module_name] = module  # so pickling (worker processes) can find it
-            module_spec.loader.exec_module(module)
-    else:
-        try:
-            module = importlib.import_module(target)
-        except ImportError as exc:
-            raise InvalidInputError(
-                f"localizer spec {spec!r}: cannot import {target!r}: {exc}"
-            ) from None
-    try:
-        factory = getattr(module, attribute)
-    except AttributeError:
-        raise InvalidInputError(
-            f"localizer spec {spec!r}: {target!r} has no attribute {attribute!r}"
-        ) from None
-    return _localizer_class(spec, factory)
-
-
 def resolve(name: str) -> Factory:
     """The factory behind a name or spec (see module docstring).
 
@@ -202,23 +163,11 @@ def resolve(name: str) -> Factory:
     if name in PRESETS:
         return resolve(PRESETS[name][0])
     if ":" in name:
-        registered = name.partition(":")[0]
-        if registered in list_localizers() or registered in list_trackers():
-            raise InvalidInputError(
-                f"localizer spec {name!r}: {registered!r} is a registered name; its "
-                f"hyperparameters are written {registered}:NAME=VALUE[,NAME=VALUE...]")
-        return _load_attribute(name)
+        return LOCALIZERS.load(name, list_localizers() + list_trackers())
     for registry in (TRACKERS, LOCALIZERS):  # a name in both groups: the tracker's, as ever
         if name in registry:
             return registry[name]
     raise unknown_name("localizer", name, list_localizers() + list_trackers())
-
-
-_PARAMS_START = re.compile(r":(?=\s*[A-Za-z_]\w*\s*=)")
-_PARAM = re.compile(r'\s*([A-Za-z_]\w*)\s*=\s*("(?:[^"\\]|\\.)*"'
-                    r'|[^,]*?(?:,(?!\s*[A-Za-z_]\w*\s*=)[^,]*?)*)\s*(?:,|$)')
-"""A NAME=VALUE pair; the value runs over commas up to the next NAME= (a list of numbers)."""
-_PYTHON_WORDS = {"True": True, "False": False, "None": None}
 
 
 def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
@@ -228,63 +177,10 @@ def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
         InvalidInputError: Hyperparameters that are not ``NAME=VALUE`` pairs, a name given twice,
             a value that is not a scalar.
     """
-    if not isinstance(spec, str):
-        raise InvalidInputError(f"localizer name must be a string, got {type(spec).__name__}")
-    start = _PARAMS_START.search(spec)
-    target, text = (spec, "") if start is None else (spec[:start.start()], spec[start.end():])
-    if text.rstrip().endswith(","):
-        raise InvalidInputError(f"localizer spec {spec!r}: a comma with nothing after it")
-    params: dict[str, Any] = {}
-    position = 0
-    while position < len(text):
-        pair = _PARAM.match(text, position)
-        if pair is None or not pair.group(2) or pair.end() == position:
-            raise InvalidInputError(
-                f"localizer spec {spec!r}: cannot read hyperparameters from {text[position:]!r}; "
-                "write NAME=VALUE[,NAME=VALUE...]")
-        name = pair.group(1)
-        if name in params:
-            raise InvalidInputError(f"localizer spec {spec!r}: hyperparameter {name!r} twice")
-        params[name] = _scalar(spec, name, pair.group(2))
-        position = pair.end()
+    target, params = split_spec(spec, "localizer")
     if target in PRESETS:
         target, params = PRESETS[target][0], {**PRESETS[target][1], **params}
     return target, params
-
-
-def _scalar(spec: str, name: str, text: str) -> Any:
-    """A hyperparameter's value: a JSON scalar, Python's True/False/None, or else a bare string."""
-    if text in _PYTHON_WORDS:
-        return _PYTHON_WORDS[text]
-    if text.startswith(("[", "{")):
-        raise InvalidInputError(f"localizer spec {spec!r}: {name} must be a scalar (true, false, "
-                                f"null, a number or a string) or numbers separated by commas "
-                                f"({name}=1,2,3), got {text}")
-    if "," in text and not text.startswith('"'):
-        return _numbers(spec, name, text)
-    try:
-        return json.loads(text)
-    except ValueError:
-        if text.startswith('"'):
-            raise InvalidInputError(
-                f"localizer spec {spec!r}: {name}={text} is not a valid quoted string") from None
-        return text
-
-
-def _numbers(spec: str, name: str, text: str) -> list[float | int]:
-    """A list value, ``1,2.5,-3``: JSON numbers separated by commas."""
-    values = []
-    for piece in text.split(","):
-        try:
-            value = json.loads(piece)
-        except ValueError:
-            value = None
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise InvalidInputError(
-                f"localizer spec {spec!r}: {name}={text} is not a list of numbers separated by "
-                f"commas ({piece.strip()!r} is not a number; quote a string that has commas)")
-        values.append(value)
-    return values
 
 
 def spec_label(target: str, params: dict[str, Any]) -> str:
@@ -359,31 +255,22 @@ def build(name: str, **params: Any) -> Any:
     if both:
         raise InvalidInputError(f"localizer {name!r}: hyperparameter {both[0]!r} given both in "
                                 "the spec and as a keyword")
-    params = {**inline, **params}
-    factory = resolve(target)
-    _check_param_names(target, factory, params)
-    try:
-        return factory(**params)
-    except TypeError as exc:
-        raise InvalidInputError(f"localizer {target!r}: {exc}") from None
+    return construct("localizer", target, resolve(target), {**inline, **params})
 
 
-def _check_param_names(target: str, factory: Factory, params: dict[str, Any]) -> None:
-    """Refuse a hyperparameter the factory does not take, naming the closest one it does.
+def profile_params(factory: Callable[..., Any], given: dict[str, Any],
+                   profile: Profile | None) -> dict[str, Any]:
+    """The hyperparameters a profile gives a factory: the fields it takes that ``given`` lacks.
 
-    A factory that takes ``**kwargs`` (or whose signature cannot be read) is left to raise
-    its own TypeError when called.
+    A hyperparameter the spec writes wins over the profile's. The one rule of a profile's
+    fields as hyperparameters, for a contender (localizer or tracker) as for a mapper
+    (:mod:`azgym.profile`).
+
+    Args:
+        factory: The class the spec resolves to (a preset's, not a tracker wrapping it).
+        given: The hyperparameters the spec writes, inline or beside it.
+        profile: The profile (None: none).
     """
-    try:
-        signature = inspect.signature(factory)
-    except (TypeError, ValueError):
-        return
-    kinds = {p.kind for p in signature.parameters.values()}
-    if inspect.Parameter.VAR_KEYWORD in kinds:
-        return
-    valid = [p.name for p in signature.parameters.values()
-             if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)]
-    for key in params:
-        if key not in valid:
-            raise InvalidInputError(
-                f"localizer {target!r}: {unknown_name('hyperparameter', key, valid)}")
+    if profile is None or profile.empty:
+        return {}
+    return profile_defaults(hyperparameter_names(factory), profile, given)

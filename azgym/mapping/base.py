@@ -20,6 +20,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
+from numbers import Integral
 from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
@@ -76,6 +77,12 @@ class MapAnswer:
             raise InvalidInputError("MapAnswer.covariances must be finite and symmetric")
         if n and (np.linalg.eigvalsh(cov)[:, 0] <= 0.0).any():
             raise InvalidInputError("MapAnswer.covariances must be positive definite")
+        if not isinstance(self.moved, (tuple, list)) or len(self.moved) > n:
+            raise InvalidInputError(
+                f"MapAnswer.moved must be a tuple or list of at most {n} ids (those it places), "
+                f"got {type(self.moved).__name__}")
+        if not all(isinstance(i, Integral) and not isinstance(i, bool) for i in self.moved):
+            raise InvalidInputError("MapAnswer.moved must hold integer ids")
         placed = set(ids.tolist())
         stray = [i for i in self.moved if i not in placed]
         if stray:

@@ -21,7 +21,7 @@ from azgym.errors import InvalidInputError
 from azgym.logs.frames import frame_measurements, frame_motions
 from azgym.logs.read import Log
 from azgym.profile import FORKLIFT, VEHICLE_KINDS, Profile
-from azgym.sensing.motion import Motion
+from azgym.sensing.motion import DifferentialOdometryModel, ImuModel, Motion
 from azgym.track.kinematics import WHEELBASE
 from azgym.track.unicycle import VEHICLE_DEFAULTS, YAW_SOURCES, MotionNoise
 from azgym.world.drive import Frame
@@ -122,6 +122,9 @@ class Settings:
         extra_sigma: Azimuth noise beyond the error model (sway, rendering) [rad].
         loss: The azimuth factors' robust loss, one of :data:`LOSSES`.
         loss_scale: Where the loss turns robust, in standard deviations of the azimuth.
+        start_bias: Spread of the turn rate's bias at a drive's start [rad/s]; None: the turn
+            rate source's (a gyro's, :class:`~azgym.sensing.motion.ImuModel`; a differential
+            drive's odometry's, :class:`~azgym.sensing.motion.DifferentialOdometryModel`).
     """
 
     vehicle: str = FORKLIFT
@@ -135,6 +138,7 @@ class Settings:
     extra_sigma: float = math.radians(0.1)
     loss: str = "cauchy"
     loss_scale: float = 3.0
+    start_bias: float | None = None
 
     def __post_init__(self) -> None:
         if self.vehicle not in VEHICLE_KINDS:
@@ -149,6 +153,10 @@ class Settings:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"{name} must be a positive number, got {value!r}")
+        if self.start_bias is not None and not (math.isfinite(self.start_bias)
+                                                and self.start_bias >= 0.0):
+            raise InvalidInputError(f"start_bias must be a number >= 0 [rad/s] or None, got "
+                                    f"{self.start_bias!r}")
         if not (self.delta_alpha_d > 0.0 or self.extra_sigma > 0.0):
             raise InvalidInputError("delta_alpha_d and extra_sigma are both 0, which gives the "
                                     "azimuths no noise to weigh them by")
@@ -157,6 +165,14 @@ class Settings:
     def turn_source(self) -> str:
         """Where the turn rate comes from."""
         return VEHICLE_DEFAULTS[self.vehicle][0] if self.yaw_source is None else self.yaw_source
+
+    @property
+    def turn_rate_bias(self) -> float:
+        """Spread of the turn rate's bias at a drive's start [rad/s] (``start_bias``)."""
+        if self.start_bias is not None:
+            return self.start_bias
+        return (ImuModel().gyro_bias if self.turn_source == "gyro"
+                else DifferentialOdometryModel().turn_rate_bias)
 
     @property
     def lever(self) -> float:

@@ -1,14 +1,16 @@
 """``survey``: every beacon's position from drives, as bearing-only SLAM (docs/mapping.md).
 
-1. Odometry: each drive's relative camera poses and their covariances
-   (:mod:`azgym.mapping.odometry`), dead-reckoned from its known start, or from the origin.
-2. First guess: each id's rays from the dead-reckoned poses, intersected
+1. Odometry: each drive's relative camera poses, their covariances and their derivatives with
+   respect to the turn rate's bias and the odometry's scale error
+   (:mod:`azgym.mapping.odometry`), dead-reckoned from its known start, or from the origin. A
+   drive without a known start is placed by the anchors it observes (at least two: a rigid fit
+   of their guesses onto their map positions).
+2. The drives solved frame by frame (:func:`_swept`, :class:`~azgym.mapping.sweep.Sweep`), from
+   which the first guesses: each id's rays from the poses, intersected
    (:func:`~azgym.localize.bearings.intersect_robustly`); an id whose rays do not spread enough
    (:func:`~azgym.localize.bearings.spread`) or are too few is unobservable, its detections
    left out. With the site's map as the prior, an id it does not hold (a misread id) is not
-   surveyed, only counted (:attr:`~azgym.mapping.problem.Prior.ids`). A drive without a known
-   start is placed by the anchors it observes (at least two: a rigid fit of their guesses onto
-   their map positions).
+   surveyed, only counted (:attr:`~azgym.mapping.problem.Prior.ids`).
 3. The factor graph (:mod:`azgym.mapping.graph`), solved; a beacon whose azimuths then mostly
    disagree with it (robust outliers: fewer than :data:`MIN_AGREEING` of them agree), or whose
    agreeing rays no longer spread enough, is reported unobservable too, and left out of the
@@ -21,6 +23,7 @@ free, and is refused by name.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -29,23 +32,38 @@ import numpy as np
 
 from azgym.core import BeaconMap, FloatArray, IntArray
 from azgym.errors import InvalidInputError
-from azgym.localize.bearings import MIN_RAYS, MIN_SPREAD, intersect_robustly, spread
-from azgym.mapping.graph import Graph, solve
+from azgym.localize.bearings import MIN_RAYS, MIN_SPREAD, spread
+from azgym.mapping.first_guess import (
+    DEFAULT_WIDTH,
+    anchor_positions,
+    azimuth_sigmas,
+    first_guess,
+    seen,
+    widths,
+)
+from azgym.mapping.graph import Graph, skeleton, solve
 from azgym.mapping.graph import covariances as graph_covariances
 from azgym.mapping.odometry import compose, relative_poses
 from azgym.mapping.problem import Drive, Prior, Settings, drive_list
-from azgym.site.error_model import ErrorModel
+from azgym.mapping.sweep import Sweep
 
-__all__ = ["DEFAULT_WIDTH", "MIN_AGREEING", "MIN_MOVE", "MOVE_CHI2", "Survey", "moved", "survey"]
+__all__ = ["DEFAULT_WIDTH", "MAX_STRAIN", "MIN_AGREEING", "MIN_MOVE", "MOVE_CHI2", "Survey",
+           "moved", "survey"]
 
-DEFAULT_WIDTH = 0.03
-"""Width of a beacon the prior map does not hold [m] (docs/logs.md's default)."""
 MIN_AGREEING = 0.5
 """Least share of an id's detections the solved graph must agree with (and at least
 :data:`~azgym.localize.bearings.MIN_RAYS` of them): among a beacon's detections, ghosts and
 misread ones are the few; an id whose azimuths are scattered (a misread id seen here and there)
 has a handful that pass near some point by chance, and is no beacon. (The first guess, from
 dead-reckoned poses that drift, cannot ask as much.)"""
+SWEEP_FRAMES = 10
+"""Frames the sweep (:func:`_swept`) adds at a time."""
+MAX_STRAIN = 1.0
+"""Most the mean squared residual of the agreeing azimuths may reach, in their modelled variance,
+for the survey to place beacons. The error model bounds the azimuth noise (uniform errors; a
+consistent solve leaves 0.2-0.6 of it); a solve that strains the azimuths beyond it has bent
+the map to fit a motion model that understates its noise (a robot's odometry taken for a
+forklift's: 1.2-1.6, and its beacons decimetres off), so none is placed."""
 MIN_MOVE = 0.10
 """Least distance between a beacon's prior and surveyed positions to call it moved [m]."""
 MOVE_CHI2 = 13.8155
@@ -117,13 +135,20 @@ def survey(drives: Drive | Sequence[Drive], prior: Prior | None = None,
             f"beacons), got {len(prior.anchors)} anchor{'' if len(prior.anchors) == 1 else 's'}"
             " and no start pose")
     odometry = [relative_poses(d, settings) for d in drives]
-    reckoned = [compose(np.zeros(3) if d.start is None else np.array(d.start), moves)
-                for d, (moves, _) in zip(drives, odometry, strict=True)]
+    reckoned = [compose(np.zeros(3) if d.start is None else np.array(d.start), o.moves)
+                for d, o in zip(drives, odometry, strict=True)]
     ids, pose_rows, beacon_of, azimuths = _detections(drives)
-    guesses, reasons = _first_guesses(drives, reckoned, prior, ids, pose_rows, beacon_of,
-                                      azimuths)
-    return _solved(drives, odometry, reckoned, prior, settings, ids, pose_rows, beacon_of,
-                   azimuths, guesses, reasons)
+    offsets = np.cumsum([0, *(len(d.frames) for d in drives)])
+    anchors = anchor_positions(prior)
+    for n, drive in enumerate(drives):
+        if drive.start is None:
+            reckoned[n] = _placed(drive, reckoned[n], anchors, ids, pose_rows - offsets[n],
+                                  beacon_of, azimuths, offsets[n + 1] - offsets[n])
+    first = skeleton(drives, offsets, odometry, np.concatenate(reckoned), settings)
+    poses = _swept(first, settings, prior, ids, pose_rows, beacon_of, azimuths)
+    guesses, reasons = _first_guesses(poses, prior, ids, pose_rows, beacon_of, azimuths)
+    return _solved(dataclasses.replace(first, poses=poses), offsets, prior, settings, ids,
+                   pose_rows, beacon_of, azimuths, guesses, reasons)
 
 
 def _detections(drives: list[Drive]) -> tuple[IntArray, IntArray, IntArray, FloatArray]:
@@ -144,17 +169,10 @@ def _detections(drives: list[Drive]) -> tuple[IntArray, IntArray, IntArray, Floa
             np.concatenate(azimuths) if azimuths else np.zeros(0))
 
 
-def _first_guesses(drives: list[Drive], reckoned: list[FloatArray], prior: Prior,
-                   ids: IntArray, pose_rows: IntArray, beacon_of: IntArray,
-                   azimuths: FloatArray) -> tuple[FloatArray, list[str]]:
-    """Each id's first guess (NaN: unobservable, with the reason), drives placed in the map."""
-    offsets = np.cumsum([0, *(len(d.frames) for d in drives)])
-    anchors = _anchor_positions(prior)
-    for n, drive in enumerate(drives):
-        if drive.start is None:
-            reckoned[n] = _placed(drive, reckoned[n], anchors, ids, pose_rows - offsets[n],
-                                  beacon_of, azimuths, offsets[n + 1] - offsets[n])
-    poses = np.concatenate(reckoned)
+def _first_guesses(poses: FloatArray, prior: Prior, ids: IntArray, pose_rows: IntArray,
+                   beacon_of: IntArray, azimuths: FloatArray) -> tuple[FloatArray, list[str]]:
+    """Each id's first guess from ``poses`` (NaN: unobservable, with the reason)."""
+    anchors = anchor_positions(prior)
     guesses = np.full((len(ids), 2), np.nan)
     reasons = [""] * len(ids)
     known = prior.ids
@@ -164,48 +182,61 @@ def _first_guesses(drives: list[Drive], reckoned: list[FloatArray], prior: Prior
             guesses[b] = anchors[beacon]
             continue
         if known is not None and beacon not in known:
-            reasons[b] = f"not in the prior map: {_seen(rows.size)}"
+            reasons[b] = f"not in the prior map: {seen(rows.size)}"
             continue
-        guesses[b], reasons[b] = _guess(poses[pose_rows[rows]], azimuths[rows])
+        guesses[b], reasons[b] = first_guess(poses[pose_rows[rows]], azimuths[rows])
     return guesses, reasons
 
 
-def _guess(poses: FloatArray, azimuths: FloatArray) -> tuple[FloatArray, str]:
-    """One id's guess from its rays, or NaN and why it is unobservable."""
-    directions = poses[:, 2] + azimuths
-    if len(directions) < MIN_RAYS:
-        return np.full(2, np.nan), f"{_seen(len(directions))}, fewer than {MIN_RAYS}"
-    angle = spread(directions)
-    if angle < MIN_SPREAD:
-        return np.full(2, np.nan), _narrow(angle)
-    point, weights = intersect_robustly(poses[:, :2], directions)
-    agreeing = weights > 0.5
-    if not np.isfinite(point).all() or agreeing.sum() < MIN_RAYS:
-        return np.full(2, np.nan), (f"its rays do not meet: {int(agreeing.sum())} of "
-                                    f"{len(directions)} agree on a point")
-    angle = spread(directions[agreeing])
-    if angle < MIN_SPREAD:
-        return np.full(2, np.nan), _narrow(angle) + " among the rays that agree"
-    return point, ""
+def _swept(base: Graph, settings: Settings, prior: Prior, ids: IntArray,
+           pose_rows: IntArray, beacon_of: IntArray, azimuths: FloatArray) -> FloatArray:
+    """Every camera pose solved frame by frame (:class:`~azgym.mapping.graph.Sweep`).
+
+    :data:`SWEEP_FRAMES` frames at a time: their poses from the odometry, their detections of
+    beacons already placed, then each beacon not yet placed whose rays from the estimated poses
+    now give a first guess (:func:`first_guess`) placed there with all its detections so far.
+    Anchors are placed from the start; an id the prior map lacks never is.
+    """
+    anchors = anchor_positions(prior)
+    index = {int(i): b for b, i in enumerate(ids.tolist())}
+    sweep = Sweep(base, settings, {index[a]: xy for a, xy in anchors.items() if a in index})
+    known = prior.ids
+    hopeless = {b for b, i in enumerate(ids.tolist()) if known is not None and i not in known}
+    where = np.full((len(ids), 2), np.nan)
+    for b in sweep.placed:
+        where[b] = anchors[int(ids[b])]
+    width = widths(prior, ids)
+    order = np.argsort(pose_rows, kind="stable")
+    edges = [*range(0, len(base.poses), SWEEP_FRAMES), len(base.poses)]
+    bounds = np.searchsorted(pose_rows[order], edges)
+    for end, first, stop in zip(edges[1:], bounds[:-1], bounds[1:], strict=True):
+        chunk = order[first:stop]
+        sweep.extend(end)
+        placed = np.array([beacon_of[r] in sweep.placed for r in chunk], dtype=bool)
+        _observe(sweep, settings, chunk[placed], pose_rows, beacon_of, azimuths, where, width)
+        seen_so_far = order[:stop]
+        for b in sorted(set(beacon_of[chunk[~placed]].tolist()) - hopeless):
+            rows = seen_so_far[beacon_of[seen_so_far] == b]
+            guess, _ = first_guess(sweep.poses[pose_rows[rows]], azimuths[rows])
+            if np.isfinite(guess).all():
+                sweep.place(b, guess)
+                where[b] = guess
+                _observe(sweep, settings, rows, pose_rows, beacon_of, azimuths, where, width)
+        sweep.update()
+    return sweep.estimate()
 
 
-def _seen(detections: int) -> str:
-    """How many times an id was detected, in words."""
-    return f"seen {detections} time{'s' * (detections != 1)}"
-
-
-def _narrow(angle: float) -> str:
-    """The reason of a beacon whose rays spread too little."""
-    return (f"its rays spread {math.degrees(angle):.1f}°, less than "
-            f"{math.degrees(MIN_SPREAD):.0f}° (too narrow a baseline)")
-
-
-def _anchor_positions(prior: Prior) -> dict[int, FloatArray]:
-    """Each anchor's map position (x, y)."""
-    if prior.beacons is None:
-        return {}
-    index = {int(i): k for k, i in enumerate(prior.beacons.ids.tolist())}
-    return {a: prior.beacons.xyz[index[a], :2].copy() for a in prior.anchors}
+def _observe(sweep: Sweep, settings: Settings, rows: IntArray, pose_rows: IntArray,
+             beacon_of: IntArray, azimuths: FloatArray, where: FloatArray,
+             width: FloatArray) -> None:
+    """The detections ``rows`` (of placed beacons) added to the sweep."""
+    beacons = beacon_of[rows]
+    sigmas = azimuth_sigmas(settings, sweep.poses[pose_rows[rows]], where[beacons],
+                            width[beacons])
+    for pose, beacon, azimuth, sigma in zip(pose_rows[rows].tolist(), beacons.tolist(),
+                                            azimuths[rows].tolist(), sigmas.tolist(),
+                                            strict=True):
+        sweep.observe(pose, beacon, azimuth, sigma)
 
 
 def _placed(drive: Drive, poses: FloatArray, anchors: dict[int, FloatArray], ids: IntArray,
@@ -221,7 +252,7 @@ def _placed(drive: Drive, poses: FloatArray, anchors: dict[int, FloatArray], ids
         rows = np.flatnonzero(inside & (beacon_of == match[0]))
         if not rows.size:
             continue
-        guess, _ = _guess(poses[local_rows[rows]], azimuths[rows])
+        guess, _ = first_guess(poses[local_rows[rows]], azimuths[rows])
         if np.isfinite(guess).all():
             seen.append(guess)
             wanted.append(position)
@@ -247,31 +278,18 @@ def _rigid(source: FloatArray, target: FloatArray) -> tuple[FloatArray, FloatArr
     return turn, target.mean(axis=0) - source.mean(axis=0) @ turn.T
 
 
-def _solved(drives: list[Drive], odometry: list[tuple[FloatArray, FloatArray]],
-            reckoned: list[FloatArray], prior: Prior, settings: Settings, ids: IntArray,
+def _solved(base: Graph, offsets: IntArray, prior: Prior, settings: Settings, ids: IntArray,
             pose_rows: IntArray, beacon_of: IntArray, azimuths: FloatArray,
             guesses: FloatArray, reasons: list[str]) -> Survey:
     """The graph of the observable beacons, solved, and the answer."""
     used: np.ndarray = np.asarray(np.isfinite(guesses).all(axis=1))
     column = np.cumsum(used) - 1
     keep = used[beacon_of]
-    poses = np.concatenate(reckoned)
-    sigmas = _sigmas(settings, poses[pose_rows[keep]], guesses[beacon_of[keep]],
-                     _widths(prior, ids)[beacon_of[keep]])
-    offsets = np.cumsum([0, *(len(d.frames) for d in drives)])
-    links = np.concatenate([np.column_stack([np.arange(o, o + len(m)), np.arange(o + 1,
-                                                                              o + len(m) + 1)])
-                            for o, (m, _) in zip(offsets[:-1], odometry, strict=True)])
-    starts = np.array([o for o, d in zip(offsets[:-1], drives, strict=True)
-                       if d.start is not None], dtype=np.int64)
+    sigmas = azimuth_sigmas(settings, base.poses[pose_rows[keep]], guesses[beacon_of[keep]],
+                     widths(prior, ids)[beacon_of[keep]])
     anchor_ids = set(prior.anchors)
-    graph = Graph(
-        poses=poses, links=links.astype(np.int64),
-        moves=np.concatenate([m for m, _ in odometry]).reshape(-1, 3),
-        move_cov=np.concatenate([c for _, c in odometry]).reshape(-1, 3, 3),
-        starts=starts,
-        start_poses=np.array([d.start for d in drives if d.start is not None]).reshape(-1, 3),
-        beacons=guesses[used],
+    graph = dataclasses.replace(
+        base, beacons=guesses[used],
         anchors=np.array([column[b] for b, i in enumerate(ids.tolist())
                           if used[b] and i in anchor_ids], dtype=np.int64),
         rows=np.column_stack([pose_rows[keep], column[beacon_of[keep]]]).astype(np.int64),
@@ -282,18 +300,20 @@ def _solved(drives: list[Drive], odometry: list[tuple[FloatArray, FloatArray]],
     xy[used] = solution.beacons
     rays = np.bincount(beacon_of, minlength=len(ids))
     outlier_rays = np.bincount(beacon_of[keep][outlying], minlength=len(ids))
-    observable = used.copy()
-    for b in np.flatnonzero(used).tolist():
-        if ids[b] in anchor_ids:
-            continue
+    observable = used & ~np.isin(ids, list(anchor_ids))
+    strain = _strain(solution.residuals[~outlying] / sigmas[~outlying])
+    for b in np.flatnonzero(observable).tolist():
         mine = np.flatnonzero(beacon_of[keep] == b)
         good = mine[~outlying[mine]]
         directions = solution.poses[graph.rows[good, 0], 2] + graph.azimuths[good]
-        if good.size < max(MIN_RAYS, MIN_AGREEING * mine.size) \
+        if strain:
+            reasons[b] = strain
+        elif good.size < max(MIN_RAYS, MIN_AGREEING * mine.size) \
                 or spread(directions) < MIN_SPREAD:
-            observable[b] = False
             reasons[b] = (f"its azimuths disagree: {outlier_rays[b]} of {mine.size} set aside "
                           "as outliers, the rest too few or too narrow a baseline")
+        observable[b] = not reasons[b]
+    observable |= used & np.isin(ids, list(anchor_ids))
     xy[~observable] = np.nan
     covariances = np.full((len(ids), 2, 2), np.nan)
     covariances[used] = graph_covariances(graph, solution, settings, observable[used])
@@ -307,23 +327,17 @@ def _solved(drives: list[Drive], odometry: list[tuple[FloatArray, FloatArray]],
     return Survey(**{**result.__dict__, "moved": moved(result, prior.beacons, anchor_ids)})
 
 
-def _widths(prior: Prior, ids: IntArray) -> FloatArray:
-    """Each id's width: the prior map's, else :data:`DEFAULT_WIDTH`."""
-    widths = np.full(len(ids), DEFAULT_WIDTH)
-    if prior.beacons is not None:
-        for b, beacon in enumerate(ids.tolist()):
-            index = np.flatnonzero(prior.beacons.ids == beacon)
-            if index.size:
-                widths[b] = prior.beacons.width[index[0]]
-    return widths
+def _strain(agreeing: FloatArray) -> str:
+    """Why no beacon is surveyed when the azimuths that agree strain (:data:`MAX_STRAIN`), or ''.
 
-
-def _sigmas(settings: Settings, poses: FloatArray, points: FloatArray,
-            widths: FloatArray) -> FloatArray:
-    """Each detection's azimuth standard deviation: eq. 1-3 at the first guess's distance."""
-    distance = np.hypot(*(points - poses[:, :2]).T)
-    model = ErrorModel(settings.delta_alpha_d, settings.coverage)
-    return np.sqrt(model.variance(np.maximum(distance, 0.1), widths) + settings.extra_sigma**2)
+    ``agreeing``: their residuals over their standard deviations.
+    """
+    strain = float(np.mean(agreeing**2)) if agreeing.size else 0.0
+    if strain <= MAX_STRAIN:
+        return ""
+    return (f"the azimuths strain against the motion: those that agree average {strain:.2f} "
+            f"times their modelled variance (more than {MAX_STRAIN:.0f}), so the profile's "
+            "motion or azimuth noise is understated and the solved map bent")
 
 
 def moved(result: Survey, prior: BeaconMap, anchors: set[int] | None = None) -> tuple[int, ...]:

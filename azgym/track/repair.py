@@ -17,22 +17,25 @@
   rejected, so its error is not taken for a move.
   Only sightings of a confident track count (running, confirmed, not lost, consistent).
 * **Set aside**: from then on its detections are removed before the correction.
-* **Located again**: each of its sightings is a ray from the tracker's camera position along
-  the tracker's heading plus the azimuth, with the azimuth's variance (eq. 3 at the range to
-  the map position, plus ``extra_sigma``² and the heading's variance) and the position's
-  covariance. The rays since its run began are intersected (:mod:`azgym.localize.bearings`);
-  rays missing the point by more than the gate are dropped and the rest intersected again.
-  The point is taken once at least :data:`KEPT_SHARE` of the rays agree with it, they spread
-  (:func:`~azgym.localize.bearings.spread`, not widened by one stray ray among parallel ones)
-  at least ``span`` radians, its position's standard deviation along its worst axis is within
-  ``max_std``, it lies ahead of every ray and within :data:`OUTSIDE_M` of the box of the
-  map's beacons (beyond it lies a mirror's image), and it is not within :data:`CLEARANCE_M`
-  (or three standard deviations) of another beacon of the map: rays that meet on another
-  beacon are that beacon's detections under a misread id, and the suspicion is dropped. So is
-  one whose point is within three standard deviations of its map position (it did not move).
+* **Located again** (:mod:`azgym.track.repair_rays`): each of its sightings gives a ray per
+  detection from the tracker's camera position along its heading plus the azimuth, with the
+  azimuth's variance (eq. 3 at the range to the map position, plus ``extra_sigma``² and the
+  heading's variance), the position's covariance and the heading's variance. The point the
+  most sightings meet, inside the box of the map's beacons grown by :data:`OUTSIDE_M` (beyond
+  it lies a mirror's image), is taken with an honest covariance once enough sightings meet it,
+  their rays spread ``span`` and fix it within ``max_std`` without the most telling of them
+  (:func:`~azgym.track.repair_rays.locate`), unless it is within :data:`CLEARANCE_M` (or three
+  standard deviations) of another beacon of the map: rays that meet on another beacon are that
+  beacon's detections under a misread id, and the suspicion is dropped. So is one whose point
+  is within three standard deviations of its map position (it did not move).
 * **Used again**: the map the tracker corrects with has the beacon at its new position (its
   height and width kept), and the repair is reported (:class:`Repair`). A suspected beacon
   whose map position agrees again in ``sightings`` sightings in a row is cleared.
+* **Refined**: a repaired beacon's rays go on being gathered, and whenever they have grown by
+  :data:`RETRY_GROWTH` those within the gate of its placement are intersected again; a
+  position more certain (its worst-axis standard deviation, as above, smaller) replaces it
+  (:attr:`MapRepair.placed`; the repair is reported once). A repaired beacon that becomes a
+  suspect again is located afresh.
 """
 
 from __future__ import annotations
@@ -49,10 +52,10 @@ from azgym.localize.bearings import spread
 from azgym.site.error_model import ErrorModel
 from azgym.track.azimuth_update import gated_update
 from azgym.track.gated_ekf import subset
-from azgym.track.repair_rays import RayStore, consensus, intersect
+from azgym.track.repair_rays import RayStore, locate, pack
 from azgym.track.unicycle import IPHI, IX, IY
 
-__all__ = ["CLEARANCE_M", "KEPT_SHARE", "OTHERS_AGREE",
+__all__ = ["CLEARANCE_M", "OTHERS_AGREE",
            "OTHERS_DISTINCT", "OUTSIDE_M", "RETRY_GROWTH", "STREAK_GAP_S", "MapRepair", "Repair"]
 
 STREAK_GAP_S = 2.0
@@ -64,8 +67,6 @@ OTHERS_DISTINCT = 2
 """Fewest distinct other beacons that must have agreed since a run began: with one other in
 view (a narrow camera), a beacon that moved a little drags the track and the one that did not
 is rejected, so one other's agreement cannot tell which of the two moved."""
-KEPT_SHARE = 0.8
-"""Smallest share of a suspect's rays that must meet its new position."""
 CLEARANCE_M = 0.25
 """A new position closer than this (or three standard deviations) to another beacon is that
 beacon's, seen under a misread id [m]."""
@@ -73,7 +74,8 @@ OUTSIDE_M = 1.0
 """A new position further than this outside the box of the map's beacons is a mirror's image
 (beacons hang on the walls and racks; what lies behind a wall is seen in it) [m]."""
 RETRY_GROWTH = 0.125
-"""A suspect is located again only once its rays, or their spread, have grown by this share
+"""A suspect is located again (a repaired beacon refined) only once its rays, or their spread
+(a repaired beacon: its rays), have grown by this share
 (at least one ray) since the last try: rays that never meet (random azimuths, one standing
 place) cost a bounded share of the tracker's time, not a least squares over all of them every
 frame (random rays' spread jitters just below its bound, π/2), while a beacon the camera sweeps
@@ -82,7 +84,7 @@ past is tried as its rays widen."""
 
 @dataclass(frozen=True, eq=False)
 class Repair:
-    """A beacon found moved and put at its new position.
+    """A beacon found moved and put at its new position (in :attr:`MapRepair.placed`, or since).
 
     Attributes:
         time: When [s] (the frame's time).
@@ -90,7 +92,7 @@ class Repair:
         beacon: The beacon's id.
         old: Its map position (x, y) [m].
         new: Its new position (x, y) [m].
-        covariance: The new position's covariance (2, 2) [m²].
+        covariance: The new position's covariance (2, 2) [m²], the track's shared error in it.
         rays: How many rays located it.
     """
 
@@ -122,10 +124,14 @@ class _Run:
     suspected: bool = False
     agreed: int = 0
     rays: RayStore = field(default_factory=RayStore)
+    sightings: int = 0
+    """Sightings whose rays were added."""
     tried: int = 0
     """Rays added when the suspect was last located (or not) from them."""
     tried_span: float = 0.0
     """Its rays' spread then [rad]."""
+    std: float = math.inf
+    """The worst-axis standard deviation of the position its rays last gave (:func:`worst_std`)."""
 
 
 class MapRepair:
@@ -153,7 +159,9 @@ class MapRepair:
         self.extra_sigma = extra_sigma
         self.repairs: list[Repair] = []
         self._runs: dict[int, _Run] = {}
-        self._moved: dict[int, FloatArray] = {}
+        self.placed: dict[int, Repair] = {}
+        """Each repaired beacon's latest placement: its repair, or a refinement since."""
+        self._refining: dict[int, _Run] = {}
         self._accepted = 0
         self._agreed_by: dict[int, int] = {}
         self._rejected = 0
@@ -175,18 +183,20 @@ class MapRepair:
         when none is).
         """
         self._frame += 1
-        if not self._moved:
+        if not self.placed:
             return beacons
         if beacons is not self._given or self._current is None:
             xyz = beacons.xyz.copy()
             for row, beacon in enumerate(beacons.ids.tolist()):
-                if beacon in self._moved:
-                    xyz[row, :2] = self._moved[beacon]
+                if beacon in self.placed:
+                    xyz[row, :2] = self.placed[beacon].new
             self._given, self._current = beacons, BeaconMap(beacons.ids, xyz, beacons.width)
         return self._current
 
     def usable(self, measurements: Measurements) -> np.ndarray | None:
         """The rows of the detections not of a suspect, or None when every row is."""
+        if not self._runs:
+            return None
         suspects = self.suspects
         if not suspects:
             return None
@@ -217,7 +227,7 @@ class MapRepair:
         suspected: list[int] = []
         if self._runs:
             self._forget_lapsed(time)
-        if not self._runs and inliers.all():  # every detection used, so every one known
+        if not self._runs and not self._refining and inliers.all():  # every one used, so known
             if confident:
                 self._agree(set(measurements.ids.tolist()))
             return suspected, []
@@ -229,6 +239,11 @@ class MapRepair:
         used = inliers.tolist()
         touched: list[int] = []
         for beacon, rows in sorted(sightings.items()):
+            refining = self._refining.get(beacon)
+            if refining is not None and confident:
+                self._add_rays(refining, measurements, np.array(rows), map_rows[beacon],
+                               beacons, state, cov)
+                self._refine(beacon, refining, time, beacons)
             run = self._runs.get(beacon)
             if run is not None and run.suspected:
                 self._suspect_sighting(beacon, run, measurements, np.array(rows), beacons,
@@ -238,22 +253,30 @@ class MapRepair:
                 if confident:
                     self._agree((beacon,))
                 self._runs.pop(beacon, None)
-            elif confident:
-                if run is None:
-                    run = self._runs[beacon] = _Run(time, time, self._accepted, self._rejected,
-                                                    dict(self._agreed_by))
-                self._rejected += 1
-                run.rejected += 1
-                run.last = time
-                self._add_rays(run, measurements, np.array(rows), map_rows[beacon], beacons,
-                               state, cov)
-                if self._suspicious(run, time):
-                    run.suspected = True
-                    suspected.append(beacon)
-                    touched.append(beacon)
+            elif confident and self._reject(beacon, time, measurements, np.array(rows),
+                                            beacons, state, cov):
+                suspected.append(beacon)
+                touched.append(beacon)
         repairs = [found for beacon in touched
                    if (found := self._try_repair(beacon, time, beacons)) is not None]
         return suspected, repairs
+
+    def _reject(self, beacon: int, time: float, measurements: Measurements, rows: np.ndarray,
+                beacons: BeaconMap, state: FloatArray, cov: FloatArray) -> bool:
+        """Count a confident track's rejected sighting of a beacon; whether it is now a suspect."""
+        run = self._runs.get(beacon)
+        if run is None:
+            run = self._runs[beacon] = _Run(time, time, self._accepted, self._rejected,
+                                            dict(self._agreed_by))
+        self._rejected += 1
+        run.rejected += 1
+        run.last = time
+        self._add_rays(run, measurements, rows, self._rows[beacon], beacons, state, cov)
+        if not self._suspicious(run, time):
+            return False
+        run.suspected = True
+        self._refining.pop(beacon, None)
+        return True
 
     def _agree(self, beacons: Collection[int]) -> None:
         """Count an agreeing sighting of each of ``beacons``."""
@@ -309,59 +332,69 @@ class MapRepair:
 
     def _add_rays(self, run: _Run, measurements: Measurements, rows: np.ndarray, row: int,
                   beacons: BeaconMap, state: FloatArray, cov: FloatArray) -> None:
-        """Each detection's ray: x, y, bearing, its variance, the position's covariance."""
+        """A sighting's rays: each detection's, from the track's camera (:func:`pack`)."""
         at = beacons.xyz[row, :2]
         distance = math.hypot(*(at - state[[IX, IY]]))
         variance = float(self.error_model.variance(distance, beacons.width[row])) \
             + self.extra_sigma ** 2 + cov[IPHI, IPHI]
-        rays = np.empty((rows.size, RayStore.WIDTH))
-        rays[:] = (state[IX], state[IY], state[IPHI], variance, cov[IX, IX], cov[IX, IY],
-                   cov[IY, IY])
-        rays[:, 2] += measurements.azimuth[rows]
-        run.rays.add(rays)
+        run.rays.add(pack(state[[IX, IY]], state[IPHI] + measurements.azimuth[rows], variance,
+                          cov[np.ix_([IX, IY], [IX, IY])], float(cov[IPHI, IPHI]),
+                          run.sightings))
+        run.sightings += 1
 
-    def _try_repair(self, beacon: int, time: float, beacons: BeaconMap) -> Repair | None:
-        """Locate a suspect from its rays; its repair, or None (module docstring).
+    def _locate(self, run: _Run, beacons: BeaconMap, placed: FloatArray | None = None
+                ) -> tuple[FloatArray, FloatArray, float, int] | None:
+        """Where a record's rays put its beacon (module docstring), or None.
 
-        Tried once its rays spread ``span``, and again whenever they or their spread have grown
-        by :data:`RETRY_GROWTH` since the last try.
+        :func:`~azgym.track.repair_rays.locate`'s answer, inside the box of the map's beacons
+        grown by :data:`OUTSIDE_M`. Tried once the rays spread ``span``, and again whenever they
+        or their spread have grown by :data:`RETRY_GROWTH` since the last try (a ``placed`` one,
+        refined: once they have grown).
         """
-        run = self._runs.get(beacon)
-        if run is None or len(run.rays) < 3:
+        grown = run.rays.added - run.tried >= max(1.0, RETRY_GROWTH * len(run.rays))
+        if len(run.rays) < 3 or (placed is not None and not grown):
             return None
         rays = run.rays.latest()
         span = spread(rays[:, 2])
-        if span < self.span or (span <= (1.0 + RETRY_GROWTH) * run.tried_span
-                                and run.rays.added - run.tried
-                                < max(1.0, RETRY_GROWTH * len(rays))):
+        if span < self.span or (span <= (1.0 + RETRY_GROWTH) * run.tried_span and not grown):
             return None
         run.tried, run.tried_span = run.rays.added, span
-        kept = consensus(rays, self.span, self.threshold)
-        if kept.sum() < max(3, KEPT_SHARE * kept.size):
+        box = (beacons.xyz[:, :2].min(axis=0) - OUTSIDE_M,
+               beacons.xyz[:, :2].max(axis=0) + OUTSIDE_M)
+        return locate(rays, self.span, self.threshold, self.max_std, box, placed)
+
+    def _try_repair(self, beacon: int, time: float, beacons: BeaconMap) -> Repair | None:
+        """Locate a suspect from its rays; its repair, or None (module docstring)."""
+        run = self._runs.get(beacon)
+        found = None if run is None else self._locate(run, beacons)
+        if run is None or found is None:
             return None
-        rays = rays[kept]
-        if spread(rays[:, 2]) < self.span:
-            return None
-        point, covariance, _ = intersect(rays)
+        point, covariance, run.std, rays = found
         std = math.sqrt(np.linalg.eigvalsh(covariance)[-1])
-        ahead = np.cos(rays[:, 2]) * (point[0] - rays[:, 0]) \
-            + np.sin(rays[:, 2]) * (point[1] - rays[:, 1])
-        inside = (point >= beacons.xyz[:, :2].min(axis=0) - OUTSIDE_M).all() and \
-            (point <= beacons.xyz[:, :2].max(axis=0) + OUTSIDE_M).all()
-        if std > self.max_std or (ahead <= 0.0).any() or not inside:
-            return None
         gaps = np.hypot(*(beacons.xyz[:, :2] - point).T)
         own = beacons.ids == beacon
         old = beacons.xyz[own, :2][0]
-        if (gaps[~own] < max(CLEARANCE_M, 3.0 * std)).any() or gaps[own][0] < 3.0 * std:
-            del self._runs[beacon]  # another beacon under a misread id, or not moved at all
-            return None
         del self._runs[beacon]
-        self._moved[beacon] = point
-        self._current = None
-        repair = Repair(time=time, frame=self._frame, beacon=beacon,
-                        old=(float(old[0]), float(old[1])),
-                        new=(float(point[0]), float(point[1])), covariance=covariance,
-                        rays=len(rays))
+        if (gaps[~own] < max(CLEARANCE_M, 3.0 * std)).any() or gaps[own][0] < 3.0 * std:
+            return None  # another beacon under a misread id, or not moved at all
+        self._refining[beacon] = run
+        repair = self._place(time, beacon, (float(old[0]), float(old[1])), point, covariance,
+                             rays)
         self.repairs.append(repair)
         return repair
+
+    def _refine(self, beacon: int, run: _Run, time: float, beacons: BeaconMap) -> None:
+        """Move a repaired beacon to where its rays put it now, if more certainly (docstring)."""
+        found = self._locate(run, beacons, np.array(self.placed[beacon].new))
+        if found is not None and found[2] < run.std:
+            point, covariance, run.std, rays = found
+            self._place(time, beacon, self.placed[beacon].old, point, covariance, rays)
+
+    def _place(self, time: float, beacon: int, old: tuple[float, float], point: FloatArray,
+               covariance: FloatArray, rays: int) -> Repair:
+        """Put a beacon at ``point`` in the map the tracker corrects with; its record."""
+        self._current = None
+        placed = self.placed[beacon] = Repair(
+            time=time, frame=self._frame, beacon=beacon, old=old,
+            new=(float(point[0]), float(point[1])), covariance=covariance, rays=rays)
+        return placed

@@ -33,6 +33,7 @@ import numpy as np
 
 from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose
 from azgym.hyperparameters import check_flag, check_range
+from azgym.localize.bearings import MIN_SPREAD
 from azgym.profile import FORKLIFT
 from azgym.site.error_model import ErrorModel
 from azgym.track.gated_ekf import DEFAULT_NOISE, GatedEkf, subset
@@ -61,8 +62,10 @@ class Robust(GatedEkf):
         repair_sightings: Rejected sightings of a beacon in a row that make it a suspect.
         repair_after: Shortest time those sightings span [s].
         repair_span: Smallest spread a suspect's rays must have to locate it [rad], at most π/2
-            (:func:`~azgym.localize.bearings.spread`).
-        repair_std: Largest standard deviation of a new position along its worst axis [m].
+            (:func:`~azgym.localize.bearings.spread`; by default the observability rule's
+            :data:`~azgym.localize.bearings.MIN_SPREAD`, 10°).
+        repair_std: Largest standard deviation of a new position along its worst axis, without
+            its most telling ray [m].
         **others: As :class:`~azgym.track.gated_ekf.GatedEkf` (``min_init_inliers`` 3).
     """
 
@@ -84,7 +87,7 @@ class Robust(GatedEkf):
                  relocalize_after: float = 0.5, strong_fix: int = 6,
                  confirm_travel: float = 1.0, repair: bool = False,
                  repair_sightings: int = 5, repair_after: float = 1.0,
-                 repair_span: float = math.radians(20.0), repair_std: float = 0.1) -> None:
+                 repair_span: float = MIN_SPREAD, repair_std: float = 0.1) -> None:
         self.max_position_std = max_position_std
         self.repair = repair
         self.repair_sightings = repair_sightings
@@ -136,6 +139,16 @@ class Robust(GatedEkf):
         """The repairs made since ``reset`` (none unless ``repair``)."""
         repair = self.__dict__.get("_repair")
         return () if repair is None else tuple(repair.repairs)
+
+    @property
+    def placed(self) -> dict[int, Repair]:
+        """Each repaired beacon's latest placement since ``reset``: its repair, or a refinement.
+
+        Where the tracker has the beacon now (the repair's ``time``, ``frame``, ``new``,
+        ``covariance`` and ``rays`` those of the refinement, ``old`` the map's position).
+        """
+        repair = self.__dict__.get("_repair")
+        return {} if repair is None else dict(repair.placed)
 
     def _now(self) -> float:
         return self._steps.time if self._steps.time is not None else 0.0

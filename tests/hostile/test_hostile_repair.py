@@ -1,8 +1,9 @@
 """robust:repair=true against suspects whose rays never meet, and against floods of ids.
 
-A beacon id whose detections are random azimuths, a moved beacon seen from one standing place
-for five minutes, and thousands of distinct ids (known to a swollen map, and unknown): the
-repair must keep its ray store capped, its work per frame bounded and repair nothing. Each
+A beacon id whose detections are random azimuths (a suspect's, or a repaired beacon's while it
+is refined), a moved beacon seen from one standing place for five minutes, and thousands of
+distinct ids (known to a swollen map, and unknown): the repair must keep its ray store capped,
+its work per frame bounded and repair nothing (or keep a repaired beacon where it is). Each
 attack runs in a child process with a time limit; the child counts the rays handed to the ray
 geometry (:func:`~azgym.localize.bearings.intersect_rays`, :func:`ray_misses`), a measure of
 the work that does not depend on the machine's load.
@@ -11,6 +12,7 @@ the work that does not depend on the machine's load.
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 
@@ -74,6 +76,10 @@ def feed():
         if attack == "random":  # beacon 4's id on three random azimuths a frame
             ids = np.append(ids, [victim] * 3)
             azimuth = np.append(azimuth, rng.uniform(-math.pi, math.pi, 3))
+        elif attack == "refine":  # once beacon 9 is repaired, its id on random azimuths too
+            if k >= 100:
+                ids = np.append(ids, [9] * 3)
+                azimuth = np.append(azimuth, rng.uniform(-math.pi, math.pi, 3))
         else:  # two never-seen map ids and 500 never-seen unknown ids a frame
             ids = np.concatenate((ids, 10_000 + 2 * k + np.arange(2),
                                   1_000_000 + 500 * k + np.arange(500)))
@@ -94,7 +100,10 @@ for motion, measurements in feed():
     count += 1
 print(json.dumps({"frames": count, "work": work[0], "most_runs": most_runs,
                   "most_rays": most_rays, "suspected": sorted(suspected),
-                  "repaired": sorted(r.beacon for r in tracker.repairs)}))
+                  "repaired": sorted(r.beacon for r in tracker.repairs),
+                  "placed": {b: list(r.new) for b, r in tracker.placed.items()},
+                  "truth": {b: scenario.beacon_positions[list(beacons.ids).index(b), :2].tolist()
+                            for b in tracker.placed}}))
 """
 
 
@@ -114,6 +123,14 @@ def test_a_suspect_whose_rays_never_meet_is_set_aside_cheaply_and_never_repaired
     assert found["most_rays"] <= MAX_RAYS
     # locating a suspect again is retried as its rays grow, not every frame over all of them:
     # a least squares over MAX_RAYS rays every frame would be over 1000 rays a frame
+    assert found["work"] <= 500 * found["frames"], found
+
+
+def test_random_azimuths_under_a_repaired_beacons_id_neither_move_it_nor_cost_unbounded():
+    found = attack("refine")
+    assert found["repaired"] == [9]  # the shipped scenario's beacon 9 did move
+    # refined from the rays that pass its placement, not carried off by the random ones
+    assert math.dist(found["placed"]["9"], found["truth"]["9"]) < 0.05, found
     assert found["work"] <= 500 * found["frames"], found
 
 

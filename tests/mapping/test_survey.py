@@ -8,11 +8,15 @@ import sys
 import numpy as np
 import pytest
 
+from azgym.core import Measurements
+from azgym.errors import InvalidInputError
 from azgym.localize.bearings import MIN_SPREAD, intersect_robustly, spread
-from azgym.mapping import Prior, Settings, simulated_drive, survey
-from azgym.mapping.graph import Graph, residuals
-from azgym.mapping.odometry import compose
-from azgym.mapping.survey import MIN_MOVE, _guess
+from azgym.mapping import Drive, Prior, Settings, SurveyFrame, simulated_drive, survey
+from azgym.mapping.first_guess import first_guess
+from azgym.mapping.graph import Graph, odometry_error, residuals
+from azgym.mapping.odometry import COVARIANCE_FLOOR, compose, relative_poses
+from azgym.mapping.survey import MAX_STRAIN, MIN_MOVE, _strain
+from azgym.sensing.motion import DifferentialOdometryModel, ImuSamples, Motion, OdometrySamples
 from azgym.site import load_scenario
 from azgym.world.drive import simulate
 
@@ -50,12 +54,78 @@ def test_bearing_factor_by_hand(pose: tuple[float, float, float], jacobian: list
     a, _ = factor.linearize(values).jacobian()
     np.testing.assert_allclose(a[0], jacobian, atol=1e-12)
     # azgym's residual (measured − predicted) is GTSAM's error with the other sign
-    graph = Graph(np.array([pose]), np.zeros((0, 2), np.int64), np.zeros((0, 3)),
-                  np.zeros((0, 3, 3)), np.zeros(0, np.int64), np.zeros((0, 3)),
-                  point[None], np.zeros(0, np.int64), np.array([[0, 0]]), np.array([measured]),
-                  np.array([1.0]))
+    graph = Graph(poses=np.array([pose]), links=np.zeros((0, 2), np.int64),
+                  moves=np.zeros((0, 3)), move_cov=np.zeros((0, 3, 3)),
+                  move_jac=np.zeros((0, 3, 2)), walks=np.zeros((0, 2)),
+                  sensor_std=np.ones(2), starts=np.zeros(0, np.int64),
+                  start_poses=np.zeros((0, 3)), beacons=point[None],
+                  anchors=np.zeros(0, np.int64), rows=np.array([[0, 0]]),
+                  azimuths=np.array([measured]), sigmas=np.array([1.0]))
     assert residuals(np.array([pose]), point[None], graph)[0] == \
         pytest.approx(measured - predicted, abs=1e-12)
+
+
+def test_odometry_factor_by_hand() -> None:
+    """Δ = move + J (b, k); the error is Δ⁻¹ first⁻¹ second in Δ's frame; its derivatives with
+    respect to the poses GTSAM's own between factor's for Δ, to (b, k) finite differences'."""
+    move = np.array([1.0, 0.0, 0.0])
+    jacobian = np.array([[0.0, 1.0], [0.0, 0.0], [-0.1, 0.0]])  # k scales x, b turns by -0.1 b
+    sensors = np.array([0.5, 0.1])  # Δ = (1.1, 0, -0.05)
+    first, second = gtsam.Pose2(0.0, 0.0, 0.0), gtsam.Pose2(1.0, 0.2, -0.05)
+    error, (d_first, d_second, d_sensors) = odometry_error(gtsam, first, second, sensors, move,
+                                                           jacobian)
+    # second in Δ's frame: (1 − 1.1, 0.2) turned by +0.05, no turn left (so Logmap is itself)
+    c, s = math.cos(0.05), math.sin(0.05)
+    np.testing.assert_allclose(error, [-0.1 * c - 0.2 * s, -0.1 * s + 0.2 * c, 0.0],
+                               atol=1e-12)
+    step = 1e-6
+    for n in range(2):
+        nudged = sensors + step * np.eye(2)[n]
+        ahead = odometry_error(gtsam, first, second, nudged, move, jacobian)[0]
+        # GTSAM's Pose2 chart derivatives are first-order in the turn (here 0.15 rad apart):
+        # its own between factor's differ from finite differences by as much
+        np.testing.assert_allclose((ahead - error) / step, d_sensors[:, n], atol=1e-4)
+    between = gtsam.BetweenFactorPose2(1, 2, gtsam.Pose2(1.1, 0.0, -0.05),
+                                       gtsam.noiseModel.Unit.Create(3))
+    values = gtsam.Values()
+    values.insert(1, first)
+    values.insert(2, second)
+    a, b = between.linearize(values).jacobian()
+    np.testing.assert_allclose(-b, error, atol=1e-12)
+    np.testing.assert_allclose(a, np.hstack([d_first, d_second]), atol=1e-12)
+
+
+def test_relative_pose_and_its_sensor_derivatives_by_hand() -> None:
+    """A differential drive (camera over the axle) at 1 m/s, not turning, for 0.1 s: the move is
+    (0.1, 0, 0); a bias b turns it by −0.1 b and, at the step's midpoint heading, moves it by
+    −0.5 · 0.1 · 0.1 b sideways; a scale error k lengthens it by 0.1 k; neither counted in its
+    covariance, whose heading variance is the turn-rate noise's σ² Σ hold² + the model's."""
+    times = np.arange(0.0, 0.1001, 0.01)
+    frames = []
+    for start, end in ((0, 1), (1, len(times))):
+        t = times[start:end]
+        odometry = OdometrySamples.turning(t, np.ones(t.size), np.zeros(t.size))
+        frames.append(SurveyFrame(float(t[-1]), Measurements([], []),
+                                  Motion(float(t[-1]), odometry, ImuSamples.none())))
+    settings = Settings(vehicle="differential-drive", camera_ahead=0.0)
+    found = relative_poses(Drive(tuple(frames), (0.0, 0.0, 0.0)), settings)
+    np.testing.assert_allclose(found.moves[0], [0.1, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(found.jacobians[0], [[0.0, 0.1], [-0.005, 0.0], [-0.1, 0.0]],
+                               atol=1e-12)
+    noise = settings.noise
+    heading = noise.turn_rate_noise**2 * 10 * 0.01**2 + noise.heading_walk**2 * 0.1
+    assert found.covariances[0, 2, 2] == pytest.approx(heading + COVARIANCE_FLOOR[2], rel=1e-9)
+    np.testing.assert_allclose(found.walks[0], [noise.bias_walk * math.sqrt(0.1),
+                                                noise.scale_walk * math.sqrt(0.1)], rtol=1e-9)
+
+
+def test_strain_is_the_agreeing_azimuths_mean_squared_residual_in_their_variance() -> None:
+    """Residuals of ±1 and ±1.5 σ average (1 + 2.25) / 2 = 1.625 times the variance: strained;
+    ±0.5 σ average 0.25: not; no agreeing azimuth: not."""
+    assert "average 1.62 times" in _strain(np.array([1.0, -1.0, 1.5, -1.5]))
+    assert _strain(np.array([0.5, -0.5])) == ""
+    assert _strain(np.zeros(0)) == ""
+    assert MAX_STRAIN == 1.0
 
 
 def test_spread_of_two_rays_is_their_angle() -> None:
@@ -81,7 +151,7 @@ def test_observability_threshold_and_the_covariance_along_the_rays() -> None:
         np.testing.assert_allclose(point, beacon, atol=1e-9)
     poses = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [1.0, 0.0, 0.0]])
     narrow = np.arctan2(0.0 - poses[:, 1], 20.0 - poses[:, 0]) + 0.001 * np.arange(3)
-    point, reason = _guess(poses, narrow)
+    point, reason = first_guess(poses, narrow)
     assert np.isnan(point).all() and "too narrow a baseline" in reason
 
 
@@ -114,6 +184,14 @@ def test_survey_recovers_a_known_map(aisle_loop: tuple) -> None:
     assert (sigma < 0.05).all() and (sigma > 0).all()
     assert survey(simulated_drive(frames, frames[0].pose), prior).xy.tobytes() == \
         result.xy.tobytes()  # deterministic
+
+
+def test_start_bias_is_checked() -> None:
+    with pytest.raises(InvalidInputError, match="start_bias must be a number >= 0"):
+        Settings(start_bias=-0.01)
+    assert Settings(start_bias=0.02).turn_rate_bias == 0.02
+    assert Settings(vehicle="differential-drive").turn_rate_bias == \
+        DifferentialOdometryModel().turn_rate_bias
 
 
 def test_huber_is_a_choice(aisle_loop: tuple) -> None:

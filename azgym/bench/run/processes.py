@@ -22,8 +22,8 @@ from azgym.bench.run.answers import death
 from azgym.bench.run.wire import STOP, MapData, ProtocolError, heard, write_all
 from azgym.profile import Profile
 
-__all__ = ["Worker", "build_verdict", "context", "default_workers", "poll", "start_fork_server",
-           "start_worker", "stop"]
+__all__ = ["Worker", "build_verdict", "caller_main_hidden", "context", "default_workers", "poll",
+           "start_fork_server", "start_worker", "stop"]
 
 PRELOAD = "azgym.bench.run.preload"
 
@@ -74,14 +74,14 @@ def start_worker(spec: str, params: dict[str, Any], profile: Profile | None,
                           args=(theirs, progress, answers, spec, params, profile, maps,
                                 os.getcwd()))
     started = time.monotonic()  # before start(): the worker may begin building at once
-    with _caller_main_hidden():
+    with caller_main_hidden():
         process.start()
     theirs.close()
     return Worker(process, mine, progress, answers, started=started)
 
 
 @contextlib.contextmanager
-def _caller_main_hidden() -> Iterator[None]:
+def caller_main_hidden() -> Iterator[None]:
     """Start workers without the caller's main script.
 
     multiprocessing re-runs the parent's ``__main__`` in a new process so that functions defined

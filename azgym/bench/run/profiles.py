@@ -5,8 +5,9 @@ A profile (:mod:`azgym.profile`) says what a camera and a vehicle are like. ``az
 
 - **to every contender**: each hyperparameter the profile gives becomes the contender's default
   (:func:`contender_params`), where its class takes a hyperparameter of that name; one its spec
-  writes wins. This runs where the contender's class is resolved, in its worker process: the
-  runner never imports a plug-in.
+  writes wins (:func:`~azgym.localize.registry.profile_params`: a mapper's the same). This runs
+  where the contender's class is resolved, in its worker process: the runner never imports a
+  plug-in.
 - **to a suite's simulator** (:class:`SimulatedNoise`): the camera's azimuth noise (eq. 1-3)
   and the odometry's and gyro's noise are drawn as the profile says, so a site's simulated
   figures can be set beside its real ones. A suite lists the fields its simulator takes
@@ -31,19 +32,18 @@ A differential drive's odometry takes the motion fields of the same names
 from __future__ import annotations
 
 import dataclasses
-import inspect
-from collections.abc import Callable, Collection
+from collections.abc import Collection
 from dataclasses import dataclass
 from typing import Any
 
-from azgym.localize.registry import parse_spec, resolve
-from azgym.profile import Profile, field_texts, profile_defaults, profile_toml
+from azgym.localize.registry import parse_spec, profile_params, resolve
+from azgym.profile import Profile, field_texts, profile_toml
 from azgym.sensing.motion import DifferentialOdometryModel, ImuModel, Motion, OdometryModel
 from azgym.site import Scenario
 from azgym.site.error_model import ErrorModel
 
 __all__ = ["AS_SHIPPED", "DIFFERENTIAL_MOTION_NOISE", "MOTION_NOISE", "SENSOR_NOISE",
-           "SimulatedNoise", "contender_params", "describe_profile", "hyperparameter_names"]
+           "SimulatedNoise", "contender_params", "describe_profile"]
 
 SENSOR_NOISE = ("sensor.delta_alpha_d", "sensor.coverage")
 """The profile fields a simulated camera's azimuth noise takes."""
@@ -54,19 +54,6 @@ DIFFERENTIAL_MOTION_NOISE = ("motion.speed_factor", "motion.speed_scale", "motio
                              "motion.turn_rate_noise", "motion.bias_walk")
 """The profile fields a differential drive's simulated odometry takes
 (:meth:`SimulatedNoise.differential_odometry`)."""
-
-
-def hyperparameter_names(factory: Callable[..., Any]) -> tuple[str, ...]:
-    """The hyperparameters a factory takes: its keyword-only arguments (a class's ``__init__``'s).
-
-    A factory whose signature cannot be read takes none that a profile could set.
-    """
-    try:
-        signature = inspect.signature(factory)
-    except (TypeError, ValueError):
-        return ()
-    return tuple(name for name, parameter in signature.parameters.items()
-                 if parameter.kind is parameter.KEYWORD_ONLY)
 
 
 def contender_params(spec: str, params: dict[str, Any], profile: Profile | None
@@ -86,8 +73,7 @@ def contender_params(spec: str, params: dict[str, Any], profile: Profile | None
     if profile is None or profile.empty:
         return params
     target, inline = parse_spec(spec)
-    accepted = hyperparameter_names(resolve(target))
-    return {**profile_defaults(accepted, profile, {**inline, **params}), **params}
+    return {**profile_params(resolve(target), {**inline, **params}, profile), **params}
 
 
 def describe_profile(profile: Profile, simulated: Collection[str] | None = None) -> str:

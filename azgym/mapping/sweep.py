@@ -1,0 +1,130 @@
+"""The drives solved frame by frame (GTSAM's iSAM2): the batch solve's first guess.
+
+Dead reckoning drifts without bound, and the batch solve (:mod:`azgym.mapping.graph`) started
+from it falls into a wrong minimum; :class:`Sweep` keeps every pose and beacon near where the
+azimuths put them as it goes. It shares the batch graph's factors.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from azgym.core import FloatArray
+from azgym.errors import InvalidInputError, require
+from azgym.mapping.graph import (
+    ANCHOR_STD,
+    START_STD,
+    Graph,
+    _beacon_key,
+    _bearing,
+    _between,
+    _loss,
+    _pose_key,
+)
+from azgym.mapping.problem import Settings
+
+__all__ = ["GUESS_STD", "PLACED_STD", "Sweep"]
+
+PLACED_STD = (0.5, 0.5, math.radians(5.0))
+"""Standard deviations of the first pose of a drive without a known start, where the anchors it
+observes placed it (:class:`Sweep`'s first guess only)."""
+GUESS_STD = 10.0
+"""Standard deviation of a weak prior holding each beacon the sweep places at its first guess
+[m]: with the azimuths behind a robust loss, a beacon whose rays the loss then sets aside would
+leave the sweep's system indeterminate."""
+
+
+class Sweep:
+    """The drives solved as they go (GTSAM's iSAM2): the batch solve's first guess.
+
+    Dead reckoning drifts without bound (a differential drive's turn-rate bias turns it by
+    degrees a second), and the batch solve started from it falls into a wrong minimum. Solved
+    frame by frame instead, each new pose starts from the latest estimate of the one before,
+    and a beacon joins once its rays from the estimated poses place it (the caller's rule),
+    so that neither ever starts far from where the azimuths put it.
+
+    ``graph`` holds the links, moves and start priors (its beacons and detections are not
+    read); the caller adds beacons (:meth:`place`), detections (:meth:`observe`) and frames
+    (:meth:`extend`), then :meth:`update` folds them in.
+    """
+
+    def __init__(self, graph: Graph, settings: Settings, anchors: dict[int, FloatArray]) -> None:
+        require("gtsam", "mapping")
+        import gtsam
+
+        self.gtsam, self.graph = gtsam, graph
+        self.loss = _loss(gtsam, settings)
+        self.isam = gtsam.ISAM2(gtsam.ISAM2Params())
+        self.factors, self.values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+        self.poses = graph.poses.copy()
+        self.count = 0
+        self.placed: set[int] = set()
+        self.next_link = {int(i): k for k, (i, _) in enumerate(graph.links.tolist())}
+        self.start = dict(zip(graph.starts.tolist(), graph.start_poses, strict=True))
+        anchor_noise = gtsam.noiseModel.Isotropic.Sigma(2, ANCHOR_STD)
+        for b, xy in anchors.items():
+            self.place(b, xy)
+            self.factors.add(gtsam.PriorFactorPoint2(_beacon_key(gtsam, b), gtsam.Point2(*xy),
+                                                     anchor_noise))
+
+    def extend(self, count: int) -> None:
+        """Add the poses up to (not including) ``count``, each from the one before."""
+        gtsam = self.gtsam
+        for k in range(self.count, count):
+            if k in self.start or k - 1 not in self.next_link:
+                # a drive's first pose: its known start, else where it was placed (loosely)
+                self.poses[k] = self.start.get(k, self.poses[k])
+                self.factors.add(gtsam.PriorFactorPose2(
+                    _pose_key(gtsam, k), gtsam.Pose2(*self.poses[k]),
+                    gtsam.noiseModel.Diagonal.Sigmas(np.array(
+                        START_STD if k in self.start else PLACED_STD))))
+            else:
+                link = self.next_link[k - 1]
+                pose = gtsam.Pose2(*self.poses[k - 1]).compose(
+                    gtsam.Pose2(*self.graph.moves[link]))
+                self.poses[k] = (pose.x(), pose.y(), pose.theta())
+                self.factors.add(_between(gtsam, self.graph, link, k - 1, k))
+            self.values.insert(_pose_key(gtsam, k), gtsam.Pose2(*self.poses[k]))
+        self.count = max(self.count, count)
+
+    def place(self, beacon: int, xy: FloatArray) -> None:
+        """Add beacon ``beacon`` at ``xy`` (held there by :data:`GUESS_STD`)."""
+        gtsam = self.gtsam
+        self.values.insert(_beacon_key(gtsam, beacon), gtsam.Point2(*xy))
+        self.factors.add(gtsam.PriorFactorPoint2(_beacon_key(gtsam, beacon), gtsam.Point2(*xy),
+                                                 gtsam.noiseModel.Isotropic.Sigma(2, GUESS_STD)))
+        self.placed.add(beacon)
+
+    def observe(self, pose: int, beacon: int, azimuth: float, sigma: float) -> None:
+        """Add a detection of a placed beacon."""
+        self.factors.add(_bearing(self.gtsam, self.loss, pose, beacon, azimuth, sigma))
+
+    def update(self) -> None:
+        """Fold the new frames, beacons and detections in; the latest pose's estimate read.
+
+        The others keep their first guesses (from an estimate a few frames back) until
+        :meth:`estimate`.
+
+        Raises:
+            InvalidInputError: GTSAM found the system indeterminate (its message quoted).
+        """
+        try:
+            self.isam.update(self.factors, self.values)
+        except RuntimeError as error:
+            raise InvalidInputError(
+                "the survey's frame-by-frame solve is indeterminate: "
+                + " ".join(str(error).split())) from None
+        self.factors, self.values = self.gtsam.NonlinearFactorGraph(), self.gtsam.Values()
+        if self.count:  # the latest pose, which the next ones start from
+            pose = self.isam.calculateEstimatePose2(_pose_key(self.gtsam, self.count - 1))
+            self.poses[self.count - 1] = (pose.x(), pose.y(), pose.theta())
+
+    def estimate(self) -> FloatArray:
+        """Every pose's current estimate (those not yet added: their first guess)."""
+        result = self.isam.calculateEstimate()
+        for k in range(self.count):
+            pose = result.atPose2(_pose_key(self.gtsam, k))
+            self.poses[k] = (pose.x(), pose.y(), pose.theta())
+        return self.poses
