@@ -1,9 +1,10 @@
 """Each command's output names are one list, its writer's, and the command claims that list.
 
-For every command that writes into ``--out`` (but ``bench``): a small run writes exactly the
-names its writer exports (every file written is one of them, every name is written), and the
-command, given a folder holding any one of those files, refuses it by name without
-``--overwrite``: no file a run writes is left unprotected by the claim.
+For every command that writes into ``--out`` (but ``bench`` on a suite or a log; ``bench
+mapping`` is here): a small run writes exactly the names its writer exports (every file written
+is one of them, every name is written), and the command, given a folder holding any one of those
+files, refuses it by name without ``--overwrite``: no file a run writes is left unprotected by
+the claim.
 """
 
 from __future__ import annotations
@@ -137,3 +138,18 @@ def test_train_navigator(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(train, "run", no_training)
     each_one_refused(["train", "navigator", "--env", NAVIGATE, "--algo", "ppo", "--steps", "1"],
                      written, tmp_path, capsys)
+
+
+def test_bench_mapping(tmp_path, capsys, monkeypatch):
+    # The run is the invented one (no mapper runs): what is written is the command's writing.
+    from mapping_files import hand_result
+
+    import azgym.bench.mapping.benchmark as benchmark
+    from azgym.bench.mapping.report import MAPPING_FILES
+
+    monkeypatch.setattr(benchmark, "run_mapping", lambda *_args, **_kwargs: hand_result())
+    argv = ["bench", "mapping", "--quick", "--workers", "1"]
+    run_command(argv)(tmp_path / "run")
+    written = files_in(tmp_path / "run")
+    exactly_covered(written, MAPPING_FILES)
+    each_one_refused(argv, written, tmp_path, capsys)

@@ -1,12 +1,15 @@
-"""``azgym bench``: score localizers on a frame suite, a navigation suite or a log.
+"""``azgym bench``: score localizers on a frame suite, a navigation suite or a log; mappers.
 
-One command, three runners, chosen by what is named: a frame suite (``--suite``, by default
+One command, four runners, chosen by what is named: a frame suite (``--suite``, by default
 :data:`DEFAULT_SUITE` in its quick size) through :func:`~azgym.bench.run.runner.run_benchmark`;
 a navigation suite (:mod:`azgym.bench.navigation.suites`), run like a frame suite —
 ``--localizer``, ``--with-builtins``, ``--split``, ``--quick``, ``--workers``, ``--out`` mean the
-same — with ``--navigator`` naming who drives; or a log of bearing data (``--data DIR``,
-docs/logs.md), scored as a suite is. Which runner takes which of the options that are not
-everyone's is one table (:data:`RUNNERS`), checked by :func:`check_options`. Who runs is the
+same — with ``--navigator`` naming who drives; a log of bearing data (``--data DIR``,
+docs/logs.md), scored as a suite is; or, as ``azgym bench mapping``, the mapping suite's
+mappers (``--mapper``, :func:`~azgym.bench.mapping.benchmark.run_mapping`), where ``--quick``,
+``--time-limit``, ``--workers``, ``--out`` and ``--overwrite`` mean the same, before or after
+``mapping``. Which runner takes which of the options that are not everyone's is one table
+(:data:`RUNNERS`), checked by :func:`check_options`. Who runs is the
 library's one rule (:func:`~azgym.bench.run.contenders.resolve_contenders`); each runner's result
 writes its own files.
 """
@@ -14,6 +17,7 @@ writes its own files.
 from __future__ import annotations
 
 import argparse
+import textwrap
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -93,8 +97,11 @@ RUNNERS = {
         "the loop that drives the forklift: it takes no {either}"),
     "data": Runner("a log (--data)", frozenset({"--time-limit", "--profile"}),
                    "--data scores a log in local worker processes: it takes no {either}"),
+    "mapping": Runner("azgym bench mapping", frozenset({"--quick", "--time-limit"}),
+                      "it runs the mapping suite's dev split (its routes are public) with each "
+                      "mapper's own defaults, in local worker processes: it takes no {either}"),
 }
-"""``azgym bench``'s runners: a frame suite, a navigation suite and a log (``--data``)."""
+"""``azgym bench``'s runners: a frame suite, a navigation suite, a log, the mapping suite."""
 
 
 def check_options(runner: str, args: argparse.Namespace) -> None:
@@ -164,9 +171,38 @@ def add_bench(commands: argparse._SubParsersAction) -> None:
                             "run, data-LOG for a log)")
     add_overwrite(bench, "a previous run's results in --out")
     bench.set_defaults(handler=_bench)
+    _add_mapping(bench.add_subparsers(
+        dest="runner", metavar="mapping", help="mapping: score mappers on the mapping suite "
+        "instead (azgym bench mapping --help); without it, localizers on --suite or --data"))
+
+
+def _add_mapping(runners: argparse._SubParsersAction) -> None:
+    """``azgym bench mapping``; the options it shares with bench default to bench's (SUPPRESS)."""
+    from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+    from azgym.mapping.registry import DEFAULT_MAPPERS
+
+    mapping = runners.add_parser("mapping", help="score mappers (beacon maps surveyed and "
+                                 "repaired from a drive) on the mapping suite",
+                                 argument_default=argparse.SUPPRESS)
+    mapping.add_argument("--mapper", action="append", metavar="SPEC",
+                         help="a mapper: NAME, package.module:Class or path/file.py:Class, then "
+                              "optionally :NAME=VALUE,... hyperparameters; repeatable (default: "
+                              f"the built-ins: {', '.join(DEFAULT_MAPPERS)})")
+    mapping.add_argument("--quick", action="store_true",
+                         help="the suite's small version: one route per perturbation")
+    mapping.add_argument("--time-limit", type=seconds_option, metavar="SECONDS",
+                         help="time a mapper may take on one survey of a drive; a call over it "
+                              f"is a failure (default: {DEFAULT_TIME_LIMIT:g})")
+    mapping.add_argument("--workers", type=workers_option, help="processes (0: one per core)")
+    mapping.add_argument("--out", type=out_folder, metavar="DIR",
+                         help=f"output folder (default: {DEFAULT_OUT}/mapping, mapping-quick "
+                              "for a quick run)")
+    add_overwrite(mapping, "a previous run's mapping.json in --out")
+    mapping.set_defaults(handler=_bench_mapping)
 
 
 def _bench(args: argparse.Namespace) -> int:
+    from azgym.bench.mapping.suites import MAPPING_SUITES
     from azgym.bench.navigation.suites import NAVIGATION_SUITES
     from azgym.bench.report.table import run_report
     from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
@@ -184,6 +220,9 @@ def _bench(args: argparse.Namespace) -> int:
         return _bench_data(args, progress_printer(), profile)
     if runner == "navigation":
         return _bench_navigation(args, progress_printer())
+    if args.suite in MAPPING_SUITES:
+        raise InvalidInputError(f"--suite {args.suite}: a mapping suite scores mappers: run "
+                                "azgym bench mapping [--mapper SPEC ...]")
     if args.suite is not None and args.suite not in SUITES:
         raise unknown_name("suite", args.suite, [*SUITES, *NAVIGATION_SUITES])
     # With no suite named, the default suite runs in its quick size: the README's main job.
@@ -299,6 +338,53 @@ def _bench_navigation(args: argparse.Namespace, progress: Progress) -> int:
           f"{record['episodes']} episodes each; {time.perf_counter() - started:.1f} s; "
           f"wrote {path}")
     return 0
+
+
+def _bench_mapping(args: argparse.Namespace) -> int:
+    """``azgym bench mapping``: every mapper on the mapping suite; its table, ``mapping.json``."""
+    from azgym.bench.mapping import report
+    from azgym.bench.mapping.benchmark import run_mapping
+    from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
+    from azgym.mapping.registry import DEFAULT_MAPPERS
+
+    check_backend(args)
+    check_options("mapping", args)
+    for option, given in (("--data", args.data is not None), ("--localizer", args.localizer),
+                          ("--with-builtins", args.with_builtins)):
+        if given:
+            raise InvalidInputError(f"{option} is not for azgym bench mapping: it scores "
+                                    "mappers, named by --mapper")
+    mappers = list(dict.fromkeys(getattr(args, "mapper", None) or DEFAULT_MAPPERS))
+    _check_mappers(mappers)
+    time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
+    out = _claim(args, report.MAPPING_FILES, f"{report.SUITE}{'-quick' if args.quick else ''}")
+    started = time.perf_counter()
+    result = _interruptible(lambda: run_mapping(
+        report.SUITE, mappers, quick=args.quick, workers=resolve_workers(args),
+        time_limit=time_limit, progress=progress_printer()))
+    path = report.write_mapping(result, out)
+    print("\n".join(["", report.score_table(result.summaries.values()), "",
+                     *textwrap.wrap(report.LEGEND, 100)]))
+    print(f"\n{result.suite} v{result.version}, dev split (seed {result.seed}), "
+          f"{len(result.cases)} cases{', quick' if result.quick else ''}; "
+          f"{time.perf_counter() - started:.1f} s; wrote {path}")
+    return 0
+
+
+def _check_mappers(specs: list[str]) -> None:
+    """Refuse an unreadable spec, an unknown name or a built-in's bad hyperparameter now.
+
+    A built-in is built here (azgym's code); a plug-in is built where the run builds it.
+    """
+    from azgym.mapping.registry import MAPPERS, make_mapper
+    from azgym.registry import split_spec
+
+    for spec in specs:
+        target, _ = split_spec(spec, "mapper")
+        if target in MAPPERS.names(plugins=False):
+            make_mapper(spec)
+        elif ":" not in target:
+            MAPPERS.check_name(target)
 
 
 def _say_figures_skipped() -> None:

@@ -1,7 +1,7 @@
 """``azgym leaderboard submit|build|verify``: make, publish and check leaderboard entries.
 
 ``submit`` makes an entry from an ``azgym bench`` output folder, ``build`` writes the board,
-``verify`` reruns an entry (or a navigation results file) and compares its figures.
+``verify`` reruns an entry (or a navigation or mapping results file) and compares its figures.
 
 Without ``--entries``, ``submit`` and ``build`` use the board of the folder they are run in or of
 the nearest folder above it (``leaderboard/entries/``, as in azgym's repository), and say which;
@@ -60,14 +60,17 @@ def add_leaderboard(commands: argparse._SubParsersAction) -> None:
     build.add_argument("--navigation", metavar="DIR",
                        help="navigation results files (default: navigation/ beside --entries, "
                             "if there is one)")
+    build.add_argument("--mapping", metavar="DIR",
+                       help="mapping results files (default: mapping/ beside --entries, if "
+                            "there is one)")
     build.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
     add_overwrite(build, "a README.md or index.html in --out that is no azgym board")
     build.add_argument("--skip-unavailable", action="store_true",
                        help="leave entries whose dataset is not found off the board (listed "
                             "as unchecked) instead of refusing to build")
     verify = actions.add_parser("verify", help="rerun an entry and compare its figures")
-    verify.add_argument("entry", help="path of the entry's .json, or of a navigation results "
-                                      "file")
+    verify.add_argument("entry", help="path of the entry's .json, or of a navigation or "
+                                      "mapping results file")
     verify.add_argument("--workers", type=workers_option, default=1,
                         help="processes (0: one per core; default: 1)")
     verify.add_argument("--datasets", metavar="DIR", help=DATASETS_HELP)
@@ -77,6 +80,8 @@ def add_leaderboard(commands: argparse._SubParsersAction) -> None:
 def _leaderboard(args: argparse.Namespace) -> int:
     from azgym.bench.leaderboard import board
     from azgym.bench.leaderboard import entries as leaderboard
+    from azgym.bench.mapping.board import verify_mapping
+    from azgym.bench.mapping.results_file import is_mapping_file
     from azgym.bench.navigation.board import verify_navigation
     from azgym.bench.navigation.results_file import is_navigation_file
     from azgym.localize.registry import is_builtin
@@ -94,15 +99,22 @@ def _leaderboard(args: argparse.Namespace) -> int:
         entries = _entries(args.entries)
         out = Path(args.out) if args.out is not None else entries.parent
         board.claim_board_folder(out, args.overwrite)
-        for path in board.build(entries, out, _navigation_dir(args.navigation, entries),
+        for path in board.build(entries, out, _results_dir(args.navigation, entries,
+                                                           "navigation"),
                                 datasets=_datasets(args),
                                 skip_unavailable=args.skip_unavailable,
-                                progress=progress_printer()):
+                                progress=progress_printer(),
+                                mapping_dir=_results_dir(args.mapping, entries, "mapping")):
             print(f"wrote {path}")
         from azgym.site.drawing import figures_skipped
 
         if (skipped := figures_skipped(["the tables' error CDFs"])) is not None:
             print(skipped)
+    elif is_mapping_file(Path(args.entry)):
+        print(f"{args.entry}: rerunning its mappers (azgym's own) on its cases", flush=True)
+        differences = verify_mapping(Path(args.entry), workers=resolve_workers(args),
+                                     progress=progress_printer())
+        return _verdict(args.entry, differences)
     elif is_navigation_file(Path(args.entry)):
         print(f"{args.entry}: rerunning its navigators and localizers (azgym's own)", flush=True)
         differences = verify_navigation(Path(args.entry), workers=resolve_workers(args))
@@ -188,13 +200,16 @@ def _verdict(entry: str, differences: dict[str, tuple[Any, Any]],
     return 0
 
 
-def _navigation_dir(named: str | None, entries: Path) -> Path | None:
-    """The navigation results folder: the one named (it must exist), else any beside entries."""
+def _results_dir(named: str | None, entries: Path, option: str) -> Path | None:
+    """A results folder (``--navigation``, ``--mapping``): the one named, which must exist.
+
+    Not named: the folder of the option's name beside the entries, if there is one.
+    """
     from azgym.bench.leaderboard.entry_files import LeaderboardError
 
     if named is None:
-        beside = entries.parent / "navigation"
+        beside = entries.parent / option
         return beside if beside.is_dir() else None
     if not Path(named).is_dir():
-        raise LeaderboardError(f"--navigation {named}: no such folder")
+        raise LeaderboardError(f"--{option} {named}: no such folder")
     return Path(named)

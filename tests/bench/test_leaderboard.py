@@ -360,12 +360,12 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
     if chromium is None:
         pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run installs it)")
     page = L.Path(__file__).parents[2] / "leaderboard" / "index.html"
-    # a frame table sorts by its p75, a navigation table by its SPL
+    # a frame table sorts by its p75, a navigation table by its SPL, a mapping one by its p95
     probe = """<script>
       var result = [];
       document.querySelectorAll("table.board").forEach(function (table) {
         var header = Array.prototype.find.call(table.tHead.rows[0].cells, function (cell) {
-          return cell.textContent === "p75 cm" || cell.textContent === "SPL"; });
+          return ["p75 cm", "SPL", "p95 cm"].indexOf(cell.textContent) >= 0; });
         var column = header.cellIndex;
         function p75() {
           return Array.prototype.map.call(table.tBodies[0].rows,
@@ -394,7 +394,7 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
     datasets = sorted(name for name in logs if logs[name]) + \
         sorted(name for name in logs if not logs[name])
     assert [table for table, _, _ in tables] == [f"board-{suite}" for suite in L.SUITES] + [
-        f"board-data-{name}" for name in datasets] + navigation
+        f"board-data-{name}" for name in datasets] + navigation + ["board-mapping-full"]
     for table, up, down in tables:
         values = [math.inf if cell == "∞" else float(cell) for cell in up.split(";")]
         assert values == sorted(values), table
@@ -415,7 +415,7 @@ def test_the_committed_reference_entries_are_sound_and_the_board_is_up_to_date(t
     shipped = "warehouse-small-simulated"  # the shipped log: its odometry and IMU drive trackers
     assert {e["name"].removesuffix(f"-data-{shipped}") for e in entries
             if e["suite"] == f"data:{shipped}"} == builtins | trackers
-    readme, _ = B.build(root / "entries", tmp_path, NAVIGATION)
+    readme, _ = B.build(root / "entries", tmp_path, NAVIGATION, mapping_dir=root / "mapping")
     assert readme.read_text() == (root / "README.md").read_text(), \
         "leaderboard/README.md is stale: run python baselines/leaderboard_entries.py"
 

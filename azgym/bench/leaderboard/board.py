@@ -1,10 +1,10 @@
 """The published board: ranked Markdown tables (``leaderboard/README.md``) and a sortable page.
 
 The board has parts: the suites' tables and the simulated logs', then the real data's (logs of
-real sensors, :data:`REAL_PART`), then the navigation suites'. The page is drawn by
-:mod:`azgym.bench.leaderboard.board_page`. A suite of driven routes adds track columns
-(:data:`TRACK_COLUMNS`: the track figures and the drift) after the accuracy ones, and one with
-events (an outage, a kidnapping) the worst recovery (:data:`RECOVERY_COLUMN`).
+real sensors, :data:`REAL_PART`), then the navigation suites', then the mapping suites'. The
+page is drawn by :mod:`azgym.bench.leaderboard.board_page`. A suite of driven routes adds track
+columns (:data:`TRACK_COLUMNS`: the track figures and the drift) after the accuracy ones, and
+one with events (an outage, a kidnapping) the worst recovery (:data:`RECOVERY_COLUMN`).
 
 Everything an entry's submitter wrote (name, version, authors, link) is escaped where it is
 shown: in Markdown, ``|``, backslashes, line breaks and HTML cannot forge a row or a tag; on the
@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-from azgym.bench.leaderboard.board_page import NAME_COLUMN, Section, cdf_png, page
+from azgym.bench.leaderboard.board_page import NAME_COLUMN, Section, Table, cdf_png, page
 from azgym.bench.leaderboard.entries import (
     DatasetUnavailable,
     LeaderboardError,
@@ -26,6 +26,7 @@ from azgym.bench.leaderboard.entries import (
     table_key,
 )
 from azgym.bench.leaderboard.entry_files import Entry
+from azgym.bench.mapping.report import MAPPING_NOTE, MAPPING_PART
 from azgym.bench.report.table import LEGEND, RANK_BY, rank_key
 from azgym.bench.report.tracking import (
     KIDNAP_WINDOW_S,
@@ -202,13 +203,13 @@ def _header(entries: list[Entry]) -> tuple[list[str], int]:
 
 def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
           datasets: Path | None = None, skip_unavailable: bool = False,
-          progress: Progress | None = None) -> list[Path]:
+          progress: Progress | None = None, mapping_dir: Path | None = None) -> list[Path]:
     """Write the board: README.md (tables) and index.html (sortable, self-contained).
 
     Each suite has one table per split and size (:data:`KINDS`); only the dev split's full size is
     the suite's ranking. Each dataset (a log, ``data:NAME``) has one table: a simulated log's after
-    the suites', a real one's in the part headed :data:`REAL_PART`. The navigation suites' tables
-    follow, from the results files in ``navigation_dir`` (:mod:`azgym.bench.navigation.board`).
+    the suites', a real one's in the part headed :data:`REAL_PART`. The navigation and mapping
+    suites' tables follow, from their results files (``azgym.bench.{navigation,mapping}.board``).
 
     Args:
         entries_dir: The entries.
@@ -219,6 +220,7 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
         skip_unavailable: Leave dataset entries whose log is not found off the board (listed
             as unchecked) instead of refusing to build.
         progress: Hears the entries checked, then the board's parts drawn.
+        mapping_dir: The mapping results files (None: no mapping section).
 
     Raises:
         LeaderboardError: The entries folder is missing or holds no entry (a typo must not
@@ -246,12 +248,18 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
             _unchecked_note(unavailable)
         count(len(SUITES) + 2)
         if navigation_dir is not None:
-            lines += _navigation_section(navigation_dir, sections)
+            from azgym.bench.navigation.board import navigation_tables
+            lines += _part(NAVIGATION_PART, NAVIGATION_NOTE, navigation_tables(navigation_dir),
+                           sections)
+        if mapping_dir is not None:
+            from azgym.bench.mapping.board import mapping_tables
+            lines += _part(MAPPING_PART, MAPPING_NOTE, mapping_tables(mapping_dir), sections)
         count(len(SUITES) + 3)
     prepare_folder(out_dir)
     readme = write_file(out_dir / "README.md", "\n".join(lines))
     text = page(sections, len(loaded), [f"Columns: {BOARD_LEGEND}", TRACKS_NOTE],
-                {REAL_PART: REAL_NOTE, NAVIGATION_PART: NAVIGATION_NOTE})
+                {REAL_PART: REAL_NOTE, NAVIGATION_PART: NAVIGATION_NOTE,
+                 MAPPING_PART: MAPPING_NOTE})
     return [readme, write_file(out_dir / "index.html", text)]
 
 
@@ -356,20 +364,18 @@ def _unchecked_note(unavailable: list[DatasetUnavailable]) -> list[str]:
     return [f"Not shown, because their datasets were not available to check them: {names}.", ""]
 
 
-def _navigation_section(directory: Path, sections: list[Section]) -> list[str]:
-    """The navigation tables' Markdown lines; their page sections are added to ``sections``."""
-    from azgym.bench.navigation.board import navigation_tables
-
-    lines = [f"# {NAVIGATION_PART}", "", NAVIGATION_NOTE, ""]
+def _part(heading: str, note: str, tables: list[Table], sections: list[Section]) -> list[str]:
+    """A part of tables of no entries (navigation, mapping): its lines, its sections added."""
+    lines = [f"# {heading}", "", note, ""]
     previous = None
-    for suite, description, title, table_id, header, rows in navigation_tables(directory):
+    for suite, description, title, table_id, header, rows in tables:
         if suite != previous:
             lines += [f"## {suite} — {description}", ""]
             previous = suite
         lines += [f"### {title}", "", "| " + " | ".join(header) + " |",
                   "|" + "---|" * len(header),
                   *("| " + " | ".join(map(markdown_cell, row)) + " |" for row in rows), ""]
-        sections.append((NAVIGATION_PART, suite, description, title, table_id, header, rows,
+        sections.append((heading, suite, description, title, table_id, header, rows,
                          [None] * len(rows), None))
     return lines
 

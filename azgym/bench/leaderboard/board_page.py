@@ -21,7 +21,7 @@ from azgym.bench.leaderboard.entry_files import Entry
 from azgym.bench.report.plots import draw_error_cdfs
 from azgym.site.drawing import figures_skipped
 
-__all__ = ["NAME_COLUMN", "Section", "cdf_png", "page"]
+__all__ = ["NAME_COLUMN", "Section", "Table", "cdf_png", "page"]
 
 NAME_COLUMN = 1
 """The column of the entry's name, which links to its web link."""
@@ -87,6 +87,9 @@ Section = tuple[str, str, str, str, str, list[str], list[list[str]], list[str | 
                 str | None]
 """A table of the page: the board's part it is in ("" before the first: the suites'), suite, its
 description, the table's title and id, its column names, rows, each row's link, the CDF image."""
+Table = tuple[str, str, str, str, list[str], list[list[str]]]
+"""A table of a part that shows no entries (navigation, mapping): suite, its description, the
+table's title and id, its column names and rows."""
 
 
 def page(sections: list[Section], count: int, intro: list[str],

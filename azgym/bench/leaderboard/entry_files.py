@@ -30,6 +30,7 @@ from azgym.bench.report.results import (
 from azgym.bench.report.summary import ContenderMetrics, Dataset, RunIdentity
 from azgym.bench.run.outcome import Outcome, RunOutcome
 from azgym.errors import LeaderboardError
+from azgym.untrusted import read_regular_file
 
 if TYPE_CHECKING:
     from azgym.bench.suites import Case
@@ -98,17 +99,12 @@ def _refuse_constant(name: str) -> Any:
 
 
 def read_bytes(path: Path, limit: int, what: str) -> bytes:
-    """A file's bytes, refused when missing, unreadable or larger than ``limit``."""
-    try:
-        with path.open("rb") as handle:
-            data = handle.read(limit + 1)
-    except FileNotFoundError:
-        raise LeaderboardError(f"{path}: no such {what}") from None
-    except OSError as exc:
-        raise LeaderboardError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
-    if len(data) > limit:
-        raise LeaderboardError(f"{path}: the {what} is larger than {limit // 2**20} MiB")
-    return data
+    """A file's bytes (:func:`azgym.untrusted.read_regular_file`).
+
+    Refused when missing, not a regular file (a FIFO is refused, never waited on), unreadable or
+    larger than ``limit``.
+    """
+    return read_regular_file(path, limit, what, LeaderboardError)
 
 
 def read_json(path: Path, what: str, allow_nan: bool = False) -> Any:
