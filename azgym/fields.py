@@ -156,7 +156,10 @@ class Number:
         """``value`` as a float; ``fail(problem)`` is raised unless it satisfies this rule."""
         problem = self.problem(value)
         if problem is None and isinstance(value, numbers.Real):  # the rule checked the type
-            return float(value)
+            try:
+                return float(value)
+            except OverflowError:  # an int of hundreds of digits, which no bound stopped
+                problem = f"must be a number within a float's range, got {shown(value)}"
         raise fail(str(problem))
 
     def as_int(self, value: object, fail: Callable[[str], Exception]) -> int:

@@ -12,7 +12,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from azgym.bench.mapping.results_file import case_names
 from azgym.bench.mapping.scoring import (
     BeaconScore,
     CaseScore,
@@ -20,7 +19,7 @@ from azgym.bench.mapping.scoring import (
     MovedScore,
     summarize,
 )
-from azgym.bench.mapping.suites import MAPPING_SUITES
+from azgym.bench.mapping.suites import MAPPING_SUITES, case_names
 
 FRAMES = 12
 """Frames of each invented case."""

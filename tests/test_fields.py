@@ -137,3 +137,9 @@ def test_an_argument_is_worded_after_its_name_without_a_colon():
     assert type(Number(1, integer=True).as_int(np.int64(3), workers)) is int
     assert type(Number().as_float(np.float32(0.5), workers)) is float
     assert type(Fields().integer(np.int16(7), "version", 1, 9)) is int
+
+
+def test_a_huge_integer_is_refused_when_made_a_float_not_overflowing() -> None:
+    with pytest.raises(ValueError, match="must be a number within a float's range, got 10000"):
+        Number(0.0).as_float(10**400, ValueError)
+    assert Number(0.0).as_float(10**300, ValueError) == 1e300

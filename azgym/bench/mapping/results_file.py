@@ -47,17 +47,11 @@ from azgym.bench.mapping.scoring import (
     MovedScore,
     summarize,
 )
-from azgym.bench.mapping.suites import (
-    MAPPING_SUITES,
-    PERTURBATIONS,
-    RACK,
-    SCENARIOS,
-)
+from azgym.bench.mapping.suites import MAPPING_SUITES, case_names
 from azgym.errors import AzgymError
 
 __all__ = ["CASE_CHECKS", "MAX_BEACONS", "MAX_FRAMES", "MAX_MAPPERS", "MAX_TIME_LIMIT",
-           "MappingFile",
-           "case_names", "is_mapping_file", "load_mapping"]
+           "MappingFile", "is_mapping_file", "load_mapping"]
 
 MAX_MAPPERS = 16
 """At most this many mappers in a file (the built-ins are 4): a rerun surveys every case for
@@ -178,26 +172,6 @@ def _check_suite(data: dict[str, Any], path: Path) -> list[str]:
         raise LeaderboardError(f"{path}: cases must be the {suite.name} suite's "
                                f"{'quick' if data['quick'] else 'full'} cases, in order: "
                                f"{', '.join(names)}")
-    return names
-
-
-def case_names(quick: bool) -> list[str]:
-    """The mapping suite's cases by name, in the order it draws them, without drawing them.
-
-    The selection of :func:`azgym.bench.mapping.suites.build`: each scenario's routes (the
-    robot's wandering ones), each under every perturbation its site allows (``rack`` where it
-    has racks); the first scenario's first route alone in the quick size.
-    """
-    from azgym.bench.suites import robot
-    from azgym.site import load_scenario
-
-    names = []
-    for name in SCENARIOS[:1] if quick else SCENARIOS:
-        scenario = load_scenario(name)
-        routes = [r.name for r in scenario.routes
-                  if name != robot.SCENARIO or r.name in robot.ROUTES]
-        names += [f"{name}/{route}/{perturbation}" for route in (routes[:1] if quick else routes)
-                  for perturbation in PERTURBATIONS if perturbation != RACK or scenario.racks]
     return names
 
 

@@ -23,7 +23,7 @@ route suites (:data:`~azgym.bench.suites.base.NO_TEST_SPLIT`).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,7 +46,8 @@ from azgym.site.elements import Route
 from azgym.world.drive import Frame, motion_models, simulate
 
 __all__ = ["MAPPING_SUITES", "MOVED_COUNT", "PERTURBATIONS", "RACK", "SCENARIOS", "UNCHANGED",
-           "UNKNOWN", "CaseTruth", "MappingCase", "MappingSuite", "build", "get_mapping_suite"]
+           "UNKNOWN", "CaseTruth", "MappingCase", "MappingSuite", "build", "case_names",
+           "get_mapping_suite", "perturbations"]
 
 UNKNOWN, MOVED_BEACONS, RACK, UNCHANGED = "unknown", "moved", "rack", "unchanged"
 PERTURBATIONS = (UNKNOWN, MOVED_BEACONS, RACK, UNCHANGED)
@@ -135,18 +136,43 @@ class MappingSuite:
 
 
 def build(seed: int, quick: bool) -> list[MappingCase]:
-    """The mapping suite's cases: every scenario x route x perturbation.
-
-    Quick: the first scenario's first route under each perturbation.
-    """
+    """The mapping suite's cases: every scenario x route x perturbation (:func:`case_names`)."""
     cases = []
+    for s, scenario, k, route in _routes(quick):
+        cases += _route_cases(scenario, route, seed, [s, k])
+    return cases
+
+
+def case_names(quick: bool) -> list[str]:
+    """The suite's cases by name, in the order it draws them, without driving them.
+
+    A name is ``scenario/route/perturbation``.
+    """
+    return [_name(scenario, route, perturbation) for _, scenario, _, route in _routes(quick)
+            for perturbation in perturbations(scenario)]
+
+
+def perturbations(scenario: Scenario) -> tuple[str, ...]:
+    """The perturbations a site allows, in order: ``rack`` only where it has racks."""
+    return tuple(p for p in PERTURBATIONS if p != RACK or scenario.racks)
+
+
+def _routes(quick: bool) -> Iterator[tuple[int, Scenario, int, Route]]:
+    """Each scenario's routes driven (the robot's wandering ones), with their indices.
+
+    Quick: the first scenario's first route alone.
+    """
     for s, name in enumerate(SCENARIOS[:1] if quick else SCENARIOS):
         scenario = load_scenario(name)
         routes = [r for r in scenario.routes
                   if name != robot.SCENARIO or r.name in robot.ROUTES]
         for k, route in enumerate(routes[:1] if quick else routes):
-            cases += _route_cases(scenario, route, seed, [s, k])
-    return cases
+            yield s, scenario, k, route
+
+
+def _name(scenario: Scenario, route: Route, perturbation: str) -> str:
+    """A case's name."""
+    return f"{scenario.name}/{route.name}/{perturbation}"
 
 
 def _route_cases(scenario: Scenario, route: Route, seed: int,
@@ -156,10 +182,8 @@ def _route_cases(scenario: Scenario, route: Route, seed: int,
     observable = sorted(observable_by_truth(*_true_detections(scenario, as_shipped)[:3],
                                             _poses(as_shipped)))
     cases = []
-    for p, perturbation in enumerate(PERTURBATIONS):
-        if perturbation == RACK and not scenario.racks:
-            continue
-        rng = np.random.default_rng([seed, *place, p])
+    for perturbation in perturbations(scenario):
+        rng = np.random.default_rng([seed, *place, PERTURBATIONS.index(perturbation)])
         world, frames, prior = scenario, as_shipped, Prior(true_map(scenario))
         if perturbation == UNKNOWN:
             anchors = sorted(int(b) for b in rng.choice(observable, 2, replace=False))
@@ -215,7 +239,7 @@ def _case(world: Scenario, route: Route, perturbation: str, frames: list[Frame],
     drive = simulated_drive(frames, frames[0].pose)
     truth = CaseTruth(true_map(world), _poses(frames), detected, ids, azimuths)
     profile = robot.contender_defaults() if world.name == robot.SCENARIO else None
-    return MappingCase(f"{world.name}/{route.name}/{perturbation}", world.name, route.name,
+    return MappingCase(_name(world, route, perturbation), world.name, route.name,
                        perturbation, drive, prior, profile, truth)
 
 

@@ -10,9 +10,9 @@ import pytest
 from mapping_files import edited, hand_result
 
 from azgym.bench.mapping.report import write_mapping
-from azgym.bench.mapping.results_file import CASE_CHECKS, case_names, is_mapping_file, load_mapping
+from azgym.bench.mapping.results_file import CASE_CHECKS, is_mapping_file, load_mapping
 from azgym.bench.mapping.scoring import CaseScore
-from azgym.bench.mapping.suites import MAPPING_SUITES
+from azgym.bench.mapping.suites import MAPPING_SUITES, case_names
 
 
 def test_a_written_run_reads_back_as_it_was_scored(tmp_path):
