@@ -11,6 +11,7 @@ from collections.abc import Iterator
 
 import pytest
 
+from azgym.bench.mapping.suites import MAPPING_SUITES, case_names
 from azgym.bench.navigation.suites import NAVIGATION_SUITES
 from azgym.bench.suites import SUITES
 from azgym.cli import build_parser, main
@@ -78,5 +79,9 @@ def test_suites_lists_every_suite_and_shipped_log_with_size_and_seed(capsys):
         assert lines[name][1:5] == [str(suite.quick_episodes), "/", str(suite.episodes), "seed"]
     for name in shipped_logs():
         assert lines[name][1:3] == ["log", "-"]
+    for name, mapping in MAPPING_SUITES.items():
+        assert lines[name][1:5] == [str(len(case_names(True))), "/", str(len(case_names(False))),
+                                    "seed"]
+        assert lines[name][5].startswith(f"{mapping.dev_seed}, dev only ")
     assert lines["stress"][1:5] == ["60", "/", "600", "seed"]
     assert "warehouse-large (64 beacons)" in lines["stress"][5]

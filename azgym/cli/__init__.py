@@ -3,6 +3,8 @@
 azgym bench [--suite S | --data DIR] [--localizer SPEC ...] [--with-builtins] [--split dev|test]
             [--workers N] [--time-limit SECONDS] [--quick] [--out DIR] [--overwrite]
             [--navigator NAME ...] [--backend local|ray] [--address ADDR] [--profile PROFILE.toml]
+azgym bench mapping [--mapper SPEC ...] [--quick] [--time-limit SECONDS] [--workers N] [--out DIR]
+                    [--overwrite]
 azgym sweep CONFIG [--backend local|ray] [--address ADDR] [--workers N] [--out DIR] [--overwrite]
 azgym import DIR | azgym import bag BAG --out LOG [--topic KIND=TOPIC ...] [--map MAP] [--overwrite]
 azgym calibrate LOG --out PROFILE.toml [--figure FILE] [--turn-rate auto|odometry|imu] [--seed N]
@@ -17,8 +19,8 @@ azgym layout analyze SCENARIO [--step M] [--localizer L] [--frames N] [--seed S]
 azgym layout optimize SCENARIO --add N [--step M] [--spacing M] [--out DIR] [--overwrite]
 azgym leaderboard submit RESULTS --localizer SPEC --name NAME --version V --authors NAME ...
                          [--link URL] [--entries DIR] [--overwrite] [--datasets DIR]
-azgym leaderboard build [--entries DIR] [--out DIR] [--navigation DIR] [--datasets DIR]
-                        [--skip-unavailable]
+azgym leaderboard build [--entries DIR] [--out DIR] [--navigation DIR] [--mapping DIR]
+                        [--datasets DIR] [--overwrite] [--skip-unavailable]
 azgym leaderboard verify ENTRY [--workers N] [--datasets DIR]
 azgym reproduce paper [--quick] [--out DIR] [--workers N] [--seed S] [--no-figures] [--overwrite]
 azgym reproduce plotter [--runs N] [--seed S] [--out DIR] [--overwrite]
@@ -42,7 +44,7 @@ Every command's ``--help`` ends with examples (:mod:`~azgym.cli.examples`);
 ``python -m azgym`` runs the command too.
 
 The command's modules, one per command group: :mod:`~azgym.cli.bench` (a frame suite, a
-navigation suite or a log), :mod:`~azgym.cli.leaderboard`, :mod:`~azgym.cli.studies`
+navigation suite, a log or the mapping suite), :mod:`~azgym.cli.leaderboard`, :mod:`~azgym.cli.studies`
 (``reproduce``, ``study``), :mod:`~azgym.cli.train`, :mod:`~azgym.cli.evaluate`,
 :mod:`~azgym.cli.logs` (``import``, ``export``), :mod:`~azgym.cli.calibrate`,
 :mod:`~azgym.cli.layout`, :mod:`~azgym.cli.sweep` and :mod:`~azgym.cli.info` (``suites``,

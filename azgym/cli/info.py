@@ -61,6 +61,12 @@ def _suites(_args: argparse.Namespace) -> int:
     for name, navigation in NAVIGATION_SUITES.items():
         _listed(name, f"{navigation.quick_episodes} / {navigation.episodes}",
                 f"seed {navigation.dev_seed}, dev+test", navigation.description)
+    from azgym.bench.mapping.suites import MAPPING_SUITES, case_names
+
+    print("\nmapping suites (azgym bench NAME; cases per mapper, --quick / full):")
+    for name, mapping in MAPPING_SUITES.items():
+        _listed(name, f"{len(case_names(True))} / {len(case_names(False))}",
+                f"seed {mapping.dev_seed}, dev only", mapping.description)
     print("\nshipped logs (--data NAME; every recorded frame, one size, no seed):")
     for name, folder in shipped_logs().items():
         manifest = read_manifest(folder, Problems(str(folder)))
