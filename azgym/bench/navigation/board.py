@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from azgym.bench.leaderboard.board_page import Table
 from azgym.bench.leaderboard.checks import clean
 from azgym.bench.leaderboard.entries import differences
 from azgym.bench.leaderboard.entry_files import LeaderboardError
@@ -20,7 +21,7 @@ from azgym.bench.navigation.report import figure
 from azgym.bench.navigation.results_file import episode_seeds, load_navigation
 from azgym.bench.navigation.suites import NAVIGATION_SUITES, overlap
 
-__all__ = ["Table", "navigation_tables", "table_rows", "verify_navigation"]
+__all__ = ["navigation_tables", "table_rows", "verify_navigation"]
 
 HEADER = ["#", "navigator", "localizer", "success % [95 % CI]", "SPL", "collisions/ep",
           "collided %", "time to goal s", "answered %", "error median cm", "error p95 cm"]
@@ -63,10 +64,6 @@ def table_rows(data: dict[str, Any]) -> list[list[str]]:
                      f"{100 * s['answered']:.1f}", figure(s["error_median_cm"]),
                      figure(s["error_p95_cm"])])
     return rows
-
-
-Table = tuple[str, str, str, str, list[str], list[list[str]]]
-"""A navigation table of the board: suite, its description, title, id, column names, rows."""
 
 
 def navigation_tables(directory: Path) -> list[Table]:
