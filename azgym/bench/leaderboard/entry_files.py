@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 
 __all__ = ["HEADING_LIMIT", "MAX_FRAMES_BYTES", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "Entry",
            "EntryLocalizer", "FrameTable", "LeaderboardError", "Machine", "parse_frames",
-           "read_bytes", "read_frames", "read_json"]
+           "exact_keys", "read_bytes", "read_frames", "read_json"]
 
 MAX_JSON_BYTES = 16 * 2**20
 """An entry or results.json larger than this is refused (a real one is a few kB)."""
@@ -105,6 +105,20 @@ def read_bytes(path: Path, limit: int, what: str) -> bytes:
     larger than ``limit``.
     """
     return read_regular_file(path, limit, what, LeaderboardError)
+
+
+def exact_keys(table: Any, keys: set[str], where: str) -> None:
+    """Refuse ``table`` unless it is an object with exactly ``keys``.
+
+    Each stray or missing key is named, at ``where``.
+    """
+    if not isinstance(table, dict):
+        raise LeaderboardError(f"{where}: must be an object")
+    if set(table) != keys:
+        extra, missing = sorted(set(table) - keys), sorted(keys - set(table))
+        raise LeaderboardError(f"{where}: " + "; ".join(
+            part for part in (f"unknown keys {extra}" if extra else "",
+                              f"missing keys {missing}" if missing else "") if part))
 
 
 def read_json(path: Path, what: str, allow_nan: bool = False) -> Any:

@@ -37,7 +37,7 @@ from typing import Any
 
 from azgym.arguments import MIN_TIME_LIMIT
 from azgym.bench.leaderboard.checks import clean, close
-from azgym.bench.leaderboard.entry_files import LeaderboardError, read_json
+from azgym.bench.leaderboard.entry_files import LeaderboardError, exact_keys, read_json
 from azgym.bench.mapping.report import KIND, RESULTS_FORMAT
 from azgym.bench.mapping.scoring import (
     DELAY_WINDOW,
@@ -114,7 +114,7 @@ def load_mapping(path: Path) -> MappingFile:
     if type(data.get("format")) is not int or data["format"] != RESULTS_FORMAT:
         raise LeaderboardError(f"{path}: format must be {RESULTS_FORMAT}, got "
                                f"{data.get('format')!r}")
-    _keys(data, FILE_KEYS, str(path))
+    exact_keys(data, FILE_KEYS, str(path))
     for key in ("azgym_version", "python", "timestamp"):
         if not isinstance(data[key], str) or len(data[key]) > MAX_TEXT:
             raise LeaderboardError(f"{path}: {key}: must be a text of at most {MAX_TEXT} "
@@ -126,7 +126,7 @@ def load_mapping(path: Path) -> MappingFile:
     scores: dict[str, tuple[CaseScore, ...]] = {}
     for k, mapper in enumerate(mappers):
         where = f"{path}: mappers/{k}"
-        _keys(mapper, MAPPER_KEYS, where)
+        exact_keys(mapper, MAPPER_KEYS, where)
         name = _check_mapper(mapper["mapper"], f"{where}/mapper")
         if name in scores:
             raise LeaderboardError(f"{where}/mapper: {name} is in the file twice")
@@ -136,17 +136,6 @@ def load_mapping(path: Path) -> MappingFile:
                                       f"{path}: mappers/{k} ({name})")
                  for k, (name, mapper) in enumerate(zip(scores, mappers, strict=True))}
     return MappingFile(path, data, scores, summaries)
-
-
-def _keys(table: Any, keys: set[str], where: str) -> None:
-    """``table`` is an object with exactly ``keys``."""
-    if not isinstance(table, dict):
-        raise LeaderboardError(f"{where}: must be an object")
-    if set(table) != keys:
-        extra, missing = sorted(set(table) - keys), sorted(keys - set(table))
-        raise LeaderboardError(f"{where}: " + "; ".join(
-            part for part in (f"unknown keys {extra}" if extra else "",
-                              f"missing keys {missing}" if missing else "") if part))
 
 
 def _check_suite(data: dict[str, Any], path: Path) -> list[str]:
@@ -242,7 +231,7 @@ def _beacons(value: Any, where: str) -> tuple[BeaconScore, ...]:
     beacons = []
     for k, item in enumerate(_items(value, where, MAX_BEACONS)):
         at = f"{where}/{k}"
-        _keys(item, {"beacon", "error", "placed"}, at)
+        exact_keys(item, {"beacon", "error", "placed"}, at)
         if not isinstance(item["placed"], bool):
             raise LeaderboardError(f"{at}/placed: must be true or false")
         error = _number(item["error"], f"{at}/error", null=not item["placed"])
@@ -256,7 +245,7 @@ def _moved(value: Any, where: str) -> tuple[MovedScore, ...]:
     moved = []
     for k, item in enumerate(_items(value, where, MAX_BEACONS)):
         at = f"{where}/{k}"
-        _keys(item, {"beacon", "said", "seen", "delay"}, at)
+        exact_keys(item, {"beacon", "said", "seen", "delay"}, at)
         if not isinstance(item["said"], bool):
             raise LeaderboardError(f"{at}/said: must be true or false")
         seen = _number(item["seen"], f"{at}/seen", null=True)
@@ -303,7 +292,7 @@ def _cases(value: Any, names: list[str], where: str) -> tuple[CaseScore, ...]:
     scores = []
     for k, (item, name) in enumerate(zip(value, names, strict=True)):
         at = f"{where}/cases/{k}"
-        _keys(item, set(CASE_CHECKS), at)
+        exact_keys(item, set(CASE_CHECKS), at)
         read = {key: check(item[key], f"{at}/{key}") for key, check in CASE_CHECKS.items()}
         if read["case"] != name or name != "/".join(
                 (read["scenario"], read["route"], read["perturbation"])):
@@ -339,7 +328,7 @@ def _check_case(score: CaseScore, where: str) -> CaseScore:
 def _check_summary(value: Any, mapper: str, scores: tuple[CaseScore, ...],
                    where: str) -> MapperSummary:
     """The file's summary of a mapper, figure by figure the one its case records give."""
-    _keys(value, SUMMARY_KEYS, f"{where}/summary")
+    exact_keys(value, SUMMARY_KEYS, f"{where}/summary")
     summary = summarize(mapper, scores)
     recomputed = clean(dataclasses.asdict(summary))
     for key in sorted(SUMMARY_KEYS):

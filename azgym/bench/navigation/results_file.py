@@ -49,7 +49,7 @@ from typing import Any
 
 from azgym import arguments
 from azgym.bench.leaderboard.checks import clean, close
-from azgym.bench.leaderboard.entry_files import LeaderboardError, read_json
+from azgym.bench.leaderboard.entry_files import LeaderboardError, exact_keys, read_json
 from azgym.bench.leaderboard.plugin_files import weights_path, weights_sha256
 from azgym.bench.navigation.benchmark import KIND, RESULTS_FORMAT
 from azgym.bench.navigation.scoring import wilson_interval
@@ -116,7 +116,7 @@ def load_navigation(path: Path) -> dict[str, Any]:
         raise LeaderboardError(f"{path}: format must be {' or '.join(map(str, FORMATS))} "
                                f"(this azgym writes {RESULTS_FORMAT}), got "
                                f"{data.get('format')!r}")
-    _keys(data, FILE_KEYS, str(path))
+    exact_keys(data, FILE_KEYS, str(path))
     for key in ("azgym_version", "python", "timestamp"):
         if not isinstance(data[key], str) or len(data[key]) > 64:
             raise LeaderboardError(f"{path}: {key}: must be a text of at most 64 characters")
@@ -134,17 +134,6 @@ def load_navigation(path: Path) -> dict[str, Any]:
             raise LeaderboardError(f"{where}: {pair[0]} + {pair[1]} is in the file twice")
         seen.add(pair)
     return data
-
-
-def _keys(table: Any, keys: set[str], where: str) -> None:
-    """``table`` is an object with exactly ``keys``."""
-    if not isinstance(table, dict):
-        raise LeaderboardError(f"{where}: must be an object")
-    if set(table) != keys:
-        extra, missing = sorted(set(table) - keys), sorted(keys - set(table))
-        raise LeaderboardError(f"{where}: " + "; ".join(
-            part for part in (f"unknown keys {extra}" if extra else "",
-                              f"missing keys {missing}" if missing else "") if part))
 
 
 def _check_suite(data: dict[str, Any], path: Path) -> None:
@@ -202,7 +191,7 @@ def _check_contender(contender: Any, data: dict[str, Any], shortest: dict[int, f
                      where: str) -> None:
     """A built-in pair that drove the file's episodes, its summary matching them."""
     weights = _named_weights(contender, data["format"], where)
-    _keys(contender, CONTENDER_KEYS | (PIN_KEYS if weights is not None else set()), where)
+    exact_keys(contender, CONTENDER_KEYS | (PIN_KEYS if weights is not None else set()), where)
     navigator, localizer = contender["navigator"], contender["localizer"]
     if not isinstance(navigator, str) or navigator not in NAVIGATORS:
         raise LeaderboardError(f"{where}/navigator: {navigator!r} is not a built-in navigator "
@@ -221,7 +210,7 @@ def _check_contender(contender: Any, data: dict[str, Any], shortest: dict[int, f
         raise LeaderboardError(f"{where}/episodes: must be the suite's {data['episodes']} "
                                f"episodes, seeds {data['seed']} to {seeds[-1]} in order")
     summary = contender["summary"]
-    _keys(summary, SUMMARY_KEYS, f"{where}/summary")
+    exact_keys(summary, SUMMARY_KEYS, f"{where}/summary")
     for key, value in recomputed_summary(episodes, shortest, where).items():
         if not _agree(summary[key], value):
             raise LeaderboardError(f"{where}/summary/{key}: the file says "
@@ -313,7 +302,7 @@ def _episode(episode: dict[str, Any], shortest: float, where: str) -> dict[str, 
 
     ``shortest`` is the episode's geodesic shortest path [m].
     """
-    _keys(episode, EPISODE_KEYS, where)
+    exact_keys(episode, EPISODE_KEYS, where)
     if not isinstance(episode["success"], bool):
         raise LeaderboardError(f"{where}/success: must be true or false")
     for key in ("collisions", "steps", "answered_steps"):
