@@ -44,12 +44,13 @@ Every command's ``--help`` ends with examples (:mod:`~azgym.cli.examples`);
 ``python -m azgym`` runs the command too.
 
 The command's modules, one per command group: :mod:`~azgym.cli.bench` (a frame suite, a
-navigation suite, a log or the mapping suite), :mod:`~azgym.cli.leaderboard`, :mod:`~azgym.cli.studies`
-(``reproduce``, ``study``), :mod:`~azgym.cli.train`, :mod:`~azgym.cli.evaluate`,
-:mod:`~azgym.cli.logs` (``import``, ``export``), :mod:`~azgym.cli.calibrate`,
-:mod:`~azgym.cli.layout`, :mod:`~azgym.cli.sweep` and :mod:`~azgym.cli.info` (``suites``,
-``scenarios``, ``localizers``, ``generate``, ``check``); :mod:`~azgym.cli.options` the options
-every command shares and the progress printer. Each module registers its parsers (``add_*``);
+navigation suite, a log or the mapping suite), :mod:`~azgym.cli.leaderboard`,
+:mod:`~azgym.cli.studies` (``reproduce``, ``study``), :mod:`~azgym.cli.train`,
+:mod:`~azgym.cli.evaluate`, :mod:`~azgym.cli.logs` (``import``, ``export``),
+:mod:`~azgym.cli.calibrate`, :mod:`~azgym.cli.survey`, :mod:`~azgym.cli.layout`,
+:mod:`~azgym.cli.sweep` and :mod:`~azgym.cli.info` (``suites``, ``scenarios``, ``localizers``,
+``generate``, ``check``); :mod:`~azgym.cli.options` the options every command shares and the
+progress printer. Each module registers its parsers (``add_*``);
 this one builds the ``azgym`` parser from them and runs the handler (:func:`main`).
 """
 
