@@ -16,7 +16,10 @@
   at least twice as many as they were rejected in. A track that is wrong sees every beacon
   rejected, so its error is not taken for a move.
   Only sightings of a confident track count (running, confirmed, not lost, consistent).
-* **Set aside**: from then on its detections are removed before the correction.
+* **Set aside**: from then on its detections are removed before the correction, and the
+  tracker re-runs its track without it from before its stretch of sightings
+  (:mod:`azgym.track.repair_lag`): its rays are then taken afresh (:meth:`MapRepair.retrace`)
+  and it is located from them (:meth:`MapRepair.relocate`).
 * **Located again** (:mod:`azgym.track.repair_rays`): each of its sightings gives a ray per
   detection from the tracker's camera position along its heading plus the azimuth, with the
   azimuth's variance (eq. 3 at the range to the map position, plus ``extra_sigma``² and the
@@ -29,7 +32,9 @@
   beacon's detections under a misread id, and the suspicion is dropped. So is one whose point
   is within three standard deviations of its map position (it did not move).
 * **Used again**: the map the tracker corrects with has the beacon at its new position (its
-  height and width kept), and the repair is reported (:class:`Repair`). A suspected beacon
+  height kept), its width widened from W to √(W² + 12σ²), σ the new position's worst-axis
+  standard deviation: eq. 2's coverage term, (W/2D)²/3 at range D, then adds the position's
+  (σ/D)² to its azimuth's variance. The repair is reported (:class:`Repair`). A suspected beacon
   whose map position agrees again in ``sightings`` sightings in a row is cleared.
 * **Refined**: a repaired beacon's rays go on being gathered, and whenever they have grown by
   :data:`RETRY_GROWTH` those within the gate of its placement are intersected again; a
@@ -42,7 +47,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -53,6 +57,7 @@ from azgym.site.error_model import ErrorModel
 from azgym.track.azimuth_update import gated_update
 from azgym.track.gated_ekf import subset
 from azgym.track.repair_rays import RayStore, locate, pack
+from azgym.track.repair_records import Repair, Run
 from azgym.track.unicycle import IPHI, IX, IY
 
 __all__ = ["CLEARANCE_M", "OTHERS_AGREE",
@@ -82,58 +87,6 @@ frame (random rays' spread jitters just below its bound, π/2), while a beacon t
 past is tried as its rays widen."""
 
 
-@dataclass(frozen=True, eq=False)
-class Repair:
-    """A beacon found moved and put at its new position (in :attr:`MapRepair.placed`, or since).
-
-    Attributes:
-        time: When [s] (the frame's time).
-        frame: Which frame, counted from 0 since ``reset``.
-        beacon: The beacon's id.
-        old: Its map position (x, y) [m].
-        new: Its new position (x, y) [m].
-        covariance: The new position's covariance (2, 2) [m²], the track's shared error in it.
-        rays: How many rays located it.
-    """
-
-    time: float
-    frame: int
-    beacon: int
-    old: tuple[float, float]
-    new: tuple[float, float]
-    covariance: FloatArray
-    rays: int
-
-    @property
-    def std(self) -> float:
-        """The new position's standard deviation along its worst axis [m]."""
-        return float(math.sqrt(np.linalg.eigvalsh(self.covariance)[-1]))
-
-
-@dataclass(eq=False)
-class _Run:
-    """One beacon's run of rejected sightings, and its rays."""
-
-    since: float
-    last: float
-    others_accepted: int
-    others_rejected: int
-    others_by: dict[int, int]
-    """Each beacon's agreeing sightings when the run began."""
-    rejected: int = 0
-    suspected: bool = False
-    agreed: int = 0
-    rays: RayStore = field(default_factory=RayStore)
-    sightings: int = 0
-    """Sightings whose rays were added."""
-    tried: int = 0
-    """Rays added when the suspect was last located (or not) from them."""
-    tried_span: float = 0.0
-    """Its rays' spread then [rad]."""
-    std: float = math.inf
-    """The worst-axis standard deviation of the position its rays last gave (:func:`worst_std`)."""
-
-
 class MapRepair:
     """The per-beacon records of a tracker's map repair (module docstring).
 
@@ -158,10 +111,10 @@ class MapRepair:
         self.error_model = error_model
         self.extra_sigma = extra_sigma
         self.repairs: list[Repair] = []
-        self._runs: dict[int, _Run] = {}
+        self._runs: dict[int, Run] = {}
         self.placed: dict[int, Repair] = {}
         """Each repaired beacon's latest placement: its repair, or a refinement since."""
-        self._refining: dict[int, _Run] = {}
+        self._refining: dict[int, Run] = {}
         self._accepted = 0
         self._agreed_by: dict[int, int] = {}
         self._rejected = 0
@@ -183,14 +136,19 @@ class MapRepair:
         when none is).
         """
         self._frame += 1
+        return self.map_for(beacons) if self.placed else beacons
+
+    def map_for(self, beacons: BeaconMap) -> BeaconMap:
+        """``beacons`` with every repaired beacon at its new position (itself when none is)."""
         if not self.placed:
             return beacons
         if beacons is not self._given or self._current is None:
-            xyz = beacons.xyz.copy()
+            xyz, width = beacons.xyz.copy(), beacons.width.copy()
             for row, beacon in enumerate(beacons.ids.tolist()):
                 if beacon in self.placed:
                     xyz[row, :2] = self.placed[beacon].new
-            self._given, self._current = beacons, BeaconMap(beacons.ids, xyz, beacons.width)
+                    width[row] = math.sqrt(width[row] ** 2 + 12.0 * self.placed[beacon].std ** 2)
+            self._given, self._current = beacons, BeaconMap(beacons.ids, xyz, width)
         return self._current
 
     def usable(self, measurements: Measurements) -> np.ndarray | None:
@@ -209,8 +167,8 @@ class MapRepair:
                 confident: bool) -> tuple[list[int], list[Repair]]:
         """Take a corrected frame: its sightings, rays and verdicts.
 
-        A frame all of whose detections the tracker used, with no record open, is only
-        counted: the per-beacon work is for frames with a rejected or unknown detection.
+        A frame all of whose detections the tracker used, with no record open, is passed over:
+        the per-beacon work is for frames with a rejected or unknown detection.
 
         Args:
             time: The frame's time [s].
@@ -227,16 +185,17 @@ class MapRepair:
         suspected: list[int] = []
         if self._runs:
             self._forget_lapsed(time)
-        if not self._runs and not self._refining and inliers.all():  # every one used, so known
-            if confident:
-                self._agree(set(measurements.ids.tolist()))
-            return suspected, []
+        if not self._runs and not self._refining and all(inliers.tolist()):  # each one used
+            return suspected, []  # agreements count only while a run is open (_agree)
         map_rows = self._map_rows(beacons)
         sightings: dict[int, list[int]] = {}
-        for row, beacon in enumerate(measurements.ids.tolist()):
+        agreeing = set()  # the beacons one of whose detections the tracker used
+        for row, (beacon, used) in enumerate(zip(measurements.ids.tolist(), inliers.tolist(),
+                                                 strict=True)):
             if beacon in map_rows:
                 sightings.setdefault(beacon, []).append(row)
-        used = inliers.tolist()
+                if used:
+                    agreeing.add(beacon)
         touched: list[int] = []
         for beacon, rows in sorted(sightings.items()):
             refining = self._refining.get(beacon)
@@ -249,24 +208,50 @@ class MapRepair:
                 self._suspect_sighting(beacon, run, measurements, np.array(rows), beacons,
                                        state, cov)
                 touched.append(beacon)
-            elif any(used[row] for row in rows):
-                if confident:
-                    self._agree((beacon,))
+            elif beacon in agreeing:
+                if confident and self._runs:
+                    self._agree(beacon)
                 self._runs.pop(beacon, None)
             elif confident and self._reject(beacon, time, measurements, np.array(rows),
                                             beacons, state, cov):
-                suspected.append(beacon)
-                touched.append(beacon)
+                suspected.append(beacon)  # located by :meth:`relocate`, or at its next sighting
         repairs = [found for beacon in touched
                    if (found := self._try_repair(beacon, time, beacons)) is not None]
         return suspected, repairs
+
+    def began(self, beacon: int) -> float:
+        """When a suspect's run of rejections began [s]."""
+        return self._runs[beacon].since
+
+    def forget_rays(self, beacons: Collection[int]) -> None:
+        """Drop suspects' rays, to take them again from a re-run track (:meth:`retrace`)."""
+        for beacon in beacons:
+            run = self._runs[beacon]
+            run.rays, run.sightings, run.tried, run.tried_span = RayStore(), 0, 0, 0.0
+
+    def retrace(self, beacons: Collection[int], measurements: Measurements, current: BeaconMap,
+                state: FloatArray, cov: FloatArray) -> None:
+        """A re-run track's frame: its sightings of suspects ``beacons`` become their rays."""
+        map_rows = self._map_rows(current)
+        ids = measurements.ids
+        for beacon in beacons:
+            rows = np.flatnonzero(ids == beacon)
+            if rows.size and beacon in map_rows:
+                self._add_rays(self._runs[beacon], measurements, rows, map_rows[beacon], current,
+                               state, cov)
+
+    def relocate(self, beacons: Collection[int], time: float, current: BeaconMap
+                 ) -> list[Repair]:
+        """Try to locate suspects from their rays; the repairs made."""
+        return [found for beacon in beacons
+                if (found := self._try_repair(beacon, time, current)) is not None]
 
     def _reject(self, beacon: int, time: float, measurements: Measurements, rows: np.ndarray,
                 beacons: BeaconMap, state: FloatArray, cov: FloatArray) -> bool:
         """Count a confident track's rejected sighting of a beacon; whether it is now a suspect."""
         run = self._runs.get(beacon)
         if run is None:
-            run = self._runs[beacon] = _Run(time, time, self._accepted, self._rejected,
+            run = self._runs[beacon] = Run(time, time, self._accepted, self._rejected,
                                             dict(self._agreed_by))
         self._rejected += 1
         run.rejected += 1
@@ -278,11 +263,15 @@ class MapRepair:
         self._refining.pop(beacon, None)
         return True
 
-    def _agree(self, beacons: Collection[int]) -> None:
-        """Count an agreeing sighting of each of ``beacons``."""
-        self._accepted += len(beacons)
-        for beacon in beacons:
-            self._agreed_by[beacon] = self._agreed_by.get(beacon, 0) + 1
+    def _agree(self, beacon: int) -> None:
+        """Count an agreeing sighting of ``beacon``.
+
+        Only while a run is open: a run reads the counts as they grow from its start, and one
+        begun later starts from the counts then, so what is not counted while none is open
+        would change no verdict (and the counts stay as small as the runs are few).
+        """
+        self._accepted += 1
+        self._agreed_by[beacon] = self._agreed_by.get(beacon, 0) + 1
 
     def _map_rows(self, beacons: BeaconMap) -> dict[int, int]:
         """Each of the map's beacon ids' row (kept while the map is the same object)."""
@@ -301,7 +290,7 @@ class MapRepair:
         self._runs = {beacon: run for beacon, run in self._runs.items()
                       if run.suspected or time - run.last <= STREAK_GAP_S}
 
-    def _suspicious(self, run: _Run, time: float) -> bool:
+    def _suspicious(self, run: Run, time: float) -> bool:
         """Whether a run makes its beacon a suspect (module docstring)."""
         if run.rejected < self.sightings or time - run.since < self.after:
             return False
@@ -313,7 +302,7 @@ class MapRepair:
                      for beacon, count in self._agreed_by.items())
         return others >= OTHERS_DISTINCT
 
-    def _suspect_sighting(self, beacon: int, run: _Run, measurements: Measurements,
+    def _suspect_sighting(self, beacon: int, run: Run, measurements: Measurements,
                           rows: np.ndarray, beacons: BeaconMap, state: FloatArray,
                           cov: FloatArray) -> None:
         """A suspect's sighting: cleared after ``sightings`` agreeing ones in a row, else a ray."""
@@ -330,7 +319,7 @@ class MapRepair:
         run.agreed = 0
         self._add_rays(run, measurements, rows, self._rows[beacon], beacons, state, cov)
 
-    def _add_rays(self, run: _Run, measurements: Measurements, rows: np.ndarray, row: int,
+    def _add_rays(self, run: Run, measurements: Measurements, rows: np.ndarray, row: int,
                   beacons: BeaconMap, state: FloatArray, cov: FloatArray) -> None:
         """A sighting's rays: each detection's, from the track's camera (:func:`pack`)."""
         at = beacons.xyz[row, :2]
@@ -342,7 +331,7 @@ class MapRepair:
                           run.sightings))
         run.sightings += 1
 
-    def _locate(self, run: _Run, beacons: BeaconMap, placed: FloatArray | None = None
+    def _locate(self, run: Run, beacons: BeaconMap, placed: FloatArray | None = None
                 ) -> tuple[FloatArray, FloatArray, float, int] | None:
         """Where a record's rays put its beacon (module docstring), or None.
 
@@ -383,7 +372,7 @@ class MapRepair:
         self.repairs.append(repair)
         return repair
 
-    def _refine(self, beacon: int, run: _Run, time: float, beacons: BeaconMap) -> None:
+    def _refine(self, beacon: int, run: Run, time: float, beacons: BeaconMap) -> None:
         """Move a repaired beacon to where its rays put it now, if more certainly (docstring)."""
         found = self._locate(run, beacons, np.array(self.placed[beacon].new))
         if found is not None and found[2] < run.std:

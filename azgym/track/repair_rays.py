@@ -110,9 +110,10 @@ def locate(rays: FloatArray, span: float, threshold: float, max_std: float,
     The rays taken are those, one a sighting, of the point the most sightings meet
     (:func:`consensus`), or those within the gate of where the beacon is ``placed`` already (a
     repaired beacon, refined). They must be at least :data:`KEPT_SHARE` of the sightings (and
-    three), spread ``span`` [rad], meet ahead of every ray inside ``box`` (lowest, highest
-    corner), and fix the point within ``max_std`` [m] without the most telling of them
-    (:func:`worst_std`).
+    three), spread ``span`` [rad], meet ahead of every ray (by more than three standard
+    deviations of its camera's position along it: rays from one standing camera, however they
+    turn, meet at the camera) inside ``box`` (lowest, highest corner), and fix the point
+    within ``max_std`` [m] without the most telling of them (:func:`worst_std`).
 
     Returns:
         The point (2,), its covariance (2, 2) (:func:`intersect`), its worst-axis standard
@@ -126,10 +127,11 @@ def locate(rays: FloatArray, span: float, threshold: float, max_std: float,
     if spread(rays[:, 2]) < span:
         return None
     point, covariance, _ = intersect(rays)
-    ahead = np.cos(rays[:, 2]) * (point[0] - rays[:, 0]) \
-        + np.sin(rays[:, 2]) * (point[1] - rays[:, 1])
+    directions = np.column_stack((np.cos(rays[:, 2]), np.sin(rays[:, 2])))
+    ahead = np.einsum("kj,kj->k", directions, point - rays[:, :2])
+    camera = np.einsum("ki,kij,kj->k", directions, origin_covariance(rays), directions)
     worst = worst_std(rays, point)
-    if worst > max_std or (ahead <= 0.0).any() \
+    if worst > max_std or (ahead <= 3.0 * np.sqrt(camera)).any() \
             or (point < box[0]).any() or (point > box[1]).any():
         return None
     return point, covariance, worst, len(rays)

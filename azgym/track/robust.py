@@ -35,11 +35,13 @@ from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose
 from azgym.hyperparameters import check_flag, check_range
 from azgym.localize.bearings import MIN_SPREAD
 from azgym.profile import FORKLIFT
+from azgym.sensing.motion import Motion
 from azgym.site.error_model import ErrorModel
 from azgym.track.gated_ekf import DEFAULT_NOISE, GatedEkf, subset
 from azgym.track.kinematics import WHEELBASE
-from azgym.track.repair import MapRepair, Repair
-from azgym.track.unicycle import IPHI, IX, IY
+from azgym.track.repair import STREAK_GAP_S, MapRepair, Repair
+from azgym.track.repair_lag import Lag, Lagged
+from azgym.track.unicycle import IPHI, IX, IY, Step, predict
 
 __all__ = ["Robust"]
 
@@ -133,6 +135,9 @@ class Robust(GatedEkf):
             threshold=self._threshold,
             error_model=ErrorModel(float(self.delta_alpha_d), bool(self.coverage)),
             extra_sigma=float(self.extra_sigma)) if self.repair else None
+        self._replay_time: float | None = None
+        self._pending: list[Step] = []
+        self._lag = Lag(self._snapshot()) if self.repair else None
 
     @property
     def repairs(self) -> tuple[Repair, ...]:
@@ -151,6 +156,8 @@ class Robust(GatedEkf):
         return {} if repair is None else dict(repair.placed)
 
     def _now(self) -> float:
+        if self._replay_time is not None:
+            return self._replay_time
         return self._steps.time if self._steps.time is not None else 0.0
 
     def _restart(self, fix: Estimate, covariance: FloatArray) -> Estimate:
@@ -162,37 +169,111 @@ class Robust(GatedEkf):
         self._checked = 0
         return self._answer(fix.inliers, {"initialized": True})
 
-    def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
-        if self._repair is None:
-            return self._track(measurements, beacons)
-        return self._track_and_repair(self._repair, measurements, beacons)
+    def _predict(self, motion: Motion) -> None:
+        if self._lag is None:
+            super()._predict(motion)
+            return
+        steps = self._steps.steps(motion)
+        self._pending += steps
+        self._move(steps)
 
-    def _track_and_repair(self, repair: MapRepair, measurements: Measurements,
-                          beacons: BeaconMap) -> Estimate:
+    def _move(self, steps: list[Step]) -> None:
+        """Predict through motion steps (a running track), as gated-ekf does."""
+        for step in steps:
+            if self._running:
+                predict(self._state, self._cov, step, self._lever, self._noise)
+
+    def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
+        if self._repair is None or self._lag is None:
+            return self._track(measurements, beacons)
+        return self._track_and_repair(self._repair, self._lag, measurements, beacons)
+
+    def _track_and_repair(self, repair: MapRepair, lag: Lag, measurements: Measurements,
+                          given: BeaconMap) -> Estimate:
         """Track on the repaired map without the suspects' detections, then take the sightings.
 
-        The sightings go to :mod:`azgym.track.repair`.
+        The sightings go to :mod:`azgym.track.repair`, the frame to the lag. A frame that makes
+        a suspect re-runs the track from before the suspect's stretch of sightings
+        (:mod:`azgym.track.repair_lag`), and the suspect is located from the re-run track.
         """
-        beacons = repair.begin_frame(beacons)
-        rows = repair.usable(measurements)
-        if rows is None:
-            estimate = self._track(measurements, beacons)
-            inliers = estimate.inliers
-        else:
-            estimate = self._track(subset(measurements, rows), beacons)
-            inliers = np.zeros(len(measurements), dtype=bool)
-            inliers[rows[estimate.inliers]] = True
+        beacons = repair.begin_frame(given)
+        estimate, inliers, rows = self._track_usable(repair, measurements, beacons)
         confident = estimate.ok and self._running and self._bad_since is None
-        suspected, repaired = repair.observe(self._now(), measurements, inliers, beacons,
-                                             self._state, self._cov, confident)
+        now = self._now()
+        suspected, repaired = repair.observe(now, measurements, inliers, beacons, self._state,
+                                             self._cov, confident)
+        lag.close(now, self._pending, measurements, self._snapshot)
+        self._pending = []
+        replayed = 0
+        if suspected:
+            frames = lag.replayable({beacon: repair.began(beacon) for beacon in suspected},
+                                    STREAK_GAP_S)
+            if frames:
+                estimate, inliers = self._replay(repair, lag, frames, suspected,
+                                                 repair.map_for(given))
+                replayed = len(frames)
+            repaired += repair.relocate(suspected, now, repair.map_for(given))
         if rows is None and not suspected and not repaired:
             return estimate
         diagnostics = dict(estimate.diagnostics)
         if suspected:
             diagnostics["suspected"] = tuple(suspected)
+            diagnostics["replayed"] = replayed
         if repaired:
             diagnostics["repaired"] = tuple(repaired)
         return dataclasses.replace(estimate, inliers=inliers, diagnostics=diagnostics)
+
+    def _track_usable(self, repair: MapRepair, measurements: Measurements, beacons: BeaconMap
+                      ) -> tuple[Estimate, np.ndarray, np.ndarray | None]:
+        """One frame tracked without the suspects' detections.
+
+        Returns:
+            The estimate, its inliers among all the detections, and the rows tracked (None:
+            every one).
+        """
+        rows = repair.usable(measurements)
+        if rows is None:
+            estimate = self._track(measurements, beacons)
+            return estimate, estimate.inliers, None
+        estimate = self._track(subset(measurements, rows), beacons)
+        inliers = np.zeros(len(measurements), dtype=bool)
+        inliers[rows[estimate.inliers]] = True
+        return estimate, inliers, rows
+
+    def _replay(self, repair: MapRepair, lag: Lag, frames: list[Lagged], suspected: list[int],
+                beacons: BeaconMap) -> tuple[Estimate, np.ndarray]:
+        """Re-run the lag's ``frames`` without the suspects; the last one's estimate, inliers.
+
+        From the snapshot before the first; the snapshots re-run replace those taken, and a
+        confident re-run track's sightings of the new suspects are their rays.
+        """
+        repair.forget_rays(suspected)
+        snapshots = lag.snapshots
+        self._restore(snapshots[frames[0][0]])
+        for number, steps, time, measurements in frames:
+            if number in snapshots:
+                snapshots[number] = self._snapshot()
+            self._move(steps)
+            self._replay_time = time
+            estimate, inliers, _ = self._track_usable(repair, measurements, beacons)
+            if estimate.ok and self._running and self._bad_since is None:
+                repair.retrace(suspected, measurements, beacons, self._state, self._cov)
+        self._replay_time = None
+        if frames[-1][0] + 1 in snapshots:
+            snapshots[frames[-1][0] + 1] = self._snapshot()
+        return estimate, inliers
+
+    def _snapshot(self) -> tuple:
+        """The filter's state, for :meth:`_restore`."""
+        return (self._state.copy(), self._cov.copy(), self._running, self._tentative,
+                self._bad_since, self._started_at, self._checked)
+
+    def _restore(self, snapshot: tuple) -> None:
+        """Go back to a :meth:`_snapshot`."""
+        state, cov, self._running, self._tentative, self._bad_since, self._started_at, \
+            self._checked = snapshot
+        self._state[:] = state
+        self._cov[:] = cov
 
     def _track(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         """One frame of the tracker without map repair (module docstring)."""
