@@ -7,13 +7,16 @@
 
 1. **clean**: every route of warehouse-routes and robot-routes (their dev seeds, as the suites
    draw them) through ``robust:repair=true``: the repairs made. warehouse-small ships with one
-   beacon moved (its ``moved_to``), which should be repaired; any other repair is false.
+   beacon moved (its ``moved_to``), which should be repaired; any other repair is false. Also
+   the beacons not moved that were suspected (set aside for a while, not repaired).
 2. **moved**: each route of warehouse-small, warehouse-paper and robot-arena driven with 1-3
    beacons moved 0.5-3 m by the mapping suite's rule (``perturb.move_beacons``, among the
    beacons the drive as shipped makes observable; the world has them moved, the tracker the
    stale map), ``--seeds`` draws each from ``--first-seed``: per truly moved beacon (a shipped
-   ``moved_to`` included) whether it was repaired, the delay from its first being seen from two
-   places (``scoring.first_seen_from_two_places`` on its true detections), the new position's
+   ``moved_to`` included) the angle between its move and the line of sight when it was first
+   seen from two places (``scoring.first_seen_from_two_places`` on its true detections), when
+   it was first suspected (``diagnostics["suspected"]``: noticed and set aside) and whether and
+   when it was repaired (located again), both from that first time, the new position's
    error when repaired and where the tracker had it at the end (refined since); the p95 of the
    position error with repair, on the stale map without it, and on the true map, and their
    ratio, over the whole drive and over the frames after the last moved beacon's repair (the
@@ -69,9 +72,11 @@ def params_for(scenario: str) -> dict:
     return {}
 
 
-def run_track(tracker, steps, beacons) -> tuple[np.ndarray, float]:
-    """Position errors per frame (inf: no answer) and seconds spent in predict and update."""
+def run_track(tracker, steps, beacons) -> tuple[np.ndarray, float, dict[int, int]]:
+    """Position errors per frame (inf: no answer), seconds spent in predict and update, and
+    the frame each beacon was first suspected in (its ``diagnostics["suspected"]``)."""
     errors, spent = [], 0.0
+    suspected: dict[int, int] = {}
     for k, (motion, measurements, pose) in enumerate(steps):
         start = time.perf_counter()
         if k == 0:
@@ -80,7 +85,9 @@ def run_track(tracker, steps, beacons) -> tuple[np.ndarray, float]:
         estimate = tracker.update(measurements, beacons)
         spent += time.perf_counter() - start
         errors.append(pose_error(estimate.pose, pose)[0] if estimate.ok else math.inf)
-    return np.array(errors), spent
+        for beacon in estimate.diagnostics.get("suspected", ()):
+            suspected.setdefault(beacon, k)
+    return np.array(errors), spent, suspected
 
 
 def clean() -> None:
@@ -88,8 +95,8 @@ def clean() -> None:
         for name, cases in sequences(suite):
             scenario = azgym.load_scenario(cases[0].scenario)
             tracker = azgym.make_tracker("robust", **REPAIR, **params_for(scenario.name))
-            run_track(tracker, [(c.motion, c.measurements, c.pose) for c in cases],
-                      scenario.beacons)
+            _, _, suspected = run_track(tracker, [(c.motion, c.measurements, c.pose)
+                                                  for c in cases], scenario.beacons)
             really = moved_as_shipped(scenario)
             where = dict(zip(scenario.beacons.ids.tolist(), scenario.beacon_positions[:, :2],
                              strict=True))
@@ -97,7 +104,8 @@ def clean() -> None:
                      f" cm off" for r in tracker.repairs]
             false = [r.beacon for r in tracker.repairs if r.beacon not in really]
             print(f"clean {name}: {len(cases)} frames, moved as shipped {sorted(really)}, "
-                  f"repairs {found}, false repairs {false}")
+                  f"repairs {found}, false repairs {false}, false suspicions "
+                  f"{sorted(set(suspected) - really)}")
 
 
 def moved_as_shipped(scenario) -> set[int]:
@@ -127,6 +135,7 @@ def p95_of(errors: np.ndarray) -> float:
 
 def moved(seeds: int, first_seed: int) -> None:
     ratios, after_ratios, delays, misses, errors = [], [], [], 0, []
+    noticed, unnoticed, false_suspicions = [], 0, 0
     for name in ("warehouse-small", "warehouse-paper", robot.SCENARIO):
         scenario = azgym.load_scenario(name)
         routes = [r for r in scenario.routes if name != robot.SCENARIO or r.name in robot.ROUTES]
@@ -143,22 +152,35 @@ def moved(seeds: int, first_seed: int) -> None:
                 times = np.array([f.time for f in frames])
                 steps = [(f.motion, f.measurements, f.pose) for f in frames]
                 tracker = azgym.make_tracker("robust", **REPAIR, **params_for(name))
-                with_repair, _ = run_track(tracker, steps, scenario.beacons)
-                stale, _ = run_track(azgym.make_tracker("robust", **params_for(name)), steps,
-                                  scenario.beacons)
-                true, _ = run_track(azgym.make_tracker("robust", **params_for(name)), steps, truth)
+                with_repair, _, suspected = run_track(tracker, steps, scenario.beacons)
+                stale = run_track(azgym.make_tracker("robust", **params_for(name)), steps,
+                                  scenario.beacons)[0]
+                true = run_track(azgym.make_tracker("robust", **params_for(name)), steps,
+                                 truth)[0]
                 repaired = {r.beacon: r for r in tracker.repairs}
                 detected, ids, _ = true_sightings(world, frames)
                 parts, done = [], 0.0
-                for beacon in sorted(truly_moved(scenario.beacons, (), truth)):
+                really = truly_moved(scenario.beacons, (), truth)
+                false_suspicions += len(set(suspected) - set(really))
+                for beacon in sorted(really):
                     row = scenario.beacons.ids.tolist().index(beacon)
                     mine = detected[ids == beacon]
                     since = first_seen_from_two_places(times[mine], poses_of(frames, mine))
+                    seen = ""
+                    if since is not None:
+                        angle = line_of_sight(frames, times, since, scenario, truth, row)
+                        first = times[suspected[beacon]] - since if beacon in suspected else None
+                        seen = f"{angle:.0f}° to the line of sight, suspected " + \
+                            ("never" if first is None else f"{first:+.1f} s") + ", "
+                        if first is not None:
+                            noticed.append(first)
+                        unnoticed += first is None
                     found = repaired.pop(beacon, None)
                     if found is None:
                         misses += since is not None
                         done = math.inf if since is not None else done
-                        parts.append(f"{beacon}: {'missed' if since is not None else 'unseen'}")
+                        parts.append(f"{beacon}: {seen}"
+                                     f"{'missed' if since is not None else 'unseen'}")
                         continue
                     done = max(done, found.time)
                     error = math.dist(found.new, truth.xyz[row, :2])
@@ -166,8 +188,8 @@ def moved(seeds: int, first_seed: int) -> None:
                     delay = found.time - (since if since is not None else found.time)
                     delays.append(delay)
                     errors.append((error, final))
-                    parts.append(f"{beacon}: {delay:+.1f} s, {100 * error:.1f} cm, at the end "
-                                 f"{100 * final:.1f} cm")
+                    parts.append(f"{beacon}: {seen}repaired {delay:+.1f} s, "
+                                 f"{100 * error:.1f} cm, at the end {100 * final:.1f} cm")
                 p95 = [p95_of(e) for e in (with_repair, stale, true)]
                 ratios.append(p95[0] / p95[2])
                 later = times > done
@@ -190,6 +212,20 @@ def moved(seeds: int, first_seed: int) -> None:
           f"{np.median(after_ratios):.3f}, within 10 %: "
           f"{sum(r <= 1.1 for r in after_ratios)}/{len(after_ratios)} runs with every moved "
           f"beacon seen repaired")
+    soon = np.array(noticed) <= 10.0
+    print(f"suspected (s from first seen from two places): median {np.median(noticed):.1f}, "
+          f"max {max(noticed):.1f}, within 10 s {soon.sum()}/{soon.size + unnoticed}; never "
+          f"{unnoticed}; beacons not moved suspected {false_suspicions}")
+
+
+def line_of_sight(frames, times: np.ndarray, since: float, scenario, truth, row: int) -> float:
+    """The angle between a beacon's move and the line from the camera to its map position when
+    first seen from two places [°] (0: along the line of sight, 90: across it)."""
+    camera = np.array(frames[int(np.searchsorted(times, since))].pose[:2])
+    old, new = scenario.beacons.xyz[row, :2], truth.xyz[row, :2]
+    sight, move = old - camera, new - old
+    cosine = abs(float(sight @ move)) / float(np.linalg.norm(sight) * np.linalg.norm(move))
+    return math.degrees(math.acos(min(1.0, cosine)))
 
 
 def poses_of(frames, rows: np.ndarray) -> np.ndarray:

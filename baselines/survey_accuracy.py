@@ -6,8 +6,9 @@ The drive: warehouse-small's aisle-loop (95 m) at ``--speed`` (0.75 m/s: 126 s, 
 minutes the acceptance asks for), written as a log by ``export_route`` (the scenario's simulated
 odometry and IMU, its glass wall's and racks' mirror images, its misread ids) into a temporary
 folder. It is surveyed by the command itself, run as a process:
-``azgym survey LOG --anchor 1 2 --out DIR`` (the known start is the log's first true pose; the
-map is unknown but for beacons 1 and 2), and the ``beacons.csv`` it writes is read back.
+``azgym survey LOG --prior ANCHORS --anchor 1 2 --out DIR`` (the known start is the log's first
+true pose; the map is unknown but for beacons 1 and 2, ``ANCHORS`` a ``beacons.csv`` of those
+two), and the ``beacons.csv`` it writes is read back.
 
 Printed: each surveyed beacon's error against the world's true positions (beacon 9 stands
 1.5 m from where the shipped map has it), their median, p95 and worst, and the mean of their
@@ -56,9 +57,20 @@ def drive_log(seed: int, speed: float, folder: Path) -> Path:
 
 
 def surveyed_map(log_folder: Path, out: Path) -> tuple[BeaconMap, str]:
-    """``azgym survey`` run on the log: the map it wrote and what it printed."""
-    command = [sys.executable, "-m", "azgym", "survey", str(log_folder), "--anchor",
-               *map(str, ANCHORS), "--out", str(out)]
+    """``azgym survey`` run on the log: the map it wrote and what it printed.
+
+    Its prior is a ``beacons.csv`` of the anchors alone, written beside ``out`` (the log's own
+    map, given whole, would hold every other beacon by its position: docs/mapping.md, "The
+    model").
+    """
+    known = read_log(log_folder).beacons
+    anchors = out.parent / "anchors.csv"
+    anchors.write_text("id,x,y,z,width\n" + "".join(
+        f"{i},{x!r},{y!r},{z!r},{w!r}\n" for i, (x, y, z), w in zip(
+            known.ids.tolist(), known.xyz.tolist(), known.width.tolist(), strict=True)
+        if i in ANCHORS))
+    command = [sys.executable, "-m", "azgym", "survey", str(log_folder), "--prior",
+               str(anchors), "--anchor", *map(str, ANCHORS), "--out", str(out)]
     done = subprocess.run(command, capture_output=True, text=True, timeout=600, check=True)
     return read_beacons(out / "beacons.csv"), done.stdout
 

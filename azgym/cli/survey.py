@@ -4,8 +4,10 @@ Reads the log (its odometry or IMU, its azimuths, its profile), fixes the map fr
 sequence's known start pose (its first frame's true pose, when the log has one) and by the
 anchors (``--anchor ID``: beacons whose positions are surveyed, read from ``--prior`` or else
 from the log's map), and writes ``beacons.csv`` and ``survey.csv`` into the folder ``--out``
-(:mod:`azgym.mapping.output`), and the figure with ``--figure``. With ``--prior`` each surveyed
-beacon is also tested for having moved from the prior's position.
+(:mod:`azgym.mapping.output`), and the figure with ``--figure``. A ``--prior`` holding beacons
+beyond the anchors is the site's map: each of its beacons the drive observes is held near its
+map position (as well as the map was surveyed, ``map_sigma``), judged moved on its position
+without that hold, and freed when it moved; an id it lacks is a misread one.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ if TYPE_CHECKING:
     from azgym.core import BeaconMap
     from azgym.mapping import Survey
 
-__all__ = ["add_survey", "build_parser"]
+__all__ = ["add_survey"]
 
 
 def add_survey(commands: argparse._SubParsersAction) -> None:
@@ -30,7 +32,8 @@ def add_survey(commands: argparse._SubParsersAction) -> None:
     parser.add_argument("log", metavar="LOG", help="the log's folder (or a shipped log's name)")
     parser.add_argument("--prior", metavar="MAP",
                         help="a prior map: a scenario (name or .toml) or a beacons.csv; its "
-                             "beacons are tested for having moved")
+                             "beacons are held near their map positions, and those that moved "
+                             "are found and surveyed afresh")
     parser.add_argument("--anchor", metavar="ID", type=int, nargs="+", default=[],
                         help="ids of surveyed beacons held at their positions (from --prior, "
                              "else from the log's map)")
@@ -40,13 +43,6 @@ def add_survey(commands: argparse._SubParsersAction) -> None:
                         help="a PNG of the survey over the log's map (needs matplotlib)")
     add_overwrite(parser, "beacons.csv, survey.csv or the figure")
     parser.set_defaults(handler=_survey)
-
-
-def build_parser() -> argparse.ArgumentParser:
-    """A parser holding ``survey`` alone (for tests, until the command's list holds it)."""
-    parser = argparse.ArgumentParser(prog="azgym")
-    add_survey(parser.add_subparsers(dest="command", required=True))
-    return parser
 
 
 def _survey(args: argparse.Namespace) -> int:

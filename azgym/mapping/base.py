@@ -28,8 +28,8 @@ import numpy as np
 from azgym.core import BeaconMap, FloatArray, IntArray
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import Hyperparameters
+from azgym.mapping.first_guess import DEFAULT_WIDTH
 from azgym.mapping.problem import Drive, Prior
-from azgym.mapping.survey import DEFAULT_WIDTH
 
 __all__ = ["MAX_BEACONS", "MapAnswer", "Mapper", "SupportsSurvey", "map_answer"]
 

@@ -3,43 +3,116 @@
 The rule (docs/mapping.md, "First guesses and observability"): an id is observable when it was
 seen at least :data:`~azgym.localize.bearings.MIN_RAYS` times, its rays spread at least
 :data:`~azgym.localize.bearings.MIN_SPREAD`, and those that agree on a point (a reweighted
-intersection) do too. Each detection's standard deviation is eq. 1-3's at the guess's distance.
+intersection, :func:`agreeing`) do too. A beacon a site's map holds is guessed at its map
+position when more of its rays agree with that. Each detection's standard deviation is eq. 1-3's
+at the guess's distance.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 
 from azgym.core import FloatArray, IntArray
-from azgym.localize.bearings import MIN_RAYS, MIN_SPREAD, intersect_robustly, spread
+from azgym.localize.bearings import (
+    MIN_RAYS,
+    MIN_SPREAD,
+    STRAY_SCALE,
+    intersect_robustly,
+    meeting_point,
+    spread,
+)
 from azgym.mapping.problem import Prior, Settings
 from azgym.site.error_model import ErrorModel
 
-__all__ = ["DEFAULT_WIDTH", "anchor_positions", "azimuth_sigmas", "first_guess", "seen",
-           "widths"]
+__all__ = ["DEFAULT_WIDTH", "MIN_AGREEING", "agreeing", "anchor_positions", "azimuth_residuals",
+           "azimuth_sigmas", "first_guess", "seen", "widths"]
 
 DEFAULT_WIDTH = 0.03
 """Width of a beacon the prior map does not hold [m] (docs/logs.md's default)."""
+CONSENSUS_RAYS = 16
+"""Rays whose pairs' meeting points a beacon the map holds is also guessed at (:func:`first_guess`:
+the one most of its rays agree with), when its map position is not."""
+MIN_AGREEING = 0.5
+"""Least share of an id's detections the solved graph must agree with (and at least
+:data:`~azgym.localize.bearings.MIN_RAYS` of them): among a beacon's detections, ghosts and
+misread ones are the few; an id whose azimuths are scattered (a misread id seen here and there)
+has a handful that pass near some point by chance, and is no beacon. (The first guess, from
+dead-reckoned poses that drift, cannot ask as much of a point it finds; it asks it of a map
+position, :func:`first_guess`.)"""
 
-def first_guess(poses: FloatArray, azimuths: FloatArray) -> tuple[FloatArray, str]:
-    """One id's guess from its rays, or NaN and why it is unobservable."""
+
+def first_guess(poses: FloatArray, azimuths: FloatArray,
+                held: FloatArray | None = None) -> tuple[FloatArray, str]:
+    """One id's guess from its rays, or NaN and why it is unobservable.
+
+    A beacon a site's map holds at ``held`` (x, y) is guessed there when at least
+    :data:`MIN_AGREEING` of its rays agree with it (:func:`agreeing`); else at whichever of
+    the intersection, the best meeting point of two rays (:func:`_consensus`) and the map
+    position more rays agree with (the first on a tie). Mirror images meet at a point of their
+    own, which the reweighting may fall to, and a stray ray crossing a narrow bundle draws the
+    intersection far along it: either way off a beacon the map has right or a moved one.
+    """
     directions = poses[:, 2] + azimuths
     if len(directions) < MIN_RAYS:
         return np.full(2, np.nan), f"{seen(len(directions))}, fewer than {MIN_RAYS}"
     angle = spread(directions)
     if angle < MIN_SPREAD:
         return np.full(2, np.nan), _narrow(angle)
-    point, weights = intersect_robustly(poses[:, :2], directions)
-    agreeing = weights > 0.5
-    if not np.isfinite(point).all() or agreeing.sum() < MIN_RAYS:
-        return np.full(2, np.nan), (f"its rays do not meet: {int(agreeing.sum())} of "
+    point, _ = intersect_robustly(poses[:, :2], directions)
+    agree = agreeing(poses, directions, point)
+    if held is not None:
+        at_map = agreeing(poses, directions, held)
+        if at_map.sum() >= MIN_AGREEING * len(directions):
+            point, agree = held, at_map
+        else:
+            for other in (_consensus(poses, directions), held):
+                at_other = agreeing(poses, directions, other)
+                if at_other.sum() > agree.sum():
+                    point, agree = other, at_other
+    if not np.isfinite(point).all() or agree.sum() < MIN_RAYS:
+        return np.full(2, np.nan), (f"its rays do not meet: {int(agree.sum())} of "
                                     f"{len(directions)} agree on a point")
-    angle = spread(directions[agreeing])
+    angle = spread(directions[agree])
     if angle < MIN_SPREAD:
         return np.full(2, np.nan), _narrow(angle) + " among the rays that agree"
     return point, ""
+
+
+def _consensus(poses: FloatArray, directions: FloatArray) -> FloatArray:
+    """The point the most rays agree with among where pairs of them meet, refined on those.
+
+    The pairs of :data:`CONSENSUS_RAYS` rays spaced evenly through the detections (all of them,
+    when fewer); NaN when no pair meets.
+    """
+    picks = np.unique(np.linspace(0, len(directions) - 1,
+                                  min(len(directions), CONSENSUS_RAYS)).round().astype(np.int64))
+    best, most = np.full(2, np.nan), np.zeros(len(directions), dtype=bool)
+    for i, j in itertools.combinations(picks.tolist(), 2):
+        point = meeting_point(poses[[i, j], :2], directions[[i, j]], np.ones(2))
+        agree = agreeing(poses, directions, point)
+        if agree.sum() > most.sum():
+            best, most = point, agree
+    if most.sum() < MIN_RAYS:
+        return best
+    return meeting_point(poses[most, :2], directions[most], np.ones(int(most.sum())))
+
+
+def agreeing(poses: FloatArray, directions: FloatArray, point: FloatArray) -> np.ndarray:
+    """Which rays, from ``poses`` along world ``directions``, agree with ``point``.
+
+    Those pointing towards it and passing within :data:`~azgym.localize.bearings.STRAY_SCALE`
+    of it: the rays :func:`~azgym.localize.bearings.intersect_robustly` weighs above half. None
+    when the point is not finite.
+    """
+    if not np.isfinite(point).all():
+        return np.zeros(len(directions), dtype=bool)
+    offsets = point - poses[:, :2]
+    cos, sin = np.cos(directions), np.sin(directions)
+    ahead = cos * offsets[:, 0] + sin * offsets[:, 1] > 0.0
+    return np.asarray(ahead & (np.abs(cos * offsets[:, 1] - sin * offsets[:, 0]) < STRAY_SCALE))
 
 
 def seen(detections: int) -> str:
@@ -72,8 +145,17 @@ def widths(prior: Prior, ids: IntArray) -> FloatArray:
     return widths
 
 
+def azimuth_residuals(poses: FloatArray, points: FloatArray, azimuths: FloatArray) -> FloatArray:
+    """Each azimuth measured from ``poses`` (K, 3) minus the one ``points`` (K, 2) give, wrapped.
+
+    The bearing of a point from a camera pose (x, y, φ) is atan2(y_b − y, x_b − x) − φ [rad].
+    """
+    predicted = np.arctan2(points[:, 1] - poses[:, 1], points[:, 0] - poses[:, 0]) - poses[:, 2]
+    return np.asarray(np.remainder(azimuths - predicted + math.pi, 2.0 * math.pi) - math.pi)
+
+
 def azimuth_sigmas(settings: Settings, poses: FloatArray, points: FloatArray,
-            widths: FloatArray) -> FloatArray:
+                   widths: FloatArray) -> FloatArray:
     """Each detection's azimuth standard deviation: eq. 1-3 at the first guess's distance."""
     distance = np.hypot(*(points - poses[:, :2]).T)
     model = ErrorModel(settings.delta_alpha_d, settings.coverage)

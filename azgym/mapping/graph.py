@@ -1,16 +1,20 @@
 """The factor graph: camera poses and beacon positions, solved with GTSAM.
 
 One ``Pose2`` per frame (the camera's), one ``Point2`` per observable beacon; per pair of
-consecutive frames an odometry factor (:func:`odometry_error`: the relative pose
-:mod:`azgym.mapping.odometry` integrated, corrected by that frame's turn-rate bias and odometry
-scale error, themselves unknowns: a 2-vector per frame, held near the previous frame's by their
-random walks and near zero at a drive's start by the sensors' spread); a ``BearingFactor2D`` per
-detection, its azimuth the bearing in the camera frame with eq. 1-3's standard deviation at the
-first guess's distance, behind a robust loss (Cauchy by default: docs/mapping.md); a prior on
-each drive's known start pose and on each anchor. Levenberg-Marquardt solves it
-(:func:`solve`), from poses the drives solved frame by frame give (:class:`Sweep`), and GTSAM's
-marginals give each beacon's covariance (:func:`covariances`), once the beacons found
-unobservable after the solve are left out. gtsam is imported here only, when a survey runs.
+consecutive frames an odometry factor (:func:`~azgym.mapping.factors.odometry_error`: the
+relative pose :mod:`azgym.mapping.odometry` integrated, corrected by that frame's turn-rate bias
+and odometry scale error, themselves unknowns: a 2-vector per frame, held near the previous
+frame's by their random walks and near zero at a drive's start by the sensors' spread); a
+``BearingFactor2D`` per detection, its azimuth the bearing in the camera frame with eq. 1-3's
+standard deviation at the first guess's distance, behind a robust loss (Cauchy by default:
+docs/mapping.md); a prior on each drive's known start pose and on each anchor; a prior on each
+beacon of a site's map given as the survey's prior, at its map position with the map's accuracy
+and behind the same robust loss, so that a moved beacon breaks away (:func:`left_out` gives its
+position without it). The factors themselves are built by :mod:`azgym.mapping.factors`.
+Levenberg-Marquardt solves it (:func:`solve`), from poses the drives solved frame by frame give
+(:class:`Sweep`), and GTSAM's marginals give each beacon's covariance (:func:`covariances`),
+once the beacons found unobservable after the solve are left out. gtsam is imported only when a
+survey runs.
 """
 
 from __future__ import annotations
@@ -23,10 +27,21 @@ import numpy as np
 
 from azgym.core import FloatArray, IntArray
 from azgym.errors import InvalidInputError, require
+from azgym.mapping.factors import (
+    beacon_key,
+    bearing,
+    between,
+    map_prior,
+    odometry_error,
+    pose_key,
+    robust_loss,
+    sensor_key,
+)
+from azgym.mapping.first_guess import azimuth_residuals
 from azgym.mapping.odometry import Odometry
 from azgym.mapping.problem import Drive, Settings
 
-__all__ = ["ANCHOR_STD", "START_STD", "Graph", "Solution", "covariances", "odometry_error",
+__all__ = ["ANCHOR_STD", "START_STD", "Graph", "Solution", "covariances", "left_out",
            "residuals", "skeleton", "solve"]
 
 START_STD = (0.005, 0.005, math.radians(0.05))
@@ -61,6 +76,9 @@ class Graph:
         starts: Pose indices with a known pose, and ``start_poses`` (S, 3) those poses.
         beacons: (B, 2) first guesses of the beacons; ``anchors`` the indices held by a prior
             at their guess.
+        priors: Indices of the beacons a site's map holds
+            (:attr:`~azgym.mapping.problem.Prior.mapped`), and ``prior_xy`` (P, 2) their map
+            positions.
         rows: (D, 2) the detections' pose and beacon indices; ``azimuths`` (D,) and ``sigmas``
             (D,) their azimuths and standard deviations [rad].
     """
@@ -76,6 +94,8 @@ class Graph:
     start_poses: FloatArray
     beacons: FloatArray
     anchors: IntArray
+    priors: IntArray
+    prior_xy: FloatArray
     rows: IntArray
     azimuths: FloatArray
     sigmas: FloatArray
@@ -113,8 +133,9 @@ def skeleton(drives: list[Drive], offsets: IntArray, odometry: list[Odometry],
         starts=np.array([o for o, d in zip(offsets[:-1], drives, strict=True)
                          if d.start is not None], dtype=np.int64),
         start_poses=np.array([d.start for d in drives if d.start is not None]).reshape(-1, 3),
-        beacons=np.zeros((0, 2)), anchors=np.zeros(0, np.int64), rows=np.zeros((0, 2), np.int64),
-        azimuths=np.zeros(0), sigmas=np.zeros(0))
+        beacons=np.zeros((0, 2)), anchors=np.zeros(0, np.int64), priors=np.zeros(0, np.int64),
+        prior_xy=np.zeros((0, 2)), rows=np.zeros((0, 2), np.int64), azimuths=np.zeros(0),
+        sigmas=np.zeros(0))
 
 
 def solve(graph: Graph, settings: Settings) -> Solution:
@@ -154,12 +175,12 @@ def solve(graph: Graph, settings: Settings) -> Solution:
 def _read(gtsam: Any, result: Any, graph: Graph, iterations: int) -> Solution:
     """The solution in GTSAM's ``result``."""
     poses = np.array([[p.x(), p.y(), p.theta()] for p in
-                      (result.atPose2(_pose_key(gtsam, k)) for k in range(len(graph.poses)))]
+                      (result.atPose2(pose_key(gtsam, k)) for k in range(len(graph.poses)))]
                      ).reshape(-1, 3)
-    beacons = np.array([result.atPoint2(_beacon_key(gtsam, b))
+    beacons = np.array([result.atPoint2(beacon_key(gtsam, b))
                         for b in range(len(graph.beacons))]).reshape(-1, 2)
-    sensors = np.array([result.atVector(_sensor_key(gtsam, k)) if result.exists(
-        _sensor_key(gtsam, k)) else np.zeros(2) for k in range(len(graph.links))]).reshape(-1, 2)
+    sensors = np.array([result.atVector(sensor_key(gtsam, k)) if result.exists(
+        sensor_key(gtsam, k)) else np.zeros(2) for k in range(len(graph.links))]).reshape(-1, 2)
     return Solution(poses, beacons, sensors, residuals(poses, beacons, graph), iterations)
 
 
@@ -195,30 +216,15 @@ def covariances(graph: Graph, solution: Solution, settings: Settings,
             "the survey's solved graph is indeterminate, so its covariances are unknown: "
             + " ".join(str(error).split())) from None
     for b in np.flatnonzero(kept).tolist():
-        found[b] = marginals.marginalCovariance(_beacon_key(gtsam, b))
+        found[b] = marginals.marginalCovariance(beacon_key(gtsam, b))
     return found
-
-
-def _pose_key(gtsam: Any, k: int) -> int:
-    """The GTSAM key of camera pose ``k``."""
-    return int(gtsam.symbol("x", k))
-
-
-def _beacon_key(gtsam: Any, b: int) -> int:
-    """The GTSAM key of beacon ``b``."""
-    return int(gtsam.symbol("l", b))
-
-
-def _sensor_key(gtsam: Any, k: int) -> int:
-    """The GTSAM key of link ``k``'s turn-rate bias and scale error."""
-    return int(gtsam.symbol("s", k))
 
 
 def _values(gtsam: Any, solution: Solution, kept: np.ndarray, sensors: bool) -> Any:
     """``solution``'s camera poses, kept beacons and, with ``sensors``, sensor errors."""
     values = _pose_values(gtsam, solution, sensors)
     for b in np.flatnonzero(kept).tolist():
-        values.insert(_beacon_key(gtsam, b), gtsam.Point2(*solution.beacons[b]))
+        values.insert(beacon_key(gtsam, b), gtsam.Point2(*solution.beacons[b]))
     return values
 
 
@@ -226,9 +232,9 @@ def _pose_values(gtsam: Any, solution: Solution, sensors: bool) -> Any:
     """``solution``'s camera poses and, with ``sensors``, sensor errors as GTSAM values."""
     values = gtsam.Values()
     for k, (x, y, phi) in enumerate(solution.poses.tolist()):
-        values.insert(_pose_key(gtsam, k), gtsam.Pose2(x, y, phi))
+        values.insert(pose_key(gtsam, k), gtsam.Pose2(x, y, phi))
     for k, errors in enumerate(solution.sensors if sensors else ()):
-        values.insert(_sensor_key(gtsam, k), errors)
+        values.insert(sensor_key(gtsam, k), errors)
     return values
 
 
@@ -243,7 +249,8 @@ def _factors(gtsam: Any, graph: Graph, fixed: Any, about: Solution | None) -> An
     factors.push_back(fixed)
     if about is None:
         for k, (i, j) in enumerate(graph.links.tolist()):
-            factors.add(_between(gtsam, graph, k, i, j))
+            factors.add(between(gtsam, i, j, graph.moves[k], graph.move_cov[k],
+                                 graph.move_jac[k], graph.sensor_std))
     else:
         _add_odometry(gtsam, factors, graph, about)
     return factors
@@ -254,36 +261,64 @@ def _fixed(gtsam: Any, graph: Graph, settings: Settings, kept: np.ndarray) -> An
     factors = gtsam.NonlinearFactorGraph()
     start_noise = gtsam.noiseModel.Diagonal.Sigmas(np.array(START_STD))
     for k, pose in zip(graph.starts.tolist(), graph.start_poses.tolist(), strict=True):
-        factors.add(gtsam.PriorFactorPose2(_pose_key(gtsam, k), gtsam.Pose2(*pose),
+        factors.add(gtsam.PriorFactorPose2(pose_key(gtsam, k), gtsam.Pose2(*pose),
                                            start_noise))
     anchor_noise = gtsam.noiseModel.Isotropic.Sigma(2, ANCHOR_STD)
     for b in graph.anchors.tolist():
         if kept[b]:
-            factors.add(gtsam.PriorFactorPoint2(_beacon_key(gtsam, b),
+            factors.add(gtsam.PriorFactorPoint2(beacon_key(gtsam, b),
                                                 gtsam.Point2(*graph.beacons[b]), anchor_noise))
-    loss = _loss(gtsam, settings)
+    loss = robust_loss(gtsam, settings)
+    for b, xy in zip(graph.priors.tolist(), graph.prior_xy, strict=True):
+        if kept[b]:
+            factors.add(map_prior(gtsam, loss, settings, b, xy))
     for (k, b), azimuth, sigma in zip(graph.rows.tolist(), graph.azimuths.tolist(),
                                       graph.sigmas.tolist(), strict=True):
         if kept[b]:
-            factors.add(_bearing(gtsam, loss, k, b, azimuth, sigma))
+            factors.add(bearing(gtsam, loss, k, b, azimuth, sigma))
     return factors
 
 
-def _between(gtsam: Any, graph: Graph, link: int, first: int, second: int) -> Any:
-    """Link ``link``'s between factor at zero sensor errors, their spread counted in it."""
-    jacobian = graph.move_jac[link]
-    spread = jacobian @ np.diag(graph.sensor_std**2) @ jacobian.T
-    return gtsam.BetweenFactorPose2(
-        _pose_key(gtsam, first), _pose_key(gtsam, second), gtsam.Pose2(*graph.moves[link]),
-        gtsam.noiseModel.Gaussian.Covariance(graph.move_cov[link] + spread))
+def left_out(graph: Graph, solution: Solution, settings: Settings,
+             covariances: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Each map-held beacon's position and covariance as the rest of the graph puts it.
 
+    That is without its own map prior (leave-its-prior-out), so that testing it against the map
+    neither calls it moved by its prior's pull nor misses a move because of it. In the
+    linearized graph the beacon's marginal information Σ⁻¹ is what the rest gives, A, plus its
+    prior's, w I / σ² (σ the map's accuracy, w the robust loss's weight at the prior's residual,
+    as GTSAM weighs it), and its position x the information-weighted mean of the rest's x₀ and
+    the map's m: A = Σ⁻¹ − w I / σ², x₀ = m + A⁻¹ Σ⁻¹ (x − m).
 
-def _bearing(gtsam: Any, loss: Any, pose: int, beacon: int, azimuth: float,
-             sigma: float) -> Any:
-    """One detection's bearing factor, behind the robust ``loss``."""
-    noise = gtsam.noiseModel.Robust.Create(loss, gtsam.noiseModel.Isotropic.Sigma(1, sigma))
-    return gtsam.BearingFactor2D(_pose_key(gtsam, pose), _beacon_key(gtsam, beacon),
-                                 gtsam.Rot2(azimuth), noise)
+    Args:
+        graph: The graph solved (its ``priors`` and ``prior_xy``).
+        solution: Its solution.
+        settings: The map's accuracy and the loss.
+        covariances: (B, 2, 2) the beacons' marginal covariances at ``solution``
+            (:func:`covariances`; NaN: not kept).
+
+    Returns:
+        Per entry of ``graph.priors``, the position (P, 2) and covariance (P, 2, 2); NaN where
+        the beacon was not kept or the rest leaves it indeterminate (A not positive definite).
+    """
+    import gtsam
+
+    loss = robust_loss(gtsam, settings)
+    positions = np.full((len(graph.priors), 2), np.nan)
+    found = np.full((len(graph.priors), 2, 2), np.nan)
+    for n, (b, xy) in enumerate(zip(graph.priors.tolist(), graph.prior_xy, strict=True)):
+        if not np.isfinite(covariances[b]).all():
+            continue
+        offset = solution.beacons[b] - xy
+        weight = float(loss.weight(math.hypot(*offset) / settings.map_sigma))
+        information = np.linalg.inv(covariances[b])
+        rest = information - weight / settings.map_sigma**2 * np.eye(2)
+        rest = 0.5 * (rest + rest.T)
+        if np.linalg.eigvalsh(rest)[0] <= 0.0:
+            continue
+        found[n] = np.linalg.inv(rest)
+        positions[n] = xy + found[n] @ information @ offset
+    return positions, found
 
 
 def _add_odometry(gtsam: Any, factors: Any, graph: Graph, about: Solution) -> None:
@@ -292,17 +327,18 @@ def _add_odometry(gtsam: Any, factors: Any, graph: Graph, about: Solution) -> No
     The sensor errors are held near zero at a drive's start (``sensor_std``), else near the
     previous link's (their random walk over the link, ``walks``).
 
-    :func:`odometry_error`'s first-order expansion about the solution's poses and sensor errors
-    (GTSAM's linear container: a Jacobian factor, whitened by the link's covariance, held at its
-    linearization point): GTSAM's Python custom factors would hand the whole set of values to
-    Python at each evaluation, a cost growing with the square of the drive's length.
+    :func:`~azgym.mapping.factors.odometry_error`'s first-order expansion about the solution's
+    poses and sensor errors (GTSAM's linear container: a Jacobian factor, whitened by the link's
+    covariance, held at its linearization point): GTSAM's Python custom factors would hand the
+    whole set of values to Python at each evaluation, a cost growing with the square of the
+    drive's length.
     """
     start_noise = gtsam.noiseModel.Diagonal.Sigmas(np.maximum(graph.sensor_std, WALK_FLOOR))
     zero = np.zeros(2)
     point = _pose_values(gtsam, about, True)
     unit = gtsam.noiseModel.Unit.Create(3)
     for k, (i, j) in enumerate(graph.links.tolist()):
-        keys = [_pose_key(gtsam, i), _pose_key(gtsam, j), _sensor_key(gtsam, k)]
+        keys = [pose_key(gtsam, i), pose_key(gtsam, j), sensor_key(gtsam, k)]
         found, derivatives = odometry_error(
             gtsam, gtsam.Pose2(*about.poses[i]), gtsam.Pose2(*about.poses[j]),
             about.sensors[k], graph.moves[k], graph.move_jac[k])
@@ -315,57 +351,12 @@ def _add_odometry(gtsam: Any, factors: Any, graph: Graph, about: Solution) -> No
             factors.add(gtsam.PriorFactorVector(keys[2], zero, start_noise))
         else:
             walk = gtsam.noiseModel.Diagonal.Sigmas(np.maximum(graph.walks[k], WALK_FLOOR))
-            factors.add(gtsam.BetweenFactorVector(_sensor_key(gtsam, k - 1), keys[2], zero,
+            factors.add(gtsam.BetweenFactorVector(sensor_key(gtsam, k - 1), keys[2], zero,
                                                   walk))
-
-
-def odometry_error(gtsam: Any, first: Any, second: Any, sensors: FloatArray, move: FloatArray,
-                   jacobian: FloatArray) -> tuple[FloatArray, tuple[FloatArray, ...]]:
-    """One link's error and its derivatives with respect to both poses and the sensor errors.
-
-    The odometry says the camera moved by Δ = ``move`` + ``jacobian`` (b, k) (x, y, heading in
-    the first camera's frame) given the link's turn-rate bias b and scale error k
-    (``sensors``); the poses say it moved by ``first``⁻¹ ``second``. The error is the latter in
-    Δ's own frame, Logmap(Δ⁻¹ ``first``⁻¹ ``second``): GTSAM's between factor's, with Δ
-    depending on (b, k). A pose's tangent (u, v, w) moves (x, y, θ) by (R(θ) (u, v), w), so
-    d(Δ's tangent)/d(b, k) is blockdiag(R(θ)ᵀ, 1) ``jacobian``.
-
-    Args:
-        gtsam: The gtsam module.
-        first: The first camera pose (``gtsam.Pose2``).
-        second: The next one.
-        sensors: (b, k) [rad/s, 1].
-        move: (3,) the relative pose at zero bias and scale error.
-        jacobian: (3, 2) its derivative with respect to (b, k).
-
-    Returns:
-        The error (3,) and its derivatives (3, 3), (3, 3), (3, 2) with respect to ``first``,
-        ``second`` (their tangents) and ``sensors``.
-    """
-    x, y, theta = move + jacobian @ sensors
-    measured = gtsam.Pose2(x, y, theta)
-    d_first, d_second = np.zeros((3, 3), order="F"), np.zeros((3, 3), order="F")
-    moved = first.between(second, d_first, d_second)
-    d_measured, d_moved = np.zeros((3, 3), order="F"), np.zeros((3, 3), order="F")
-    found = measured.localCoordinates(moved, d_measured, d_moved)
-    c, s = math.cos(theta), math.sin(theta)
-    tangent = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-    return np.asarray(found).reshape(3), (d_moved @ d_first, d_moved @ d_second,
-                                          d_measured @ tangent @ jacobian)
 
 
 def residuals(poses: FloatArray, beacons: FloatArray, graph: Graph) -> FloatArray:
     """Each detection's measured minus predicted azimuth, wrapped [rad]."""
     if graph.rows.size == 0:
         return np.zeros(0)
-    pose = poses[graph.rows[:, 0]]
-    point = beacons[graph.rows[:, 1]]
-    predicted = np.arctan2(point[:, 1] - pose[:, 1], point[:, 0] - pose[:, 0]) - pose[:, 2]
-    return np.remainder(graph.azimuths - predicted + math.pi, 2.0 * math.pi) - math.pi
-
-
-def _loss(gtsam: Any, settings: Settings) -> Any:
-    """The robust loss of the azimuth factors, at ``loss_scale`` standard deviations."""
-    estimators = {"cauchy": gtsam.noiseModel.mEstimator.Cauchy,
-                  "huber": gtsam.noiseModel.mEstimator.Huber}
-    return estimators[settings.loss].Create(float(settings.loss_scale))
+    return azimuth_residuals(poses[graph.rows[:, 0]], beacons[graph.rows[:, 1]], graph.azimuths)

@@ -40,7 +40,7 @@ NON_NEGATIVE = ("speed_noise", "speed_scale", "scale_walk", "turn_rate_noise", "
                 "position_walk", "heading_walk", "max_speed", "max_turn_rate", "delta_alpha_d",
                 "extra_sigma")
 """The settings' hyperparameters that are numbers of zero or more."""
-POSITIVE = ("wheelbase", "speed_factor", "loss_scale")
+POSITIVE = ("wheelbase", "speed_factor", "loss_scale", "map_sigma")
 """... and those that are numbers above zero (the choices
 :class:`~azgym.mapping.problem.Settings` checks itself)."""
 
@@ -86,7 +86,8 @@ class SurveyMapper(_Settled):
 
     Args:
         vehicle, yaw_source, camera_ahead, wheelbase, speed_factor, start_bias, delta_alpha_d,
-        coverage, extra_sigma, loss, loss_scale: As :class:`~azgym.mapping.problem.Settings`.
+        coverage, extra_sigma, loss, loss_scale, map_sigma: As
+            :class:`~azgym.mapping.problem.Settings`.
         speed_noise, speed_scale, scale_walk, turn_rate_noise, bias_walk, position_walk,
         heading_walk, max_speed, max_turn_rate: As :class:`~azgym.track.unicycle.MotionNoise`.
     """
@@ -104,7 +105,8 @@ class SurveyMapper(_Settled):
                  max_turn_rate: float = NOISE.max_turn_rate, start_bias: float | None = None,
                  delta_alpha_d: float = SETTINGS.delta_alpha_d,
                  coverage: bool = SETTINGS.coverage, extra_sigma: float = SETTINGS.extra_sigma,
-                 loss: str = SETTINGS.loss, loss_scale: float = SETTINGS.loss_scale) -> None:
+                 loss: str = SETTINGS.loss, loss_scale: float = SETTINGS.loss_scale,
+                 map_sigma: float = SETTINGS.map_sigma) -> None:
         self.vehicle, self.yaw_source, self.camera_ahead = vehicle, yaw_source, camera_ahead
         self.wheelbase, self.speed_factor = wheelbase, speed_factor
         self.speed_noise, self.speed_scale, self.scale_walk = speed_noise, speed_scale, scale_walk
@@ -112,7 +114,7 @@ class SurveyMapper(_Settled):
         self.position_walk, self.heading_walk = position_walk, heading_walk
         self.max_speed, self.max_turn_rate, self.start_bias = max_speed, max_turn_rate, start_bias
         self.delta_alpha_d, self.coverage, self.extra_sigma = delta_alpha_d, coverage, extra_sigma
-        self.loss, self.loss_scale = loss, loss_scale
+        self.loss, self.loss_scale, self.map_sigma = loss, loss_scale, map_sigma
         self._validate_once()
 
     def _survey(self, drive: Drive, prior: Prior) -> MapAnswer:

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from azgym.core import BeaconMap, Measurements, Pose
+from azgym.core import BeaconMap, FloatArray, Measurements, Pose
 from azgym.errors import InvalidInputError
 from azgym.logs.frames import frame_measurements, frame_motions
 from azgym.logs.read import Log
@@ -26,11 +26,15 @@ from azgym.track.kinematics import WHEELBASE
 from azgym.track.unicycle import VEHICLE_DEFAULTS, YAW_SOURCES, MotionNoise
 from azgym.world.drive import Frame
 
-__all__ = ["LOSSES", "Drive", "Prior", "Settings", "SurveyFrame", "drive_list", "log_drives",
-           "settings_from_profile", "simulated_drive"]
+__all__ = ["LOSSES", "MIN_MAP_SIGMA", "Drive", "Prior", "Settings", "SurveyFrame", "drive_list",
+           "log_drives", "settings_from_profile", "simulated_drive"]
 
 LOSSES = ("cauchy", "huber")
 """The robust losses of the azimuth factors (docs/mapping.md: why Cauchy is the default)."""
+MIN_MAP_SIGMA = 0.001
+"""Least :attr:`Settings.map_sigma` [m]: no map is surveyed finer than a millimetre, and a
+prior much stiffer than its beacon's azimuths leaves the beacon's position without its prior
+(:func:`~azgym.mapping.graph.left_out`: its information less the prior's) to rounding."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,6 +109,20 @@ class Prior:
             return None
         return frozenset(self.beacons.ids.tolist())
 
+    @property
+    def mapped(self) -> dict[int, FloatArray]:
+        """The map position (x, y) of each beacon a survey holds by the map, not as an anchor.
+
+        A site's map (:attr:`ids` not None) is mostly right even when stale: its beacons beyond
+        the anchors are priors of the survey (:attr:`Settings.map_sigma`). Empty without a map,
+        or with one of the anchors alone.
+        """
+        if self.ids is None or self.beacons is None:
+            return {}
+        held = set(self.anchors)
+        return {int(i): self.beacons.xyz[k, :2].copy()
+                for k, i in enumerate(self.beacons.ids.tolist()) if i not in held}
+
 
 @dataclass(frozen=True)
 class Settings:
@@ -125,6 +143,10 @@ class Settings:
         start_bias: Spread of the turn rate's bias at a drive's start [rad/s]; None: the turn
             rate source's (a gyro's, :class:`~azgym.sensing.motion.ImuModel`; a differential
             drive's odometry's, :class:`~azgym.sensing.motion.DifferentialOdometryModel`).
+        map_sigma: Standard deviation of each position of a site's map given as the prior
+            (:attr:`Prior.mapped`) [m]: how well it was surveyed (a total station's centimetre).
+            Each such beacon is held there by that much, behind the robust loss, until the
+            drive shows it moved (docs/mapping.md, "The model" and "Moved beacons").
     """
 
     vehicle: str = FORKLIFT
@@ -139,6 +161,7 @@ class Settings:
     loss: str = "cauchy"
     loss_scale: float = 3.0
     start_bias: float | None = None
+    map_sigma: float = 0.01
 
     def __post_init__(self) -> None:
         if self.vehicle not in VEHICLE_KINDS:
@@ -153,6 +176,9 @@ class Settings:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"{name} must be a positive number, got {value!r}")
+        if not (math.isfinite(self.map_sigma) and self.map_sigma >= MIN_MAP_SIGMA):
+            raise InvalidInputError(f"map_sigma must be a number of at least {MIN_MAP_SIGMA} m, "
+                                    f"got {self.map_sigma!r}")
         if self.start_bias is not None and not (math.isfinite(self.start_bias)
                                                 and self.start_bias >= 0.0):
             raise InvalidInputError(f"start_bias must be a number >= 0 [rad/s] or None, got "

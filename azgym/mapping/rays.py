@@ -18,9 +18,10 @@ The ``rays`` mapper's method, the survey's first guess made an answer (no factor
    through the point (a shift moves it as much; a turn as the rays' meeting point turns). As in
    the survey, an id a site map lacks (a misread one) is not placed, and anchors are held.
 3. **Anchors**: a drive without a start is turned and shifted so that its anchors' intersections
-   fall on their map positions (at least two observed anchors: else refused by name).
+   fall on their map positions (at least two observed anchors: else refused by name, as the
+   survey refuses, :mod:`azgym.mapping.map_frame`).
 4. With a prior map, each placed beacon's move is the survey's test
-   (:func:`azgym.mapping.survey.moved`).
+   (:func:`azgym.mapping.moves.moved`).
 """
 
 from __future__ import annotations
@@ -39,10 +40,13 @@ from azgym.localize.bearings import (
     meeting_point,
     spread,
 )
+from azgym.mapping.first_guess import anchor_positions, widths
 from azgym.mapping.graph import START_STD
+from azgym.mapping.map_frame import require_anchors, require_fixed, rigid
+from azgym.mapping.moves import moved
 from azgym.mapping.odometry import PERIOD
 from azgym.mapping.problem import Drive, Prior, Settings
-from azgym.mapping.survey import DEFAULT_WIDTH, Survey, moved
+from azgym.mapping.survey import Survey
 from azgym.site.error_model import ErrorModel
 from azgym.track.unicycle import IBIAS, ISCALE, STATE_SIZE, MotionSteps, predict
 
@@ -63,14 +67,10 @@ def survey_by_rays(drive: Drive, prior: Prior, settings: Settings) -> Survey:
             a start that observes fewer than two anchors from a wide enough baseline.
     """
     require_frames(drive)
-    if drive.start is None and len(prior.anchors) < 2:
-        raise InvalidInputError(
-            f"the map frame is free: give the start pose or at least two anchors (surveyed "
-            f"beacons), got {len(prior.anchors)} anchor{'' if len(prior.anchors) == 1 else 's'}"
-            " and no start pose")
+    require_fixed([drive], prior)
     poses, pose_cov = dead_reckoned(drive, settings)
     ids, rows, frames, azimuths = _detections(drive)
-    widths = _widths(prior, ids)
+    width = widths(prior, ids)
     xy = np.full((len(ids), 2), np.nan)
     cov = np.full((len(ids), 2, 2), np.nan)
     reasons = [""] * len(ids)
@@ -82,9 +82,9 @@ def survey_by_rays(drive: Drive, prior: Prior, settings: Settings) -> Survey:
             reasons[b] = "not in the prior map (a misread id)"
             continue
         xy[b], cov[b], reasons[b] = _located(poses[frames[mine]], pose_cov[frames[mine]],
-                                             azimuths[mine], float(widths[b]), settings)
+                                             azimuths[mine], float(width[b]), settings)
     if drive.start is None:
-        poses, xy, cov = _placed(drive, _anchor_positions(prior), ids, poses, xy, cov)
+        poses, xy, cov = _placed(drive, anchor_positions(prior), ids, poses, xy, cov)
     held = np.isin(ids, list(anchors))
     xy[held], cov[held] = np.nan, np.nan
     observable = np.isfinite(xy).all(axis=1)
@@ -96,7 +96,8 @@ def survey_by_rays(drive: Drive, prior: Prior, settings: Settings) -> Survey:
                     moved=(), poses=(poses,), outliers=0, iterations=0)
     if prior.beacons is None:
         return result
-    return Survey(**{**result.__dict__, "moved": moved(result, prior.beacons, anchors)})
+    return Survey(**{**result.__dict__,
+                     "moved": moved(ids, xy, cov, observable, prior.beacons, anchors)})
 
 
 def require_frames(drive: Drive) -> None:
@@ -143,24 +144,6 @@ def _detections(drive: Drive) -> tuple[IntArray, IntArray, IntArray, FloatArray]
     return ids.astype(np.int64), rows.astype(np.int64), frames, azimuths
 
 
-def _anchor_positions(prior: Prior) -> dict[int, FloatArray]:
-    """Each anchor's map position (x, y)."""
-    if prior.beacons is None:
-        return {}
-    rows = {int(i): k for k, i in enumerate(prior.beacons.ids.tolist())}
-    return {a: prior.beacons.xyz[rows[a], :2] for a in prior.anchors}
-
-
-def _widths(prior: Prior, ids: IntArray) -> FloatArray:
-    """Each id's width: the prior map's, else the survey's default."""
-    widths = np.full(len(ids), DEFAULT_WIDTH)
-    if prior.beacons is not None:
-        known = {int(i): w for i, w in zip(prior.beacons.ids.tolist(),
-                                            prior.beacons.width.tolist(), strict=True)}
-        widths = np.array([known.get(int(i), DEFAULT_WIDTH) for i in ids.tolist()], np.float64)
-    return widths
-
-
 def _located(poses: FloatArray, pose_cov: FloatArray, azimuths: FloatArray, width: float,
              settings: Settings) -> tuple[FloatArray, FloatArray, str]:
     """One id's point and covariance from its rays, or NaN and why it is unobservable."""
@@ -199,19 +182,9 @@ def _placed(drive: Drive, anchors: dict[int, FloatArray], ids: IntArray, poses: 
         if found.size and np.isfinite(xy[found[0]]).all():
             local.append(xy[found[0]])
             wanted.append(position)
-    if len(local) < 2:
-        raise InvalidInputError(
-            f"{drive.name} has no known start pose and observes {len(local)} anchor"
-            f"{'' if len(local) == 1 else 's'} from a wide enough baseline; it needs its start "
-            "pose or at least two observed anchors to be placed on the map")
-    source = np.array(local) @ np.array([1.0, 1j])
-    target = np.array(wanted) @ np.array([1.0, 1j])
-    turn = np.sum(np.conj(source - source.mean()) * (target - target.mean()))
-    angle = math.atan2(turn.imag, turn.real)
-    c, s = math.cos(angle), math.sin(angle)
-    rotation = np.array([[c, -s], [s, c]])
-    shift = target.mean() - source.mean() * complex(c, s)
-    offset = np.array([shift.real, shift.imag])
+    require_anchors(drive, len(local))
+    rotation, offset = rigid(np.array(local), np.array(wanted))
+    angle = math.atan2(rotation[1, 0], rotation[0, 0])
     placed = poses.copy()
     placed[:, :2] = poses[:, :2] @ rotation.T + offset
     placed[:, 2] = np.remainder(poses[:, 2] + angle + math.pi, 2.0 * math.pi) - math.pi

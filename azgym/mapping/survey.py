@@ -4,27 +4,33 @@
    respect to the turn rate's bias and the odometry's scale error
    (:mod:`azgym.mapping.odometry`), dead-reckoned from its known start, or from the origin. A
    drive without a known start is placed by the anchors it observes (at least two: a rigid fit
-   of their guesses onto their map positions).
-2. The drives solved frame by frame (:func:`_swept`, :class:`~azgym.mapping.sweep.Sweep`), from
-   which the first guesses: each id's rays from the poses, intersected
-   (:func:`~azgym.localize.bearings.intersect_robustly`); an id whose rays do not spread enough
-   (:func:`~azgym.localize.bearings.spread`) or are too few is unobservable, its detections
-   left out. With the site's map as the prior, an id it does not hold (a misread id) is not
-   surveyed, only counted (:attr:`~azgym.mapping.problem.Prior.ids`).
-3. The factor graph (:mod:`azgym.mapping.graph`), solved; a beacon whose azimuths then mostly
-   disagree with it (robust outliers: fewer than :data:`MIN_AGREEING` of them agree), or whose
-   agreeing rays no longer spread enough, is reported unobservable too, and left out of the
-   graph whose marginals give the others' covariances.
-4. With a prior map, each surveyed beacon's move is tested (:func:`moved`).
+   of their guesses onto their map positions, :func:`~azgym.mapping.map_frame.placed`).
+2. The drives solved frame by frame (:func:`_swept`, :class:`~azgym.mapping.sweep.Sweep`; the
+   anchors and the beacons a site's map holds, :attr:`~azgym.mapping.problem.Prior.mapped`,
+   placed from the start at their map positions), from which the first guesses: each id's
+   rays from the poses, intersected (:func:`~azgym.localize.bearings.intersect_robustly`; a
+   held beacon's map position instead when its rays agree with it, :func:`first_guess`); an
+   id whose rays do not spread enough (:func:`~azgym.localize.bearings.spread`) or are too few
+   is unobservable, its detections left out. With the site's map as the prior, an id it does
+   not hold (a misread id) is not surveyed, only counted
+   (:attr:`~azgym.mapping.problem.Prior.ids`).
+3. The factor graph (:mod:`azgym.mapping.graph`: a site's map's beacons held by it, behind the
+   robust loss), solved; a beacon whose azimuths then mostly disagree with it (robust
+   outliers: fewer than :data:`MIN_AGREEING` of them agree), or whose agreeing rays no longer
+   spread enough, is reported unobservable too, and left out of the graph whose marginals give
+   the others' covariances.
+4. With a site's map, each surveyed beacon it holds is tested for a move on its position
+   without its own map prior (:func:`_moves`, :func:`~azgym.mapping.moves.contradicts`); those
+   found moved are freed of their priors and the graph solved again (at most
+   :data:`MOVE_ROUNDS` solves).
 
 The map frame is fixed by a known start pose or by at least two anchors; anything less leaves it
-free, and is refused by name.
+free, and is refused by name (:mod:`azgym.mapping.map_frame`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -35,27 +41,23 @@ from azgym.errors import InvalidInputError
 from azgym.localize.bearings import MIN_RAYS, MIN_SPREAD, spread
 from azgym.mapping.first_guess import (
     DEFAULT_WIDTH,
+    MIN_AGREEING,
     anchor_positions,
     azimuth_sigmas,
     first_guess,
     seen,
     widths,
 )
-from azgym.mapping.graph import Graph, skeleton, solve
+from azgym.mapping.graph import Graph, Solution, left_out, skeleton, solve
 from azgym.mapping.graph import covariances as graph_covariances
+from azgym.mapping.map_frame import placed, require_fixed
+from azgym.mapping.moves import contradicts
 from azgym.mapping.odometry import compose, relative_poses
 from azgym.mapping.problem import Drive, Prior, Settings, drive_list
 from azgym.mapping.sweep import Sweep
 
-__all__ = ["DEFAULT_WIDTH", "MAX_STRAIN", "MIN_AGREEING", "MIN_MOVE", "MOVE_CHI2", "Survey",
-           "moved", "survey"]
+__all__ = ["MAX_STRAIN", "MOVE_ROUNDS", "Survey", "survey"]
 
-MIN_AGREEING = 0.5
-"""Least share of an id's detections the solved graph must agree with (and at least
-:data:`~azgym.localize.bearings.MIN_RAYS` of them): among a beacon's detections, ghosts and
-misread ones are the few; an id whose azimuths are scattered (a misread id seen here and there)
-has a handful that pass near some point by chance, and is no beacon. (The first guess, from
-dead-reckoned poses that drift, cannot ask as much.)"""
 SWEEP_FRAMES = 10
 """Frames the sweep (:func:`_swept`) adds at a time."""
 MAX_STRAIN = 1.0
@@ -64,11 +66,9 @@ for the survey to place beacons. The error model bounds the azimuth noise (unifo
 consistent solve leaves 0.2-0.6 of it); a solve that strains the azimuths beyond it has bent
 the map to fit a motion model that understates its noise (a robot's odometry taken for a
 forklift's: 1.2-1.6, and its beacons decimetres off), so none is placed."""
-MIN_MOVE = 0.10
-"""Least distance between a beacon's prior and surveyed positions to call it moved [m]."""
-MOVE_CHI2 = 13.8155
-"""... and the least squared Mahalanobis distance (χ², 2 degrees of freedom, 0.999): both must
-hold, so that neither a tiny but certain shift nor a large but uncertain one counts."""
+MOVE_ROUNDS = 3
+"""Most solves of a survey with a site's map as the prior: each frees the beacons the one
+before found moved of their map priors (:func:`_solved`)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +83,8 @@ class Survey:
         reasons: (N,) why not ('' when it was).
         rays: (N,) detections of each id; ``outliers`` (N,) those the robust loss set aside.
         anchors: Ids held at their map positions.
-        moved: Ids whose prior position the survey contradicts (:func:`moved`).
+        moved: Ids of a site's map whose map position the survey contradicts, each judged
+            without its own map prior (:func:`_moves`).
         poses: Per drive, the camera poses (K, 3) solved.
         outliers: Detections set aside by the robust loss, in all.
         iterations: Levenberg-Marquardt's iterations.
@@ -129,11 +130,7 @@ def survey(drives: Drive | Sequence[Drive], prior: Prior | None = None,
     settings = Settings() if settings is None else settings
     if not drives or not any(d.frames for d in drives):
         raise InvalidInputError("the survey got no frames")
-    if len(prior.anchors) < 2 and all(d.start is None for d in drives):
-        raise InvalidInputError(
-            f"the map frame is free: give the start pose or at least two anchors (surveyed "
-            f"beacons), got {len(prior.anchors)} anchor{'' if len(prior.anchors) == 1 else 's'}"
-            " and no start pose")
+    require_fixed(drives, prior)
     odometry = [relative_poses(d, settings) for d in drives]
     reckoned = [compose(np.zeros(3) if d.start is None else np.array(d.start), o.moves)
                 for d, o in zip(drives, odometry, strict=True)]
@@ -142,8 +139,8 @@ def survey(drives: Drive | Sequence[Drive], prior: Prior | None = None,
     anchors = anchor_positions(prior)
     for n, drive in enumerate(drives):
         if drive.start is None:
-            reckoned[n] = _placed(drive, reckoned[n], anchors, ids, pose_rows - offsets[n],
-                                  beacon_of, azimuths, offsets[n + 1] - offsets[n])
+            reckoned[n] = placed(drive, reckoned[n], anchors, ids, pose_rows - offsets[n],
+                                 beacon_of, azimuths, offsets[n + 1] - offsets[n])
     first = skeleton(drives, offsets, odometry, np.concatenate(reckoned), settings)
     poses = _swept(first, settings, prior, ids, pose_rows, beacon_of, azimuths)
     guesses, reasons = _first_guesses(poses, prior, ids, pose_rows, beacon_of, azimuths)
@@ -172,7 +169,7 @@ def _detections(drives: list[Drive]) -> tuple[IntArray, IntArray, IntArray, Floa
 def _first_guesses(poses: FloatArray, prior: Prior, ids: IntArray, pose_rows: IntArray,
                    beacon_of: IntArray, azimuths: FloatArray) -> tuple[FloatArray, list[str]]:
     """Each id's first guess from ``poses`` (NaN: unobservable, with the reason)."""
-    anchors = anchor_positions(prior)
+    anchors, mapped = anchor_positions(prior), prior.mapped
     guesses = np.full((len(ids), 2), np.nan)
     reasons = [""] * len(ids)
     known = prior.ids
@@ -184,7 +181,8 @@ def _first_guesses(poses: FloatArray, prior: Prior, ids: IntArray, pose_rows: In
         if known is not None and beacon not in known:
             reasons[b] = f"not in the prior map: {seen(rows.size)}"
             continue
-        guesses[b], reasons[b] = first_guess(poses[pose_rows[rows]], azimuths[rows])
+        guesses[b], reasons[b] = first_guess(poses[pose_rows[rows]], azimuths[rows],
+                                             mapped.get(beacon))
     return guesses, reasons
 
 
@@ -195,16 +193,18 @@ def _swept(base: Graph, settings: Settings, prior: Prior, ids: IntArray,
     :data:`SWEEP_FRAMES` frames at a time: their poses from the odometry, their detections of
     beacons already placed, then each beacon not yet placed whose rays from the estimated poses
     now give a first guess (:func:`first_guess`) placed there with all its detections so far.
-    Anchors are placed from the start; an id the prior map lacks never is.
+    Anchors and the beacons a site's map holds are placed from the start, at their map
+    positions; an id the prior map lacks never is.
     """
-    anchors = anchor_positions(prior)
+    anchors, mapped = anchor_positions(prior), prior.mapped
     index = {int(i): b for b, i in enumerate(ids.tolist())}
-    sweep = Sweep(base, settings, {index[a]: xy for a, xy in anchors.items() if a in index})
+    sweep = Sweep(base, settings, {index[a]: xy for a, xy in anchors.items() if a in index},
+                  {index[m]: xy for m, xy in mapped.items() if m in index})
     known = prior.ids
     hopeless = {b for b, i in enumerate(ids.tolist()) if known is not None and i not in known}
     where = np.full((len(ids), 2), np.nan)
     for b in sweep.placed:
-        where[b] = anchors[int(ids[b])]
+        where[b] = {**anchors, **mapped}[int(ids[b])]
     width = widths(prior, ids)
     order = np.argsort(pose_rows, kind="stable")
     edges = [*range(0, len(base.poses), SWEEP_FRAMES), len(base.poses)]
@@ -239,92 +239,120 @@ def _observe(sweep: Sweep, settings: Settings, rows: IntArray, pose_rows: IntArr
         sweep.observe(pose, beacon, azimuth, sigma)
 
 
-def _placed(drive: Drive, poses: FloatArray, anchors: dict[int, FloatArray], ids: IntArray,
-            local_rows: IntArray, beacon_of: IntArray, azimuths: FloatArray,
-            count: int) -> FloatArray:
-    """A drive without a start, moved onto the map by the anchors it observes (rigid fit)."""
-    inside = (local_rows >= 0) & (local_rows < count)
-    seen, wanted = [], []
-    for beacon, position in anchors.items():
-        match = np.flatnonzero(ids == beacon)
-        if not match.size:
-            continue
-        rows = np.flatnonzero(inside & (beacon_of == match[0]))
-        if not rows.size:
-            continue
-        guess, _ = first_guess(poses[local_rows[rows]], azimuths[rows])
-        if np.isfinite(guess).all():
-            seen.append(guess)
-            wanted.append(position)
-    if len(seen) < 2:
-        raise InvalidInputError(
-            f"{drive.name} has no known start pose and observes {len(seen)} anchor"
-            f"{'' if len(seen) == 1 else 's'} from a wide enough baseline; it needs its start "
-            "pose or at least two observed anchors to be placed on the map")
-    turn, shift = _rigid(np.array(seen), np.array(wanted))
-    placed = poses.copy()
-    placed[:, :2] = poses[:, :2] @ turn.T + shift
-    placed[:, 2] = np.remainder(poses[:, 2] + math.atan2(turn[1, 0], turn[0, 0]) + math.pi,
-                                2.0 * math.pi) - math.pi
-    return placed
-
-
-def _rigid(source: FloatArray, target: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The rotation and shift that best carry ``source`` points onto ``target`` (Kabsch)."""
-    a, b = source - source.mean(axis=0), target - target.mean(axis=0)
-    u, _, vt = np.linalg.svd(a.T @ b)
-    d = np.sign(np.linalg.det(vt.T @ u.T))
-    turn = vt.T @ np.diag([1.0, d]) @ u.T
-    return turn, target.mean(axis=0) - source.mean(axis=0) @ turn.T
-
-
 def _solved(base: Graph, offsets: IntArray, prior: Prior, settings: Settings, ids: IntArray,
             pose_rows: IntArray, beacon_of: IntArray, azimuths: FloatArray,
             guesses: FloatArray, reasons: list[str]) -> Survey:
-    """The graph of the observable beacons, solved, and the answer."""
+    """The graph of the observable beacons, solved, and the answer.
+
+    With a site's map as the prior, its beacons are held by it; a beacon the solve finds moved
+    (:func:`_moves`) is freed of its map prior and the graph solved again (the others' test
+    then free of its pull), at most :data:`MOVE_ROUNDS` solves in all.
+    """
     used: np.ndarray = np.asarray(np.isfinite(guesses).all(axis=1))
     column = np.cumsum(used) - 1
     keep = used[beacon_of]
     sigmas = azimuth_sigmas(settings, base.poses[pose_rows[keep]], guesses[beacon_of[keep]],
-                     widths(prior, ids)[beacon_of[keep]])
-    anchor_ids = set(prior.anchors)
+                            widths(prior, ids)[beacon_of[keep]])
+    anchor_ids, mapped = set(prior.anchors), prior.mapped
+    held = np.array([b for b, i in enumerate(ids.tolist()) if used[b] and i in mapped],
+                    dtype=np.int64)
     graph = dataclasses.replace(
         base, beacons=guesses[used],
         anchors=np.array([column[b] for b, i in enumerate(ids.tolist())
                           if used[b] and i in anchor_ids], dtype=np.int64),
+        priors=column[held].astype(np.int64),
+        prior_xy=np.array([mapped[int(ids[b])] for b in held]).reshape(-1, 2),
         rows=np.column_stack([pose_rows[keep], column[beacon_of[keep]]]).astype(np.int64),
         azimuths=azimuths[keep], sigmas=sigmas)
-    solution = solve(graph, settings)
-    outlying = np.abs(solution.residuals) > settings.loss_scale * sigmas
+    freed = np.zeros(len(held), dtype=bool)
+    for _ in range(MOVE_ROUNDS):
+        holding = dataclasses.replace(graph, priors=graph.priors[~freed],
+                                      prior_xy=graph.prior_xy[~freed])
+        solution = solve(holding, settings)
+        outlying = np.abs(solution.residuals) > settings.loss_scale * sigmas
+        observable, found_reasons = _checked(holding, solution, outlying, ids, used, anchor_ids,
+                                             beacon_of[keep], list(reasons))
+        covariances = np.full((len(ids), 2, 2), np.nan)
+        covariances[used] = graph_covariances(holding, solution, settings, observable[used])
+        said = _moves(graph, holding, solution, settings, covariances[used], freed,
+                      observable[held])
+        if not (said & ~freed).any():
+            break
+        freed |= said
+        graph = dataclasses.replace(graph, poses=solution.poses, beacons=solution.beacons)
     xy = np.full((len(ids), 2), np.nan)
-    xy[used] = solution.beacons
-    rays = np.bincount(beacon_of, minlength=len(ids))
-    outlier_rays = np.bincount(beacon_of[keep][outlying], minlength=len(ids))
-    observable = used & ~np.isin(ids, list(anchor_ids))
-    strain = _strain(solution.residuals[~outlying] / sigmas[~outlying])
+    xy[observable] = solution.beacons[column[observable]]
+    return Survey(ids=ids, xy=xy, covariances=covariances, observable=observable,
+                  reasons=tuple(found_reasons), rays=np.bincount(beacon_of, minlength=len(ids)),
+                  outlier_rays=np.bincount(beacon_of[keep][outlying], minlength=len(ids)),
+                  anchors=tuple(sorted(anchor_ids)),
+                  moved=tuple(sorted(int(ids[b]) for b in held[said].tolist())),
+                  poses=tuple(np.split(solution.poses, offsets[1:-1])),
+                  outliers=int(outlying.sum()), iterations=solution.iterations)
+
+
+def _checked(graph: Graph, solution: Solution, outlying: np.ndarray, ids: IntArray,
+             used: np.ndarray, anchors: set[int], beacon_of: IntArray,
+             reasons: list[str]) -> tuple[np.ndarray, list[str]]:
+    """Which beacons the solve keeps (anchors always), and why each other is not.
+
+    A beacon (not an anchor) is not kept when the azimuths strain against the motion
+    (:func:`_strain`: then none is), or when fewer than :data:`MIN_AGREEING` of its detections
+    (or fewer than :data:`~azgym.localize.bearings.MIN_RAYS`) agree with it, or the agreeing
+    ones spread too little.
+
+    Args:
+        graph: The graph solved.
+        solution: Its solution.
+        outlying: Which of its detections the robust loss set aside.
+        ids: Every id.
+        used: Which are in the graph.
+        anchors: The anchors' ids.
+        beacon_of: Each of the graph's detections' id index.
+        reasons: Each id's reason so far ('' when none), updated and returned.
+    """
+    observable = used & ~np.isin(ids, list(anchors))
+    strain = _strain(solution.residuals[~outlying] / graph.sigmas[~outlying])
     for b in np.flatnonzero(observable).tolist():
-        mine = np.flatnonzero(beacon_of[keep] == b)
+        mine = np.flatnonzero(beacon_of == b)
         good = mine[~outlying[mine]]
         directions = solution.poses[graph.rows[good, 0], 2] + graph.azimuths[good]
         if strain:
             reasons[b] = strain
         elif good.size < max(MIN_RAYS, MIN_AGREEING * mine.size) \
                 or spread(directions) < MIN_SPREAD:
-            reasons[b] = (f"its azimuths disagree: {outlier_rays[b]} of {mine.size} set aside "
-                          "as outliers, the rest too few or too narrow a baseline")
+            reasons[b] = (f"its azimuths disagree: {int(outlying[mine].sum())} of {mine.size} "
+                          "set aside as outliers, the rest too few or too narrow a baseline")
         observable[b] = not reasons[b]
-    observable |= used & np.isin(ids, list(anchor_ids))
-    xy[~observable] = np.nan
-    covariances = np.full((len(ids), 2, 2), np.nan)
-    covariances[used] = graph_covariances(graph, solution, settings, observable[used])
-    result = Survey(ids=ids, xy=xy, covariances=covariances, observable=observable,
-                    reasons=tuple(reasons), rays=rays, outlier_rays=outlier_rays,
-                    anchors=tuple(sorted(anchor_ids)), moved=(),
-                    poses=tuple(np.split(solution.poses, offsets[1:-1])),
-                    outliers=int(outlying.sum()), iterations=solution.iterations)
-    if prior.beacons is None:
-        return result
-    return Survey(**{**result.__dict__, "moved": moved(result, prior.beacons, anchor_ids)})
+    return observable | (used & np.isin(ids, list(anchors))), reasons
+
+
+def _moves(graph: Graph, holding: Graph, solution: Solution, settings: Settings,
+           covariances: FloatArray, freed: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """Which of the map-held beacons (``graph.priors``) moved, each judged without its prior.
+
+    A beacon still held (``~freed``) is judged on where the rest of the graph puts it
+    (:func:`~azgym.mapping.graph.left_out`), a freed one on its own solved position; either
+    against its map position, under the two's covariances summed (the map's own, ``map_sigma``
+    each way), by :func:`~azgym.mapping.moves.contradicts`. Only ``kept`` beacons (observable
+    once solved) are.
+
+    Args:
+        graph: The graph with every map prior.
+        holding: The one solved (the freed ones' priors left out).
+        solution: Its solution.
+        settings: The map's accuracy and the robust loss.
+        covariances: (B, 2, 2) the beacons' marginal covariances at ``solution``.
+        freed: Which of ``graph.priors`` were left out.
+        kept: Which of them are observable.
+    """
+    positions = solution.beacons[graph.priors]
+    spread_of = covariances[graph.priors]
+    positions[~freed], spread_of[~freed] = left_out(holding, solution, settings, covariances)
+    own = settings.map_sigma**2 * np.eye(2)
+    return np.array([bool(k) and np.isfinite(c).all() and contradicts(p - m, c + own)
+                     for p, m, c, k in zip(positions, graph.prior_xy, spread_of, kept,
+                                           strict=True)], dtype=bool)
 
 
 def _strain(agreeing: FloatArray) -> str:
@@ -338,24 +366,3 @@ def _strain(agreeing: FloatArray) -> str:
     return (f"the azimuths strain against the motion: those that agree average {strain:.2f} "
             f"times their modelled variance (more than {MAX_STRAIN:.0f}), so the profile's "
             "motion or azimuth noise is understated and the solved map bent")
-
-
-def moved(result: Survey, prior: BeaconMap, anchors: set[int] | None = None) -> tuple[int, ...]:
-    """The surveyed beacons whose prior position the survey contradicts.
-
-    A beacon moved when its surveyed position is at least :data:`MIN_MOVE` from its prior one
-    and the squared Mahalanobis distance under its covariance is at least :data:`MOVE_CHI2`.
-    Anchors are held, never tested.
-    """
-    found = []
-    held = anchors or set()
-    for b in np.flatnonzero(result.observable).tolist():
-        beacon = int(result.ids[b])
-        index = np.flatnonzero(prior.ids == beacon)
-        if beacon in held or not index.size:
-            continue
-        offset = result.xy[b] - prior.xyz[index[0], :2]
-        distance2 = float(offset @ np.linalg.solve(result.covariances[b], offset))
-        if math.hypot(*offset) >= MIN_MOVE and distance2 >= MOVE_CHI2:
-            found.append(beacon)
-    return tuple(found)

@@ -110,15 +110,14 @@ def test_cli_log_without_odometry_and_an_unknown_anchor(tmp_path: Path) -> None:
     subprocess.run([sys.executable, "-m", "azgym", "export", "route", "--scenario",
                     "warehouse-small", "--route", "aisle-loop", "--out", str(log)],
                    check=True, capture_output=True, timeout=120)
-    code = ("import sys; from azgym.cli.survey import build_parser; "
-            "a = build_parser().parse_args(sys.argv[1:]); sys.exit(a.handler(a))")
-    run = subprocess.run([sys.executable, "-c", code, "survey", str(log), "--anchor", "1",
+    command = [sys.executable, "-m", "azgym"]
+    run = subprocess.run([*command, "survey", str(log), "--anchor", "1",
                           "42", "--out", str(tmp_path / "map")], capture_output=True,
                          text=True, timeout=120)
     assert run.returncode != 0 and "anchor id [42] not in the map" in run.stderr
     (log / "odometry.csv").unlink()
     (log / "imu.csv").unlink()
-    run = subprocess.run([sys.executable, "-c", code, "survey", str(log), "--anchor", "1",
+    run = subprocess.run([*command, "survey", str(log), "--anchor", "1",
                           "2", "--out", str(tmp_path / "map")], capture_output=True,
                          text=True, timeout=120)
     assert run.returncode != 0 and "no odometry.csv or imu.csv" in run.stderr

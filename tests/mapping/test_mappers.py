@@ -162,8 +162,11 @@ def test_a_drive_a_mapper_cannot_place_is_refused_by_name(spec, drive, prior, me
 
 def test_the_settings_mappers_take_every_setting_as_a_hyperparameter():
     """Each field of the survey's settings (the motion noise's spelled out) is a hyperparameter
-    of ``survey`` (``rays``: but the graph's loss), so a profile or a spec reaches it."""
+    of ``survey`` (``rays``: but the graph's loss and the map's accuracy, which only a graph
+    weighs), so a profile or a spec reaches it."""
     settings = {f.name for f in dataclasses.fields(Settings)} - {"noise"}
     settings |= {f.name for f in dataclasses.fields(MotionNoise)}
     assert set(SurveyMapper().get_params()) == settings
-    assert set(RaysMapper().get_params()) == settings - {"loss", "loss_scale"}
+    assert set(RaysMapper().get_params()) == settings - {"loss", "loss_scale", "map_sigma"}
+    with pytest.raises(InvalidInputError, match="map_sigma"):
+        SurveyMapper(map_sigma=0.0)

@@ -12,10 +12,12 @@ from azgym.core import Measurements
 from azgym.errors import InvalidInputError
 from azgym.localize.bearings import MIN_SPREAD, intersect_robustly, spread
 from azgym.mapping import Drive, Prior, Settings, SurveyFrame, simulated_drive, survey
+from azgym.mapping.factors import odometry_error
 from azgym.mapping.first_guess import first_guess
-from azgym.mapping.graph import Graph, odometry_error, residuals
+from azgym.mapping.graph import Graph, residuals
+from azgym.mapping.moves import MIN_MOVE
 from azgym.mapping.odometry import COVARIANCE_FLOOR, compose, relative_poses
-from azgym.mapping.survey import MAX_STRAIN, MIN_MOVE, _strain
+from azgym.mapping.survey import MAX_STRAIN, _strain
 from azgym.sensing.motion import DifferentialOdometryModel, ImuSamples, Motion, OdometrySamples
 from azgym.site import load_scenario
 from azgym.world.drive import simulate
@@ -59,7 +61,8 @@ def test_bearing_factor_by_hand(pose: tuple[float, float, float], jacobian: list
                   move_jac=np.zeros((0, 3, 2)), walks=np.zeros((0, 2)),
                   sensor_std=np.ones(2), starts=np.zeros(0, np.int64),
                   start_poses=np.zeros((0, 3)), beacons=point[None],
-                  anchors=np.zeros(0, np.int64), rows=np.array([[0, 0]]),
+                  anchors=np.zeros(0, np.int64), priors=np.zeros(0, np.int64),
+                  prior_xy=np.zeros((0, 2)), rows=np.array([[0, 0]]),
                   azimuths=np.array([measured]), sigmas=np.array([1.0]))
     assert residuals(np.array([pose]), point[None], graph)[0] == \
         pytest.approx(measured - predicted, abs=1e-12)
