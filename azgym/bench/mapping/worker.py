@@ -23,12 +23,11 @@ import io
 import json
 import os
 import signal
-import struct
 from typing import Any
 
 import numpy as np
 
-from azgym.bench.run.wire import framed, pack, unpack, write_all
+from azgym.bench.run.wire import LENGTH, framed, pack, unframed, unpack, write_all
 from azgym.bench.run.worker import describe, seal
 from azgym.core import BeaconMap
 from azgym.errors import AzgymError, InvalidInputError, ProtocolError
@@ -49,8 +48,6 @@ READY = b"R"
 """Sent once the mapper is built."""
 SURVEYING = b"S"
 """Sent as a call into the mapper begins (the time limit counts from it)."""
-_LENGTH = struct.Struct("!i")
-"""A message's length, as :func:`azgym.bench.run.wire.framed` frames it."""
 _ANSWER_KEYS = {"ids", "xy", "covariances", "moved"}
 
 
@@ -151,8 +148,8 @@ def _error(exc: BaseException) -> bytes:
 
 def _receive(fd: int) -> bytes:
     """The next message from the parent; empty when told to stop or when the parent is gone."""
-    head = _read(fd, _LENGTH.size)
-    return _read(fd, _LENGTH.unpack(head)[0]) if len(head) == _LENGTH.size else b""
+    head = _read(fd, LENGTH.size)
+    return _read(fd, LENGTH.unpack(head)[0]) if len(head) == LENGTH.size else b""
 
 
 def _read(fd: int, size: int) -> bytes:
@@ -176,16 +173,8 @@ def messages(inbox: bytearray) -> list[bytes]:
     Raises:
         ProtocolError: A message longer than :data:`ANSWER_CAP`.
     """
-    found = []
-    while len(inbox) >= _LENGTH.size:
-        (size,) = _LENGTH.unpack_from(inbox)
-        if not 0 <= size <= ANSWER_CAP:
-            raise ProtocolError(f"it answered more than {ANSWER_CAP >> 20} MiB")
-        if len(inbox) < _LENGTH.size + size:
-            break
-        found.append(bytes(inbox[_LENGTH.size:_LENGTH.size + size]))
-        del inbox[:_LENGTH.size + size]
-    return found
+    return unframed(inbox, ANSWER_CAP,
+                    lambda _size: f"it answered more than {ANSWER_CAP >> 20} MiB")
 
 
 def read_answer(data: bytes) -> MapAnswer:

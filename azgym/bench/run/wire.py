@@ -18,7 +18,7 @@ import json
 import os
 import pickle
 import struct
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,9 +28,9 @@ from azgym.core import BeaconMap, Measurements, Pose
 from azgym.errors import ProtocolError
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 
-__all__ = ["DONE", "MapData", "Packed", "ProtocolError", "STOP", "StepReader", "WorkerFrame",
-           "framed", "heard", "pack", "pack_map", "say", "step_message", "unpack", "unpack_map",
-           "write_all"]
+__all__ = ["DONE", "LENGTH", "MapData", "Packed", "ProtocolError", "STOP", "StepReader",
+           "WorkerFrame", "framed", "heard", "pack", "pack_map", "say", "step_message", "unframed",
+           "unpack", "unpack_map", "write_all"]
 
 MapData = tuple[np.ndarray, np.ndarray, np.ndarray]
 """One beacon map as sent: ids, xyz, width."""
@@ -111,13 +111,13 @@ def _unpack_motion(data: bytes) -> Motion:
                   ImuSamples(parts[4], parts[5], parts[6].reshape(n, 2), parts[7]))
 
 
-_LENGTH = struct.Struct("!i")
+LENGTH = struct.Struct("!i")
 """A message's length, as ``multiprocessing.connection.Connection.send_bytes`` frames it."""
 
 
 def framed(payload: bytes) -> bytes:
     """A message as the pipes carry it: its length, then itself."""
-    return _LENGTH.pack(len(payload)) + payload
+    return LENGTH.pack(len(payload)) + payload
 
 
 STOP = framed(pickle.dumps(None))
@@ -142,8 +142,8 @@ class StepReader:
     def read(self) -> list[Packed] | None:
         """The next step's packed frames; None: told to stop, or the parent is gone."""
         got = os.readv(self.fd, [self.buffer])
-        while 0 < got < _LENGTH.size or got >= _LENGTH.size and \
-                got < _LENGTH.size + _LENGTH.unpack_from(self.buffer)[0]:
+        while 0 < got < LENGTH.size or got >= LENGTH.size and \
+                got < LENGTH.size + LENGTH.unpack_from(self.buffer)[0]:
             if got == len(self.buffer):
                 self.buffer.extend(bytes(len(self.buffer)))
             with memoryview(self.buffer) as view:
@@ -151,9 +151,9 @@ class StepReader:
             if not more:
                 return None
             got += more
-        if got < _LENGTH.size:
+        if got < LENGTH.size:
             return None
-        return pickle.loads(self.buffer[_LENGTH.size:got])
+        return pickle.loads(self.buffer[LENGTH.size:got])
 
 
 MAX_MESSAGE = 1 << 20
@@ -176,21 +176,33 @@ def heard(inbox: bytearray) -> list[list[Any]]:
         ProtocolError: A message that is too long, or not a JSON list.
     """
     messages = []
-    while len(inbox) >= _LENGTH.size:
-        (size,) = _LENGTH.unpack_from(inbox)
-        if not 0 <= size <= MAX_MESSAGE:
-            raise ProtocolError(f"a message of {size} bytes")
-        if len(inbox) < _LENGTH.size + size:
-            break
+    for payload in unframed(inbox, MAX_MESSAGE, lambda size: f"a message of {size} bytes"):
         try:
-            message = json.loads(bytes(inbox[_LENGTH.size:_LENGTH.size + size]))
+            message = json.loads(payload)
         except (ValueError, RecursionError):  # RecursionError: nested too deeply
             raise ProtocolError("a message that is not JSON") from None
         if not isinstance(message, list) or not message:
             raise ProtocolError("a message that is not a list")
-        del inbox[:_LENGTH.size + size]
         messages.append(message)
     return messages
+
+
+def unframed(inbox: bytearray, cap: int, too_long: Callable[[int], str]) -> list[bytes]:
+    """Take the complete messages (:func:`framed`) out of ``inbox``, each at most ``cap`` bytes.
+
+    Raises:
+        ProtocolError: A message longer than ``cap`` (worded by ``too_long(size)``).
+    """
+    found = []
+    while len(inbox) >= LENGTH.size:
+        (size,) = LENGTH.unpack_from(inbox)
+        if not 0 <= size <= cap:
+            raise ProtocolError(too_long(size))
+        if len(inbox) < LENGTH.size + size:
+            break
+        found.append(bytes(inbox[LENGTH.size:LENGTH.size + size]))
+        del inbox[:LENGTH.size + size]
+    return found
 
 
 def write_all(fd: int, data: bytes) -> None:
