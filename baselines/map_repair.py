@@ -44,7 +44,7 @@ from azgym.bench.mapping.scoring import (  # noqa: E402
     observable_by_truth,
     truly_moved,
 )
-from azgym.bench.mapping.suites import TRUE_LABELS  # noqa: E402
+from azgym.bench.mapping.suites import true_detections  # noqa: E402
 from azgym.bench.run.profiles import contender_params  # noqa: E402
 from azgym.bench.suites import robot  # noqa: E402
 from azgym.bench.suites.catalog import get_suite  # noqa: E402
@@ -113,17 +113,6 @@ def moved_as_shipped(scenario) -> set[int]:
     return set(truly_moved(scenario.beacons, (), true_map(scenario)))
 
 
-def true_sightings(world, frames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each true detection's frame, beacon id and noise-free azimuth (the mapping suite's)."""
-    parts = []
-    for k, frame in enumerate(frames):
-        truth = frame.truth
-        true = np.isin(truth.label, TRUE_LABELS) & (truth.beacon >= 0)
-        parts.append((np.full(int(true.sum()), k), world.beacons.ids[truth.beacon[true]],
-                      truth.azimuth[true]))
-    return tuple(np.concatenate([p[n] for p in parts]) for n in range(3))  # type: ignore
-
-
 def p95_of(errors: np.ndarray) -> float:
     """The 95th percentile of position errors, inf when it falls among unanswered frames."""
     if errors.size == 0:
@@ -145,7 +134,7 @@ def moved(seeds: int, first_seed: int) -> None:
                 rng = np.random.default_rng([seed, k])
                 shipped = list(simulate(scenario, route, seed=seed + k, **extra))
                 poses = np.array([f.pose for f in shipped])
-                among = sorted(observable_by_truth(*true_sightings(scenario, shipped), poses))
+                among = sorted(observable_by_truth(*true_detections(scenario, shipped), poses))
                 world = move_beacons(scenario, rng, 1 + (seed + k) % 3, among, MOVED_BY).world
                 truth = true_map(world)
                 frames = list(simulate(world, route, seed=seed + k, **extra))
@@ -158,7 +147,7 @@ def moved(seeds: int, first_seed: int) -> None:
                 true = run_track(azgym.make_tracker("robust", **params_for(name)), steps,
                                  truth)[0]
                 repaired = {r.beacon: r for r in tracker.repairs}
-                detected, ids, _ = true_sightings(world, frames)
+                detected, ids, _ = true_detections(world, frames)
                 parts, done = [], 0.0
                 really = truly_moved(scenario.beacons, (), truth)
                 false_suspicions += len(set(suspected) - set(really))

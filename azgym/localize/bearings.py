@@ -37,7 +37,8 @@ from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 
 __all__ = ["MIN_RAYS", "MIN_SPREAD", "PARALLEL_CONDITION", "ROBUST_PASSES", "STRAY_SCALE",
-           "intersect_rays", "intersect_robustly", "meeting_point", "ray_misses", "spread"]
+           "agreeing", "crossings", "intersect_rays", "intersect_robustly", "meeting_point",
+           "pair_spread", "ray_misses", "spread"]
 
 MIN_SPREAD = math.radians(10.0)
 """Least spread of a point's rays [rad] for it to be observable (module docstring): at 10° the
@@ -66,6 +67,31 @@ def spread(bearings: FloatArray) -> float:
         return 0.0
     resultant = abs(complex(np.mean(np.exp(2j * bearings))))
     return 2.0 * math.asin(math.sqrt(max(0.0, (1.0 - min(resultant, 1.0)) / 2.0)))
+
+
+def pair_spread(first: FloatArray, second: FloatArray) -> FloatArray:
+    """The :func:`spread` of each pair of rays, directions ``first[i]`` and ``second[i]`` [rad].
+
+    For two rays the spread is the acute angle between their lines, in [0, π/2].
+
+    Example:
+        >>> np.degrees(pair_spread(np.radians([0.0, 10.0]), np.radians([30.0, 170.0]))).round(6)
+        array([30., 20.])
+    """
+    return np.arccos(np.minimum(1.0, np.abs(np.cos(second - first))))
+
+
+def crossings(first_origins: FloatArray, first: FloatArray, second_origins: FloatArray,
+              second: FloatArray) -> FloatArray:
+    """Where each pair of rays, as lines, crosses (n, 2) [m]: inf or NaN for parallel ones.
+
+    Ray i of each pair starts at ``first_origins[i]`` (n, 2) along ``first[i]`` [rad], its
+    partner at ``second_origins[i]`` along ``second[i]``: c1 + t d1 meets c2 + u d2 at
+    t = ((c2 − c1) × d2) / sin(θ2 − θ1).
+    """
+    gap = second_origins - first_origins
+    along = (gap[:, 0] * np.sin(second) - gap[:, 1] * np.cos(second)) / np.sin(second - first)
+    return first_origins + along[:, None] * np.column_stack((np.cos(first), np.sin(first)))
 
 
 def intersect_rays(origins: FloatArray, bearings: FloatArray, bearing_variance: FloatArray,
@@ -168,6 +194,20 @@ def intersect_robustly(origins: FloatArray,
         ahead = np.einsum("ki,ki->k", along, offsets) > 0.0
         weights = ahead / (1.0 + (miss / STRAY_SCALE) ** 2)
     return point, weights
+
+
+def agreeing(origins: FloatArray, bearings: FloatArray, point: FloatArray) -> np.ndarray:
+    """Which rays, from ``origins`` (K, 2) along world ``bearings`` (K,), agree with ``point``.
+
+    Those pointing towards it and passing within :data:`STRAY_SCALE` of it: the rays
+    :func:`intersect_robustly` weighs above half; none when the point is not finite.
+    """
+    if not np.isfinite(point).all():
+        return np.zeros(len(bearings), dtype=bool)
+    offsets = point - origins
+    cos, sin = np.cos(bearings), np.sin(bearings)
+    ahead = cos * offsets[:, 0] + sin * offsets[:, 1] > 0.0
+    return np.asarray(ahead & (np.abs(cos * offsets[:, 1] - sin * offsets[:, 0]) < STRAY_SCALE))
 
 
 def _normals(bearings: FloatArray) -> FloatArray:

@@ -2,7 +2,8 @@
 
 The keys of the unknowns (:func:`pose_key`, :func:`beacon_key`, :func:`sensor_key`); the robust
 loss of the azimuths and the map (:func:`robust_loss`); a detection's bearing factor
-(:func:`bearing`), a beacon's map prior (:func:`map_prior`), a link's between factor at zero
+(:func:`bearing`), an anchor's prior (:func:`anchor`), a beacon's map prior
+(:func:`map_prior`), a link's between factor at zero
 sensor errors (:func:`between`) and the odometry's error with its derivatives
 (:func:`odometry_error`), which the batch solve linearizes (:mod:`azgym.mapping.graph`) and the
 frame-by-frame one (:mod:`azgym.mapping.sweep`) shares. Every function takes the ``gtsam``
@@ -19,8 +20,11 @@ import numpy as np
 from azgym.core import FloatArray
 from azgym.mapping.problem import Settings
 
-__all__ = ["beacon_key", "bearing", "between", "map_prior", "odometry_error", "pose_key",
-           "robust_loss", "sensor_key"]
+__all__ = ["ANCHOR_STD", "anchor", "beacon_key", "bearing", "between", "map_prior",
+           "odometry_error", "pose_key", "robust_loss", "sensor_key"]
+
+ANCHOR_STD = 0.002
+"""Standard deviation of a surveyed anchor's position [m] (a total station's)."""
 
 
 def pose_key(gtsam: Any, k: int) -> int:
@@ -43,6 +47,12 @@ def robust_loss(gtsam: Any, settings: Settings) -> Any:
     estimators = {"cauchy": gtsam.noiseModel.mEstimator.Cauchy,
                   "huber": gtsam.noiseModel.mEstimator.Huber}
     return estimators[settings.loss].Create(float(settings.loss_scale))
+
+
+def anchor(gtsam: Any, beacon: int, xy: FloatArray) -> Any:
+    """Beacon ``beacon`` held at its map position ``xy`` as an anchor (:data:`ANCHOR_STD`)."""
+    return gtsam.PriorFactorPoint2(beacon_key(gtsam, beacon), gtsam.Point2(*xy),
+                                   gtsam.noiseModel.Isotropic.Sigma(2, ANCHOR_STD))
 
 
 def map_prior(gtsam: Any, loss: Any, settings: Settings, beacon: int, xy: FloatArray) -> Any:

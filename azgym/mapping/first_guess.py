@@ -19,7 +19,7 @@ from azgym.core import FloatArray, IntArray
 from azgym.localize.bearings import (
     MIN_RAYS,
     MIN_SPREAD,
-    STRAY_SCALE,
+    agreeing,
     intersect_robustly,
     meeting_point,
     spread,
@@ -27,11 +27,14 @@ from azgym.localize.bearings import (
 from azgym.mapping.problem import Prior, Settings
 from azgym.site.error_model import ErrorModel
 
-__all__ = ["DEFAULT_WIDTH", "MIN_AGREEING", "agreeing", "anchor_positions", "azimuth_residuals",
-           "azimuth_sigmas", "first_guess", "seen", "widths"]
+__all__ = ["DEFAULT_WIDTH", "MIN_AGREEING", "MIN_RANGE", "anchor_positions",
+           "azimuth_residuals", "azimuth_sigmas", "azimuth_variances", "first_guess", "seen",
+           "too_few", "unmet", "widths"]
 
 DEFAULT_WIDTH = 0.03
 """Width of a beacon the prior map does not hold [m] (docs/logs.md's default)."""
+MIN_RANGE = 0.1
+"""Least distance the azimuth noise is taken at [m] (:func:`azimuth_variances`)."""
 CONSENSUS_RAYS = 16
 """Rays whose pairs' meeting points a beacon the map holds is also guessed at (:func:`first_guess`:
 the one most of its rays agree with), when its map position is not."""
@@ -56,29 +59,47 @@ def first_guess(poses: FloatArray, azimuths: FloatArray,
     intersection far along it: either way off a beacon the map has right or a moved one.
     """
     directions = poses[:, 2] + azimuths
-    if len(directions) < MIN_RAYS:
-        return np.full(2, np.nan), f"{seen(len(directions))}, fewer than {MIN_RAYS}"
+    if reason := too_few(len(directions)):
+        return np.full(2, np.nan), reason
     angle = spread(directions)
     if angle < MIN_SPREAD:
         return np.full(2, np.nan), _narrow(angle)
     point, _ = intersect_robustly(poses[:, :2], directions)
-    agree = agreeing(poses, directions, point)
+    agree = agreeing(poses[:, :2], directions, point)
     if held is not None:
-        at_map = agreeing(poses, directions, held)
+        at_map = agreeing(poses[:, :2], directions, held)
         if at_map.sum() >= MIN_AGREEING * len(directions):
             point, agree = held, at_map
         else:
             for other in (_consensus(poses, directions), held):
-                at_other = agreeing(poses, directions, other)
+                at_other = agreeing(poses[:, :2], directions, other)
                 if at_other.sum() > agree.sum():
                     point, agree = other, at_other
+    if reason := unmet(directions, point, agree):
+        return np.full(2, np.nan), reason
+    return point, ""
+
+
+def too_few(detections: int) -> str:
+    """Why an id seen ``detections`` times is unobservable: too few rays; '' when not."""
+    if detections < MIN_RAYS:
+        return f"{seen(detections)}, fewer than {MIN_RAYS}"
+    return ""
+
+
+def unmet(directions: FloatArray, point: FloatArray, agree: np.ndarray) -> str:
+    """Why rays along ``directions`` do not place ``point``, or '' when they do.
+
+    They do when it is finite and those that agree with it (``agree``, :func:`agreeing`) are
+    at least :data:`~azgym.localize.bearings.MIN_RAYS` and spread at least
+    :data:`~azgym.localize.bearings.MIN_SPREAD`.
+    """
     if not np.isfinite(point).all() or agree.sum() < MIN_RAYS:
-        return np.full(2, np.nan), (f"its rays do not meet: {int(agree.sum())} of "
-                                    f"{len(directions)} agree on a point")
+        return f"its rays do not meet: {int(agree.sum())} of {len(directions)} agree on a point"
     angle = spread(directions[agree])
     if angle < MIN_SPREAD:
-        return np.full(2, np.nan), _narrow(angle) + " among the rays that agree"
-    return point, ""
+        return _narrow(angle) + " among the rays that agree"
+    return ""
 
 
 def _consensus(poses: FloatArray, directions: FloatArray) -> FloatArray:
@@ -92,27 +113,12 @@ def _consensus(poses: FloatArray, directions: FloatArray) -> FloatArray:
     best, most = np.full(2, np.nan), np.zeros(len(directions), dtype=bool)
     for i, j in itertools.combinations(picks.tolist(), 2):
         point = meeting_point(poses[[i, j], :2], directions[[i, j]], np.ones(2))
-        agree = agreeing(poses, directions, point)
+        agree = agreeing(poses[:, :2], directions, point)
         if agree.sum() > most.sum():
             best, most = point, agree
     if most.sum() < MIN_RAYS:
         return best
     return meeting_point(poses[most, :2], directions[most], np.ones(int(most.sum())))
-
-
-def agreeing(poses: FloatArray, directions: FloatArray, point: FloatArray) -> np.ndarray:
-    """Which rays, from ``poses`` along world ``directions``, agree with ``point``.
-
-    Those pointing towards it and passing within :data:`~azgym.localize.bearings.STRAY_SCALE`
-    of it: the rays :func:`~azgym.localize.bearings.intersect_robustly` weighs above half. None
-    when the point is not finite.
-    """
-    if not np.isfinite(point).all():
-        return np.zeros(len(directions), dtype=bool)
-    offsets = point - poses[:, :2]
-    cos, sin = np.cos(directions), np.sin(directions)
-    ahead = cos * offsets[:, 0] + sin * offsets[:, 1] > 0.0
-    return np.asarray(ahead & (np.abs(cos * offsets[:, 1] - sin * offsets[:, 0]) < STRAY_SCALE))
 
 
 def seen(detections: int) -> str:
@@ -154,9 +160,17 @@ def azimuth_residuals(poses: FloatArray, points: FloatArray, azimuths: FloatArra
     return np.asarray(np.remainder(azimuths - predicted + math.pi, 2.0 * math.pi) - math.pi)
 
 
+def azimuth_variances(settings: Settings, distance: FloatArray,
+                      widths: FloatArray | float) -> FloatArray:
+    """Each detection's azimuth variance [rad²]: eq. 1-3's at ``distance`` plus extra_sigma's.
+
+    ``distance`` [m] is taken at :data:`MIN_RANGE` at least.
+    """
+    model = ErrorModel(settings.delta_alpha_d, settings.coverage)
+    return model.variance(np.maximum(distance, MIN_RANGE), widths) + settings.extra_sigma**2
+
+
 def azimuth_sigmas(settings: Settings, poses: FloatArray, points: FloatArray,
                    widths: FloatArray) -> FloatArray:
     """Each detection's azimuth standard deviation: eq. 1-3 at the first guess's distance."""
-    distance = np.hypot(*(points - poses[:, :2]).T)
-    model = ErrorModel(settings.delta_alpha_d, settings.coverage)
-    return np.sqrt(model.variance(np.maximum(distance, 0.1), widths) + settings.extra_sigma**2)
+    return np.sqrt(azimuth_variances(settings, np.hypot(*(points - poses[:, :2]).T), widths))

@@ -28,6 +28,7 @@ import numpy as np
 from azgym.core import FloatArray, IntArray
 from azgym.errors import InvalidInputError, require
 from azgym.mapping.factors import (
+    anchor,
     beacon_key,
     bearing,
     between,
@@ -41,14 +42,12 @@ from azgym.mapping.first_guess import azimuth_residuals
 from azgym.mapping.odometry import Odometry
 from azgym.mapping.problem import Drive, Settings
 
-__all__ = ["ANCHOR_STD", "START_STD", "Graph", "Solution", "covariances", "left_out",
+__all__ = ["START_STD", "Graph", "Solution", "covariances", "left_out",
            "residuals", "skeleton", "solve"]
 
 START_STD = (0.005, 0.005, math.radians(0.05))
 """Standard deviations of a known start pose (x, y [m], heading [rad]): a dock's survey. The
 map is only as well placed as this: a heading off by 0.05° turns a beacon 20 m away by 1.7 cm."""
-ANCHOR_STD = 0.002
-"""Standard deviation of a surveyed anchor's position [m] (a total station's)."""
 WALK_FLOOR = 1e-6
 """Least standard deviation of the sensor errors at a drive's start and of their change between
 links: a profile without such an error, or two frames at the same time, must still give an
@@ -263,11 +262,9 @@ def _fixed(gtsam: Any, graph: Graph, settings: Settings, kept: np.ndarray) -> An
     for k, pose in zip(graph.starts.tolist(), graph.start_poses.tolist(), strict=True):
         factors.add(gtsam.PriorFactorPose2(pose_key(gtsam, k), gtsam.Pose2(*pose),
                                            start_noise))
-    anchor_noise = gtsam.noiseModel.Isotropic.Sigma(2, ANCHOR_STD)
     for b in graph.anchors.tolist():
         if kept[b]:
-            factors.add(gtsam.PriorFactorPoint2(beacon_key(gtsam, b),
-                                                gtsam.Point2(*graph.beacons[b]), anchor_noise))
+            factors.add(anchor(gtsam, b, graph.beacons[b]))
     loss = robust_loss(gtsam, settings)
     for b, xy in zip(graph.priors.tolist(), graph.prior_xy, strict=True):
         if kept[b]:

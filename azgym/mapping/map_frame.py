@@ -20,7 +20,7 @@ from azgym.errors import InvalidInputError
 from azgym.mapping.first_guess import first_guess
 from azgym.mapping.problem import Drive, Prior
 
-__all__ = ["placed", "require_anchors", "require_fixed", "rigid"]
+__all__ = ["carried", "placed", "require_anchors", "require_fixed", "rigid"]
 
 
 def require_fixed(drives: Sequence[Drive], prior: Prior) -> None:
@@ -70,7 +70,11 @@ def placed(drive: Drive, poses: FloatArray, anchors: dict[int, FloatArray], ids:
             seen.append(guess)
             wanted.append(position)
     require_anchors(drive, len(seen))
-    turn, shift = rigid(np.array(seen), np.array(wanted))
+    return carried(poses, *rigid(np.array(seen), np.array(wanted)))
+
+
+def carried(poses: FloatArray, turn: FloatArray, shift: FloatArray) -> FloatArray:
+    """Poses (K, 3) turned by ``turn`` (2, 2) and shifted by ``shift`` (2,), headings wrapped."""
     placed = poses.copy()
     placed[:, :2] = poses[:, :2] @ turn.T + shift
     placed[:, 2] = np.remainder(poses[:, 2] + math.atan2(turn[1, 0], turn[0, 0]) + math.pi,

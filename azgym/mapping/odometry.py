@@ -29,7 +29,7 @@ from azgym.mapping.problem import Drive, Settings
 from azgym.sensing.motion import OdometryModel
 from azgym.track.unicycle import IBIAS, ISCALE, STATE_SIZE, MotionNoise, MotionSteps, predict
 
-__all__ = ["COVARIANCE_FLOOR", "Odometry", "compose", "relative_poses"]
+__all__ = ["COVARIANCE_FLOOR", "Odometry", "compose", "motion_steps", "relative_poses"]
 
 COVARIANCE_FLOOR = np.array([1e-4, 1e-4, math.radians(0.01)]) ** 2
 """Added to every relative pose's covariance (x, y [m²], heading [rad²]): a frame at the same
@@ -60,10 +60,15 @@ class Odometry(NamedTuple):
     walks: FloatArray
 
 
+def motion_steps(settings: Settings) -> MotionSteps:
+    """A fresh stepper of the trackers' motion model for one drive, as the settings give it."""
+    return MotionSteps(PERIOD, settings.turn_source, settings.vehicle,
+                       float(settings.wheelbase), float(settings.speed_factor))
+
+
 def relative_poses(drive: Drive, settings: Settings) -> Odometry:
     """Each frame's camera pose relative to the previous frame's (:class:`Odometry`)."""
-    steps = MotionSteps(PERIOD, settings.turn_source, settings.vehicle,
-                        float(settings.wheelbase), float(settings.speed_factor))
+    steps = motion_steps(settings)
     noise = settings.noise
     still = MotionNoise(**{name: 0.0 for name in MotionNoise.__dataclass_fields__})
     count = max(len(drive.frames) - 1, 0)

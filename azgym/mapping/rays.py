@@ -9,8 +9,10 @@ The ``rays`` mapper's method, the survey's first guess made an answer (no factor
    reckoned from the origin and placed by its anchors (step 3).
 2. **Each id's rays** (the camera's heading plus the azimuth, from its position) intersected
    robustly (:func:`~azgym.localize.bearings.intersect_robustly`); an id is placed when the rays
-   agreeing with the point are at least :data:`~azgym.localize.bearings.MIN_RAYS` and spread at
-   least :data:`~azgym.localize.bearings.MIN_SPREAD` (the survey's observability rule). Its
+   agreeing with the point (:func:`~azgym.localize.bearings.agreeing`) are at least
+   :data:`~azgym.localize.bearings.MIN_RAYS` and spread at least
+   :data:`~azgym.localize.bearings.MIN_SPREAD` (the survey's observability rule,
+   :func:`~azgym.mapping.first_guess.unmet`). Its
    position is those rays' weighted intersection (:func:`~azgym.localize.bearings.intersect_rays`,
    each azimuth weighed by eq. 1-3 at its range plus the pose's heading variance), and its
    covariance that intersection's plus the rays' shared pose error: dead reckoning's drift moves
@@ -26,35 +28,30 @@ The ``rays`` mapper's method, the survey's first guess made an answer (no factor
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from azgym.core import FloatArray, IntArray
 from azgym.errors import InvalidInputError
-from azgym.localize.bearings import (
-    MIN_RAYS,
-    MIN_SPREAD,
-    intersect_rays,
-    intersect_robustly,
-    meeting_point,
-    spread,
+from azgym.localize.bearings import intersect_rays, intersect_robustly, meeting_point
+from azgym.mapping.first_guess import (
+    MIN_RANGE,
+    agreeing,
+    anchor_positions,
+    azimuth_variances,
+    too_few,
+    unmet,
+    widths,
 )
-from azgym.mapping.first_guess import anchor_positions, widths
 from azgym.mapping.graph import START_STD
-from azgym.mapping.map_frame import require_anchors, require_fixed, rigid
+from azgym.mapping.map_frame import carried, require_anchors, require_fixed, rigid
 from azgym.mapping.moves import moved
-from azgym.mapping.odometry import PERIOD
+from azgym.mapping.odometry import motion_steps
 from azgym.mapping.problem import Drive, Prior, Settings
 from azgym.mapping.survey import Survey
-from azgym.site.error_model import ErrorModel
-from azgym.track.unicycle import IBIAS, ISCALE, STATE_SIZE, MotionSteps, predict
+from azgym.track.unicycle import IBIAS, ISCALE, STATE_SIZE, predict
 
-__all__ = ["AGREEING_WEIGHT", "dead_reckoned", "require_frames", "survey_by_rays"]
+__all__ = ["dead_reckoned", "require_frames", "survey_by_rays"]
 
-AGREEING_WEIGHT = 0.5
-"""Least robust weight of a ray that agrees with its id's point (a miss within the stray scale,
-:data:`~azgym.localize.bearings.STRAY_SCALE`): the survey's first guess's rule."""
 TURN_STEP = 1e-6
 """The heading step of the point's numerical derivative with respect to a shared turn [rad]."""
 
@@ -117,8 +114,7 @@ def dead_reckoned(drive: Drive, settings: Settings) -> tuple[FloatArray, FloatAr
         (K, 3) each frame's pose from the drive's start (or the origin), and (K, 3, 3) its
         covariance by the trackers' motion model.
     """
-    steps = MotionSteps(PERIOD, settings.turn_source, settings.vehicle,
-                        float(settings.wheelbase), float(settings.speed_factor))
+    steps = motion_steps(settings)
     state = np.zeros(STATE_SIZE)
     cov = np.zeros((STATE_SIZE, STATE_SIZE))
     if drive.start is not None:
@@ -149,21 +145,15 @@ def _located(poses: FloatArray, pose_cov: FloatArray, azimuths: FloatArray, widt
     """One id's point and covariance from its rays, or NaN and why it is unobservable."""
     nothing = np.full(2, np.nan), np.full((2, 2), np.nan)
     bearings = poses[:, 2] + azimuths
-    if len(bearings) < MIN_RAYS:
-        return *nothing, f"seen {len(bearings)} time(s), fewer than {MIN_RAYS}"
-    point, weights = intersect_robustly(poses[:, :2], bearings)
-    agree = weights > AGREEING_WEIGHT
-    if not np.isfinite(point).all() or agree.sum() < MIN_RAYS:
-        return *nothing, (f"its rays do not meet: {int(agree.sum())} of {len(bearings)} agree "
-                          "on a point")
-    angle = spread(bearings[agree])
-    if angle < MIN_SPREAD:
-        return *nothing, (f"its rays spread {math.degrees(angle):.1f}°, less than "
-                          f"{math.degrees(MIN_SPREAD):.0f}° (too narrow a baseline)")
+    if reason := too_few(len(bearings)):
+        return *nothing, reason
+    point, _ = intersect_robustly(poses[:, :2], bearings)
+    agree = agreeing(poses[:, :2], bearings, point)
+    if reason := unmet(bearings, point, agree):
+        return *nothing, reason
     origins, bearings, shared = poses[agree, :2], bearings[agree], pose_cov[agree].mean(axis=0)
-    distance = np.maximum(np.hypot(*(point - origins).T), 0.1)
-    noise = ErrorModel(settings.delta_alpha_d, settings.coverage).variance(distance, width) \
-        + settings.extra_sigma ** 2
+    distance = np.maximum(np.hypot(*(point - origins).T), MIN_RANGE)
+    noise = azimuth_variances(settings, distance, width)
     point, cov, _ = intersect_rays(origins, bearings, noise, np.zeros((len(bearings), 2, 2)))
     weights = 1.0 / (np.square(distance) * noise)
     turned = (meeting_point(origins, bearings + TURN_STEP, weights)
@@ -184,8 +174,5 @@ def _placed(drive: Drive, anchors: dict[int, FloatArray], ids: IntArray, poses: 
             wanted.append(position)
     require_anchors(drive, len(local))
     rotation, offset = rigid(np.array(local), np.array(wanted))
-    angle = math.atan2(rotation[1, 0], rotation[0, 0])
-    placed = poses.copy()
-    placed[:, :2] = poses[:, :2] @ rotation.T + offset
-    placed[:, 2] = np.remainder(poses[:, 2] + angle + math.pi, 2.0 * math.pi) - math.pi
-    return placed, xy @ rotation.T + offset, rotation @ cov @ rotation.T
+    return (carried(poses, rotation, offset), xy @ rotation.T + offset,
+            rotation @ cov @ rotation.T)

@@ -15,8 +15,16 @@ import numpy as np
 
 from azgym.core import FloatArray
 from azgym.errors import InvalidInputError, require
-from azgym.mapping.factors import beacon_key, bearing, between, map_prior, pose_key, robust_loss
-from azgym.mapping.graph import ANCHOR_STD, START_STD, Graph
+from azgym.mapping.factors import (
+    anchor,
+    beacon_key,
+    bearing,
+    between,
+    map_prior,
+    pose_key,
+    robust_loss,
+)
+from azgym.mapping.graph import START_STD, Graph
 from azgym.mapping.problem import Settings
 
 __all__ = ["GUESS_STD", "PLACED_STD", "Sweep"]
@@ -60,11 +68,9 @@ class Sweep:
         self.placed: set[int] = set()
         self.next_link = {int(i): k for k, (i, _) in enumerate(graph.links.tolist())}
         self.start = dict(zip(graph.starts.tolist(), graph.start_poses, strict=True))
-        anchor_noise = gtsam.noiseModel.Isotropic.Sigma(2, ANCHOR_STD)
         for b, xy in anchors.items():
             self.place(b, xy)
-            self.factors.add(gtsam.PriorFactorPoint2(beacon_key(gtsam, b), gtsam.Point2(*xy),
-                                                     anchor_noise))
+            self.factors.add(anchor(gtsam, b, xy))
         for b, xy in mapped.items():
             self._add(b, xy, map_prior(gtsam, self.loss, settings, b, xy))
 

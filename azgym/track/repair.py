@@ -136,7 +136,7 @@ class MapRepair:
         when none is).
         """
         self._frame += 1
-        return self.map_for(beacons) if self.placed else beacons
+        return self.map_for(beacons)
 
     def map_for(self, beacons: BeaconMap) -> BeaconMap:
         """``beacons`` with every repaired beacon at its new position (itself when none is)."""

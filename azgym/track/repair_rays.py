@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from azgym.core import FloatArray
-from azgym.localize.bearings import intersect_rays, ray_misses, spread
+from azgym.localize.bearings import crossings, intersect_rays, pair_spread, ray_misses, spread
 
 __all__ = ["CANDIDATES", "COLUMN_HEADING_VARIANCE", "COLUMN_SIGHTING", "KEPT_SHARE", "MAX_RAYS",
            "RayStore", "consensus", "intersect", "locate", "near", "origin_covariance", "pack",
@@ -145,10 +145,9 @@ def consensus(rays: FloatArray, span: float, threshold: float,
     pairs of rays are tried, ray k (:data:`CANDIDATES` of them, spread over the store) with
     ray k + K/2 and with the ray of another sighting most across it, each scored by the
     sightings that have a ray within the gate of it. A pair whose rays spread less than half
-    ``span`` (for two rays, the acute angle between them:
-    :func:`~azgym.localize.bearings.spread`) crosses too uncertainly to be tried, and one that
-    crosses outside ``box`` (lowest, highest corner) is not where a beacon can hang (a mirror's
-    image is seen there, as often as the beacon or more).
+    ``span`` (:func:`~azgym.localize.bearings.pair_spread`) crosses too uncertainly to be
+    tried, and one that crosses outside ``box`` (lowest, highest corner) is not where a beacon
+    can hang (a mirror's image is seen there, as often as the beacon or more).
     """
     half = len(rays) // 2
     sightings, bearings = rays[:, COLUMN_SIGHTING], rays[:, 2]
@@ -157,15 +156,9 @@ def consensus(rays: FloatArray, span: float, threshold: float,
         * (sightings[None, :] != sightings[firsts, None])
     pairs = np.concatenate((np.column_stack((firsts, firsts + half)),
                             np.column_stack((firsts, across.argmax(axis=1)))))
-    turn = bearings[pairs[:, 1]] - bearings[pairs[:, 0]]
-    wide = np.arccos(np.minimum(1.0, np.abs(np.cos(turn)))) >= 0.5 * span
-    pairs, turn = pairs[wide], turn[wide]
-    # the crossing of c1 + t d1 and c2 + u d2: t = ((c2 − c1) × d2) / sin(θ2 − θ1)
-    first, second = rays[pairs[:, 0]], rays[pairs[:, 1]]
-    gap = second[:, :2] - first[:, :2]
-    along = (gap[:, 0] * np.sin(second[:, 2]) - gap[:, 1] * np.cos(second[:, 2])) / np.sin(turn)
-    points = first[:, :2] + along[:, None] * np.column_stack((np.cos(first[:, 2]),
-                                                              np.sin(first[:, 2])))
+    pairs = pairs[pair_spread(bearings[pairs[:, 0]], bearings[pairs[:, 1]]) >= 0.5 * span]
+    points = crossings(rays[pairs[:, 0], :2], bearings[pairs[:, 0]], rays[pairs[:, 1], :2],
+                       bearings[pairs[:, 1]])
     points = points[((points >= box[0]) & (points <= box[1])).all(axis=1)]
     covariance = origin_covariance(rays)
     best, most = np.full(len(rays), np.inf), 0

@@ -16,15 +16,13 @@ from typing import Any
 from azgym.bench.leaderboard.board_page import Table
 from azgym.bench.leaderboard.entries import differences
 from azgym.bench.leaderboard.entry_files import LeaderboardError
-from azgym.bench.mapping.report import COLUMNS, case_record, figures, rank_key, summary_record
+from azgym.bench.mapping.report import HEADER, case_record, ranked_rows, summary_record
 from azgym.bench.mapping.results_file import MappingFile, load_mapping
 from azgym.bench.mapping.suites import MAPPING_SUITES
 from azgym.progress import Progress
 
-__all__ = ["FRAME_LISTS", "HEADER", "RUNTIMES", "mapping_tables", "table_rows", "verify_mapping"]
+__all__ = ["FRAME_LISTS", "RUNTIMES", "mapping_tables", "table_rows", "verify_mapping"]
 
-HEADER = ["#", "mapper", *(title for title, _, _ in COLUMNS)]
-"""The columns of a mapping table."""
 RUNTIMES = ("runtime", "runtime_median_s")
 """The figures a rerun does not compare: they depend on the machine."""
 FRAME_LISTS = ("localization_updated", "localization_true")
@@ -87,10 +85,8 @@ def _compared(summary: dict[str, Any], cases: list[dict[str, Any]]) -> dict[str,
 
 def table_rows(checked: MappingFile) -> list[list[str]]:
     """A file's mappers as table rows, ranked, each figure from its recomputed summary."""
-    ranked = sorted(checked.summaries.values(), key=rank_key)
-    return [[str(rank), summary.mapper,
-             *(BOARD_GLYPHS.get(text, text) for text in figures(summary))]
-            for rank, summary in enumerate(ranked, 1)]
+    return [[*row[:2], *(BOARD_GLYPHS.get(text, text) for text in row[2:])]
+            for row in ranked_rows(checked.summaries.values())]
 
 
 def mapping_tables(directory: Path) -> list[Table]:

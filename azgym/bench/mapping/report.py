@@ -28,9 +28,10 @@ from azgym.bench.mapping.scoring import CaseScore, MapperSummary, MappingResult
 from azgym.bench.report.table import cell
 from azgym.files import prepare_folder, write_file
 
-__all__ = ["COLUMNS", "KIND", "LEGEND", "MAPPING_FILE", "MAPPING_FILES", "MAPPING_NOTE",
-           "MAPPING_PART", "RESULTS_FORMAT", "SUITE", "case_record", "figures", "mapping_record",
-           "rank_key", "score_table", "summary_record", "write_mapping"]
+__all__ = ["COLUMNS", "HEADER", "KIND", "LEGEND", "MAPPING_FILE", "MAPPING_FILES",
+           "MAPPING_NOTE", "MAPPING_PART", "RESULTS_FORMAT", "SUITE", "case_record",
+           "mapping_record", "rank_key", "ranked_rows", "score_table", "summary_record",
+           "write_mapping"]
 
 SUITE = "mapping"
 """The mapping suite ``azgym bench mapping`` runs."""
@@ -54,6 +55,8 @@ COLUMNS = (("median cm", "error_median_cm", 1), ("p95 cm", "error_p95_cm", 1),
            ("ratio", "localization_ratio", 2), ("failures", "failures", 0),
            ("runtime s", "runtime_median_s", 2))
 """The columns after the mapper's name: title, :class:`MapperSummary` field, decimals."""
+HEADER = ["#", "mapper", *(title for title, _, _ in COLUMNS)]
+"""The column names of a mapping table (the printed one and the board's)."""
 PERCENT = frozenset({"moved_precision", "moved_recall"})
 """Summary fields kept as shares (0-1) and shown as percentages."""
 LEGEND = (
@@ -142,20 +145,24 @@ def rank_key(summary: MapperSummary) -> tuple[float, float, str]:
     return low(summary.error_p95_cm), low(summary.error_median_cm), summary.mapper
 
 
-def figures(summary: MapperSummary) -> list[str]:
-    """A summary's cells in the order of :data:`COLUMNS` (``inf``: infinite, ``-``: none)."""
-    values = dataclasses.asdict(summary)
-    return [cell(100 * values[key] if key in PERCENT else values[key], decimals)
-            for _, key, decimals in COLUMNS]
+def ranked_rows(summaries: Iterable[MapperSummary]) -> list[list[str]]:
+    """The mappers ranked (:func:`rank_key`), a row each: rank, mapper, then :data:`COLUMNS`.
+
+    A figure's cell is ``inf`` when it is infinite, ``-`` when there is none.
+    """
+    rows = []
+    for rank, summary in enumerate(sorted(summaries, key=rank_key), 1):
+        values = dataclasses.asdict(summary)
+        rows.append([str(rank), summary.mapper,
+                     *(cell(100 * values[key] if key in PERCENT else values[key], decimals)
+                       for _, key, decimals in COLUMNS)])
+    return rows
 
 
 def score_table(summaries: Iterable[MapperSummary]) -> str:
     """The mappers, ranked (:func:`rank_key`), as a text table."""
-    ranked = sorted(summaries, key=rank_key)
-    rows = [[str(rank), summary.mapper, *figures(summary)]
-            for rank, summary in enumerate(ranked, 1)]
-    header = ["#", "mapper", *(title for title, _, _ in COLUMNS)]
-    widths = [max(len(text) for text in column) for column in zip(header, *rows, strict=True)]
+    rows = ranked_rows(summaries)
+    widths = [max(len(text) for text in column) for column in zip(HEADER, *rows, strict=True)]
     return "\n".join("  ".join(text.ljust(width) if k < 2 else text.rjust(width)
                                for k, (text, width) in enumerate(zip(line, widths, strict=True)))
-                     for line in (header, *rows))
+                     for line in (HEADER, *rows))

@@ -140,11 +140,10 @@ def load_mapping(path: Path) -> MappingFile:
 
 def _check_suite(data: dict[str, Any], path: Path) -> list[str]:
     """The file's suite, at its version, on its dev split, seed and size; its cases' names."""
-    suite = MAPPING_SUITES[data["suite"]] if isinstance(data["suite"], str) and \
-        data["suite"] in MAPPING_SUITES else None
-    if suite is None:
+    if not isinstance(data["suite"], str) or data["suite"] not in MAPPING_SUITES:
         raise LeaderboardError(f"{path}: suite {data['suite']!r} is not a mapping suite "
                                f"({', '.join(MAPPING_SUITES)})")
+    suite = MAPPING_SUITES[data["suite"]]
     if type(data["suite_version"]) is not int or data["suite_version"] != suite.version:
         raise LeaderboardError(f"{path}: suite_version {data['suite_version']!r}: "
                                f"{suite.name} is at version {suite.version}; rerun it")

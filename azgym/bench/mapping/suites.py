@@ -46,8 +46,8 @@ from azgym.site.elements import Route
 from azgym.world.drive import Frame, motion_models, simulate
 
 __all__ = ["MAPPING_SUITES", "MOVED_COUNT", "PERTURBATIONS", "RACK", "SCENARIOS", "UNCHANGED",
-           "UNKNOWN", "CaseTruth", "MappingCase", "MappingSuite", "build", "case_names",
-           "get_mapping_suite", "perturbations"]
+           "TRUE_LABELS", "UNKNOWN", "CaseTruth", "MappingCase", "MappingSuite", "build",
+           "case_names", "get_mapping_suite", "perturbations", "true_detections"]
 
 UNKNOWN, MOVED_BEACONS, RACK, UNCHANGED = "unknown", "moved", "rack", "unchanged"
 PERTURBATIONS = (UNKNOWN, MOVED_BEACONS, RACK, UNCHANGED)
@@ -179,7 +179,7 @@ def _route_cases(scenario: Scenario, route: Route, seed: int,
                  place: list[int]) -> list[MappingCase]:
     """A route's cases, one per perturbation the site allows, each drawn from its own stream."""
     as_shipped = _drive(scenario, route, seed + place[1])
-    observable = sorted(observable_by_truth(*_true_detections(scenario, as_shipped)[:3],
+    observable = sorted(observable_by_truth(*true_detections(scenario, as_shipped),
                                             _poses(as_shipped)))
     cases = []
     for perturbation in perturbations(scenario):
@@ -218,9 +218,9 @@ def _poses(frames: list[Frame]) -> FloatArray:
     return np.array([frame.pose for frame in frames], dtype=np.float64).reshape(-1, 3)
 
 
-def _true_detections(scenario: Scenario, frames: list[Frame]
-                     ) -> tuple[IntArray, IntArray, FloatArray]:
-    """Each true detection's frame, beacon id and noise-free azimuth."""
+def true_detections(scenario: Scenario, frames: list[Frame]
+                    ) -> tuple[IntArray, IntArray, FloatArray]:
+    """Each true detection (:data:`TRUE_LABELS`): its frame, beacon id and noise-free azimuth."""
     parts = []
     for k, frame in enumerate(frames):
         truth = frame.truth
@@ -235,7 +235,7 @@ def _true_detections(scenario: Scenario, frames: list[Frame]
 def _case(world: Scenario, route: Route, perturbation: str, frames: list[Frame],
           prior: Prior) -> MappingCase:
     """A case of a route driven through ``world``."""
-    detected, ids, azimuths = _true_detections(world, frames)
+    detected, ids, azimuths = true_detections(world, frames)
     drive = simulated_drive(frames, frames[0].pose)
     truth = CaseTruth(true_map(world), _poses(frames), detected, ids, azimuths)
     profile = robot.contender_defaults() if world.name == robot.SCENARIO else None

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from azgym.bench.run.wire import LENGTH, framed, pack, unframed, unpack, write_all
+from azgym.bench.run.wire import framed, pack, unframed, unpack, write_all
 from azgym.bench.run.worker import describe, seal
 from azgym.core import BeaconMap
 from azgym.errors import AzgymError, InvalidInputError, ProtocolError
@@ -124,7 +124,7 @@ def serve(conn: Any, spec: str, profile: Profile | None, folder: str) -> None:
         write_all(fd, framed(_error(exc)))
         return
     write_all(fd, framed(READY))
-    while problem := _receive(fd):
+    while problem := _receive(conn):
         write_all(fd, framed(SURVEYING))
         try:
             answer = mapper.survey(*decode_problem(problem))
@@ -146,25 +146,16 @@ def _error(exc: BaseException) -> bytes:
                        else describe(exc)}).encode()
 
 
-def _receive(fd: int) -> bytes:
-    """The next message from the parent; empty when told to stop or when the parent is gone."""
-    head = _read(fd, LENGTH.size)
-    return _read(fd, LENGTH.unpack(head)[0]) if len(head) == LENGTH.size else b""
+def _receive(conn: Any) -> bytes:
+    """The next message from the parent; empty when told to stop or when the parent is gone.
 
-
-def _read(fd: int, size: int) -> bytes:
-    """``size`` bytes from ``fd``, fewer only when it ends first."""
-    parts, left = [], size
-    while left:
-        try:
-            part = os.read(fd, min(left, 1 << 20))
-        except OSError:
-            part = b""
-        if not part:
-            break
-        parts.append(part)
-        left -= len(part)
-    return b"".join(parts)
+    The parent frames each one as ``Connection.send_bytes`` does (:func:`framed`), so the
+    pipe's own reader takes it whole; a pipe that ends, even mid-message, is the parent gone.
+    """
+    try:
+        return conn.recv_bytes()
+    except (EOFError, OSError):
+        return b""
 
 
 def messages(inbox: bytearray) -> list[bytes]:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from azgym.bench.mapping.scoring import (
+    BeaconScore,
     CaseScore,
     MovedScore,
     beacon_scores,
@@ -30,8 +31,6 @@ def beacons(rows: dict[int, tuple[float, float]]) -> BeaconMap:
 
 def case(perturbation="moved", beacon_errors=(), moved=(), said=(), false=0,
          updated=(0.1,), true=(0.1,), failure=None, runtime=1.0) -> CaseScore:
-    from azgym.bench.mapping.scoring import BeaconScore
-
     return CaseScore("s/r/" + perturbation, "s", "r", perturbation,
                      tuple(BeaconScore(k, e, math.isfinite(e))
                            for k, e in enumerate(beacon_errors)),
