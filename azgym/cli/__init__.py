@@ -70,7 +70,7 @@ from azgym.cli.info import add_info
 from azgym.cli.layout import add_layout
 from azgym.cli.leaderboard import add_leaderboard
 from azgym.cli.logs import add_logs
-from azgym.cli.options import stopped
+from azgym.cli.options import interruption_within, stopped
 from azgym.cli.show import add_show
 from azgym.cli.studies import add_reproduce, add_study
 from azgym.cli.survey import add_survey
@@ -137,6 +137,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as exc:  # Ctrl-C: one line saying what was kept
         return stopped(exc)
+    except SystemError as exc:  # Ctrl-C inside a compiled kernel's machinery
+        interruption = interruption_within(exc)
+        if interruption is None:
+            raise
+        return stopped(interruption)
     except BrokenPipeError:  # the reader left (azgym suites | head): stop without a traceback
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1

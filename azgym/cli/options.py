@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 
 __all__ = ["Interrupted", "add_backend_options", "add_overwrite", "check_backend", "out_file",
            "out_folder", "profile_option", "progress_printer", "resolve_workers",
-           "seconds_option", "stopped", "workers_option"]
+           "interruption_within", "seconds_option", "stopped", "workers_option"]
 
 
 def seconds_option(text: str) -> float:
@@ -142,6 +142,23 @@ def progress_printer() -> Meter:
 
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C while a command runs, with what it kept (its message: ``checkpoints kept in ...``)."""
+
+
+def interruption_within(error: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C an error was raised from, if any.
+
+    A Ctrl-C that lands inside a compiled kernel's machinery (numba unpickling a constant, say)
+    reaches Python as a ``SystemError`` raised from the ``KeyboardInterrupt``; it is still the
+    user's Ctrl-C, not a fault of the command.
+    """
+    seen: set[int] = set()
+    cause: BaseException | None = error
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return cause
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return None
 
 
 def stopped(interruption: KeyboardInterrupt) -> int:

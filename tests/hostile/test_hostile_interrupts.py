@@ -4,6 +4,7 @@ that has finished."""
 
 from __future__ import annotations
 
+import argparse
 import os
 import selectors
 import signal
@@ -36,6 +37,37 @@ def test_ctrl_c_ends_a_command_with_one_line_and_exit_code_130(tmp_path):
     assert "Traceback" not in err and "KeyboardInterrupt" not in err
     assert err.strip().splitlines()[-1] == "azgym: interrupted"
     assert not (tmp_path / "out" / "navigation.json").exists()
+
+
+def _run_instead(monkeypatch, handler):
+    """Make every command line run ``handler`` (the command's own work replaced)."""
+    class Parser:
+        def parse_args(self, argv):
+            return argparse.Namespace(handler=handler)
+    monkeypatch.setattr(cli, "build_parser", Parser)
+
+
+def _raise_from_a_kernel(args):
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt as interruption:  # as numba's dispatcher wraps it
+        raise SystemError("CPUDispatcher(gather) returned a result with an exception set") \
+            from interruption
+
+
+def test_ctrl_c_inside_a_compiled_kernel_is_still_an_interruption(monkeypatch, capsys):
+    """A Ctrl-C landing in numba's machinery arrives as a SystemError raised from it."""
+    _run_instead(monkeypatch, _raise_from_a_kernel)
+    assert cli.main(["suites"]) == 130
+    assert capsys.readouterr().err.strip() == "azgym: interrupted"
+
+
+def test_a_system_error_not_from_ctrl_c_is_not_called_an_interruption(monkeypatch):
+    def broken(args):
+        raise SystemError("a genuine fault")
+    _run_instead(monkeypatch, broken)
+    with pytest.raises(SystemError, match="a genuine fault"):
+        cli.main(["suites"])
 
 
 @pytest.mark.parametrize("model,weights", [("ng-ransac", "ng-ransac.npz"),
