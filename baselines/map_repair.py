@@ -1,6 +1,7 @@
 """robust's map repair (``robust:repair=true``): false repairs, moved beacons found, its cost.
 
-    python baselines/map_repair.py [--part clean|moved|speed|all] [--seeds 3] [--first-seed 0]
+    python baselines/map_repair.py [--part clean|moved|bounds|speed|all] [--seeds 3]
+                                   [--first-seed 0]
                                    [--span DEGREES]
 
 ``--span`` sets robust's ``repair_span`` (the least spread of a suspect's rays) to try another.
@@ -21,7 +22,15 @@
    position error with repair, on the stale map without it, and on the true map, and their
    ratio, over the whole drive and over the frames after the last moved beacon's repair (the
    run's moved beacons seen from two places all repaired; none if one never was).
-3. **speed**: robust and ``robust:repair=true`` timed over the clean routes of the scenarios
+3. **bounds**: what any method could do with the moved part's beacons within 10 s of each
+   first being seen from two places, from its true detections there: how far the move turns
+   its azimuths, the noncentrality Σ Δ²/σ² of a test that knew where it went (σ² the error
+   model's azimuth variance, with true poses; and with the track's error added, robust's
+   covariance on the true map: the best track), and the Cramér-Rao worst-axis standard
+   deviation of its new position from those bearings (with the track's error: plus its mean
+   position covariance, which rays a few seconds apart share). A noncentrality under 25 cannot
+   be told from noise; a bound over 0.1 m cannot be located to ``repair_std``.
+4. **speed**: robust and ``robust:repair=true`` timed over the clean routes of the scenarios
    that ship no moved beacon (no repair happens: warehouse-small's beacon 9 is left out), the
    least disturbed of 5 rounds, as a ratio.
 """
@@ -52,6 +61,13 @@ from azgym.core import pose_error  # noqa: E402
 from azgym.world.drive import simulate  # noqa: E402
 
 MOVED_BY = (0.5, 3.0)
+WINDOW_S = 10.0
+"""The bounds part's window after a beacon is first seen from two places [s]."""
+DETECTABLE = 25.0
+"""A move whose azimuth changes add up to less noncentrality than this (five standard deviations
+of a test that knew where the beacon went) cannot be told from noise in the window."""
+LOCATABLE_M = 0.1
+"""The bounds part's standard deviation of a located beacon: robust's ``repair_std`` [m]."""
 REPAIR: dict = {"repair": True}
 """robust's options for its map repair (``--span`` adds ``repair_span``)."""
 
@@ -122,9 +138,8 @@ def p95_of(errors: np.ndarray) -> float:
     return math.inf if math.isnan(p95) else p95
 
 
-def moved(seeds: int, first_seed: int) -> None:
-    ratios, after_ratios, delays, misses, errors = [], [], [], 0, []
-    noticed, unnoticed, false_suspicions = [], 0, 0
+def drives(seeds: int, first_seed: int):
+    """The moved part's drives: (scenario, route, seed, world, its true map, frames, times)."""
     for name in ("warehouse-small", "warehouse-paper", robot.SCENARIO):
         scenario = azgym.load_scenario(name)
         routes = [r for r in scenario.routes if name != robot.SCENARIO or r.name in robot.ROUTES]
@@ -136,61 +151,68 @@ def moved(seeds: int, first_seed: int) -> None:
                 poses = np.array([f.pose for f in shipped])
                 among = sorted(observable_by_truth(*true_detections(scenario, shipped), poses))
                 world = move_beacons(scenario, rng, 1 + (seed + k) % 3, among, MOVED_BY).world
-                truth = true_map(world)
                 frames = list(simulate(world, route, seed=seed + k, **extra))
-                times = np.array([f.time for f in frames])
-                steps = [(f.motion, f.measurements, f.pose) for f in frames]
-                tracker = azgym.make_tracker("robust", **REPAIR, **params_for(name))
-                with_repair, _, suspected = run_track(tracker, steps, scenario.beacons)
-                stale = run_track(azgym.make_tracker("robust", **params_for(name)), steps,
-                                  scenario.beacons)[0]
-                true = run_track(azgym.make_tracker("robust", **params_for(name)), steps,
-                                 truth)[0]
-                repaired = {r.beacon: r for r in tracker.repairs}
-                detected, ids, _ = true_detections(world, frames)
-                parts, done = [], 0.0
-                really = truly_moved(scenario.beacons, (), truth)
-                false_suspicions += len(set(suspected) - set(really))
-                for beacon in sorted(really):
-                    row = scenario.beacons.ids.tolist().index(beacon)
-                    mine = detected[ids == beacon]
-                    since = first_seen_from_two_places(times[mine], poses_of(frames, mine))
-                    seen = ""
-                    if since is not None:
-                        angle = line_of_sight(frames, times, since, scenario, truth, row)
-                        first = times[suspected[beacon]] - since if beacon in suspected else None
-                        seen = f"{angle:.0f}° to the line of sight, suspected " + \
-                            ("never" if first is None else f"{first:+.1f} s") + ", "
-                        if first is not None:
-                            noticed.append(first)
-                        unnoticed += first is None
-                    found = repaired.pop(beacon, None)
-                    if found is None:
-                        misses += since is not None
-                        done = math.inf if since is not None else done
-                        parts.append(f"{beacon}: {seen}"
-                                     f"{'missed' if since is not None else 'unseen'}")
-                        continue
-                    done = max(done, found.time)
-                    error = math.dist(found.new, truth.xyz[row, :2])
-                    final = math.dist(tracker.placed[beacon].new, truth.xyz[row, :2])
-                    delay = found.time - (since if since is not None else found.time)
-                    delays.append(delay)
-                    errors.append((error, final))
-                    parts.append(f"{beacon}: {seen}repaired {delay:+.1f} s, "
-                                 f"{100 * error:.1f} cm, at the end {100 * final:.1f} cm")
-                p95 = [p95_of(e) for e in (with_repair, stale, true)]
-                ratios.append(p95[0] / p95[2])
-                later = times > done
-                after = [p95_of(e[later]) for e in (with_repair, true)]
-                if later.any():
-                    after_ratios.append(after[0] / after[1])
-                tail = (f"after repair ({later.sum()} frames) {after[0]:.3f} against "
-                        f"{after[1]:.3f} m, {after[0] / after[1]:.2f}" if later.any()
-                        else "after repair: none")
-                print(f"{name}/{route.name} seed {seed}: moved {parts}; false "
-                      f"{sorted(repaired)}; p95 repair {p95[0]:.3f} stale {p95[1]:.3f} true "
-                      f"{p95[2]:.3f} m, repair/true {ratios[-1]:.2f}; {tail}")
+                yield (scenario, route, seed, world, true_map(world), frames,
+                       np.array([f.time for f in frames]))
+
+
+def moved(seeds: int, first_seed: int) -> None:
+    ratios, after_ratios, delays, misses, errors = [], [], [], 0, []
+    noticed, unnoticed, false_suspicions = [], 0, 0
+    for scenario, route, seed, world, truth, frames, times in drives(seeds, first_seed):
+        name = scenario.name
+        steps = [(f.motion, f.measurements, f.pose) for f in frames]
+        tracker = azgym.make_tracker("robust", **REPAIR, **params_for(name))
+        with_repair, _, suspected = run_track(tracker, steps, scenario.beacons)
+        stale = run_track(azgym.make_tracker("robust", **params_for(name)), steps,
+                          scenario.beacons)[0]
+        true = run_track(azgym.make_tracker("robust", **params_for(name)), steps,
+                         truth)[0]
+        repaired = {r.beacon: r for r in tracker.repairs}
+        detected, ids, _ = true_detections(world, frames)
+        parts, done = [], 0.0
+        really = truly_moved(scenario.beacons, (), truth)
+        false_suspicions += len(set(suspected) - set(really))
+        for beacon in sorted(really):
+            row = scenario.beacons.ids.tolist().index(beacon)
+            mine = detected[ids == beacon]
+            since = first_seen_from_two_places(times[mine], poses_of(frames, mine))
+            seen = ""
+            if since is not None:
+                angle = line_of_sight(frames, times, since, scenario, truth, row)
+                first = times[suspected[beacon]] - since if beacon in suspected else None
+                seen = f"{angle:.0f}° to the line of sight, suspected " + \
+                    ("never" if first is None else f"{first:+.1f} s") + ", "
+                if first is not None:
+                    noticed.append(first)
+                unnoticed += first is None
+            found = repaired.pop(beacon, None)
+            if found is None:
+                misses += since is not None
+                done = math.inf if since is not None else done
+                parts.append(f"{beacon}: {seen}"
+                             f"{'missed' if since is not None else 'unseen'}")
+                continue
+            done = max(done, found.time)
+            error = math.dist(found.new, truth.xyz[row, :2])
+            final = math.dist(tracker.placed[beacon].new, truth.xyz[row, :2])
+            delay = found.time - (since if since is not None else found.time)
+            delays.append(delay)
+            errors.append((error, final))
+            parts.append(f"{beacon}: {seen}repaired {delay:+.1f} s, "
+                         f"{100 * error:.1f} cm, at the end {100 * final:.1f} cm")
+        p95 = [p95_of(e) for e in (with_repair, stale, true)]
+        ratios.append(p95[0] / p95[2])
+        later = times > done
+        after = [p95_of(e[later]) for e in (with_repair, true)]
+        if later.any():
+            after_ratios.append(after[0] / after[1])
+        tail = (f"after repair ({later.sum()} frames) {after[0]:.3f} against "
+                f"{after[1]:.3f} m, {after[0] / after[1]:.2f}" if later.any()
+                else "after repair: none")
+        print(f"{name}/{route.name} seed {seed}: moved {parts}; false "
+              f"{sorted(repaired)}; p95 repair {p95[0]:.3f} stale {p95[1]:.3f} true "
+              f"{p95[2]:.3f} m, repair/true {ratios[-1]:.2f}; {tail}")
     within = np.array(delays) <= 10.0
     first, last = np.median(errors, axis=0) if errors else (math.nan, math.nan)
     print(f"delays (s): median {np.median(delays):.1f}, max {max(delays):.1f}, within 10 s "
@@ -205,6 +227,74 @@ def moved(seeds: int, first_seed: int) -> None:
     print(f"suspected (s from first seen from two places): median {np.median(noticed):.1f}, "
           f"max {max(noticed):.1f}, within 10 s {soon.sum()}/{soon.size + unnoticed}; never "
           f"{unnoticed}; beacons not moved suspected {false_suspicions}")
+
+
+def bounds(seeds: int, first_seed: int) -> None:
+    """What any method could do with each moved beacon in its first 10 s (module docstring)."""
+    table = []
+    for scenario, route, seed, world, truth, frames, times in drives(seeds, first_seed):
+        covariances = track_covariances(scenario.name, frames, truth)
+        detected, ids, _ = true_detections(world, frames)
+        for beacon in sorted(truly_moved(scenario.beacons, (), truth)):
+            row = scenario.beacons.ids.tolist().index(beacon)
+            mine = detected[ids == beacon]
+            since = first_seen_from_two_places(times[mine], poses_of(frames, mine))
+            if since is None:
+                continue
+            window = mine[(times[mine] >= since) & (times[mine] <= since + WINDOW_S)]
+            cameras = poses_of(frames, window)
+            new, old = truth.xyz[row, :2], scenario.beacons.xyz[row, :2]
+            ranges = np.hypot(*(new - cameras).T)
+            bearings = np.arctan2(*(new - cameras).T[::-1])
+            moved_by = np.remainder(np.arctan2(*(old - cameras).T[::-1]) - bearings + math.pi,
+                                    2.0 * math.pi) - math.pi
+            normals = np.column_stack((-np.sin(bearings), np.cos(bearings)))
+            own = scenario.error_model.variance(ranges, scenario.beacons.width[row])
+            track = covariances[window]
+            with_track = own + track[:, 2, 2] + np.einsum(
+                "ki,kij,kj->k", normals, track[:, :2, :2], normals) / ranges ** 2
+            floor = float(np.linalg.eigvalsh(track[:, :2, :2].mean(axis=0))[-1])
+            table.append((f"{scenario.name}/{route.name} seed {seed} beacon {beacon}",
+                          len(window), math.degrees(np.abs(moved_by).max()),
+                          float(np.sum(moved_by ** 2 / own)),
+                          float(np.sum(moved_by ** 2 / with_track)),
+                          fisher_std(normals, ranges, own),
+                          math.sqrt(fisher_std(normals, ranges, with_track) ** 2 + floor)))
+    for name, count, largest, perfect, tracked, std, std_tracked in table:
+        print(f"{name}: {count} sightings, the move turns its azimuth up to {largest:.2f}°; "
+              f"noncentrality {perfect:.0f} (true poses), {tracked:.0f} (the track's error); "
+              f"locatable to {100 * std:.1f} cm (true poses), {100 * std_tracked:.1f} cm")
+    columns = np.array([row[3:] for row in table])
+    print(f"bounds over the {len(table)} moved beacons seen from two places, in their first "
+          f"{WINDOW_S:.0f} s: noncentrality under {DETECTABLE:.0f} with true poses "
+          f"{int((columns[:, 0] < DETECTABLE).sum())}, with the track's error "
+          f"{int((columns[:, 1] < DETECTABLE).sum())} (least {columns[:, 1].min():.0f}); "
+          f"not locatable within {100 * LOCATABLE_M:.0f} cm with true poses "
+          f"{int((columns[:, 2] > LOCATABLE_M).sum())}, with the track's error "
+          f"{int((columns[:, 3] > LOCATABLE_M).sum())}")
+
+
+def track_covariances(name: str, frames, truth) -> np.ndarray:
+    """robust's (x, y, heading) covariance per frame on the true map (K, 3, 3): the best track."""
+    tracker = azgym.make_tracker("robust", **params_for(name))
+    covariances = []
+    for k, frame in enumerate(frames):
+        if k == 0:
+            tracker.reset(seed=0, initial=frame.pose)
+        tracker.predict(frame.motion)
+        estimate = tracker.update(frame.measurements, truth)
+        covariances.append(np.asarray(estimate.covariance)[:3, :3] if estimate.ok
+                           else np.full((3, 3), np.inf))
+    return np.array(covariances)
+
+
+def fisher_std(normals: np.ndarray, ranges: np.ndarray, variances: np.ndarray) -> float:
+    """The least worst-axis standard deviation of a point from its bearings [m] (Cramér-Rao):
+    each bearing's information n nᵀ / (D² σ²); infinite when they do not fix both axes."""
+    scaled = normals / (ranges * np.sqrt(variances))[:, None]
+    smallest = float(np.linalg.eigvalsh(scaled.T @ scaled)[0]) if np.isfinite(scaled).all() \
+        else 0.0
+    return 1.0 / math.sqrt(smallest) if smallest > 1e-12 else math.inf
 
 
 def line_of_sight(frames, times: np.ndarray, since: float, scenario, truth, row: int) -> float:
@@ -244,7 +334,8 @@ def speed(rounds: int = 5) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--part", choices=("clean", "moved", "speed", "all"), default="all")
+    parser.add_argument("--part", choices=("clean", "moved", "bounds", "speed", "all"),
+                        default="all")
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--first-seed", type=int, default=0,
                         help="the first seed of the moved part (a held-out seed alone)")
@@ -256,6 +347,8 @@ def main() -> None:
         clean()
     if args.part in ("moved", "all"):
         moved(args.seeds, args.first_seed)
+    if args.part in ("bounds", "all"):
+        bounds(args.seeds, args.first_seed)
     if args.part in ("speed", "all"):
         speed()
 
