@@ -135,10 +135,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except AzgymError as exc:
         print(f"azgym: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt as exc:  # Ctrl-C: one line saying what was kept
-        return stopped(exc)
-    except SystemError as exc:  # Ctrl-C inside a compiled kernel's machinery
-        interruption = interruption_within(exc)
+    except (KeyboardInterrupt, SystemError) as exc:  # Ctrl-C: one line saying what was kept
+        interruption = interruption_within(exc)  # (a kernel's machinery may have wrapped it)
         if interruption is None:
             raise
         return stopped(interruption)

@@ -26,10 +26,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
 from azgym.cli.options import (
-    Interrupted,
     add_backend_options,
     add_overwrite,
     check_backend,
+    on_ctrl_c,
     out_folder,
     profile_option,
     progress_printer,
@@ -259,10 +259,7 @@ def _claim(args: argparse.Namespace, names: tuple[str, ...], run: str) -> Path:
 
 def _interruptible(run: Callable[[], T]) -> T:
     """``run()``; Ctrl-C during it says that nothing was written (results come at its end)."""
-    try:
-        return run()
-    except KeyboardInterrupt:
-        raise Interrupted("nothing was written: a run writes its results when it ends") from None
+    return on_ctrl_c(run, lambda: "nothing was written: a run writes its results when it ends")
 
 
 def _contenders(args: argparse.Namespace, time_limit: float, profile: Profile | None

@@ -11,14 +11,15 @@ FILE`` (:func:`out_file`), an empty name refused by both, and replaces nothing a
 without ``--overwrite`` (:func:`add_overwrite`, checked by :func:`azgym.files.claim_file` and
 :func:`azgym.files.claim_folder` before any work). :func:`progress_printer` shows a run's
 progress; :func:`stopped` ends a command interrupted by Ctrl-C with one line (what it kept,
-:class:`Interrupted`) and exit code 130.
+:class:`Interrupted`, raised by :func:`on_ctrl_c`) and exit code 130.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from azgym.arguments import time_limit
 from azgym.errors import InvalidInputError
@@ -26,9 +27,11 @@ from azgym.errors import InvalidInputError
 if TYPE_CHECKING:
     from azgym.progress import Meter
 
+T = TypeVar("T")
+
 __all__ = ["Interrupted", "add_backend_options", "add_overwrite", "check_backend", "out_file",
            "out_folder", "profile_option", "progress_printer", "resolve_workers",
-           "interruption_within", "seconds_option", "stopped", "workers_option"]
+           "interruption_within", "on_ctrl_c", "seconds_option", "stopped", "workers_option"]
 
 
 def seconds_option(text: str) -> float:
@@ -159,6 +162,20 @@ def interruption_within(error: BaseException) -> KeyboardInterrupt | None:
         seen.add(id(cause))
         cause = cause.__cause__ or cause.__context__
     return None
+
+
+def on_ctrl_c(run: Callable[[], T], kept: Callable[[], str]) -> T:
+    """``run()``; a Ctrl-C during it raised as :class:`Interrupted` saying what was ``kept()``.
+
+    The one rule of the commands that keep something when interrupted, the Ctrl-C a compiled
+    kernel's machinery wrapped (:func:`interruption_within`) included.
+    """
+    try:
+        return run()
+    except (KeyboardInterrupt, SystemError) as exc:
+        if interruption_within(exc) is None:
+            raise
+        raise Interrupted(kept()) from None
 
 
 def stopped(interruption: KeyboardInterrupt) -> int:

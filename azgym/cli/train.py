@@ -14,7 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from azgym.arguments import whole_number
-from azgym.cli.options import Interrupted, add_overwrite, out_folder
+from azgym.cli.options import add_overwrite, on_ctrl_c, out_folder
 from azgym.errors import AzgymError, DependencyNotInstalled, InvalidInputError
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
 
@@ -72,14 +72,12 @@ def _train_localizer(args: argparse.Namespace) -> int:
     out = Path(args.out)
     checkpoint = _claim_run(out, out / WEIGHTS_NAME, out / CHECKPOINT_NAME, args)
     started = time.perf_counter()
-    try:
-        result = train(out, layouts=settings["layouts"], frames=args.frames_per_layout,
-                       epochs=settings["epochs"], seed=args.seed, hidden=settings["hidden"],
-                       threads=args.threads)
-    except KeyboardInterrupt:
-        raise Interrupted(f"the last finished epoch is kept in {checkpoint} (the same command "
-                          "resumes from it)" if checkpoint.is_file()
-                          else "no epoch was finished, nothing was kept") from None
+    result = on_ctrl_c(
+        lambda: train(out, layouts=settings["layouts"], frames=args.frames_per_layout,
+                      epochs=settings["epochs"], seed=args.seed, hidden=settings["hidden"],
+                      threads=args.threads),
+        lambda: f"the last finished epoch is kept in {checkpoint} (the same command resumes "
+                "from it)" if checkpoint.is_file() else "no epoch was finished, nothing was kept")
     print(f"{args.model}: {len(result.history)} epochs, {time.perf_counter() - started:.0f} s"
           "; wrote " + ", ".join(map(str, (result.weights, result.card, result.figure))))
     return 0
@@ -114,13 +112,11 @@ def _train_navigator(args: argparse.Namespace) -> int:
     claim_folder(Path(args.out), NAVIGATOR_FILES, args.overwrite, "--out")
     request = prepare(args.env, args.algo, args.steps, Path(args.out), seed=args.seed,
                       localizer=args.localizer, n_envs=args.envs, threads=args.threads)
-    try:
-        result = run(request)
-    except KeyboardInterrupt:
-        kept = request.out / CHECKPOINTS
-        raise Interrupted(f"the checkpoints so far are kept in {kept}"
-                          if kept.is_dir() and any(kept.iterdir())
-                          else "no checkpoint was written yet, nothing was kept") from None
+    kept = request.out / CHECKPOINTS
+    result = on_ctrl_c(lambda: run(request),
+                       lambda: f"the checkpoints so far are kept in {kept}"
+                       if kept.is_dir() and any(kept.iterdir())
+                       else "no checkpoint was written yet, nothing was kept")
     print("wrote " + ", ".join(map(str, (result.policy, result.card, result.curve,
                                           result.evaluations))))
     return 0

@@ -15,6 +15,7 @@ import time
 import pytest
 
 from azgym import cli
+from azgym.cli.options import on_ctrl_c
 
 
 def test_ctrl_c_ends_a_command_with_one_line_and_exit_code_130(tmp_path):
@@ -62,10 +63,21 @@ def test_ctrl_c_inside_a_compiled_kernel_is_still_an_interruption(monkeypatch, c
     assert capsys.readouterr().err.strip() == "azgym: interrupted"
 
 
+def test_a_command_that_keeps_something_says_what_also_when_a_kernel_wrapped_the_ctrl_c(
+        monkeypatch, capsys):
+    _run_instead(monkeypatch, lambda args: on_ctrl_c(lambda: _raise_from_a_kernel(args),
+                                                     lambda: "its checkpoints are kept"))
+    assert cli.main(["suites"]) == 130
+    assert capsys.readouterr().err.strip() == "azgym: interrupted; its checkpoints are kept"
+
+
 def test_a_system_error_not_from_ctrl_c_is_not_called_an_interruption(monkeypatch):
     def broken(args):
         raise SystemError("a genuine fault")
     _run_instead(monkeypatch, broken)
+    with pytest.raises(SystemError, match="a genuine fault"):
+        cli.main(["suites"])
+    _run_instead(monkeypatch, lambda args: on_ctrl_c(lambda: broken(args), lambda: "kept"))
     with pytest.raises(SystemError, match="a genuine fault"):
         cli.main(["suites"])
 
