@@ -35,6 +35,15 @@ class Hyperparameters:
         if name in _param_names(type(self)):  # type: ignore[arg-type]
             object.__setattr__(self, "_params_checked", False)
 
+    def _take(self, arguments: dict[str, Any]) -> None:
+        """Store each hyperparameter as given, from ``__init__``'s ``locals()``, and check them.
+
+        For a class whose long argument list would otherwise be written out twice.
+        """
+        for name in _param_names(type(self)):  # type: ignore[arg-type]  # mypy#11470
+            setattr(self, name, arguments[name])
+        self._validate_once()
+
     def _validate_once(self) -> None:
         """Run ``_check_params`` unless it passed and no hyperparameter was set since.
 

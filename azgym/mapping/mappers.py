@@ -107,15 +107,7 @@ class SurveyMapper(_Settled):
                  coverage: bool = SETTINGS.coverage, extra_sigma: float = SETTINGS.extra_sigma,
                  loss: str = SETTINGS.loss, loss_scale: float = SETTINGS.loss_scale,
                  map_sigma: float = SETTINGS.map_sigma) -> None:
-        self.vehicle, self.yaw_source, self.camera_ahead = vehicle, yaw_source, camera_ahead
-        self.wheelbase, self.speed_factor = wheelbase, speed_factor
-        self.speed_noise, self.speed_scale, self.scale_walk = speed_noise, speed_scale, scale_walk
-        self.turn_rate_noise, self.bias_walk = turn_rate_noise, bias_walk
-        self.position_walk, self.heading_walk = position_walk, heading_walk
-        self.max_speed, self.max_turn_rate, self.start_bias = max_speed, max_turn_rate, start_bias
-        self.delta_alpha_d, self.coverage, self.extra_sigma = delta_alpha_d, coverage, extra_sigma
-        self.loss, self.loss_scale, self.map_sigma = loss, loss_scale, map_sigma
-        self._validate_once()
+        self._take(locals())
 
     def _survey(self, drive: Drive, prior: Prior) -> MapAnswer:
         require_frames(drive)
@@ -146,14 +138,7 @@ class RaysMapper(_Settled):
                  delta_alpha_d: float = SETTINGS.delta_alpha_d,
                  coverage: bool = SETTINGS.coverage,
                  extra_sigma: float = SETTINGS.extra_sigma) -> None:
-        self.vehicle, self.yaw_source, self.camera_ahead = vehicle, yaw_source, camera_ahead
-        self.wheelbase, self.speed_factor = wheelbase, speed_factor
-        self.speed_noise, self.speed_scale, self.scale_walk = speed_noise, speed_scale, scale_walk
-        self.turn_rate_noise, self.bias_walk = turn_rate_noise, bias_walk
-        self.position_walk, self.heading_walk = position_walk, heading_walk
-        self.max_speed, self.max_turn_rate, self.start_bias = max_speed, max_turn_rate, start_bias
-        self.delta_alpha_d, self.coverage, self.extra_sigma = delta_alpha_d, coverage, extra_sigma
-        self._validate_once()
+        self._take(locals())
 
     def _survey(self, drive: Drive, prior: Prior) -> MapAnswer:
         return _answer(survey_by_rays(drive, prior, self._settings()))
