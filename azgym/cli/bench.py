@@ -371,7 +371,8 @@ def _bench_mapping(args: argparse.Namespace) -> int:
 def _check_mappers(specs: list[str]) -> None:
     """Refuse an unreadable spec, an unknown name or a built-in's bad hyperparameter now.
 
-    A built-in is built here (azgym's code); a plug-in is built where the run builds it.
+    A built-in is built here (azgym's code); a plug-in is built where the run builds it, in a
+    worker, before any case is run (:func:`~azgym.bench.mapping.calls.build_problems`).
     """
     from azgym.mapping.registry import MAPPERS, make_mapper
     from azgym.registry import split_spec

@@ -51,6 +51,26 @@ def failures(scores: dict, name: str) -> list[str | None]:
     return [failure for _, failure, _ in scores[f"{PLUGINS}:{name}"]]
 
 
+@pytest.mark.parametrize("attacker,why", [
+    ("RaisingBuild", "it raised ValueError: no such survey"),
+    ("HangingBuild", "timed out: building the mapper took longer than the 2 s limit"),
+    ("ExitingBuild", "its process exited (exit code 4) without answering")])
+def test_a_mapper_that_cannot_be_built_is_refused_before_any_case_runs(attacker, why, tmp_path):
+    # as a plug-in localizer is: named by the command, exit code 2, nothing written
+    began = time.monotonic()
+    spec = f"{PLUGINS}:{attacker}"
+    done = subprocess.run([sys.executable, "-m", "azgym", "bench", "mapping", "--quick",
+                           "--mapper", "prior", "--mapper", spec, "--time-limit", "2",
+                           "--out", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 2, done.stderr[-2000:]
+    last = done.stderr.strip().splitlines()[-1]
+    assert last == f"azgym: error: cannot build mapper {spec}: {why}"
+    assert "mapping:" not in done.stderr  # no case was run
+    assert not (tmp_path / "out" / "mapping.json").exists()
+    assert time.monotonic() - began < 60.0
+
+
 def test_a_mapper_that_sleeps_past_the_limit_is_killed_and_charged():
     began = time.monotonic()
     scores, _ = run("Sleeper", time_limit=1.0)

@@ -27,7 +27,7 @@ import numpy as np
 
 from azgym.arguments import time_limit as checked_time_limit
 from azgym.arguments import whole_number
-from azgym.bench.mapping.calls import Job, Outcome, run_calls
+from azgym.bench.mapping.calls import Job, Outcome, build_problems, run_calls
 from azgym.bench.mapping.scoring import (
     DELAY_WINDOW,
     CaseScore,
@@ -73,7 +73,8 @@ def run_mapping(suite_name: str, mappers: Sequence[str], quick: bool = False,
         progress: Told how many (mapper, case) pairs are done.
 
     Raises:
-        InvalidInputError: No mapper, a bad worker count or time limit.
+        InvalidInputError: No mapper, a bad worker count or time limit, or a mapper that cannot
+            be built (each is built first, as its calls would build it, before any is run).
         UnknownNameError: No such suite.
     """
     suite = get_mapping_suite(suite_name)
@@ -85,6 +86,9 @@ def run_mapping(suite_name: str, mappers: Sequence[str], quick: bool = False,
     began = time.monotonic()
     start_fork_server()  # its warm-up overlaps the drawing of the cases
     cases = suite.build(suite.dev_seed, quick)
+    for spec, problem in build_problems(specs, cases, workers, time_limit).items():
+        if problem:
+            raise InvalidInputError(f"cannot build mapper {spec}: {problem}")
     pairs = [(spec, k) for spec in specs for k in range(len(cases))]
     jobs = [_calls(cases[k], k) for _, k in pairs]
     with counter(progress, "mapping", len(pairs), "cases") as count:

@@ -30,7 +30,11 @@ from azgym.errors import InvalidInputError, ProtocolError
 from azgym.mapping.base import MapAnswer
 from azgym.mapping.problem import Drive
 
-__all__ = ["Job", "Outcome", "Record", "run_calls"]
+__all__ = ["BUILD_ONLY", "Job", "Outcome", "Record", "build_problems", "run_calls"]
+
+BUILD_ONLY = -1
+"""The frames a job asks for when it asks only that its mapper be built (with the case's
+profile): the outcome is heard once the mapper is ready (:func:`build_problems`)."""
 
 
 @dataclass(frozen=True)
@@ -62,6 +66,32 @@ def run_calls(jobs: list[Job], specs: list[str], cases: list[MappingCase], worke
     ``count`` is told how many jobs are done.
     """
     return _Runner(jobs, specs, cases, time_limit, count).run(workers)
+
+
+def build_problems(specs: list[str], cases: list[MappingCase], workers: int,
+                   time_limit: float) -> dict[str, str]:
+    """Why each mapper cannot be built where the run builds it ("" when it can).
+
+    Each is built in a worker as a call's would be, with each profile the cases give (a
+    plug-in whose module or constructor raises, hangs or ends its process is named here, before
+    any case is run, as :func:`azgym.bench.run.contenders.check_buildable` names a localizer).
+    """
+    firsts: dict[Any, int] = {}  # each profile's first case
+    for k, case in enumerate(cases):
+        firsts.setdefault(case.profile, k)
+    pairs = [(spec, k) for spec in specs for k in firsts.values()]
+    records = run_calls([_build_only(k) for _, k in pairs], [spec for spec, _ in pairs], cases,
+                        workers, time_limit, lambda done: None)
+    problems = dict.fromkeys(specs, "")
+    for (spec, _), (outcome, _) in zip(pairs, records, strict=True):
+        problems[spec] = problems[spec] or outcome.failure or ""
+    return problems
+
+
+def _build_only(k: int) -> Job:
+    """A job that asks only that its mapper be built, with case ``k``'s profile."""
+    built = yield k, BUILD_ONLY
+    return built, []
 
 
 @dataclass
@@ -185,7 +215,9 @@ class _Runner:
         """Act on one message of job ``n``'s process."""
         step = {("starting", worker.BUILDING): "building", ("building", worker.READY): "ready",
                 ("sending", worker.SURVEYING): "surveying"}.get((slot.phase, message))
-        if step == "ready":
+        if step == "ready" and slot.ask[1] == BUILD_ONLY:
+            self._advance(n, Outcome(None, None, time.monotonic() - slot.since))
+        elif step == "ready":
             self._call(n)
         elif step is not None:
             slot.phase, slot.since = step, time.monotonic()
@@ -194,7 +226,8 @@ class _Runner:
             try:
                 answer = worker.read_answer(message)
             except (ProtocolError, InvalidInputError) as exc:
-                self._fail(n, f"{'building it: ' if slot.phase == 'building' else ''}{exc}"[:600])
+                rebuilding = slot.phase == "building" and slot.ask[1] != BUILD_ONLY
+                self._fail(n, f"{'building it: ' if rebuilding else ''}{exc}"[:600])
                 return
             if slot.phase == "building":
                 self._fail(n, "it answered before its call began")

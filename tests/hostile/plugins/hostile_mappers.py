@@ -132,3 +132,33 @@ class TruthSeeker:
                                      "types": sorted(types),
                                      "frames": len(drive.frames)}) + "\n")
         return MapAnswer(*NOTHING)
+
+
+class RaisingBuild:
+    """Cannot be built: its constructor raises."""
+
+    def __init__(self):
+        raise ValueError("no such survey")
+
+    def survey(self, drive, prior):
+        return MapAnswer(*NOTHING)
+
+
+class HangingBuild:
+    """Cannot be built: its constructor sleeps past any time limit."""
+
+    def __init__(self):
+        time.sleep(3600)
+
+    def survey(self, drive, prior):
+        return MapAnswer(*NOTHING)
+
+
+class ExitingBuild:
+    """Cannot be built: its constructor ends its process."""
+
+    def __init__(self):
+        os._exit(4)
+
+    def survey(self, drive, prior):
+        return MapAnswer(*NOTHING)
