@@ -83,6 +83,12 @@ def _train_localizer(args: argparse.Namespace) -> int:
     return 0
 
 
+def _checkpoints_kept(folder: Path) -> str:
+    """What an interrupted navigator training kept: its checkpoints folder, if it has any."""
+    return f"the checkpoints so far are kept in {folder}" if folder.is_dir() and any(
+        folder.iterdir()) else "no checkpoint was written yet, nothing was kept"
+
+
 def _claim_run(out: Path, weights: Path, checkpoint: Path, args: argparse.Namespace) -> Path:
     """The checkpoint of ``train localizer`` in ``--out``, once the run there is claimed.
 
@@ -112,11 +118,7 @@ def _train_navigator(args: argparse.Namespace) -> int:
     claim_folder(Path(args.out), NAVIGATOR_FILES, args.overwrite, "--out")
     request = prepare(args.env, args.algo, args.steps, Path(args.out), seed=args.seed,
                       localizer=args.localizer, n_envs=args.envs, threads=args.threads)
-    kept = request.out / CHECKPOINTS
-    result = on_ctrl_c(lambda: run(request),
-                       lambda: f"the checkpoints so far are kept in {kept}"
-                       if kept.is_dir() and any(kept.iterdir())
-                       else "no checkpoint was written yet, nothing was kept")
+    result = on_ctrl_c(lambda: run(request), lambda: _checkpoints_kept(request.out / CHECKPOINTS))
     print("wrote " + ", ".join(map(str, (result.policy, result.card, result.curve,
                                           result.evaluations))))
     return 0
