@@ -26,7 +26,9 @@
    first being seen from two places, from its true detections there: how far the move turns
    its azimuths, the noncentrality Σ Δ²/σ² of a test that knew where it went (σ² the error
    model's azimuth variance, with true poses; and with the track's error added, robust's
-   covariance on the true map: the best track), and the Cramér-Rao worst-axis standard
+   covariance on the true map: the best track; and Δᵀ Σ⁻¹ Δ with that error correlated over
+   time, Σ as map repair's fit test has it with the time constant the lag at which the best
+   track's error autocorrelation falls to 1/e on the drive), and the Cramér-Rao worst-axis standard
    deviation of its new position from those bearings (with the track's error: plus its mean
    position covariance, which rays a few seconds apart share). A noncentrality under 25 cannot
    be told from noise; a bound over 0.1 m cannot be located to ``repair_std``.
@@ -233,7 +235,7 @@ def bounds(seeds: int, first_seed: int) -> None:
     """What any method could do with each moved beacon in its first 10 s (module docstring)."""
     table = []
     for scenario, route, seed, world, truth, frames, times in drives(seeds, first_seed):
-        covariances = track_covariances(scenario.name, frames, truth)
+        covariances, tau = track_covariances(scenario.name, frames, truth)
         detected, ids, _ = true_detections(world, frames)
         for beacon in sorted(truly_moved(scenario.beacons, (), truth)):
             row = scenario.beacons.ids.tolist().index(beacon)
@@ -254,30 +256,39 @@ def bounds(seeds: int, first_seed: int) -> None:
             with_track = own + track[:, 2, 2] + np.einsum(
                 "ki,kij,kj->k", normals, track[:, :2, :2], normals) / ranges ** 2
             floor = float(np.linalg.eigvalsh(track[:, :2, :2].mean(axis=0))[-1])
+            sensitivity = np.column_stack((normals / ranges[:, None], np.ones(len(window))))
+            shared = (sensitivity @ track.mean(axis=0) @ sensitivity.T) * np.exp(
+                -np.abs(np.subtract.outer(times[window], times[window])) / tau)
+            correlated = float(moved_by @ np.linalg.solve(np.diag(own) + shared, moved_by))
             table.append((f"{scenario.name}/{route.name} seed {seed} beacon {beacon}",
                           len(window), math.degrees(np.abs(moved_by).max()),
                           float(np.sum(moved_by ** 2 / own)),
-                          float(np.sum(moved_by ** 2 / with_track)),
+                          float(np.sum(moved_by ** 2 / with_track)), correlated,
                           fisher_std(normals, ranges, own),
                           math.sqrt(fisher_std(normals, ranges, with_track) ** 2 + floor)))
-    for name, count, largest, perfect, tracked, std, std_tracked in table:
+    for name, count, largest, perfect, tracked, correlated, std, std_tracked in table:
         print(f"{name}: {count} sightings, the move turns its azimuth up to {largest:.2f}°; "
-              f"noncentrality {perfect:.0f} (true poses), {tracked:.0f} (the track's error); "
+              f"noncentrality {perfect:.0f} (true poses), {tracked:.0f} (the track's error), "
+              f"{correlated:.0f} (correlated over time); "
               f"locatable to {100 * std:.1f} cm (true poses), {100 * std_tracked:.1f} cm")
     columns = np.array([row[3:] for row in table])
     print(f"bounds over the {len(table)} moved beacons seen from two places, in their first "
           f"{WINDOW_S:.0f} s: noncentrality under {DETECTABLE:.0f} with true poses "
           f"{int((columns[:, 0] < DETECTABLE).sum())}, with the track's error "
-          f"{int((columns[:, 1] < DETECTABLE).sum())} (least {columns[:, 1].min():.0f}); "
+          f"{int((columns[:, 1] < DETECTABLE).sum())} (least {columns[:, 1].min():.0f}), "
+          f"correlated over time {int((columns[:, 2] < DETECTABLE).sum())} (least "
+          f"{columns[:, 2].min():.0f}); "
           f"not locatable within {100 * LOCATABLE_M:.0f} cm with true poses "
-          f"{int((columns[:, 2] > LOCATABLE_M).sum())}, with the track's error "
-          f"{int((columns[:, 3] > LOCATABLE_M).sum())}")
+          f"{int((columns[:, 3] > LOCATABLE_M).sum())}, with the track's error "
+          f"{int((columns[:, 4] > LOCATABLE_M).sum())}")
 
 
-def track_covariances(name: str, frames, truth) -> np.ndarray:
-    """robust's (x, y, heading) covariance per frame on the true map (K, 3, 3): the best track."""
+def track_covariances(name: str, frames, truth) -> tuple[np.ndarray, float]:
+    """robust's (x, y, heading) covariance per frame on the true map (K, 3, 3), the best
+    track's, and the time its error takes to decorrelate [s]: the lag at which the
+    autocorrelation of its x, y and heading errors (their mean) falls to 1/e."""
     tracker = azgym.make_tracker("robust", **params_for(name))
-    covariances = []
+    covariances, errors, times = [], [], []
     for k, frame in enumerate(frames):
         if k == 0:
             tracker.reset(seed=0, initial=frame.pose)
@@ -285,7 +296,23 @@ def track_covariances(name: str, frames, truth) -> np.ndarray:
         estimate = tracker.update(frame.measurements, truth)
         covariances.append(np.asarray(estimate.covariance)[:3, :3] if estimate.ok
                            else np.full((3, 3), np.inf))
-    return np.array(covariances)
+        if estimate.ok:
+            errors.append(np.subtract(estimate.pose[:3], frame.pose[:3]))
+            times.append(frame.time)
+    return np.array(covariances), decorrelation_time(np.array(errors), np.array(times))
+
+
+def decorrelation_time(errors: np.ndarray, times: np.ndarray) -> float:
+    """The lag at which the mean autocorrelation of ``errors``' columns falls to 1/e [s]."""
+    errors = errors.copy()
+    errors[:, 2] = np.remainder(errors[:, 2] + math.pi, 2.0 * math.pi) - math.pi
+    errors -= errors.mean(axis=0)
+    step = float(np.median(np.diff(times)))
+    power = np.sum(errors ** 2, axis=0)
+    for lag in range(1, len(errors) // 2):
+        if np.mean(np.sum(errors[:-lag] * errors[lag:], axis=0) / power) < math.exp(-1.0):
+            return lag * step
+    return len(errors) // 2 * step
 
 
 def fisher_std(normals: np.ndarray, ranges: np.ndarray, variances: np.ndarray) -> float:

@@ -7,8 +7,7 @@
   the tracker's gate and leave-one-out test (:mod:`azgym.track.azimuth_update`), and is
   *rejected* when none did. Under the error model a good beacon's sighting is rejected with
   probability 1 − ``gate_probability`` (0.001), so a run of n rejections has probability about
-  0.001ⁿ; ghosts and misread ids are rarer than one in two frames of one beacon and do not
-  come in runs that last.
+  0.001ⁿ; ghosts and misread ids do not come in runs that last.
 * **Suspected**: a beacon is suspected after ``sightings`` rejected sightings in a row (none
   agreeing between, none more than :data:`STREAK_GAP_S` after the one before) spanning at
   least ``after`` seconds, while the other beacons agree: since its run began they agreed in
@@ -16,31 +15,30 @@
   at least twice as many as they were rejected in. A track that is wrong sees every beacon
   rejected, so its error is not taken for a move.
   Only sightings of a confident track count (running, confirmed, not lost, consistent).
-* **Set aside**: from then on its detections are removed before the correction, and the
-  tracker re-runs its track without it from before its stretch of sightings
-  (:mod:`azgym.track.repair_lag`): its rays are then taken afresh (:meth:`MapRepair.retrace`)
-  and it is located from them (:meth:`MapRepair.relocate`).
+* **Suspected, too, when the track fits it** (a move along the line of sight, whose azimuths
+  pass the gate: :mod:`azgym.track.repair_fit`). Sightings that pass the gate do not clear such
+  a suspect; only locating it where the map has it does.
+* **Set aside**: its detections are removed before the correction, and the track is re-run
+  without it from before its stretch of sightings (:mod:`azgym.track.repair_lag`); its rays
+  are taken afresh (:meth:`MapRepair.retrace`) and it is located (:meth:`MapRepair.relocate`).
 * **Located again** (:mod:`azgym.track.repair_rays`): each of its sightings gives a ray per
-  detection from the tracker's camera position along its heading plus the azimuth, with the
-  azimuth's variance (eq. 3 at the range to the map position, plus ``extra_sigma``² and the
-  heading's variance), the position's covariance and the heading's variance. The point the
+  detection from the tracker's camera along its heading plus the azimuth, with the azimuth's
+  variance (eq. 3, ``extra_sigma``², the heading's), the camera's covariance. The point the
   most sightings meet, inside the box of the map's beacons grown by :data:`OUTSIDE_M` (beyond
   it lies a mirror's image), is taken with an honest covariance once enough sightings meet it,
   their rays spread ``span`` and fix it within ``max_std`` without the most telling of them
   (:func:`~azgym.track.repair_rays.locate`), unless it is within :data:`CLEARANCE_M` (or three
-  standard deviations) of another beacon of the map: rays that meet on another beacon are that
-  beacon's detections under a misread id, and the suspicion is dropped. So is one whose point
-  is within three standard deviations of its map position (it did not move).
+  standard deviations) of another beacon (rays that meet there are its detections under a
+  misread id) or of its own map position (it did not move): the suspicion is then dropped.
 * **Used again**: the map the tracker corrects with has the beacon at its new position (its
   height kept), its width widened from W to √(W² + 12σ²), σ the new position's worst-axis
   standard deviation: eq. 2's coverage term, (W/2D)²/3 at range D, then adds the position's
-  (σ/D)² to its azimuth's variance. The repair is reported (:class:`Repair`). A suspected beacon
-  whose map position agrees again in ``sightings`` sightings in a row is cleared.
-* **Refined**: a repaired beacon's rays go on being gathered, and whenever they have grown by
-  :data:`RETRY_GROWTH` those within the gate of its placement are intersected again; a
-  position more certain (its worst-axis standard deviation, as above, smaller) replaces it
-  (:attr:`MapRepair.placed`; the repair is reported once). A repaired beacon that becomes a
-  suspect again is located afresh.
+  (σ/D)² to its azimuth's variance. The repair is reported (:class:`Repair`). A suspect of
+  rejections whose map position agrees again in ``sightings`` sightings in a row is cleared.
+* **Refined**: a repaired beacon's rays are gathered on; whenever they grow by
+  :data:`RETRY_GROWTH`, those within the gate of its placement are intersected again and a more
+  certain position (a smaller worst-axis standard deviation) replaces it
+  (:attr:`MapRepair.placed`; reported once). One suspected again is located afresh.
 """
 
 from __future__ import annotations
@@ -56,12 +54,13 @@ from azgym.localize.bearings import spread
 from azgym.site.error_model import ErrorModel
 from azgym.track.azimuth_update import gated_update
 from azgym.track.gated_ekf import subset
+from azgym.track.repair_fit import FitTest
 from azgym.track.repair_rays import RayStore, locate, pack
 from azgym.track.repair_records import Repair, Run
 from azgym.track.unicycle import IPHI, IX, IY
 
-__all__ = ["CLEARANCE_M", "OTHERS_AGREE",
-           "OTHERS_DISTINCT", "OUTSIDE_M", "RETRY_GROWTH", "STREAK_GAP_S", "MapRepair", "Repair"]
+__all__ = ["CLEARANCE_M", "OTHERS_AGREE", "OTHERS_DISTINCT", "OUTSIDE_M", "RETRY_GROWTH",
+           "STREAK_GAP_S", "MapRepair", "Repair"]
 
 STREAK_GAP_S = 2.0
 """Longest time between two rejected sightings of one run [s]: a beacon out of sight longer
@@ -79,12 +78,10 @@ OUTSIDE_M = 1.0
 """A new position further than this outside the box of the map's beacons is a mirror's image
 (beacons hang on the walls and racks; what lies behind a wall is seen in it) [m]."""
 RETRY_GROWTH = 0.125
-"""A suspect is located again (a repaired beacon refined) only once its rays, or their spread
-(a repaired beacon: its rays), have grown by this share
-(at least one ray) since the last try: rays that never meet (random azimuths, one standing
-place) cost a bounded share of the tracker's time, not a least squares over all of them every
-frame (random rays' spread jitters just below its bound, π/2), while a beacon the camera sweeps
-past is tried as its rays widen."""
+"""A suspect is located again only once its rays or their spread (a repaired beacon, refined:
+its rays) have grown by this share (one ray at least) since the last try: rays that never meet
+(random azimuths, whose spread jitters just below π/2; one standing place) cost a bounded share
+of the tracker's time, while a beacon the camera sweeps past is tried as its rays widen."""
 
 
 class MapRepair:
@@ -123,6 +120,7 @@ class MapRepair:
         self._current: BeaconMap | None = None
         self._rows_of: BeaconMap | None = None
         self._rows: dict[int, int] = {}
+        self._fits = FitTest(error_model, extra_sigma)
 
     @property
     def suspects(self) -> tuple[int, ...]:
@@ -167,8 +165,7 @@ class MapRepair:
                 confident: bool) -> tuple[list[int], list[Repair]]:
         """Take a corrected frame: its sightings, rays and verdicts.
 
-        A frame all of whose detections the tracker used, with no record open, is passed over:
-        the per-beacon work is for frames with a rejected or unknown detection.
+        A frame whose detections were all used, with no record open, goes to the fit test only.
 
         Args:
             time: The frame's time [s].
@@ -183,8 +180,13 @@ class MapRepair:
             The beacons newly suspected, and the repairs made, in this frame.
         """
         suspected: list[int] = []
-        if self._runs:
-            self._forget_lapsed(time)
+        self._forget_lapsed(time)
+        if confident:
+            self._fits.record(time, measurements, inliers, state, cov)
+            if (fitted := self._fits.moved(time, beacons)) is not None:
+                self._set_aside(fitted, Run(self._fits.began(fitted), time, self._accepted,
+                                            self._rejected, dict(self._agreed_by), fitted=True))
+                suspected.append(fitted)
         if not self._runs and not self._refining and all(inliers.tolist()):  # each one used
             return suspected, []  # agreements count only while a run is open (_agree)
         map_rows = self._map_rows(beacons)
@@ -259,16 +261,20 @@ class MapRepair:
         self._add_rays(run, measurements, rows, self._rows[beacon], beacons, state, cov)
         if not self._suspicious(run, time):
             return False
-        run.suspected = True
-        self._refining.pop(beacon, None)
+        self._set_aside(beacon, run)
         return True
 
-    def _agree(self, beacon: int) -> None:
-        """Count an agreeing sighting of ``beacon``.
+    def _set_aside(self, beacon: int, run: Run) -> None:
+        """Make ``run`` a suspect's: its beacon's refinement and fit-test window are dropped."""
+        run.suspected = True
+        self._runs[beacon] = run
+        self._refining.pop(beacon, None)
+        self._fits.forget(beacon)
 
-        Only while a run is open: a run reads the counts as they grow from its start, and one
-        begun later starts from the counts then, so what is not counted while none is open
-        would change no verdict (and the counts stay as small as the runs are few).
+    def _agree(self, beacon: int) -> None:
+        """Count an agreeing sighting of ``beacon`` while a run is open.
+
+        A run reads the counts from its start: what none would read is not counted.
         """
         self._accepted += 1
         self._agreed_by[beacon] = self._agreed_by.get(beacon, 0) + 1
@@ -283,9 +289,7 @@ class MapRepair:
     def _forget_lapsed(self, time: float) -> None:
         """Drop the runs not suspected and lapsed (none rejected for :data:`STREAK_GAP_S`).
 
-        Its beacon's next rejection starts a new run: so the records held are the suspects'
-        and those of beacons rejected lately, however many ids were seen, and a frame whose
-        detections were all used is only counted.
+        The records held are the suspects' and those of beacons rejected lately, however many.
         """
         self._runs = {beacon: run for beacon, run in self._runs.items()
                       if run.suspected or time - run.last <= STREAK_GAP_S}
@@ -305,18 +309,22 @@ class MapRepair:
     def _suspect_sighting(self, beacon: int, run: Run, measurements: Measurements,
                           rows: np.ndarray, beacons: BeaconMap, state: FloatArray,
                           cov: FloatArray) -> None:
-        """A suspect's sighting: cleared after ``sightings`` agreeing ones in a row, else a ray."""
-        problem = Problem.from_frame(subset(measurements, rows), beacons)
-        passed, _ = gated_update(state.copy(), cov.copy(), problem.floats,
-                                 problem.ints[ROW_BEACON_INDEX],
-                                 self.error_model.delta_alpha_d, self.error_model.coverage,
-                                 self.extra_sigma, self.threshold)
-        if passed.any():
-            run.agreed += 1
-            if run.agreed >= self.sightings:
-                del self._runs[beacon]
-            return
-        run.agreed = 0
+        """A suspect's sighting: a ray, or one of ``sightings`` agreeing in a row that clear it.
+
+        Agreeing sightings clear a suspect of rejections only: the fit test's agreed before.
+        """
+        if not run.fitted:
+            problem = Problem.from_frame(subset(measurements, rows), beacons)
+            passed, _ = gated_update(state.copy(), cov.copy(), problem.floats,
+                                     problem.ints[ROW_BEACON_INDEX],
+                                     self.error_model.delta_alpha_d, self.error_model.coverage,
+                                     self.extra_sigma, self.threshold)
+            if passed.any():
+                run.agreed += 1
+                if run.agreed >= self.sightings:
+                    del self._runs[beacon]
+                return
+            run.agreed = 0
         self._add_rays(run, measurements, rows, self._rows[beacon], beacons, state, cov)
 
     def _add_rays(self, run: Run, measurements: Measurements, rows: np.ndarray, row: int,
@@ -383,6 +391,7 @@ class MapRepair:
                covariance: FloatArray, rays: int) -> Repair:
         """Put a beacon at ``point`` in the map the tracker corrects with; its record."""
         self._current = None
+        self._fits.forget(beacon)
         placed = self.placed[beacon] = Repair(
             time=time, frame=self._frame, beacon=beacon, old=old,
             new=(float(point[0]), float(point[1])), covariance=covariance, rays=rays)

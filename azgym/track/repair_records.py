@@ -53,6 +53,8 @@ class Run:
     """Each beacon's agreeing sightings when the run began."""
     rejected: int = 0
     suspected: bool = False
+    fitted: bool = False
+    """Whether the fit test (:mod:`azgym.track.repair_fit`) made it a suspect, not rejections."""
     agreed: int = 0
     rays: RayStore = field(default_factory=RayStore)
     sightings: int = 0
