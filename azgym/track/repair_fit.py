@@ -33,11 +33,11 @@ elsewhere) raises every beacon's Λ, and with fewer beacons in view no test can 
 moved. A beacon taken as moved is set aside and located from a track re-run without it, as a
 beacon suspected after rejections is; its window starts afresh.
 
-**Bounded.** The detections are kept in one ring of :data:`MAX_DETECTIONS` (the latest), and a
-test weighs at most :data:`TESTED` of a beacon's (evenly spaced over its window): the memory and
-a test's cost are bounded at any frame rate. Keeping a frame's detections and a test (of every
-beacon due, at most once a second) are each one compiled pass: together about 5 µs a tracked
-frame on the route suites (``python baselines/map_repair.py --part speed``).
+**Bounded.** The detections are kept in one ring of :data:`MAX_DETECTIONS` rows (one a beacon a
+frame), and a test weighs at most :data:`TESTED` of a beacon's (evenly spaced over its window):
+the memory and a test's cost are bounded at any frame rate. Keeping a frame's detections and a
+test (of every beacon due, at most once a second) are each one compiled pass: together about
+6 µs a tracked frame on the route suites (``python baselines/map_repair.py --part speed``).
 """
 
 from __future__ import annotations
@@ -47,6 +47,7 @@ import math
 import numpy as np
 
 from azgym.core import BeaconMap, FloatArray, Measurements
+from azgym.errors import InvalidInputError
 from azgym.jit import jit, wrap_compiled
 from azgym.site.error_model import ErrorModel
 
@@ -78,10 +79,11 @@ probability 0.007 of exceeding it)."""
 OTHERS_AGREE = 2
 """Fewest other beacons that must agree for one to be taken as moved."""
 
-_TIME, _BEACON, _CAMERA, _BEARING, _COVARIANCE = 0, 1, 2, 4, 5
-"""The ring's columns (:class:`FitTest`): time, beacon id, camera x (and y), world bearing,
-then the track's six covariance entries xx, xy, xφ, yy, yφ, φφ."""
-_COLUMNS = 11
+_TIME, _CAMERA, _BEARING, _COVARIANCE = 0, 1, 3, 4
+"""The ring's columns (:class:`FitTest`): time, camera x (and y), world bearing, then the
+track's six covariance entries xx, xy, xφ, yy, yφ, φφ. The beacon ids are a ring of their own
+(int64: an id past 2⁵³ is not a float's)."""
+_COLUMNS = 10
 
 
 def likelihood_ratio(times: FloatArray, cameras: FloatArray, bearings: FloatArray,
@@ -100,7 +102,12 @@ def likelihood_ratio(times: FloatArray, cameras: FloatArray, bearings: FloatArra
 
     Returns:
         Λ; NaN when Σ is not positive definite.
+
+    Raises:
+        InvalidInputError: If the times do not ascend.
     """
+    if np.any(np.diff(times) < 0.0):
+        raise InvalidInputError("likelihood_ratio: times must be in ascending order")
     cameras = np.asarray(cameras, dtype=np.float64)
     return float(_window_ratio(np.asarray(times, dtype=np.float64),
                                np.ascontiguousarray(cameras[:, 0]),
@@ -116,14 +123,15 @@ def _window_ratio(times, xs, ys, bearings, covariance, variances, beacon_x, beac
                   shared_error_s):
     """The compiled :func:`likelihood_ratio`.
 
-    Σ is built as (A P̄ Aᵀ)_kl e_l / e_k (k ≤ l, e_k = exp(−(t_k − t_0)/τ)), factored by
-    Cholesky, and [J, r] whitened by forward substitution; Λ = bᵀ G⁺ b from their 3 × 3 Gram
-    matrix (G = MᵀM, b = Mᵀw): with G of rank one (every bearing along one line), |b|²/tr G.
+    Σ is built as (A P̄ Aᵀ)_kl ∏ e_m over k < m ≤ l (e_m = exp(−(t_m − t_(m−1))/τ): no
+    underflow however long the window), factored by Cholesky, and [J, r] whitened by forward
+    substitution; Λ = bᵀ G⁺ b from their 3 × 3 Gram matrix (G = MᵀM, b = Mᵀw): with G of
+    rank one (every bearing along one line), |b|²/tr G.
     """
     count = times.size
     shared = np.empty((count, 3))
     columns = np.empty((count, 3))
-    decay = np.empty(count)
+    step = np.empty(count)
     for k in range(count):
         dx = beacon_x - xs[k]
         dy = beacon_y - ys[k]
@@ -131,16 +139,17 @@ def _window_ratio(times, xs, ys, bearings, covariance, variances, beacon_x, beac
         shared[k, 0] = -dy / squared
         shared[k, 1] = dx / squared
         shared[k, 2] = 1.0
-        columns[k, 0] = shared[k, 0]
-        columns[k, 1] = shared[k, 1]
+        columns[k, :2] = shared[k, :2]
         columns[k, 2] = wrap_compiled(bearings[k] - math.atan2(dy, dx))
-        decay[k] = math.exp(-(times[k] - times[0]) / shared_error_s)
+        step[k] = math.exp(-(times[k] - times[k - 1]) / shared_error_s) if k > 0 else 1.0
     projected = shared @ covariance
     sigma = np.empty((count, count))
     for k in range(count):
+        decay = 1.0
         for m in range(k, count):
+            decay = decay * step[m] if m > k else 1.0
             value = (projected[k, 0] * shared[m, 0] + projected[k, 1] * shared[m, 1]
-                     + projected[k, 2] * shared[m, 2]) * decay[m] / decay[k]
+                     + projected[k, 2] * shared[m, 2]) * decay
             sigma[k, m] = value
             sigma[m, k] = value
         sigma[k, k] += variances[k]
@@ -172,41 +181,48 @@ def _window_ratio(times, xs, ys, bearings, covariance, variances, beacon_x, beac
 
 
 @jit
-def _record(kept, start, time, ids, azimuths, inliers, state, cov):
+def _record(kept, kept_ids, start, time, ids, azimuths, inliers, state, cov):
     """Write a frame's accepted detections into the ring; where the next frame's begin.
 
-    From ``start``, or from the ring's beginning when they would pass its end.
+    From ``start``, or from the ring's beginning when they would pass its end; one a beacon
+    (a detection repeated within a frame is one sighting, not many).
     """
     count = min(int(inliers.sum()), kept.shape[0])
     first = start if start + count <= kept.shape[0] else 0
     row = first
     for k in range(ids.size):
-        if inliers[k] and row < first + count:
-            kept[row, 0] = time
-            kept[row, 1] = ids[k]
-            kept[row, 2] = state[0]
-            kept[row, 3] = state[1]
-            kept[row, 4] = state[2] + azimuths[k]
-            kept[row, 5] = cov[0, 0]
-            kept[row, 6] = cov[0, 1]
-            kept[row, 7] = cov[0, 2]
-            kept[row, 8] = cov[1, 1]
-            kept[row, 9] = cov[1, 2]
-            kept[row, 10] = cov[2, 2]
-            row += 1
+        if not inliers[k] or row >= first + count:
+            continue
+        seen = False
+        for r in range(first, row):
+            seen = seen or kept_ids[r] == ids[k]
+        if seen:
+            continue
+        kept_ids[row] = ids[k]
+        kept[row, 0] = time
+        kept[row, 1] = state[0]
+        kept[row, 2] = state[1]
+        kept[row, 3] = state[2] + azimuths[k]
+        kept[row, 4] = cov[0, 0]
+        kept[row, 5] = cov[0, 1]
+        kept[row, 6] = cov[0, 2]
+        kept[row, 7] = cov[1, 1]
+        kept[row, 8] = cov[1, 2]
+        kept[row, 9] = cov[2, 2]
+        row += 1
     return row
 
 
 @jit
-def _test(kept, oldest, time, window_s, tested_at, min_sightings, most, fewest, sorted_ids, xy,
-          width, delta_d, coverage, extra_sigma, shared_error_s, tested, ratios):
+def _test(kept, kept_ids, oldest, time, window_s, tested_at, min_sightings, most, fewest,
+          sorted_ids, xy, width, delta_d, coverage, extra_sigma, shared_error_s, tested, ratios):
     """The test of :meth:`FitTest.ratios` over the ring; how many beacons it tested.
 
     Writes ``tested`` (their rows in the order of ``sorted_ids``) and ``ratios``; none when
     fewer than ``fewest`` beacons are due. ``sorted_ids`` are the map's ids in ascending order,
     ``xy`` and ``width`` its beacons' positions and widths in that order.
     """
-    rows, starts = _grouped(kept, oldest, time, window_s, sorted_ids)
+    rows, starts = _grouped(kept, kept_ids, oldest, time, window_s, sorted_ids)
     due = np.zeros(sorted_ids.size, dtype=np.bool_)
     for at in range(sorted_ids.size):
         latest = -np.inf
@@ -220,25 +236,25 @@ def _test(kept, oldest, time, window_s, tested_at, min_sightings, most, fewest, 
         window = _picked(kept, rows[starts[at]:starts[at + 1]], most)
         variances = np.empty(window.shape[0])
         for j in range(window.shape[0]):
-            distance = math.hypot(xy[at, 0] - window[j, 2], xy[at, 1] - window[j, 3])
+            distance = math.hypot(xy[at, 0] - window[j, 1], xy[at, 1] - window[j, 2])
             cover = math.atan2(0.5 * width[at], distance) if coverage else 0.0
             variances[j] = (delta_d * delta_d + cover * cover) / 3.0 + extra_sigma * extra_sigma
         mean = np.zeros(6)
         for j in range(window.shape[0]):
-            mean += window[j, 5:]
+            mean += window[j, 4:]
         mean /= window.shape[0]
         covariance = np.array([[mean[0], mean[1], mean[2]], [mean[1], mean[3], mean[4]],
                                [mean[2], mean[4], mean[5]]])
         tested[count] = at
-        ratios[count] = _window_ratio(window[:, 0].copy(), window[:, 2].copy(),
-                                      window[:, 3].copy(), window[:, 4].copy(), covariance,
+        ratios[count] = _window_ratio(window[:, 0].copy(), window[:, 1].copy(),
+                                      window[:, 2].copy(), window[:, 3].copy(), covariance,
                                       variances, xy[at, 0], xy[at, 1], shared_error_s)
         count += 1
     return count
 
 
 @jit
-def _grouped(kept, oldest, time, window_s, sorted_ids):
+def _grouped(kept, kept_ids, oldest, time, window_s, sorted_ids):
     """The ring's rows of the last ``window_s`` seconds, grouped by beacon, as written.
 
     ``rows`` holds those of ``sorted_ids[at]`` from ``starts[at]`` to ``starts[at + 1]``: a
@@ -251,8 +267,8 @@ def _grouped(kept, oldest, time, window_s, sorted_ids):
         if not kept[r, 0] >= time - window_s:
             kept[r, 0] = np.nan
             continue
-        at = np.searchsorted(sorted_ids, kept[r, 1])
-        if at < sorted_ids.size and sorted_ids[at] == kept[r, 1]:
+        at = np.searchsorted(sorted_ids, kept_ids[r])
+        if at < sorted_ids.size and sorted_ids[at] == kept_ids[r]:
             slot[r] = at
             counts[at + 1] += 1
     starts = np.cumsum(counts)
@@ -299,12 +315,14 @@ class FitTest:
         self.error_model = error_model
         self.extra_sigma = extra_sigma
         self._kept = np.full((MAX_DETECTIONS, _COLUMNS), np.nan)
+        self._ids = np.full(MAX_DETECTIONS, -1, dtype=np.int64)
+        """Each row's beacon id."""
         """The ring of detections, one a row (the ``_TIME`` ... columns; NaN time: empty)."""
         self._next = 0
         self._tested_at = -math.inf
         self._due = -math.inf
         self._map: BeaconMap | None = None
-        self._sorted: tuple[np.ndarray, FloatArray, FloatArray, np.ndarray] | None = None
+        self._sorted: tuple[np.ndarray, FloatArray, FloatArray] | None = None
 
     def record(self, time: float, measurements: Measurements, inliers: np.ndarray,
                state: FloatArray, cov: FloatArray) -> None:
@@ -313,16 +331,16 @@ class FitTest:
         Written as one block of the ring, from its start again when it would pass the end
         (the rows left there are overwritten in their turn, or expire).
         """
-        self._next = _record(self._kept, self._next, float(time), measurements.ids,
+        self._next = _record(self._kept, self._ids, self._next, float(time), measurements.ids,
                              measurements.azimuth, inliers, state, cov)
 
     def forget(self, beacon: int) -> None:
         """Drop a beacon's detections (it was set aside, or placed anew)."""
-        self._kept[self._kept[:, _BEACON] == beacon, _TIME] = np.nan
+        self._kept[self._ids == beacon, _TIME] = np.nan
 
     def began(self, beacon: int) -> float:
         """When a beacon's window begins [s]: its earliest detection kept."""
-        times = self._kept[self._kept[:, _BEACON] == beacon, _TIME]
+        times = self._kept[self._ids == beacon, _TIME]
         return float(times[~np.isnan(times)].min())
 
     def moved(self, time: float, beacons: BeaconMap) -> int | None:
@@ -347,18 +365,17 @@ class FitTest:
         if beacons is not self._map or self._sorted is None:
             order = np.argsort(beacons.ids, kind="stable")
             self._map = beacons
-            self._sorted = (beacons.ids[order].astype(np.float64),
+            self._sorted = (np.ascontiguousarray(beacons.ids[order], dtype=np.int64),
                             np.ascontiguousarray(beacons.xyz[order, :2]),
-                            np.ascontiguousarray(beacons.width[order], dtype=np.float64),
-                            beacons.ids[order])
-        sorted_ids, xy, width, ids = self._sorted
+                            np.ascontiguousarray(beacons.width[order], dtype=np.float64))
+        sorted_ids, xy, width = self._sorted
         tested = np.empty(sorted_ids.size, dtype=np.int64)
         ratios = np.empty(sorted_ids.size)
-        count = _test(self._kept, self._next, float(time), WINDOW_S, self._tested_at,
+        count = _test(self._kept, self._ids, self._next, float(time), WINDOW_S, self._tested_at,
                       MIN_SIGHTINGS, TESTED, OTHERS_AGREE + 1, sorted_ids, xy, width,
                       float(self.error_model.delta_alpha_d), bool(self.error_model.coverage),
                       float(self.extra_sigma), SHARED_ERROR_S, tested, ratios)
         self._tested_at = time
-        return {int(ids[row]): float(ratio) for row, ratio in
+        return {int(sorted_ids[row]): float(ratio) for row, ratio in
                 zip(tested[:count].tolist(), ratios[:count].tolist(), strict=True)
                 if not math.isnan(ratio)}

@@ -11,7 +11,7 @@ import pytest
 from helpers import beacon_map
 
 import azgym
-from azgym import Measurements
+from azgym import InvalidInputError, Measurements
 from azgym.site.error_model import ErrorModel
 from azgym.track.repair import MapRepair
 from azgym.track.repair_fit import (
@@ -227,3 +227,10 @@ def test_a_move_along_the_line_of_sight_that_the_gate_lets_pass_is_found_and_rep
     (repair,) = tracker.repairs
     assert repair.beacon == 14
     assert math.dist(tracker.placed[14].new, physical[row, :2]) < 0.05
+
+
+def test_times_out_of_order_are_refused_by_name():
+    times, cameras = path(5)
+    with pytest.raises(InvalidInputError, match="ascending"):
+        likelihood_ratio(times[::-1], cameras, bearings_with(cameras, np.zeros(5)),
+                         np.zeros((3, 3)), np.full(5, SIGMA ** 2), BEACON)
