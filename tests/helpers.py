@@ -14,8 +14,8 @@ import azgym
 from azgym.core import BeaconMap, Measurements, pose_error
 from azgym.sensing.synthetic import ideal_azimuths
 
-__all__ = ["beacon_map", "bounded_outcome", "edited_json", "ideal_frame", "pose_error_of",
-           "quick_navigation_run"]
+__all__ = ["beacon_map", "bounded_outcome", "dense_likelihood_ratio", "edited_json", "ideal_frame",
+           "pose_error_of", "quick_navigation_run"]
 
 
 def ideal_frame(x: float, y: float, heading: float, beacons: BeaconMap) -> Measurements:
@@ -78,3 +78,20 @@ def bounded_outcome(code: str, *, memory_bytes: int, seconds: float,
                          timeout=seconds, stdin=stdin, check=False)
     assert run.returncode == 0, run.stderr[-2000:]
     return run.stdout.strip()
+
+
+def dense_likelihood_ratio(times, cameras, bearings, covariance, variances, beacon) -> float:
+    """Map repair's fit-test ratio Λ = rᵀ Σ⁻¹ J (Jᵀ Σ⁻¹ J)⁻¹ Jᵀ Σ⁻¹ r, with numpy, Σ as
+    ``azgym.track.repair_fit``'s docstring writes it: the reference its kernel is held to."""
+    from azgym.track.repair_fit import SHARED_ERROR_S
+
+    offsets = beacon - cameras
+    sensitivity = np.column_stack((-offsets[:, 1], offsets[:, 0])) \
+        / (offsets ** 2).sum(axis=1)[:, None]
+    shared = np.column_stack((sensitivity, np.ones(len(times))))
+    residuals = np.angle(np.exp(1j * (bearings - np.arctan2(offsets[:, 1], offsets[:, 0]))))
+    sigma = np.diag(variances) + (shared @ covariance @ shared.T) * np.exp(
+        -np.abs(np.subtract.outer(times, times)) / SHARED_ERROR_S)
+    inverse = np.linalg.inv(sigma)
+    projected = sensitivity.T @ inverse @ residuals
+    return float(projected @ np.linalg.solve(sensitivity.T @ inverse @ sensitivity, projected))

@@ -19,11 +19,12 @@ import sys
 
 import numpy as np
 import pytest
+from helpers import dense_likelihood_ratio
 
 from azgym import Measurements, wrap_angle
 from azgym.core import BeaconMap
 from azgym.site.error_model import ErrorModel
-from azgym.track.repair_fit import SHARED_ERROR_S, TESTED, WINDOW_S, FitTest, likelihood_ratio
+from azgym.track.repair_fit import TESTED, WINDOW_S, FitTest, likelihood_ratio
 
 TIME_LIMIT = 240.0
 """The child's time [s]: each drive takes a few seconds."""
@@ -88,20 +89,6 @@ def test_a_detection_repeated_within_a_frame_is_not_taken_for_many_sightings():
     assert feed(fit_test(), given, seed=6, repeats=30) == []
 
 
-def dense_ratio(times, cameras, bearings, covariance, variances, beacon):
-    """Λ of the module docstring with numpy (the dense formula)."""
-    offsets = beacon - cameras
-    sensitivity = np.column_stack((-offsets[:, 1], offsets[:, 0])) / (offsets ** 2).sum(axis=1)[
-        :, None]
-    shared = np.column_stack((sensitivity, np.ones(times.size)))
-    residuals = np.angle(np.exp(1j * (bearings - np.arctan2(offsets[:, 1], offsets[:, 0]))))
-    sigma = np.diag(variances) + (shared @ covariance @ shared.T) * np.exp(
-        -np.abs(np.subtract.outer(times, times)) / SHARED_ERROR_S)
-    inverse = np.linalg.inv(sigma)
-    projected = sensitivity.T @ inverse @ residuals
-    return projected @ np.linalg.solve(sensitivity.T @ inverse @ sensitivity, projected)
-
-
 # DEFECT (fixed: Σ's decay is now a product of each step's; the public function only:
 # FitTest's windows span at most WINDOW_S): Σ's shared part was built as e_l / e_k with
 # e_k = exp(−(t_k − t_0)/τ), which underflows to 0/0 once the bearings span more than about
@@ -116,8 +103,8 @@ def test_the_ratio_of_bearings_spanning_a_long_time_is_the_dense_formula():
     covariance = np.diag([1e-4, 1e-4, 1e-6])
     variances = np.full(30, SIGMA ** 2)
     ratio = likelihood_ratio(times, cameras, bearings, covariance, variances, XY[0])
-    assert ratio == pytest.approx(dense_ratio(times, cameras, bearings, covariance, variances,
-                                              XY[0]), rel=1e-8)
+    expected = dense_likelihood_ratio(times, cameras, bearings, covariance, variances, XY[0])
+    assert ratio == pytest.approx(expected, rel=1e-8)
 
 
 # HOLDS (pinned): over 20 laps of the ring, with frames of 0-150 detections (most of ids not on

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import beacon_map
+from helpers import beacon_map, dense_likelihood_ratio
 
 import azgym
 from azgym import InvalidInputError, Measurements
@@ -77,17 +77,6 @@ def test_bearings_along_one_line_give_the_one_dimensional_ratio():
     assert ratio == pytest.approx(expected, rel=1e-9)
 
 
-def dense_ratio(times, cameras, residuals, covariance, variances):
-    """Λ = rᵀ Σ⁻¹ J (Jᵀ Σ⁻¹ J)⁻¹ Jᵀ Σ⁻¹ r, Σ as the module docstring writes it, with numpy."""
-    sensitivity = sensitivities(cameras)
-    shared = np.column_stack((sensitivity, np.ones(times.size)))
-    sigma = np.diag(variances) + (shared @ covariance @ shared.T) * np.exp(
-        -np.abs(np.subtract.outer(times, times)) / SHARED_ERROR_S)
-    inverse = np.linalg.inv(sigma)
-    projected = sensitivity.T @ inverse @ residuals
-    return projected @ np.linalg.solve(sensitivity.T @ inverse @ sensitivity, projected)
-
-
 def test_with_a_shared_track_error_it_is_the_dense_formula():
     rng = np.random.default_rng(3)
     times, cameras = path()
@@ -97,7 +86,9 @@ def test_with_a_shared_track_error_it_is_the_dense_formula():
     residuals = rng.normal(0.0, 2.0 * SIGMA, times.size)
     ratio = likelihood_ratio(times, cameras, bearings_with(cameras, residuals), covariance,
                              variances, BEACON)
-    assert ratio == pytest.approx(dense_ratio(times, cameras, residuals, covariance, variances),
+    assert ratio == pytest.approx(dense_likelihood_ratio(times, cameras,
+                                                         bearings_with(cameras, residuals),
+                                                         covariance, variances, BEACON),
                                   rel=1e-8)
 
 
