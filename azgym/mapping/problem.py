@@ -22,6 +22,7 @@ from azgym.logs.frames import frame_measurements, frame_motions
 from azgym.logs.read import Log
 from azgym.profile import FORKLIFT, VEHICLE_KINDS, Profile
 from azgym.sensing.motion import DifferentialOdometryModel, ImuModel, Motion
+from azgym.site.error_model import check_azimuth_noise
 from azgym.track.kinematics import WHEELBASE
 from azgym.track.unicycle import VEHICLE_DEFAULTS, YAW_SOURCES, MotionNoise
 from azgym.world.drive import Frame
@@ -183,9 +184,7 @@ class Settings:
                                                 and self.start_bias >= 0.0):
             raise InvalidInputError(f"start_bias must be a number >= 0 [rad/s] or None, got "
                                     f"{self.start_bias!r}")
-        if not (self.delta_alpha_d > 0.0 or self.extra_sigma > 0.0):
-            raise InvalidInputError("delta_alpha_d and extra_sigma are both 0, which gives the "
-                                    "azimuths no noise to weigh them by")
+        check_azimuth_noise("survey settings", self.delta_alpha_d, self.extra_sigma)
 
     @property
     def turn_source(self) -> str:

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 
-__all__ = ["ErrorModel"]
+__all__ = ["LEAST_AZIMUTH_NOISE", "ErrorModel", "check_azimuth_noise"]
 
 
 @dataclass(frozen=True)
@@ -91,3 +91,21 @@ class ErrorModel:
         d = rng.uniform(-self.delta_alpha_d, self.delta_alpha_d, size=coverage.shape)
         c = rng.uniform(-1.0, 1.0, size=coverage.shape) * coverage
         return d + c
+
+
+LEAST_AZIMUTH_NOISE = 1e-6
+"""Least azimuth noise a filter weighs azimuths by, Δα_d or the extra noise [rad] (0.2″): no
+camera measures azimuths finer, and below it a gated filter's matrices are singular to machine
+precision (at 1e-9 rad, a route's first frame)."""
+
+
+def check_azimuth_noise(owner: str, delta_alpha_d: float, extra_sigma: float) -> None:
+    """Refuse, naming ``owner``, a Δα_d and an extra noise both below :data:`LEAST_AZIMUTH_NOISE`.
+
+    Raises:
+        InvalidInputError: If neither reaches it.
+    """
+    if not (delta_alpha_d >= LEAST_AZIMUTH_NOISE or extra_sigma >= LEAST_AZIMUTH_NOISE):
+        raise InvalidInputError(
+            f"{owner}: delta_alpha_d ({delta_alpha_d}) and extra_sigma ({extra_sigma}) are both "
+            f"below {LEAST_AZIMUTH_NOISE} rad, which gives the azimuths no noise to weigh them by")

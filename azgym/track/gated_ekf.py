@@ -21,12 +21,12 @@ from statistics import NormalDist
 import numpy as np
 
 from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose, wrap_scalar
-from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
 from azgym.localize.base import ROW_BEACON_INDEX, ROW_SOURCE, Problem
 from azgym.localize.registry import build
 from azgym.profile import FORKLIFT, VEHICLE_KINDS
 from azgym.sensing.motion import ImuModel, Motion, OdometryModel
+from azgym.site.error_model import check_azimuth_noise
 from azgym.track.azimuth_update import gated_update
 from azgym.track.base import Tracker, check_choice
 from azgym.track.kinematics import WHEELBASE
@@ -146,9 +146,7 @@ class GatedEkf(Tracker):
             check_range(name, field, getattr(self, field), low=0.0)
         check_range(name, "min_init_inliers", self.min_init_inliers, low=3, integer=True)
         check_choice(name, "initializer", self.initializer, INITIALIZERS)
-        if self.delta_alpha_d == 0.0 and self.extra_sigma == 0.0:
-            raise InvalidInputError(f"{name}: delta_alpha_d and extra_sigma are both 0, which "
-                                    "gives the azimuths no noise to weigh them by")
+        check_azimuth_noise(name, self.delta_alpha_d, self.extra_sigma)
         self._threshold = NormalDist().inv_cdf(0.5 + 0.5 * self.gate_probability) ** 2
         coverage = {"coverage": self.coverage} if self.initializer == "ransac" else {}
         self._localizer = build(self.initializer, delta_alpha_d=self.delta_alpha_d, **coverage)
