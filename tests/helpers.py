@@ -13,6 +13,7 @@ import numpy as np
 import azgym
 from azgym.core import BeaconMap, Measurements, pose_error
 from azgym.sensing.synthetic import ideal_azimuths
+from azgym.track.repair_fit import SHARED_ERROR_S
 
 __all__ = ["beacon_map", "bounded_outcome", "dense_likelihood_ratio", "edited_json", "ideal_frame",
            "pose_error_of", "quick_navigation_run"]
@@ -83,8 +84,6 @@ def bounded_outcome(code: str, *, memory_bytes: int, seconds: float,
 def dense_likelihood_ratio(times, cameras, bearings, covariance, variances, beacon) -> float:
     """Map repair's fit-test ratio Λ = rᵀ Σ⁻¹ J (Jᵀ Σ⁻¹ J)⁻¹ Jᵀ Σ⁻¹ r, with numpy, Σ as
     ``azgym.track.repair_fit``'s docstring writes it: the reference its kernel is held to."""
-    from azgym.track.repair_fit import SHARED_ERROR_S
-
     offsets = beacon - cameras
     sensitivity = np.column_stack((-offsets[:, 1], offsets[:, 0])) \
         / (offsets ** 2).sum(axis=1)[:, None]

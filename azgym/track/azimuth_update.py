@@ -48,7 +48,7 @@ from azgym.jit import jit, wrap_compiled
 from azgym.localize.base import ROW_AZIMUTH, ROW_BX, ROW_BY, ROW_WIDTH
 from azgym.track.unicycle import IPHI, IX, IY
 
-__all__ = ["gated_update"]
+__all__ = ["azimuth_variance", "gated_update"]
 
 
 def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_index: IntArray,
@@ -78,6 +78,17 @@ def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_
     return passed, distance
 
 
+@jit(inline="always")
+def azimuth_variance(distance, width, delta_d, coverage, extra_sigma):
+    """An azimuth's variance in a compiled loop [rad²], plus ``extra_sigma``².
+
+    Eq. 3's (Δα_d² + Δα_c²) / 3 with the coverage bound Δα_c = atan2(W/2, D) unless
+    ``coverage`` is off: the compiled twin of :meth:`~azgym.site.error_model.ErrorModel.variance`.
+    """
+    cover = math.atan2(0.5 * width, distance) if coverage else 0.0
+    return (delta_d * delta_d + cover * cover) / 3.0 + extra_sigma * extra_sigma
+
+
 @jit
 def _gated_update(state, cov, floats, beacon_index, delta_d, coverage, extra_sigma, threshold,
                   passed, distance):
@@ -94,8 +105,8 @@ def _gated_update(state, cov, floats, beacon_index, delta_d, coverage, extra_sig
         rows[i, IX] = dy / r2
         rows[i, IY] = -dx / r2
         rows[i, IPHI] = -1.0
-        cover = math.atan2(0.5 * floats[ROW_WIDTH, i], math.sqrt(r2)) if coverage else 0.0
-        noise[i] = (delta_d * delta_d + cover * cover) / 3.0 + extra_sigma * extra_sigma
+        noise[i] = azimuth_variance(math.sqrt(r2), floats[ROW_WIDTH, i], delta_d, coverage,
+                                    extra_sigma)
         spread = noise[i]
         for a in range(size):
             for b in range(size):

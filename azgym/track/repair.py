@@ -291,8 +291,9 @@ class MapRepair:
 
         The records held are the suspects' and those of beacons rejected lately, however many.
         """
-        self._runs = {beacon: run for beacon, run in self._runs.items()
-                      if run.suspected or time - run.last <= STREAK_GAP_S}
+        if self._runs:  # a frame with none open costs nothing here
+            self._runs = {beacon: run for beacon, run in self._runs.items()
+                          if run.suspected or time - run.last <= STREAK_GAP_S}
 
     def _suspicious(self, run: Run, time: float) -> bool:
         """Whether a run makes its beacon a suspect (module docstring)."""

@@ -50,6 +50,7 @@ from azgym.core import BeaconMap, FloatArray, Measurements
 from azgym.errors import InvalidInputError
 from azgym.jit import jit, wrap_compiled
 from azgym.site.error_model import ErrorModel
+from azgym.track.azimuth_update import azimuth_variance
 
 __all__ = ["AGREE", "MAX_DETECTIONS", "MIN_SIGHTINGS", "OTHERS_AGREE", "SHARED_ERROR_S", "TESTED",
            "TEST_EVERY_S", "THRESHOLD", "WINDOW_S", "FitTest", "likelihood_ratio"]
@@ -237,8 +238,7 @@ def _test(kept, kept_ids, oldest, time, window_s, tested_at, min_sightings, most
         variances = np.empty(window.shape[0])
         for j in range(window.shape[0]):
             distance = math.hypot(xy[at, 0] - window[j, 1], xy[at, 1] - window[j, 2])
-            cover = math.atan2(0.5 * width[at], distance) if coverage else 0.0
-            variances[j] = (delta_d * delta_d + cover * cover) / 3.0 + extra_sigma * extra_sigma
+            variances[j] = azimuth_variance(distance, width[at], delta_d, coverage, extra_sigma)
         mean = np.zeros(6)
         for j in range(window.shape[0]):
             mean += window[j, 4:]
