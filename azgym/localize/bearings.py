@@ -37,8 +37,8 @@ from azgym.core import FloatArray
 from azgym.errors import InvalidInputError
 
 __all__ = ["MIN_RAYS", "MIN_SPREAD", "PARALLEL_CONDITION", "ROBUST_PASSES", "STRAY_SCALE",
-           "agreeing", "crossings", "intersect_rays", "intersect_robustly", "meeting_point",
-           "pair_spread", "ray_misses", "spread"]
+           "agreeing", "crossings", "intersect_rays", "intersect_robustly", "meet",
+           "meeting_point", "pair_spread", "ray_misses", "spread"]
 
 MIN_SPREAD = math.radians(10.0)
 """Least spread of a point's rays [rad] for it to be observable (module docstring): at 10° the
@@ -120,15 +120,28 @@ def intersect_rays(origins: FloatArray, bearings: FloatArray, bearing_variance: 
             f"intersect_rays needs two or more rays with origins (K, 2), bearings (K,), "
             f"bearing_variance (K,) and origin_covariance (K, 2, 2); got {origins.shape}, "
             f"{bearings.shape}, {bearing_variance.shape}, {origin_covariance.shape}")
+    found = meet(origins, bearings, bearing_variance, origin_covariance)
+    if found is None:
+        raise InvalidInputError(
+            "intersect_rays: the rays are parallel, so they meet at no single point")
+    return found
+
+
+def meet(origins: FloatArray, bearings: FloatArray, bearing_variance: FloatArray,
+         origin_covariance: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+    """:func:`intersect_rays` on arrays already checked: None where it raises for parallel rays.
+
+    Rays that spread yet meet at no single point once weighed (a few rays far tighter than the
+    rest, along one line) are a caller's "the rays do not say", not an error.
+    """
     normals = _normals(bearings)
     origin_part = np.einsum("ki,kij,kj->k", normals, origin_covariance, normals)
-    weights = np.ones(count)
+    weights = np.ones(bearings.shape[0])
     point = np.zeros(2)
     for _ in range(2):  # unweighted, then weighted by each ray's spread at its range
         point = meeting_point(origins, bearings, weights)
         if not np.isfinite(point).all():
-            raise InvalidInputError(
-                "intersect_rays: the rays are parallel, so they meet at no single point")
+            return None
         ranges2 = np.sum(np.square(point - origins), axis=1)
         variance = ranges2 * bearing_variance + origin_part
         weights = 1.0 / variance

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from azgym.core import FloatArray
-from azgym.localize.bearings import crossings, intersect_rays, pair_spread, ray_misses, spread
+from azgym.localize.bearings import crossings, meet, pair_spread, ray_misses, spread
 
 __all__ = ["CANDIDATES", "COLUMN_HEADING_VARIANCE", "COLUMN_SIGHTING", "KEPT_SHARE", "MAX_RAYS",
            "RayStore", "consensus", "intersect", "locate", "near", "origin_covariance", "pack",
@@ -126,7 +126,10 @@ def locate(rays: FloatArray, span: float, threshold: float, max_std: float,
     rays = rays[kept]
     if spread(rays[:, 2]) < span:
         return None
-    point, covariance, _ = intersect(rays)
+    met = intersect(rays)
+    if met is None:
+        return None
+    point, covariance, _ = met
     directions = np.column_stack((np.cos(rays[:, 2]), np.sin(rays[:, 2])))
     ahead = np.einsum("kj,kj->k", directions, point - rays[:, :2])
     camera = np.einsum("ki,kij,kj->k", directions, origin_covariance(rays), directions)
@@ -193,14 +196,17 @@ def origin_covariance(rays: FloatArray) -> FloatArray:
     return np.stack((rays[:, 4:6], rays[:, 5:7]), axis=1)
 
 
-def intersect(rays: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+def intersect(rays: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
     """Where packed rays meet, its covariance, and each ray's miss (module docstring).
 
-    :func:`~azgym.localize.bearings.intersect_rays`'s point and misses; its covariance widened
-    by the rays' scatter (:func:`scatter`), plus the track's shared error.
+    :func:`~azgym.localize.bearings.meet`'s point and misses (None where the weighed rays meet
+    at no single point); its covariance widened by the rays' scatter (:func:`scatter`), plus
+    the track's shared error.
     """
-    point, covariance, misses = intersect_rays(rays[:, :2], rays[:, 2], rays[:, 3],
-                                               origin_covariance(rays))
+    met = meet(rays[:, :2], rays[:, 2], rays[:, 3], origin_covariance(rays))
+    if met is None:
+        return None
+    point, covariance, misses = met
     shared = _shared(rays, point, np.asarray(np.linalg.inv(covariance), np.float64))
     return point, covariance * scatter(misses) + shared, misses
 

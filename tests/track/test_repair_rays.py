@@ -12,13 +12,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from helpers import beacon_map
 
 from azgym.core import Measurements
-from azgym.localize.bearings import intersect_rays
+from azgym.errors import InvalidInputError
+from azgym.localize.bearings import intersect_rays, meet
 from azgym.site.error_model import ErrorModel
 from azgym.track.repair import MapRepair
-from azgym.track.repair_rays import intersect, origin_covariance, pack, scatter
+from azgym.track.repair_rays import intersect, locate, origin_covariance, pack, scatter
 
 BEACONS = beacon_map([(1.0, 3.0), (10.0, 10.0), (10.0, 0.0)])
 POSITION_VARIANCE = 0.03 ** 2
@@ -112,3 +114,22 @@ def test_a_repaired_beacon_is_refined_as_its_rays_widen_and_reported_once() -> N
     assert placed.std < first.std
     assert math.dist(placed.new, truth) < math.dist(first.new, truth)
     np.testing.assert_array_equal(repair.begin_frame(beacons).xyz[0, :2], placed.new)
+
+
+def test_rays_that_spread_but_meet_nowhere_once_weighed_locate_nothing() -> None:
+    # twelve rays along the x axis from a camera sure of itself (bearing variance 1e-14, no
+    # position error) and two loose ones across it from (-1, ±3): unweighted they meet at
+    # (0, 0), and they spread 143°; weighed, the twelve outweigh the two by 10¹³ and the
+    # normal matrix is singular to machine precision. A suspect's rays that say nothing are
+    # not located: None, not intersect_rays' "parallel" error out of a tracker's update
+    tight = [pack(np.array([x, 0.0]), np.zeros(1), 1e-14, np.zeros((2, 2)), 0.0, k)
+             for k, x in enumerate(np.linspace(-6.0, -4.0, 12))]
+    loose = [pack(np.array([-1.0, y]), np.array([math.atan2(-y, 1.0)]), 0.1,
+                  np.eye(2) * 1e-2, 0.0, 12 + k) for k, y in enumerate((-3.0, 3.0))]
+    rays = np.concatenate(tight + loose)
+    box = (np.full(2, -20.0), np.full(2, 20.0))
+    assert locate(rays, math.radians(10.0), 9.0, 0.1, box) is None
+    assert intersect(rays) is None
+    assert meet(rays[:, :2], rays[:, 2], rays[:, 3], origin_covariance(rays)) is None
+    with pytest.raises(InvalidInputError, match="parallel"):  # the checked entry still says so
+        intersect_rays(rays[:, :2], rays[:, 2], rays[:, 3], origin_covariance(rays))
