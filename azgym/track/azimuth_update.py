@@ -50,10 +50,13 @@ from azgym.track.unicycle import IPHI, IX, IY
 
 __all__ = ["azimuth_variance", "gated_update"]
 
+NO_COLUMNS = np.empty(0, dtype=np.int64)
+"""``gated_update``'s columns when no beacon is in the state (no array made a frame)."""
+
 
 def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_index: IntArray,
-                 delta_d: float, coverage: bool, extra_sigma: float, threshold: float
-                 ) -> tuple[BoolArray, FloatArray]:
+                 delta_d: float, coverage: bool, extra_sigma: float, threshold: float,
+                 columns: IntArray | None = None) -> tuple[BoolArray, FloatArray]:
     """Gate a frame's azimuths and correct ``state`` and ``cov`` with those that pass, in place.
 
     Args:
@@ -66,6 +69,11 @@ def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_
         coverage: Whether the noise includes eq. 2's coverage term Δα_c,i.
         extra_sigma: Azimuth noise beyond the error model [rad].
         threshold: The gate: the largest ν²/S accepted.
+        columns: Per measurement, the state's column of its beacon's x (y the next) for a
+            beacon kept in the state (a repaired one, :mod:`azgym.track.repair_state`), or −1
+            for one at its map position; None: every one at its map position. A beacon in the
+            state is seen where the state has it, and its Jacobian row has
+            [−(y_i − y)/r², (x_i − x)/r²] in those columns, so the update corrects it too.
 
     Returns:
         Which measurements passed the gate and the leave-one-out test, and each one's squared
@@ -74,7 +82,7 @@ def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_
     passed = np.zeros(floats.shape[1], dtype=np.bool_)
     distance = np.empty(floats.shape[1])
     _gated_update(state, cov, floats, beacon_index, delta_d, bool(coverage), extra_sigma,
-                  threshold, passed, distance)
+                  threshold, passed, distance, NO_COLUMNS if columns is None else columns)
     return passed, distance
 
 
@@ -91,20 +99,26 @@ def azimuth_variance(distance, width, delta_d, coverage, extra_sigma):
 
 @jit
 def _gated_update(state, cov, floats, beacon_index, delta_d, coverage, extra_sigma, threshold,
-                  passed, distance):
+                  passed, distance, columns):
     """The compiled step of :func:`gated_update`; writes ``passed`` and ``distance``."""
     count, size = floats.shape[1], state.size
     nu = np.empty(count)
     noise = np.empty(count)
     rows = np.zeros((count, size))
     for i in range(count):
-        dx = floats[ROW_BX, i] - state[IX]
-        dy = floats[ROW_BY, i] - state[IY]
+        column = columns[i] if columns.size else -1
+        bx = state[column] if column >= 0 else floats[ROW_BX, i]
+        by = state[column + 1] if column >= 0 else floats[ROW_BY, i]
+        dx = bx - state[IX]
+        dy = by - state[IY]
         r2 = dx * dx + dy * dy
         nu[i] = wrap_compiled(floats[ROW_AZIMUTH, i] - math.atan2(dy, dx) + state[IPHI])
         rows[i, IX] = dy / r2
         rows[i, IY] = -dx / r2
         rows[i, IPHI] = -1.0
+        if column >= 0:
+            rows[i, column] = -dy / r2
+            rows[i, column + 1] = dx / r2
         noise[i] = azimuth_variance(math.sqrt(r2), floats[ROW_WIDTH, i], delta_d, coverage,
                                     extra_sigma)
         spread = noise[i]

@@ -20,7 +20,7 @@ from statistics import NormalDist
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose, wrap_scalar
+from azgym.core import BeaconMap, Estimate, FloatArray, IntArray, Measurements, Pose, wrap_scalar
 from azgym.hyperparameters import check_flag, check_range
 from azgym.localize.base import ROW_BEACON_INDEX, ROW_SOURCE, Problem
 from azgym.localize.registry import build
@@ -171,9 +171,14 @@ class GatedEkf(Tracker):
             self._start(np.array(initial), np.diag(np.square(INITIAL_STD)))
 
     def _start(self, pose: np.ndarray, cov: np.ndarray) -> None:
-        """Start (or restart) the filter at ``pose`` with covariance ``cov`` (3 × 3)."""
-        self._state[:] = (pose[0], pose[1], pose[2], 0.0, 0.0)
-        self._cov[:] = 0.0
+        """Start (or restart) the filter at ``pose`` with covariance ``cov`` (3 × 3).
+
+        Beacons kept in the state past its first :data:`STATE_SIZE` entries keep their
+        positions and covariance; their ties to the old pose are cut.
+        """
+        self._state[:STATE_SIZE] = (pose[0], pose[1], pose[2], 0.0, 0.0)
+        self._cov[:STATE_SIZE] = 0.0
+        self._cov[:, :STATE_SIZE] = 0.0
         self._cov[:3, :3] = cov + np.diag(np.square(INITIAL_STD))
         self._cov[IBIAS, IBIAS] = ImuModel().gyro_bias ** 2
         self._cov[ISCALE, ISCALE] = self._noise.speed_scale ** 2
@@ -224,9 +229,18 @@ class GatedEkf(Tracker):
             return inliers, 0
         passed, _ = gated_update(self._state, self._cov, problem.floats,
                                  problem.ints[ROW_BEACON_INDEX], self.delta_alpha_d,
-                                 self.coverage, self.extra_sigma, self._threshold)
+                                 self.coverage, self.extra_sigma, self._threshold,
+                                 self._state_columns(problem, beacons))
         inliers[problem.ints[ROW_SOURCE][passed]] = True
         return inliers, problem.n_distinct
+
+    def _state_columns(self, problem: Problem, beacons: BeaconMap) -> IntArray | None:
+        """Where the state keeps each measured beacon: ``gated_update``'s ``columns``.
+
+        None here (every beacon at its map position); a tracker that keeps beacons in its
+        state says where.
+        """
+        return None
 
     def _estimate(self, inliers: np.ndarray, diagnostics: dict | None = None) -> Estimate:
         state = self._state

@@ -21,24 +21,23 @@
 * **Set aside**: its detections are removed before the correction, and the track is re-run
   without it from before its stretch of sightings (:mod:`azgym.track.repair_lag`); its rays
   are taken afresh (:meth:`MapRepair.retrace`) and it is located (:meth:`MapRepair.relocate`).
-* **Located again** (:mod:`azgym.track.repair_rays`): each of its sightings gives a ray per
-  detection from the tracker's camera along its heading plus the azimuth, with the azimuth's
-  variance (eq. 3, ``extra_sigma``², the heading's), the camera's covariance. The point the
-  most sightings meet, inside the box of the map's beacons grown by :data:`OUTSIDE_M` (beyond
-  it lies a mirror's image), is taken with an honest covariance once enough sightings meet it,
-  their rays spread ``span`` and fix it within ``max_std`` without the most telling of them
-  (:func:`~azgym.track.repair_rays.locate`), unless it is within :data:`CLEARANCE_M` (or three
-  standard deviations) of another beacon (rays that meet there are its detections under a
-  misread id) or of its own map position (it did not move): the suspicion is then dropped.
-* **Used again**: the map the tracker corrects with has the beacon at its new position (its
-  height kept), its width widened from W to √(W² + 12σ²), σ the new position's worst-axis
-  standard deviation: eq. 2's coverage term, (W/2D)²/3 at range D, then adds the position's
-  (σ/D)² to its azimuth's variance. The repair is reported (:class:`Repair`). A suspect of
-  rejections whose map position agrees again in ``sightings`` sightings in a row is cleared.
-* **Refined**: a repaired beacon's rays are gathered on; whenever they grow by
-  :data:`RETRY_GROWTH`, those within the gate of its placement are intersected again and a more
-  certain position (a smaller worst-axis standard deviation) replaces it
-  (:attr:`MapRepair.placed`; reported once). One suspected again is located afresh.
+* **Located again** (:func:`~azgym.track.repair_rays.locate`): each sighting gives a ray per
+  detection from the tracker's camera along its heading plus the azimuth. The point the most
+  sightings meet, inside the map's box grown by :data:`OUTSIDE_M` (beyond lies a mirror's
+  image), is taken once their rays spread ``span`` and fix it within ``max_std`` without the
+  most telling of them, unless it is within :data:`CLEARANCE_M` (or three standard
+  deviations) of another beacon (its detections under a misread id) or of its own map
+  position (it did not move): the suspicion is then dropped.
+* **Used again**: the beacon goes into the tracker's state at its new position, with its
+  covariance, and is corrected with the pose by its azimuths (:mod:`azgym.track.repair_state`;
+  its placement, :attr:`MapRepair.placed`, is where the state has it). The repair is reported
+  (:class:`Repair`), once. Beyond the beacons the state keeps, a repaired beacon is used at
+  its placement, its width widened from W to √(W² + 12σ²) (σ its worst-axis standard
+  deviation: eq. 2's coverage term then adds (σ/D)² to its azimuth's variance at range D),
+  and *refined*: whenever its rays grow by :data:`RETRY_GROWTH`, a more certain position from
+  those within the gate of its placement replaces it. A suspect of rejections whose map
+  position agrees again in ``sightings`` sightings in a row is cleared; a repaired beacon
+  suspected again is located afresh.
 """
 
 from __future__ import annotations
@@ -57,6 +56,7 @@ from azgym.track.gated_ekf import subset
 from azgym.track.repair_fit import FitTest
 from azgym.track.repair_rays import RayStore, locate, pack
 from azgym.track.repair_records import Repair, Run
+from azgym.track.repair_state import StateBeacons, placed_map
 from azgym.track.unicycle import IPHI, IX, IY
 
 __all__ = ["CLEARANCE_M", "OTHERS_AGREE", "OTHERS_DISTINCT", "OUTSIDE_M", "RETRY_GROWTH",
@@ -121,6 +121,8 @@ class MapRepair:
         self._rows_of: BeaconMap | None = None
         self._rows: dict[int, int] = {}
         self._fits = FitTest(error_model, extra_sigma)
+        self.kept = StateBeacons()
+        """The repaired beacons the tracker's state keeps (:meth:`take_state`)."""
 
     @property
     def suspects(self) -> tuple[int, ...]:
@@ -128,11 +130,7 @@ class MapRepair:
         return tuple(beacon for beacon, run in self._runs.items() if run.suspected)
 
     def begin_frame(self, beacons: BeaconMap) -> BeaconMap:
-        """Count a frame; the map to correct it with.
-
-        That is ``beacons`` with every repaired beacon at its new position (``beacons`` itself
-        when none is).
-        """
+        """Count a frame; the map to correct it with (:meth:`map_for`)."""
         self._frame += 1
         return self.map_for(beacons)
 
@@ -141,12 +139,7 @@ class MapRepair:
         if not self.placed:
             return beacons
         if beacons is not self._given or self._current is None:
-            xyz, width = beacons.xyz.copy(), beacons.width.copy()
-            for row, beacon in enumerate(beacons.ids.tolist()):
-                if beacon in self.placed:
-                    xyz[row, :2] = self.placed[beacon].new
-                    width[row] = math.sqrt(width[row] ** 2 + 12.0 * self.placed[beacon].std ** 2)
-            self._given, self._current = beacons, BeaconMap(beacons.ids, xyz, width)
+            self._given, self._current = beacons, placed_map(beacons, self.placed, self.kept)
         return self._current
 
     def usable(self, measurements: Measurements) -> np.ndarray | None:
@@ -220,6 +213,13 @@ class MapRepair:
         repairs = [found for beacon in touched
                    if (found := self._try_repair(beacon, time, beacons)) is not None]
         return suspected, repairs
+
+    def take_state(self, state: FloatArray, cov: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The state after a frame with the beacons just repaired in it; placements from it."""
+        if not self.kept:
+            return state, cov
+        self._current = None
+        return self.kept.sync(state, cov, self.placed)
 
     def began(self, beacon: int) -> float:
         """When a suspect's run of rejections began [s]."""
@@ -310,7 +310,7 @@ class MapRepair:
     def _suspect_sighting(self, beacon: int, run: Run, measurements: Measurements,
                           rows: np.ndarray, beacons: BeaconMap, state: FloatArray,
                           cov: FloatArray) -> None:
-        """A suspect's sighting: a ray, or one of ``sightings`` agreeing in a row that clear it.
+        """A suspect's sighting: a ray, or one of the agreeing ones in a row that clear it.
 
         Agreeing sightings clear a suspect of rejections only: the fit test's agreed before.
         """
@@ -375,7 +375,8 @@ class MapRepair:
         del self._runs[beacon]
         if (gaps[~own] < max(CLEARANCE_M, 3.0 * std)).any() or gaps[own][0] < 3.0 * std:
             return None  # another beacon under a misread id, or not moved at all
-        self._refining[beacon] = run
+        if not self.kept.reserve(beacon):
+            self._refining[beacon] = run
         repair = self._place(time, beacon, (float(old[0]), float(old[1])), point, covariance,
                              rays)
         self.repairs.append(repair)

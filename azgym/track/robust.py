@@ -31,8 +31,9 @@ import math
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose
+from azgym.core import BeaconMap, Estimate, FloatArray, IntArray, Measurements, Pose
 from azgym.hyperparameters import check_flag, check_range
+from azgym.localize.base import ROW_BEACON_INDEX, Problem
 from azgym.localize.bearings import MIN_SPREAD
 from azgym.profile import FORKLIFT
 from azgym.sensing.motion import Motion
@@ -213,6 +214,7 @@ class Robust(GatedEkf):
                                                  repair.map_for(given))
                 replayed = len(frames)
             repaired += repair.relocate(suspected, now, repair.map_for(given))
+        self._state, self._cov = repair.take_state(self._state, self._cov)
         if rows is None and not suspected and not repaired:
             return estimate
         diagnostics = dict(estimate.diagnostics)
@@ -272,8 +274,16 @@ class Robust(GatedEkf):
         """Go back to a :meth:`_snapshot`."""
         state, cov, self._running, self._tentative, self._bad_since, self._started_at, \
             self._checked = snapshot
-        self._state[:] = state
-        self._cov[:] = cov
+        self._state, self._cov = state.copy(), cov.copy()
+        if self._repair is not None:  # beacons kept since the snapshot are appended
+            self._state, self._cov = self._repair.kept.restored(self._state, self._cov,
+                                                                self._repair.placed)
+
+    def _state_columns(self, problem: Problem, beacons: BeaconMap) -> IntArray | None:
+        """The repaired beacons the state keeps (:mod:`azgym.track.repair_state`)."""
+        if self._repair is None or not self._repair.kept.columns:
+            return None  # the frame's hot path: nothing kept
+        return self._repair.kept.columns_of(beacons.ids[problem.ints[ROW_BEACON_INDEX]])
 
     def _track(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         """One frame of the tracker without map repair (module docstring)."""

@@ -272,7 +272,11 @@ def _cuts(times: FloatArray, bounds: FloatArray) -> list[slice]:
 
 def predict(state: FloatArray, cov: FloatArray, step: Step, lever: float,
             noise: MotionNoise) -> None:
-    """Move ``state`` and ``cov`` (in place) by one :class:`Step`."""
+    """Move ``state`` and ``cov`` (in place) by one :class:`Step`.
+
+    Entries past the first :data:`STATE_SIZE` (beacons a tracker keeps in its state) stand
+    still; their cross-covariances with the pose move with it.
+    """
     read, measured_rate, tau = step.speed, step.yaw_rate, step.observed
     v = read * (1.0 + state[ISCALE])
     omega = measured_rate - state[IBIAS]
@@ -280,7 +284,7 @@ def predict(state: FloatArray, cov: FloatArray, step: Step, lever: float,
     c, s = math.cos(half), math.sin(half)
     dx = v * tau * c - lever * omega * tau * s
     dy = v * tau * s + lever * omega * tau * c
-    jacobian = np.eye(STATE_SIZE)
+    jacobian = np.eye(state.size)
     jacobian[IX, IPHI] = -dy
     jacobian[IY, IPHI] = dx
     jacobian[IX, IBIAS] = 0.5 * tau * dy + lever * tau * s

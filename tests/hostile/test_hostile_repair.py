@@ -5,7 +5,7 @@ is refined), a moved beacon seen from one standing place for five minutes, and t
 distinct ids (known to a swollen map, and unknown): the repair must keep its ray store capped,
 its work per frame bounded and repair nothing (or keep a repaired beacon where it is). Each
 attack runs in a child process with a time limit; the child counts the rays handed to the ray
-geometry (:func:`~azgym.localize.bearings.intersect_rays`, :func:`ray_misses`), a measure of
+geometry (:func:`~azgym.localize.bearings.meet`, :func:`ray_misses`), a measure of
 the work that does not depend on the machine's load.
 """
 
@@ -37,7 +37,7 @@ from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 from azgym.world.drive import simulate
 
 work = [0]
-for name in ("intersect_rays", "ray_misses"):
+for name in ("meet", "ray_misses"):
     original = getattr(repair_module, name)
     def counted(*args, _original=original):
         work[0] += len(args[1])

@@ -21,6 +21,7 @@ from azgym.localize.bearings import intersect_rays, meet
 from azgym.site.error_model import ErrorModel
 from azgym.track.repair import MapRepair
 from azgym.track.repair_rays import intersect, locate, origin_covariance, pack, scatter
+from azgym.track.repair_state import MAX_KEPT
 
 BEACONS = beacon_map([(1.0, 3.0), (10.0, 10.0), (10.0, 0.0)])
 POSITION_VARIANCE = 0.03 ** 2
@@ -92,11 +93,13 @@ def test_a_new_positions_covariance_is_honest_under_the_error_model() -> None:
 def test_a_repaired_beacon_is_refined_as_its_rays_widen_and_reported_once() -> None:
     # beacon 1, mapped at (5, 8), hangs at (5, 4): seen from y = 0 as the camera drives east,
     # repaired once its first rays fix it within max_std, then moved where the wider rays since
-    # put it, more certainly; the repair is reported once, the refinement in ``placed``
+    # put it, more certainly; the repair is reported once, the refinement in ``placed``. So
+    # is a repaired beacon the tracker's state has no room for (MAX_KEPT others kept)
     beacons = beacon_map([(5.0, 8.0), (10.0, 10.0), (10.0, 0.0)])
     truth = np.array([5.0, 4.0])
     repair = MapRepair(sightings=3, after=0.2, span=math.radians(10.0), max_std=0.1,
                        threshold=10.83, error_model=ErrorModel(), extra_sigma=0.0)
+    assert all(repair.kept.reserve(other) for other in range(100, 100 + MAX_KEPT))
     cov = np.diag([1e-6, 1e-6, 1e-8, 1e-8, 1e-6])
     rng = np.random.default_rng(3)
     made = []
@@ -114,6 +117,7 @@ def test_a_repaired_beacon_is_refined_as_its_rays_widen_and_reported_once() -> N
     assert placed.std < first.std
     assert math.dist(placed.new, truth) < math.dist(first.new, truth)
     np.testing.assert_array_equal(repair.begin_frame(beacons).xyz[0, :2], placed.new)
+    assert 1 not in repair.kept
 
 
 def test_rays_that_spread_but_meet_nowhere_once_weighed_locate_nothing() -> None:

@@ -1,0 +1,135 @@
+"""Repaired beacons kept in the tracker's state, as a SLAM filter keeps its map.
+
+A beacon located again from its rays (:mod:`azgym.track.repair`) is placed a few centimetres
+off. Used at that position, its error is the same in every frame: weighing its azimuths by
+the position's uncertainty treats that error as new noise each frame, and rays gathered later
+to refine it start from the very track it pulls. Plotter's SLAM filter keeps its map in the
+filter's state instead, and so does robust with ``repair=True``: a repaired beacon's (x, y)
+is appended to the state [x, y, φ, b, k] with the repair's covariance (no tie to the pose);
+each of its azimuths then corrects the beacon and the pose jointly (the beacon's Jacobian
+columns, :func:`~azgym.track.azimuth_update.gated_update`), the prediction leaves it where it
+is (:func:`~azgym.track.unicycle.predict`), and a restart of the pose keeps it
+(:meth:`~azgym.track.gated_ekf.GatedEkf._start`). Where it is now, read back from the state
+every frame, is its placement (:attr:`~azgym.track.repair.MapRepair.placed`).
+
+At most :data:`MAX_KEPT` beacons are kept (a state of 5 + 2 × 8 entries at most); a repaired
+beacon beyond them is used at its placement, weighed by its uncertainty, and refined from its
+rays. One located afresh (moved again) has its entries set anew from the new placement.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from azgym.core import BeaconMap, FloatArray, IntArray
+from azgym.track.repair_records import Repair
+from azgym.track.unicycle import STATE_SIZE
+
+__all__ = ["MAX_KEPT", "StateBeacons", "placed_map"]
+
+MAX_KEPT = 8
+"""Most repaired beacons kept in the state: bounds its size and each update's cost."""
+
+
+class StateBeacons:
+    """Which repaired beacons the state keeps, and where (module docstring)."""
+
+    def __init__(self) -> None:
+        self.columns: dict[int, int] = {}
+        """Each kept beacon's column of x in the state (y the next)."""
+        self._pending: list[int] = []
+
+    def __len__(self) -> int:
+        return len(self.columns) + len(self._pending)
+
+    def __contains__(self, beacon: object) -> bool:
+        return beacon in self.columns or beacon in self._pending
+
+    def reserve(self, beacon: int) -> bool:
+        """Whether a beacon just placed goes into the state (its entries set at :meth:`sync`).
+
+        False when :data:`MAX_KEPT` others are kept or about to be.
+        """
+        if beacon not in self:
+            if len(self.columns) + len(self._pending) >= MAX_KEPT:
+                return False
+        if beacon not in self._pending:
+            self._pending.append(beacon)
+        return True
+
+    def columns_of(self, ids: IntArray) -> IntArray | None:
+        """Per measured beacon id, its state column (−1: at its map position); None: none kept."""
+        if not self.columns:
+            return None
+        return np.array([self.columns.get(beacon, -1) for beacon in ids.tolist()],
+                        dtype=np.int64)
+
+    def sync(self, state: FloatArray, cov: FloatArray, placed: dict[int, Repair]
+             ) -> tuple[FloatArray, FloatArray]:
+        """Take the beacons reserved into the state; each kept one's placement from it.
+
+        Args:
+            state: The tracker's state (``STATE_SIZE`` + 2 per kept beacon); grown, not changed
+                in place, when a beacon is added.
+            cov: Its covariance.
+            placed: The repair's placements (:attr:`~azgym.track.repair.MapRepair.placed`),
+                rewritten for the kept beacons.
+
+        Returns:
+            The state and covariance, grown by the beacons taken in.
+        """
+        for beacon in self._pending:
+            column = self.columns.setdefault(beacon, STATE_SIZE + 2 * len(self.columns))
+            state, cov = _grown(state, cov, column + 2)
+            state[column:column + 2] = placed[beacon].new
+            cov[column:column + 2, :] = 0.0
+            cov[:, column:column + 2] = 0.0
+            cov[column:column + 2, column:column + 2] = placed[beacon].covariance
+        self._pending.clear()
+        for beacon, column in self.columns.items():
+            placed[beacon] = dataclasses.replace(
+                placed[beacon], new=(float(state[column]), float(state[column + 1])),
+                covariance=cov[column:column + 2, column:column + 2].copy())
+        return state, cov
+
+    def restored(self, state: FloatArray, cov: FloatArray, placed: dict[int, Repair]
+                 ) -> tuple[FloatArray, FloatArray]:
+        """A state from before some beacons were kept, those beacons appended at their placements.
+
+        The state of a snapshot the track re-runs from (:mod:`azgym.track.repair_lag`).
+        """
+        for beacon, column in sorted(self.columns.items(), key=lambda item: item[1]):
+            if column >= state.size:
+                state, cov = _grown(state, cov, column + 2)
+                state[column:column + 2] = placed[beacon].new
+                cov[column:column + 2, column:column + 2] = placed[beacon].covariance
+        return state, cov
+
+
+def placed_map(beacons: BeaconMap, placed: dict[int, Repair], kept: StateBeacons) -> BeaconMap:
+    """``beacons`` with every repaired beacon at its placement (its height kept).
+
+    A beacon the state does not keep has its width widened from W to √(W² + 12σ²), σ its
+    placement's worst-axis standard deviation: eq. 2's coverage term, (W/2D)²/3 at range D,
+    then adds (σ/D)² to its azimuth's variance. A kept one's uncertainty is in the state.
+    """
+    xyz, width = beacons.xyz.copy(), beacons.width.copy()
+    for row, beacon in enumerate(beacons.ids.tolist()):
+        if beacon in placed:
+            xyz[row, :2] = placed[beacon].new
+            if beacon not in kept:
+                width[row] = math.sqrt(width[row] ** 2 + 12.0 * placed[beacon].std ** 2)
+    return BeaconMap(beacons.ids, xyz, width)
+
+
+def _grown(state: FloatArray, cov: FloatArray, size: int) -> tuple[FloatArray, FloatArray]:
+    """``state`` and ``cov`` with zero entries up to ``size`` (themselves when as large)."""
+    if state.size >= size:
+        return state, cov
+    grown, wider = np.zeros(size), np.zeros((size, size))
+    grown[:state.size] = state
+    wider[:state.size, :state.size] = cov
+    return grown, wider
