@@ -110,7 +110,7 @@ class MapRepair:
         self.repairs: list[Repair] = []
         self._runs: dict[int, Run] = {}
         self.placed: dict[int, Repair] = {}
-        """Each repaired beacon's latest placement: its repair, or a refinement since."""
+        """Each repaired beacon's placement now: the state's (:meth:`take_state`), or rays'."""
         self._refining: dict[int, Run] = {}
         self._accepted = 0
         self._agreed_by: dict[int, int] = {}

@@ -148,10 +148,11 @@ class Robust(GatedEkf):
 
     @property
     def placed(self) -> dict[int, Repair]:
-        """Each repaired beacon's latest placement since ``reset``: its repair, or a refinement.
+        """Where the tracker has each beacon repaired since ``reset`` now, as a :class:`Repair`.
 
-        Where the tracker has the beacon now (the repair's ``time``, ``frame``, ``new``,
-        ``covariance`` and ``rays`` those of the refinement, ``old`` the map's position).
+        A beacon kept in the state: its ``new`` position and ``covariance`` the state's now, the
+        rest its repair's. One refined from its rays: the latest refinement's. ``old`` is the
+        map's position.
         """
         repair = self.__dict__.get("_repair")
         return {} if repair is None else dict(repair.placed)
