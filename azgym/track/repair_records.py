@@ -23,7 +23,8 @@ class Repair:
         beacon: The beacon's id.
         old: Its map position (x, y) [m].
         new: Its new position (x, y) [m].
-        covariance: The new position's covariance (2, 2) [m²], the track's shared error in it.
+        covariance: The new position's covariance (2, 2) [m²], the track's shared error in it;
+            a read-only copy (what a caller is handed cannot change the tracker).
         rays: How many rays located it.
     """
 
@@ -34,6 +35,11 @@ class Repair:
     new: tuple[float, float]
     covariance: FloatArray
     rays: int
+
+    def __post_init__(self) -> None:
+        covariance = np.array(self.covariance, dtype=np.float64)
+        covariance.setflags(write=False)
+        object.__setattr__(self, "covariance", covariance)
 
     @property
     def std(self) -> float:

@@ -15,6 +15,11 @@ every frame, is its placement (:attr:`~azgym.track.repair.MapRepair.placed`).
 At most :data:`MAX_KEPT` beacons are kept (a state of 5 + 2 × 8 entries at most); a repaired
 beacon beyond them is used at its placement, weighed by its uncertainty, and refined from its
 rays. One located afresh (moved again) has its entries set anew from the new placement.
+
+A re-run of the lag (:mod:`azgym.track.repair_lag`) starts from a snapshot of the state: a
+beacon kept since it was taken, or placed afresh since (its :meth:`StateBeacons.stamp` tells),
+has its entries set from its placement now (:meth:`StateBeacons.restored`), not brought back
+from before.
 """
 
 from __future__ import annotations
@@ -41,6 +46,8 @@ class StateBeacons:
         self.columns: dict[int, int] = {}
         """Each kept beacon's column of x in the state (y the next)."""
         self._pending: list[int] = []
+        self._placings: dict[int, int] = {}
+        """How often each kept beacon's entries have been set from a placement."""
 
     def __len__(self) -> int:
         return len(self.columns) + len(self._pending)
@@ -59,6 +66,10 @@ class StateBeacons:
         if beacon not in self._pending:
             self._pending.append(beacon)
         return True
+
+    def stamp(self) -> dict[int, int]:
+        """What a snapshot of the state keeps to be :meth:`restored`: which placements it has."""
+        return dict(self._placings)
 
     def columns_of(self, ids: IntArray) -> IntArray | None:
         """Per measured beacon id, its state column (−1: at its map position); None: none kept."""
@@ -83,29 +94,27 @@ class StateBeacons:
         """
         for beacon in self._pending:
             column = self.columns.setdefault(beacon, STATE_SIZE + 2 * len(self.columns))
-            state, cov = _grown(state, cov, column + 2)
-            state[column:column + 2] = placed[beacon].new
-            cov[column:column + 2, :] = 0.0
-            cov[:, column:column + 2] = 0.0
-            cov[column:column + 2, column:column + 2] = placed[beacon].covariance
+            state, cov = _set(state, cov, column, placed[beacon])
+            self._placings[beacon] = self._placings.get(beacon, 0) + 1
         self._pending.clear()
         for beacon, column in self.columns.items():
             placed[beacon] = dataclasses.replace(
                 placed[beacon], new=(float(state[column]), float(state[column + 1])),
-                covariance=cov[column:column + 2, column:column + 2].copy())
+                covariance=cov[column:column + 2, column:column + 2])  # copied by Repair
         return state, cov
 
-    def restored(self, state: FloatArray, cov: FloatArray, placed: dict[int, Repair]
-                 ) -> tuple[FloatArray, FloatArray]:
-        """A state from before some beacons were kept, those beacons appended at their placements.
+    def restored(self, state: FloatArray, cov: FloatArray, placed: dict[int, Repair],
+                 stamp: dict[int, int]) -> tuple[FloatArray, FloatArray]:
+        """A snapshot's state, with the kept beacons it holds from an older placement set anew.
 
-        The state of a snapshot the track re-runs from (:mod:`azgym.track.repair_lag`).
+        The state of a snapshot the track re-runs from (:mod:`azgym.track.repair_lag`): a beacon
+        kept since is appended, and one placed afresh since (``stamp``: the snapshot's
+        :meth:`stamp`) or about to be (reserved again) has its entries set anew, its ties to the
+        rest cut, as :meth:`sync` sets them.
         """
         for beacon, column in sorted(self.columns.items(), key=lambda item: item[1]):
-            if column >= state.size:
-                state, cov = _grown(state, cov, column + 2)
-                state[column:column + 2] = placed[beacon].new
-                cov[column:column + 2, column:column + 2] = placed[beacon].covariance
+            if beacon in self._pending or stamp.get(beacon) != self._placings[beacon]:
+                state, cov = _set(state, cov, column, placed[beacon])
         return state, cov
 
 
@@ -123,6 +132,17 @@ def placed_map(beacons: BeaconMap, placed: dict[int, Repair], kept: StateBeacons
             if beacon not in kept:
                 width[row] = math.sqrt(width[row] ** 2 + 12.0 * placed[beacon].std ** 2)
     return BeaconMap(beacons.ids, xyz, width)
+
+
+def _set(state: FloatArray, cov: FloatArray, column: int, placement: Repair
+         ) -> tuple[FloatArray, FloatArray]:
+    """A beacon's entries at ``column`` set from its placement, untied (grown to hold them)."""
+    state, cov = _grown(state, cov, column + 2)
+    state[column:column + 2] = placement.new
+    cov[column:column + 2, :] = 0.0
+    cov[:, column:column + 2] = 0.0
+    cov[column:column + 2, column:column + 2] = placement.covariance
+    return state, cov
 
 
 def _grown(state: FloatArray, cov: FloatArray, size: int) -> tuple[FloatArray, FloatArray]:

@@ -269,16 +269,17 @@ class Robust(GatedEkf):
     def _snapshot(self) -> tuple:
         """The filter's state, for :meth:`_restore`."""
         return (self._state.copy(), self._cov.copy(), self._running, self._tentative,
-                self._bad_since, self._started_at, self._checked)
+                self._bad_since, self._started_at, self._checked,
+                None if self._repair is None else self._repair.kept.stamp())
 
     def _restore(self, snapshot: tuple) -> None:
         """Go back to a :meth:`_snapshot`."""
         state, cov, self._running, self._tentative, self._bad_since, self._started_at, \
-            self._checked = snapshot
+            self._checked, stamp = snapshot
         self._state, self._cov = state.copy(), cov.copy()
-        if self._repair is not None:  # beacons kept since the snapshot are appended
+        if self._repair is not None:  # beacons kept or placed afresh since are set as now
             self._state, self._cov = self._repair.kept.restored(self._state, self._cov,
-                                                                self._repair.placed)
+                                                                self._repair.placed, stamp)
 
     def _state_columns(self, problem: Problem, beacons: BeaconMap) -> IntArray | None:
         """The repaired beacons the state keeps (:mod:`azgym.track.repair_state`)."""

@@ -145,20 +145,21 @@ def test_the_state_keeps_at_most_max_kept_beacons_each_in_its_two_columns():
 
 def test_placements_are_read_back_from_the_state_and_a_snapshot_gets_them_appended():
     kept = StateBeacons()
+    before = kept.stamp()  # the lag's snapshot, from before the repair
     kept.reserve(7)
     placed = {7: repair(7, (2.0, 3.0)), 8: repair(8, (4.0, 4.0))}
     state, cov = kept.sync(np.zeros(5), np.eye(5), placed)
-    snapshot = state[:5].copy(), cov[:5, :5].copy()  # the lag's, from before the repair
+    snapshot = state[:5].copy(), cov[:5, :5].copy(), placed, before
     state[5:7] = (2.1, 2.9)  # the filter moved it
     cov[5:7, 5:7] = np.eye(2) * 1e-4
     state, cov = kept.sync(state, cov, placed)
     assert placed[7].new == (2.1, 2.9) and placed[7].std == pytest.approx(0.01)
     assert placed[7].time == 1.0 and placed[7].old == (0.0, 0.0)  # the repair's, as reported
     assert placed[8].new == (4.0, 4.0)  # not kept: left alone
-    restored, restored_cov = kept.restored(*snapshot, placed)
+    restored, restored_cov = kept.restored(*snapshot)
     np.testing.assert_array_equal(restored[5:7], (2.1, 2.9))
     np.testing.assert_array_equal(restored_cov[5:7, 5:7], np.eye(2) * 1e-4)
-    assert kept.restored(state, cov, placed)[0] is state  # already has it
+    assert kept.restored(state, cov, placed, kept.stamp())[0] is state  # already has it
 
 
 def test_the_map_widens_only_the_repaired_beacons_the_state_does_not_keep():
