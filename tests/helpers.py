@@ -3,6 +3,7 @@ attack run in a child process with bounded memory and time."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import subprocess
 import sys
@@ -15,8 +16,19 @@ from azgym.core import BeaconMap, Measurements, pose_error
 from azgym.sensing.synthetic import ideal_azimuths
 from azgym.track.repair_fit import SHARED_ERROR_S
 
-__all__ = ["beacon_map", "bounded_outcome", "dense_likelihood_ratio", "edited_json", "ideal_frame",
-           "pose_error_of", "quick_navigation_run"]
+__all__ = ["answers_digest", "beacon_map", "bounded_outcome", "dense_likelihood_ratio",
+           "edited_json", "ideal_frame", "pose_error_of", "quick_navigation_run"]
+
+
+def answers_digest(tracker, frames, beacons: BeaconMap) -> str:
+    """A reset tracker driven along ``frames``: the SHA-256 of every answer (ok, pose, inliers)."""
+    digest = hashlib.sha256()
+    for frame in frames:
+        tracker.predict(frame.motion)
+        estimate = tracker.update(frame.measurements, beacons)
+        digest.update(np.array([estimate.ok, *estimate.pose]).tobytes()
+                      + estimate.inliers.tobytes())
+    return digest.hexdigest()
 
 
 def ideal_frame(x: float, y: float, heading: float, beacons: BeaconMap) -> Measurements:
