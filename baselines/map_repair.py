@@ -62,6 +62,7 @@ from azgym.bench.run.profiles import contender_params  # noqa: E402
 from azgym.bench.suites import robot  # noqa: E402
 from azgym.bench.suites.catalog import get_suite  # noqa: E402
 from azgym.core import BeaconMap, pose_error  # noqa: E402
+from azgym.mapping.base import map_answer  # noqa: E402
 from azgym.world.drive import simulate  # noqa: E402
 
 MOVED_BY = (0.5, 3.0)
@@ -136,11 +137,9 @@ def moved_as_shipped(scenario) -> set[int]:
 
 def left_map(beacons: BeaconMap, placed: dict) -> BeaconMap:
     """The map a repairing tracker leaves: ``beacons`` with each repaired one where it is now."""
-    xyz = beacons.xyz.copy()
-    for row, beacon in enumerate(beacons.ids.tolist()):
-        if beacon in placed:
-            xyz[row, :2] = placed[beacon].new
-    return BeaconMap(beacons.ids, xyz, beacons.width)
+    ids = sorted(placed)
+    return map_answer(ids, [placed[b].new for b in ids],
+                      [placed[b].covariance for b in ids]).updated(beacons)
 
 
 def p95_of(errors: np.ndarray) -> float:

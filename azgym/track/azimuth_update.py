@@ -50,7 +50,7 @@ from azgym.track.unicycle import IPHI, IX, IY
 
 __all__ = ["azimuth_variance", "gated_update"]
 
-NO_COLUMNS = np.empty(0, dtype=np.int64)
+_NO_COLUMNS = np.empty(0, dtype=np.int64)
 """``gated_update``'s columns when no beacon is in the state (no array made a frame)."""
 
 
@@ -82,7 +82,7 @@ def gated_update(state: FloatArray, cov: FloatArray, floats: FloatArray, beacon_
     passed = np.zeros(floats.shape[1], dtype=np.bool_)
     distance = np.empty(floats.shape[1])
     _gated_update(state, cov, floats, beacon_index, delta_d, bool(coverage), extra_sigma,
-                  threshold, passed, distance, NO_COLUMNS if columns is None else columns)
+                  threshold, passed, distance, _NO_COLUMNS if columns is None else columns)
     return passed, distance
 
 

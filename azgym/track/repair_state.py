@@ -50,7 +50,8 @@ class StateBeacons:
         """How often each kept beacon's entries have been set from a placement."""
 
     def __len__(self) -> int:
-        return len(self.columns) + len(self._pending)
+        """The beacons kept or about to be (one placed afresh counted once)."""
+        return len(self.columns.keys() | set(self._pending))
 
     def __contains__(self, beacon: object) -> bool:
         return beacon in self.columns or beacon in self._pending
@@ -60,9 +61,8 @@ class StateBeacons:
 
         False when :data:`MAX_KEPT` others are kept or about to be.
         """
-        if beacon not in self:
-            if len(self.columns) + len(self._pending) >= MAX_KEPT:
-                return False
+        if beacon not in self and len(self) >= MAX_KEPT:
+            return False
         if beacon not in self._pending:
             self._pending.append(beacon)
         return True
@@ -71,10 +71,8 @@ class StateBeacons:
         """What a snapshot of the state keeps to be :meth:`restored`: which placements it has."""
         return dict(self._placings)
 
-    def columns_of(self, ids: IntArray) -> IntArray | None:
-        """Per measured beacon id, its state column (−1: at its map position); None: none kept."""
-        if not self.columns:
-            return None
+    def columns_of(self, ids: IntArray) -> IntArray:
+        """Per measured beacon id, its state column (−1: at its map position)."""
         return np.array([self.columns.get(beacon, -1) for beacon in ids.tolist()],
                         dtype=np.int64)
 
@@ -112,7 +110,7 @@ class StateBeacons:
         :meth:`stamp`) or about to be (reserved again) has its entries set anew, its ties to the
         rest cut, as :meth:`sync` sets them.
         """
-        for beacon, column in sorted(self.columns.items(), key=lambda item: item[1]):
+        for beacon, column in self.columns.items():
             if beacon in self._pending or stamp.get(beacon) != self._placings[beacon]:
                 state, cov = _set(state, cov, column, placed[beacon])
         return state, cov

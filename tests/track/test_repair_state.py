@@ -182,3 +182,12 @@ def test_a_restart_of_the_pose_keeps_the_kept_beacons():
     np.testing.assert_array_equal(tracker._state[5:], (3.0, 4.0))
     np.testing.assert_array_equal(tracker._cov[5:, 5:], np.eye(2) * 0.01)
     assert not tracker._cov[:5, 5:].any() and not tracker._cov[5:, :5].any()
+
+
+def test_a_kept_beacon_placed_afresh_does_not_take_another_ones_room():
+    kept = StateBeacons()
+    assert all(kept.reserve(beacon) for beacon in range(MAX_KEPT - 1))
+    kept.sync(np.zeros(5), np.eye(5), {b: repair(b, (float(b), 0.0)) for b in range(MAX_KEPT)})
+    assert kept.reserve(0) and len(kept) == MAX_KEPT - 1  # kept, about to be set anew: once
+    assert kept.reserve(MAX_KEPT - 1)  # the last room is still free
+    assert not kept.reserve(99)
