@@ -108,6 +108,22 @@ class Padder:
         ints[:, :count] = observation.ints[:, :count]
         floats[:, :count] = observation.measured[:, :count]
         valid[:count] = 1
+        return self._shown(ints, floats, valid)
+
+    def pad_frame(self, floats: np.ndarray, ints: np.ndarray, count: int
+                  ) -> dict[str, np.ndarray]:
+        """As :meth:`pad`, from a geometry sensor's frame buffers (``FrameBuffers``).
+
+        Their rows are an observation's, and their entries past ``count`` are padded as
+        :meth:`pad` pads; they must be at least :attr:`size` long. No Observation is made.
+        """
+        valid = self._valid.copy()
+        valid[:count] = 1
+        return self._shown(ints[:, :self.size].copy(),
+                           floats[:1 + self.quality_columns, :self.size].astype(np.float32), valid)
+
+    def _shown(self, ints: np.ndarray, floats: np.ndarray, valid: np.ndarray
+               ) -> dict[str, np.ndarray]:
         quality = floats[1] if self.quality_columns == 1 else floats[1:].T.copy()
         return {"ids": ints[ID], "azimuth": floats[AZIMUTH], "valid": valid, "quality": quality,
                 "labels": ints[LABEL], "beacons": ints[BEACON]}

@@ -13,6 +13,7 @@ from azgym.core import pose_error, wrap_angle
 from azgym.envs.common import Padder, check_camera_rate, check_render_mode, reward_weights, size
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.catalog import make_sensor
+from azgym.sensing.geometry.sensor import FrameBuffers, GeometrySensor
 from azgym.sensing.protocol import Observation
 from azgym.site import Scenario, load_scenario
 from azgym.site.sampling import random_free_pose
@@ -154,8 +155,14 @@ class LocalizeEnv(gym.Env):
                                   ids)
         self.camera_rate_hz = camera_rate_hz or self.camera.frame_rate_hz
         self._sway = CameraSway(self.scenario, 1.0 / self.camera_rate_hz)
-        self.last_observation: Observation | None = None
         self._padder = Padder(self.max_detections, len(self.camera.quality_names))
+        self._last: Observation | None = None
+        self._direct: tuple[GeometrySensor, FrameBuffers] | None = None
+        self._count = 0
+        if isinstance(self.camera, GeometrySensor) and observation == "measurements":
+            # Straight into the padded arrays, with no Observation made (``last_observation``).
+            self._direct = self.camera, self.camera.new_buffers(max(self.camera.capacity,
+                                                                    self.max_detections))
         self._shown: dict[str, np.ndarray] = {}
         self._trajectories: dict[str, np.ndarray] = {}
         x_min, y_min, x_max, y_max = self.scenario.bounds
@@ -279,12 +286,19 @@ class LocalizeEnv(gym.Env):
     def _observe(self) -> LocalizeObservation:
         x, y, heading = self._poses[self._frame]
         tilt = self._sway.step(x, y, self.np_random)
-        observed = self.camera.observe((x, y, heading), self.np_random, tilt)
-        self.last_observation = observed
-        shown = self._shown = self._padder.pad(observed)
+        if self._direct is not None:
+            camera, buffers = self._direct
+            self._count = camera.observe_into((x, y, heading), self.np_random, buffers, tilt)
+            self._last = None
+            shown = self._shown = self._padder.pad_frame(buffers.floats, buffers.ints,
+                                                         self._count)
+        else:
+            observed = self._last = self.camera.observe((x, y, heading), self.np_random, tilt)
+            shown = self._shown = self._padder.pad(observed)
         if self.observation == "image":
-            assert observed.image is not None, "an image sensor's frame carries its image"
-            self._observation: LocalizeObservation = observed.image[:, :, None]
+            assert self._last is not None and self._last.image is not None, \
+                "an image sensor's frame carries its image"
+            self._observation: LocalizeObservation = self._last.image[:, :, None]
         else:
             self._observation = {"ids": shown["ids"], "azimuth": shown["azimuth"],
                                  "valid": shown["valid"], "quality": shown["quality"],
@@ -324,6 +338,13 @@ class LocalizeEnv(gym.Env):
         centre, half = self._centre, self._half
         return (centre[0] + float(action[0]) * half[0], centre[1] + float(action[1]) * half[1],
                 float(action[2]) * half[2])
+
+    @property
+    def last_observation(self) -> Observation | None:
+        """The camera's frame last observed (None before the first)."""
+        if self._last is None and self._direct is not None and self._shown:
+            self._last = self._direct[1].observation(self._count)
+        return self._last
 
     def true_pose(self) -> tuple[float, float, float]:
         """The true camera pose of the frame last observed."""

@@ -228,7 +228,8 @@ class NavigateEnv(gym.Env):
         self._goal_index = goal
         self._goal = self.spots[goal].astype(np.float64)
         self._steps = 0
-        self._potential = self._cost_to_go()
+        pose = self._world.forklift.pose
+        self._potential = self._cost_to_go(pose)
         self._guidance.start(self._goal_index, *self.spots[start])
         self._shortest_path = float(self.shortest_paths[start, goal])
         self._travelled = 0.0
@@ -239,10 +240,10 @@ class NavigateEnv(gym.Env):
         if self._feed is not None:
             self._feed.reset(self._world, self.np_random)
         self._look([(self._camera_pose(), 0.0)])
-        observation = self._observe()
+        observation = self._observe(pose)
         if self.render_mode == "human":
             self.render()
-        return observation, self._info()
+        return observation, self._info(pose)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
         """Drive for one control period (0.1 s), taking camera frames on the way; localize."""
@@ -250,21 +251,22 @@ class NavigateEnv(gym.Env):
         world = self._episode()
         contacts_before = len(world.contacts)
         frames = self._due_frames(world.steps)
-        states = [self._camera_pose()]  # the camera pose i physics steps into the period
-        x, y, _ = world.forklift.pose
+        forklift = world.forklift
+        x, y, heading = pose = forklift.pose
+        states = [(*forklift.camera_at(pose), heading)]  # the camera i physics steps in
         for _ in range(CONTROL_STEPS):
             world.step(throttle, steer)
             if self._feed is not None:
                 self._feed.step(world)
-            self._pose.coast(world.forklift.speed, world.forklift.steer, PHYSICS_DT)
-            states.append(self._camera_pose())
+            self._pose.coast(forklift.speed, forklift.steer, PHYSICS_DT)
             previous_x, previous_y = x, y
-            x, y, _ = world.forklift.pose
+            x, y, heading = pose = forklift.pose
+            states.append((*forklift.camera_at(pose), heading))
             self._travelled += math.hypot(x - previous_x, y - previous_y)
         self._steps += 1
         self._look([(interpolate_pose(states[i], states[i + 1], fraction), time)
                     for i, fraction, time in frames])
-        potential = self._cost_to_go()
+        potential = self._cost_to_go(pose)
         arrived = math.hypot(self._goal[0] - x, self._goal[1] - y) < self.goal_radius
         rewards = {
             "progress": self.weights["progress"] * (self._potential - potential),
@@ -273,8 +275,8 @@ class NavigateEnv(gym.Env):
             "success": self.weights["success"] * arrived,
         }
         self._potential = potential
-        observation = self._observe()
-        info = self._info()
+        observation = self._observe(pose)
+        info = self._info(pose)
         info["rewards"] = rewards
         if self.render_mode == "human":
             self.render()
@@ -282,9 +284,9 @@ class NavigateEnv(gym.Env):
                 self._steps >= self.max_steps and not arrived, info)
 
 
-    def _cost_to_go(self) -> float:
-        """The planner's cost to go from the true pose: the potential of the progress reward."""
-        x, y, _ = self._episode().forklift.pose
+    def _cost_to_go(self, pose: Pose | None = None) -> float:
+        """The planner's cost to go from the body's true pose (default: now): the potential."""
+        x, y, _ = self._episode().forklift.pose if pose is None else pose
         return self.planner.cost_to_go(self._goal_index, x, y)
 
     def _episode(self) -> World:
@@ -341,18 +343,21 @@ class NavigateEnv(gym.Env):
             support = int(np.count_nonzero(estimate.inliers)) if self._answer else 0
         self._localized = self._pose.offer(self._answer, support)
 
-    def _observe(self) -> np.ndarray:
+    def _observe(self, pose: Pose | None = None) -> np.ndarray:
+        """The agent's observation with the body at its true ``pose`` (default: now)."""
         forklift = self._episode().forklift
         spec = forklift.spec
         return self._guidance.observe(
             self._pose.body_pose(), self._pose.age, self._pose.support, self._localized,
-            forklift.speed / spec.max_speed, forklift.steer / spec.max_steer, forklift.pose)
+            forklift.speed / spec.max_speed, forklift.steer / spec.max_steer, pose or forklift.pose)
 
-    def _info(self) -> dict[str, Any]:
+    def _info(self, pose: Pose) -> dict[str, Any]:
+        """The step's info with the body at its true ``pose``."""
         world = self._episode()
-        x, y, heading = world.forklift.pose
+        x, y, heading = pose
         answer = self._answer
-        error = pose_error(answer, self._camera_pose())[0] if answer else None
+        camera = (*world.forklift.camera_at(pose), heading)
+        error = pose_error(answer, camera)[0] if answer else None
         return {"true_pose": (x, y, heading), "estimate": self._pose.pose,
                 "answered": answer is not None, "localized": self._localized,
                 "rejected": self._pose.rejected, "position_error": error,

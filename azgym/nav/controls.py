@@ -44,9 +44,10 @@ def controls(action: Any, discrete: bool) -> tuple[float, float]:
     if values.shape != (2,):
         raise InvalidInputError(
             f"action must be (throttle, steer) of shape (2,), got shape {values.shape}")
-    if not np.isfinite(values).all() or (np.abs(values) > 1.0 + 1e-6).any():
+    throttle, steer = float(values[0]), float(values[1])
+    if not (abs(throttle) <= 1.0 + 1e-6 and abs(steer) <= 1.0 + 1e-6):  # NaN fails too
         raise InvalidInputError(f"action must be finite and within [-1, 1], got {values.tolist()}")
-    return float(values[0]), float(values[1])
+    return throttle, steer
 
 
 def nearest_discrete(throttle: float, steer: float) -> int:

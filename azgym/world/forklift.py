@@ -168,7 +168,11 @@ class Forklift:
 
     def camera_position(self) -> tuple[float, float]:
         """Where the camera is in the world (x, y) [m]."""
-        x, y, heading = self.pose
+        return self.camera_at(self.pose)
+
+    def camera_at(self, pose: tuple[float, float, float]) -> tuple[float, float]:
+        """Where the camera is (x, y) [m] with the body centre at ``pose`` (x, y, heading)."""
+        x, y, heading = pose
         forward, left = self.spec.camera_offset
         c, s = math.cos(heading), math.sin(heading)
         return x + forward * c - left * s, y + forward * s + left * c

@@ -50,10 +50,12 @@ class CameraSway:
         unit_noise = stationary - self._transition @ stationary @ self._transition.T
         self._noise_factor = np.linalg.cholesky(unit_noise)
         self._state = np.zeros((2, 2))  # rows: angle, rate; columns: pitch, roll
+        self._still = True  # the state is zero: it stays so until a bump
 
     def reset(self) -> None:
         """Still camera: no sway, as at the start of an episode."""
         self._state[:] = 0.0
+        self._still = True
 
     def step(self, x: float, y: float, rng: np.random.Generator) -> tuple[float, float]:
         """Advance one frame with the camera at (x, y); returns the new (pitch, roll) [rad].
@@ -61,8 +63,12 @@ class CameraSway:
         The bump at (x, y), if any, shakes the mast during the frame; off bumps no random number
         is drawn.
         """
+        tilt = next((bump.tilt for bump in self._bumps if bump.contains(x, y)), 0.0) \
+            if self._bumps else 0.0
+        if self._still and tilt <= 0.0:
+            return 0.0, 0.0
         self._state = self._transition @ self._state
-        tilt = next((bump.tilt for bump in self._bumps if bump.contains(x, y)), 0.0)
         if tilt > 0.0:
+            self._still = False
             self._state += tilt * (self._noise_factor @ rng.standard_normal((2, 2)))
         return float(self._state[0, 0]), float(self._state[0, 1])

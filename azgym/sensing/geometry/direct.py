@@ -28,6 +28,9 @@ __all__ = ["direct_view"]
 _COVER_LO = 0
 _COVER_HI = 1
 _COVER_ROWS = 2
+# Rows of the scratch array of the occluders' end points as the camera sees them (_ends_from).
+_EX1, _EY1, _R1, _T1, _EX2, _EY2, _R2, _T2 = range(8)
+_END_ROWS = 8
 
 _BEFORE_BEACON = 1e-7
 """An occluder covers a beacon only if it crosses the ray before this share short of the beacon
@@ -39,7 +42,8 @@ _HIDDEN_SHARE = 1e-12
 
 
 @jit(inline="always")
-def _cover(cx, cy, cz, dx, dy, dz, dist, alpha, half, x1, y1, x2, y2, top):
+def _cover(cx, cy, cz, dx, dy, dz, dist, alpha, half, x1, y1, x2, y2, top, ex1, ey1, r1, t1,
+           ex2, ey2, r2, t2):
     """The part of a beacon's angular extent an occluder hides: (whether any, lo, hi).
 
     The beacon is seen from the camera (cx, cy, cz) at the offset (dx, dy, dz), horizontal
@@ -48,23 +52,19 @@ def _cover(cx, cy, cz, dx, dy, dz, dist, alpha, half, x1, y1, x2, y2, top):
     directions, lo and hi relative to ``alpha`` and cut to [−half, half], if it stands in front
     of the beacon and the ray passes below its top, both checked at the middle of the overlap.
     """
-    ex1 = x1 - cx
-    ey1 = y1 - cy
-    ex2 = x2 - cx
-    ey2 = y2 - cy
     # Both end points strictly on one side of the beacon's extent: no overlap. The side is the
     # sign of the cross product with the centre direction, compared with sin(h).
     c1 = dx * ey1 - dy * ex1
     c2 = dx * ey2 - dy * ex2
-    n1 = math.sqrt(ex1 * ex1 + ey1 * ey1) * dist
-    n2 = math.sqrt(ex2 * ex2 + ey2 * ey2) * dist
+    n1 = r1 * dist
+    n2 = r2 * dist
     margin = math.sin(half) + _SIDE_MARGIN
     if (c1 > margin * n1 and c2 > margin * n2) or (c1 < -margin * n1 and c2 < -margin * n2):
         return False, 0.0, 0.0
     if dx * ex1 + dy * ey1 <= 0.0 and dx * ex2 + dy * ey2 <= 0.0:
         return False, 0.0, 0.0  # entirely behind the camera
-    a1 = wrap_compiled(math.atan2(ey1, ex1) - alpha)
-    a2 = wrap_compiled(math.atan2(ey2, ex2) - alpha)
+    a1 = wrap_compiled(t1 - alpha)
+    a2 = wrap_compiled(t2 - alpha)
     if max(a1, a2) - min(a1, a2) >= math.pi:
         return False, 0.0, 0.0  # the segment passes behind the camera
     lo = max(min(a1, a2), -half)
@@ -78,6 +78,29 @@ def _cover(cx, cy, cz, dx, dy, dz, dist, alpha, half, x1, y1, x2, y2, top):
     if cz + t * dz >= top:
         return False, 0.0, 0.0  # the ray passes over the occluder
     return True, lo, hi
+
+
+@jit(inline="always")
+def _ends_from(cx, cy, seg):
+    """Each occluder's end points seen from the camera: rows ``_EX1`` … ``_R2`` (offsets, lengths).
+
+    The same for every beacon of a frame, so worked out once per frame, not per beacon.
+    """
+    ends = np.empty((_END_ROWS, seg.shape[0]))
+    for s in range(seg.shape[0]):
+        ex1 = seg[s, SEG_X1] - cx
+        ey1 = seg[s, SEG_Y1] - cy
+        ex2 = seg[s, SEG_X2] - cx
+        ey2 = seg[s, SEG_Y2] - cy
+        ends[_EX1, s] = ex1
+        ends[_EY1, s] = ey1
+        ends[_R1, s] = math.sqrt(ex1 * ex1 + ey1 * ey1)
+        ends[_T1, s] = math.atan2(ey1, ex1)
+        ends[_EX2, s] = ex2
+        ends[_EY2, s] = ey2
+        ends[_R2, s] = math.sqrt(ex2 * ex2 + ey2 * ey2)
+        ends[_T2, s] = math.atan2(ey2, ex2)
+    return ends
 
 
 @jit(inline="always")
@@ -117,6 +140,7 @@ def direct_view(eye, lens, beacon_xyz, beacon_width, moved, seg, found, found_in
     cx, cy, cz = eye
     min_elevation, max_range = lens
     covers = np.empty((_COVER_ROWS, seg.shape[0]))  # an occluder covers a beacon at most once
+    ends = _ends_from(cx, cy, seg)
     count = 0
     for b in range(beacon_xyz.shape[0]):
         dx = beacon_xyz[b, 0] - cx
@@ -133,7 +157,9 @@ def direct_view(eye, lens, beacon_xyz, beacon_width, moved, seg, found, found_in
         for s in range(seg.shape[0]):
             covered, lo, hi = _cover(cx, cy, cz, dx, dy, dz, dist, alpha, half, seg[s, SEG_X1],
                                      seg[s, SEG_Y1], seg[s, SEG_X2], seg[s, SEG_Y2],
-                                     seg[s, SEG_HEIGHT])
+                                     seg[s, SEG_HEIGHT], ends[_EX1, s], ends[_EY1, s],
+                                     ends[_R1, s], ends[_T1, s], ends[_EX2, s], ends[_EY2, s],
+                                     ends[_R2, s], ends[_T2, s])
             if covered:
                 covers[_COVER_LO, n_covers] = lo
                 covers[_COVER_HI, n_covers] = hi
