@@ -252,16 +252,16 @@ class NavigateEnv(gym.Env):
         contacts_before = len(world.contacts)
         frames = self._due_frames(world.steps)
         forklift = world.forklift
-        x, y, heading = pose = forklift.pose
-        states = [(*forklift.camera_at(pose), heading)]  # the camera i physics steps in
+        x, y, _ = pose = forklift.pose
+        states = [forklift.camera_pose_at(pose)]  # the camera i physics steps into the period
         for _ in range(CONTROL_STEPS):
             world.step(throttle, steer)
             if self._feed is not None:
                 self._feed.step(world)
             self._pose.coast(forklift.speed, forklift.steer, PHYSICS_DT)
             previous_x, previous_y = x, y
-            x, y, heading = pose = forklift.pose
-            states.append((*forklift.camera_at(pose), heading))
+            x, y, _ = pose = forklift.pose
+            states.append(forklift.camera_pose_at(pose))
             self._travelled += math.hypot(x - previous_x, y - previous_y)
         self._steps += 1
         self._look([(interpolate_pose(states[i], states[i + 1], fraction), time)
@@ -297,7 +297,7 @@ class NavigateEnv(gym.Env):
 
     def _camera_pose(self) -> tuple[float, float, float]:
         forklift = self._episode().forklift
-        return (*forklift.camera_position(), forklift.pose[2])
+        return forklift.camera_pose_at(forklift.pose)
 
     def _due_frames(self, start: int) -> list[tuple[int, float, float]]:
         """The frames due in the control period after physics step ``start``, in time order.
@@ -356,8 +356,7 @@ class NavigateEnv(gym.Env):
         world = self._episode()
         x, y, heading = pose
         answer = self._answer
-        camera = (*world.forklift.camera_at(pose), heading)
-        error = pose_error(answer, camera)[0] if answer else None
+        error = pose_error(answer, world.forklift.camera_pose_at(pose))[0] if answer else None
         return {"true_pose": (x, y, heading), "estimate": self._pose.pose,
                 "answered": answer is not None, "localized": self._localized,
                 "rejected": self._pose.rejected, "position_error": error,

@@ -177,8 +177,7 @@ def _robot_frames(scenario: Scenario, route: Route, camera_rate_hz: float, dt: f
 
 
 def _camera_pose(world: World) -> Pose:
-    x, y = world.forklift.camera_position()
-    return x, y, world.forklift.pose[2]
+    return world.forklift.camera_pose_at(world.forklift.pose)
 
 
 _Part = TypeVar("_Part")

@@ -168,11 +168,12 @@ class Forklift:
 
     def camera_position(self) -> tuple[float, float]:
         """Where the camera is in the world (x, y) [m]."""
-        return self.camera_at(self.pose)
+        x, y, _ = self.camera_pose_at(self.pose)
+        return x, y
 
-    def camera_at(self, pose: tuple[float, float, float]) -> tuple[float, float]:
-        """Where the camera is (x, y) [m] with the body centre at ``pose`` (x, y, heading)."""
+    def camera_pose_at(self, pose: tuple[float, float, float]) -> tuple[float, float, float]:
+        """The camera's pose (x, y, heading) [m, m, rad] with the body centre at ``pose``."""
         x, y, heading = pose
         forward, left = self.spec.camera_offset
         c, s = math.cos(heading), math.sin(heading)
-        return x + forward * c - left * s, y + forward * s + left * c
+        return x + forward * c - left * s, y + forward * s + left * c, heading

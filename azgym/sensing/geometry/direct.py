@@ -82,7 +82,7 @@ def _cover(cx, cy, cz, dx, dy, dz, dist, alpha, half, x1, y1, x2, y2, top, ex1, 
 
 @jit(inline="always")
 def _ends_from(cx, cy, seg):
-    """Each occluder's end points seen from the camera: rows ``_EX1`` … ``_R2`` (offsets, lengths).
+    """Each occluder's end points from the camera: rows ``_EX1`` … ``_T2`` (offset, length, angle).
 
     The same for every beacon of a frame, so worked out once per frame, not per beacon.
     """
