@@ -126,6 +126,7 @@ def test_contender_params_merges_the_profile_under_the_spec():
 
 
 @pytest.mark.slow
+@pytest.mark.ray
 def test_ray_workers_apply_the_profile_as_local_ones(cases, reporter):
     pytest.importorskip("ray", reason="ray is not installed")
     contenders = [Contender("profiled", f"{reporter}:Reporter"), contender("ransac")]

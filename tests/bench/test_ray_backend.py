@@ -23,6 +23,7 @@ from azgym.cli import main
 from azgym.errors import DependencyNotInstalled
 
 ray = pytest.importorskip("ray", reason="ray is not installed (pip install \"azgym[ray]\")")
+pytestmark = pytest.mark.ray
 
 PLUGINS = Path(__file__).parents[1] / "hostile" / "plugins"
 ACCURACY = ("all", "ci95", "by_cause", "by_group", "tracking", "crashes", "first_error")

@@ -25,7 +25,8 @@ from pathlib import Path
 import pytest
 
 pytest.importorskip("ray", reason="ray is not installed (pip install \"azgym[ray]\")")
-pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="Ray's files and process groups")
+pytestmark = [pytest.mark.skipif(sys.platform == "win32", reason="Ray's files and process groups"),
+              pytest.mark.ray]
 
 TIME_LIMIT = 150.0
 """The child's time [s]: a local Ray instance and a quick bench take about 15 s."""

@@ -49,7 +49,8 @@ def test_the_runner_s_output_in_a_file_does_not_give_the_seed_away(tmp_path):
     assert f"(test, seed {seed}," in text  # in the table, once every contender has answered
 
 
-@pytest.mark.parametrize("backend", ["local", pytest.param("ray", marks=pytest.mark.slow)])
+@pytest.mark.parametrize(
+    "backend", ["local", pytest.param("ray", marks=[pytest.mark.slow, pytest.mark.ray])])
 def test_no_process_of_the_run_lets_a_worker_read_its_memory(tmp_path, backend):
     if backend == "ray":
         pytest.importorskip("ray", reason="ray is not installed")
