@@ -48,7 +48,8 @@ from azgym.mapping.moves import moved
 from azgym.mapping.odometry import motion_steps
 from azgym.mapping.problem import Drive, Prior, Settings
 from azgym.mapping.survey import Survey
-from azgym.track.unicycle import IBIAS, ISCALE, STATE_SIZE, predict
+from azgym.track.pose_state import IBIAS, ISCALE, STATE_SIZE
+from azgym.track.unicycle import predict
 
 __all__ = ["dead_reckoned", "require_frames", "survey_by_rays"]
 

@@ -1,7 +1,7 @@
 """Plotter's Kalman trackers (Dang et al. 2015, Sec. IV): ``tkf``, and ``lpkf`` with a low-pass IMU.
 
 The state is the IMU's position, velocity and heading and the gyro's bias (x, y, vₓ, v_y, φ, b).
-Between frames the IMU predicts it (:func:`azgym.track.kalman.inertial_step`): the body-frame
+Between frames the IMU predicts it (:mod:`azgym.track.inertial_steps`): the body-frame
 acceleration, turned into the world frame by the heading, integrated twice; the heading by the
 gyro's yaw rate less the bias and, when the IMU has an orientation sensor
 (``ImuModel.orientation_noise``), corrected by each of its readings. Plotter predicts from the
@@ -39,24 +39,31 @@ import math
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, Measurements, Pose, wrap_scalar
+from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose, wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
 from azgym.localize.registry import SupportsLocalize, build
 from azgym.profile import FORKLIFT, VEHICLE_KINDS
-from azgym.sensing.motion import ImuModel, ImuSamples, Motion, OdometryModel
+from azgym.sensing.motion import ImuModel, Motion, OdometryModel
 from azgym.track.base import Tracker, check_choice
-from azgym.track.kalman import (
+from azgym.track.inertial_steps import (
+    ACCEL_VAR,
+    BIAS_WALK_VAR,
     HEADING,
+    HEADING_VAR,
+    LOW_PASS_RC,
+    NOISE_SIZE,
     SIZE,
-    VX,
-    VY,
-    camera_observation,
-    inertial_step,
-    scalar_update,
-    update,
+    SPEED_FACTOR,
+    SPEED_VAR,
+    UNMEASURED_ACCEL_VAR,
+    YAW_RATE_VAR,
+    camera_estimate,
+    fix_update,
+    new_held,
+    predict_samples,
 )
-from azgym.track.kinematics import CAMERA_FROM_IMU, WHEELBASE, LowPass, odometry_yaw_rates
+from azgym.track.kinematics import CAMERA_FROM_IMU, WHEELBASE, odometry_yaw_rates
 from azgym.track.unicycle import VEHICLE_DEFAULTS, YAW_SOURCES
 
 __all__ = ["Lpkf", "Tkf"]
@@ -65,6 +72,7 @@ CHI2_3DOF_999 = 16.27
 """The 99.9 % point of χ² with 3 degrees of freedom: a fix this far off (x, y, φ) is an outlier."""
 FALLBACK_FIX_SD = (0.1, 0.1, math.radians(2.0))
 """Standard deviations (x, y, φ) [m, m, rad] of a fix whose localizer gives no covariance."""
+_FALLBACK_FIX_COVARIANCE = np.diag(np.square(FALLBACK_FIX_SD))
 START_SD = (0.05, 0.05, 0.05, 0.05, math.radians(1.0))
 """Uncertainty of a start pose given to ``reset`` (x, y [m], vₓ, v_y [m/s], φ [rad]): a forklift
 at its dock, at rest, trusted without a fix to confirm it."""
@@ -74,8 +82,9 @@ GYRO_BIAS_WALK = 1e-3
 """How fast the bias may wander by default [rad/s/√s] (the default IMU's walks at 1e-4)."""
 UNMEASURED_ACCEL_SD = 1.0
 """Standard deviation of the acceleration [m/s²] when the IMU reports none: a vehicle's."""
-_HEADING_ROW = np.eye(SIZE)[[HEADING]]
 _POSE = np.array([0, 1, HEADING])
+_GYRO_YAW = np.zeros(0)
+"""The odometry's turn rates when the turn rate is the gyro's: unused."""
 FIX_START_SPEED_SD = 1.0
 """Velocity uncertainty [m/s] when a fix starts the filter: the forklift may be moving."""
 
@@ -156,9 +165,9 @@ class Tkf(Tracker):
                                     f"localizer, got {self.localizer!r} (a tracker)")
         self._fixer = fixer
 
-    def _lowpass(self) -> LowPass | None:
-        """The accelerometer's prefilter: none for the traditional filter."""
-        return None
+    def _low_pass_rc(self) -> float:
+        """The RC [s] of the accelerometer's low-pass prefilter; none (0) for tkf."""
+        return 0.0
 
     def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:
         self._x = np.zeros(SIZE)
@@ -169,14 +178,12 @@ class Tkf(Tracker):
             self._confirmed = True
         self._time: float | None = None
         self._last_fix: float | None = None
-        self._accel_filter = self._lowpass()
-        self._last_sample = -math.inf
-        self._accel = (0.0, 0.0)
-        self._yaw_rate = 0.0
+        self._held = new_held()
+        self._noise = self._noise_constants()
         self._accelerometer = False
 
     def _predict(self, motion: Motion) -> None:
-        """Step through the frame's samples in time order.
+        """Step through the frame's samples in time order (:mod:`azgym.track.inertial_steps`).
 
         An IMU sample starts the acceleration (and the gyro's yaw rate) held until the next one
         (its heading, when it has one, corrects the state first); an odometry sample observes
@@ -197,67 +204,27 @@ class Tkf(Tracker):
         use_speed = self.odometry_speed if self.odometry_speed is not None \
             else not self._accelerometer
         from_odometry = self._yaw_source == "odometry"
-        rates = odometry_yaw_rates(odometry, self.vehicle, float(self.wheelbase)) \
-            if from_odometry else None
-        times = np.concatenate((imu.time, odometry.time if use_speed or from_odometry
-                                else odometry.time[:0]))
-        order = np.argsort(times, kind="stable").tolist()
-        for k in order:
-            self._inertial(float(times[k]) - clock)
-            clock = float(times[k])
-            if k < imu.time.size:
-                self._imu_sample(imu, k)
-                continue
-            k -= imu.time.size
-            if use_speed:
-                self._speed_sample(float(odometry.speed[k]))
-            if rates is not None:
-                self._yaw_rate = float(rates[k])
-        self._inertial(motion.time - clock)
+        used = odometry.time.size if use_speed or from_odometry else 0
+        # A new array either way (a run's frames arrive read-only): one specialization.
+        rates = np.array(odometry_yaw_rates(odometry, self.vehicle, float(self.wheelbase)),
+                         dtype=np.float64) if from_odometry else _GYRO_YAW
+        predict_samples(self._x, self._P, imu.time, imu.accel, imu.yaw_rate, imu.heading,
+                        odometry.time[:used], odometry.speed[:used], rates, clock, motion.time,
+                        self._held, self._noise, self._accelerometer, bool(use_speed),
+                        not from_odometry)
 
-    def _inertial(self, dt: float) -> None:
-        """Move the state ``dt`` seconds with the held acceleration and turn rate."""
-        measured = self._accelerometer and not math.isnan(self._accel[0])
-        inertial_step(self._x, self._P, self._accel if measured else (0.0, 0.0),
-                      self._yaw_rate, dt,
-                      float(self.accel_variance) if measured else UNMEASURED_ACCEL_SD ** 2,
-                      float(self.turn_rate_noise) ** 2, float(self.bias_walk) ** 2)
-
-    def _imu_sample(self, imu: ImuSamples, k: int) -> None:
-        """Correct the heading by the sample's orientation, if any; hold its readings."""
-        x, P = self._x, self._P
-        heading = float(imu.heading[k])
-        if not math.isnan(heading):
-            heading_var = math.radians(1.0) ** 2 * float(self.orientation_variance)
-            update(x, P, np.array([heading]), x[[HEADING]], _HEADING_ROW,
-                   np.array([[heading_var]]), angles=(0,))
-        accel = imu.accel[k]
-        if self._accel_filter is not None and not math.isnan(accel[0]):
-            accel = self._accel_filter(accel, float(imu.time[k]) - self._last_sample)
-        self._last_sample = float(imu.time[k])
-        self._accel = (float(accel[0]), float(accel[1]))
-        if self._yaw_source == "gyro":
-            self._yaw_rate = float(imu.yaw_rate[k])
-
-    def _speed_sample(self, speed: float) -> None:
-        """Correct the velocity along the heading by an odometry speed sample.
-
-        Without an accelerometer nothing else turns the velocity with the heading, so the
-        sample also observes the velocity across the heading as zero: the tracked point is then
-        taken on the turning axis (``camera_from_imu`` the camera's offset ahead of it).
-        """
-        x = self._x
-        c, s = math.cos(x[HEADING]), math.sin(x[HEADING])
-        variance = float(self.speed_noise) ** 2
-        along, across = x[VX] * c + x[VY] * s, -x[VX] * s + x[VY] * c
-        row = np.zeros(SIZE)
-        row[VX], row[VY], row[HEADING] = c, s, across
-        scalar_update(x, self._P, float(self.speed_factor) * speed - along, row, variance)
-        if not self._accelerometer:
-            c, s = math.cos(x[HEADING]), math.sin(x[HEADING])
-            row = np.zeros(SIZE)
-            row[VX], row[VY], row[HEADING] = -s, c, -(x[VX] * c + x[VY] * s)
-            scalar_update(x, self._P, x[VX] * s - x[VY] * c, row, variance)
+    def _noise_constants(self) -> FloatArray:
+        """The constants :func:`predict_samples` takes, from the hyperparameters."""
+        noise = np.empty(NOISE_SIZE)
+        noise[ACCEL_VAR] = float(self.accel_variance)
+        noise[YAW_RATE_VAR] = float(self.turn_rate_noise) ** 2
+        noise[BIAS_WALK_VAR] = float(self.bias_walk) ** 2
+        noise[HEADING_VAR] = math.radians(1.0) ** 2 * float(self.orientation_variance)
+        noise[SPEED_VAR] = float(self.speed_noise) ** 2
+        noise[SPEED_FACTOR] = float(self.speed_factor)
+        noise[LOW_PASS_RC] = self._low_pass_rc()
+        noise[UNMEASURED_ACCEL_VAR] = UNMEASURED_ACCEL_SD ** 2
+        return noise
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         fix = self._fixer.localize(measurements, beacons)
@@ -272,11 +239,11 @@ class Tkf(Tracker):
                       else f"no fix for {since:.1f} s (max_holdover {self.max_holdover} s)")
             return Estimate.failure(reason, len(measurements), {"fix": _fix_state(fix, used)})
         x = self._x
-        camera, H = camera_observation(x, float(self.camera_from_imu))
+        camera, covariance = camera_estimate(x, self._P, float(self.camera_from_imu))
         return Estimate(
             x=float(camera[0]), y=float(camera[1]), heading=wrap_scalar(float(camera[2])),
             inliers=fix.inliers if used else np.zeros(len(measurements), bool),
-            covariance=H @ self._P @ H.T,
+            covariance=covariance,
             diagnostics={"fix": _fix_state(fix, used), "holdover": since,
                          "speed": math.hypot(x[2], x[3])})
 
@@ -294,13 +261,13 @@ class Tkf(Tracker):
         (ransac can be wrong for several frames running) cannot capture it.
         """
         z = np.array(fix.pose, dtype=np.float64)
-        R = fix.covariance if fix.covariance is not None else np.diag(np.square(FALLBACK_FIX_SD))
+        R = np.array(fix.covariance if fix.covariance is not None else _FALLBACK_FIX_COVARIANCE,
+                     dtype=np.float64)  # a new array: one specialization of the kernel
         if not (np.isfinite(z).all() and np.isfinite(R).all()):
             return False
         if self._live:
-            predicted, H = camera_observation(self._x, float(self.camera_from_imu))
             gate = float(self.gate)
-            if update(self._x, self._P, z, predicted, H, R, angles=(2,), gate=gate) <= gate:
+            if fix_update(self._x, self._P, z, R, float(self.camera_from_imu), gate) <= gate:
                 self._confirmed = True
                 return True
             if self._confirmed:
@@ -351,8 +318,8 @@ class Lpkf(Tkf):
         check_range(type(self).__name__, "cutoff_hz", self.cutoff_hz, low=0.0, low_open=True)
         super()._check_params()
 
-    def _lowpass(self) -> LowPass:
-        return LowPass(float(self.cutoff_hz))
+    def _low_pass_rc(self) -> float:
+        return 1.0 / (2.0 * math.pi * float(self.cutoff_hz))
 
 
 def _fix_state(fix: Estimate, used: bool) -> str:

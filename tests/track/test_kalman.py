@@ -1,4 +1,4 @@
-"""Plotter's Kalman filter: the textbook steps by hand, the trackers on a simulated route."""
+"""Plotter's Kalman filter: its compiled steps by hand, the trackers on a simulated route."""
 
 from __future__ import annotations
 
@@ -10,66 +10,118 @@ import pytest
 import azgym
 from azgym import InvalidInputError
 from azgym.core import Measurements, pose_error
-from azgym.track.kalman import SIZE, inertial_step, predict, update
-from azgym.track.kinematics import LowPass
+from azgym.track.inertial_steps import (
+    HEADING,
+    HEADING_VAR,
+    NOISE_SIZE,
+    SIZE,
+    SPEED_FACTOR,
+    SPEED_VAR,
+    VX,
+    VY,
+    X,
+    Y,
+    camera_estimate,
+    fix_update,
+    inertial_step,
+    low_pass,
+    new_held,
+    predict_samples,
+)
 from azgym.world.drive import simulate
 
 
-def test_a_constant_velocity_step_by_hand():
-    # p = 0, v = 1, P = I; F moves one second; then a position reading of 1.5 with variance 1.
-    x, P = np.array([0.0, 1.0]), np.eye(2)
-    predict(x, P, np.array([[1.0, 1.0], [0.0, 1.0]]), np.zeros((2, 2)))
-    np.testing.assert_allclose(x, [1.0, 1.0])
-    np.testing.assert_allclose(P, [[2.0, 1.0], [1.0, 1.0]])
-    H = np.array([[1.0, 0.0]])
-    distance = update(x, P, np.array([1.5]), H @ x, H, np.array([[1.0]]))
-    # S = 3, K = (2/3, 1/3): x = (1 + 1/3, 1 + 1/6), P = P − K S Kᵀ.
-    assert distance == pytest.approx(0.25 / 3)
-    np.testing.assert_allclose(x, [4 / 3, 7 / 6])
-    np.testing.assert_allclose(P, [[2 / 3, 1 / 3], [1 / 3, 2 / 3]])
+def _fix_update(z, heading=0.0, ahead=0.0, gate=math.inf):
+    """A fix with covariance I on x = (0, 0, 0, 0, heading, 0), P = I; the state after, and d²."""
+    x, P = np.zeros(SIZE), np.eye(SIZE)
+    x[HEADING] = heading
+    distance = fix_update(x, P, np.array(z, dtype=float), np.eye(3), ahead, gate)
+    return x, P, distance
 
 
-def test_process_noise_adds_to_the_covariance():
-    x, P = np.zeros(2), np.zeros((2, 2))
-    predict(x, P, np.eye(2), np.diag([0.5, 0.25]), u=np.array([1.0, 2.0]))
-    np.testing.assert_allclose(x, [1.0, 2.0])
-    np.testing.assert_allclose(P, np.diag([0.5, 0.25]))
+def test_a_fix_as_uncertain_as_the_state_pulls_it_halfway_by_hand():
+    # S = P + R = 2 I, K = I / 2 on (x, y, φ): the state moves half the innovation, P halves.
+    x, P, distance = _fix_update([1.0, -2.0, 0.5])
+    np.testing.assert_allclose(x[[X, Y, HEADING]], [0.5, -1.0, 0.25])
+    np.testing.assert_allclose(np.diag(P)[[X, Y, HEADING]], [0.5, 0.5, 0.5])
+    assert x[VX] == x[VY] == 0.0 and P[VX, VX] == 1.0  # uncorrelated: untouched
+    assert distance == pytest.approx((1.0 + 4.0 + 0.25) / 2)
+
+
+def test_the_fix_sees_the_camera_ahead_of_the_imu():
+    # Facing north with the camera 1 m ahead: a fix at (0, 1, π/2) is what the state predicts.
+    x, P, distance = _fix_update([0.0, 1.0, math.pi / 2], heading=math.pi / 2, ahead=1.0)
+    assert distance == pytest.approx(0.0, abs=1e-24)
+    np.testing.assert_allclose(x[[X, Y]], [0.0, 0.0], atol=1e-15)
 
 
 def test_the_gate_leaves_the_state_alone_for_an_outlier():
-    x, P = np.array([0.0]), np.eye(1)
-    H = np.eye(1)
-    distance = update(x, P, np.array([10.0]), H @ x, H, np.eye(1), gate=16.0)
+    x, P, distance = _fix_update([10.0, 0.0, 0.0], gate=16.0)
     assert distance == pytest.approx(50.0)
-    assert x[0] == 0.0 and P[0, 0] == 1.0
+    assert not x.any() and (P == np.eye(SIZE)).all()
 
 
-def test_an_angle_innovation_is_wrapped():
-    x, P = np.array([math.pi - 0.01]), np.eye(1)
-    H = np.eye(1)
-    update(x, P, np.array([-math.pi + 0.01]), H @ x, H, np.eye(1), angles=(0,))
-    assert x[0] == pytest.approx(math.pi, abs=1e-9)  # halfway across ±π, not through zero
-    update(x, P, np.array([-math.pi + 0.01]), H @ x, H, np.eye(1))
-    assert abs(x[0]) < 2  # without the wrap, 2π − 0.02 apart: pulled through zero
+def test_a_heading_innovation_is_wrapped():
+    x, _, _ = _fix_update([0.0, 0.0, -math.pi + 0.01], heading=math.pi - 0.01)
+    assert abs(x[HEADING]) == pytest.approx(math.pi, abs=1e-9)  # halfway across ±π, not 0
+
+
+def test_the_camera_s_covariance_carries_the_heading_s_through_the_lever():
+    # Facing east, camera 2 m ahead: its y moves 2 m per radian of heading, so var(y) = 1 + 4.
+    x, P = np.zeros(SIZE), np.eye(SIZE)
+    pose, covariance = camera_estimate(x, P, 2.0)
+    np.testing.assert_allclose(pose, [2.0, 0.0, 0.0])
+    np.testing.assert_allclose(covariance, [[1.0, 0.0, 0.0], [0.0, 5.0, 2.0], [0.0, 2.0, 1.0]])
 
 
 def test_the_inertial_step_turns_body_acceleration_into_the_world():
     x, P = np.zeros(SIZE), np.zeros((SIZE, SIZE))
     x[4] = math.pi / 2  # facing north: forward acceleration is northward
     for _ in range(100):
-        inertial_step(x, P, (1.0, 0.0), 0.0, 0.01, 0.0, 0.0, 0.0)
+        inertial_step(x, P, 1.0, 0.0, 0.0, 0.01, 0.0, 0.0, 0.0)
     np.testing.assert_allclose(x[:4], [0.0, 0.5, 0.0, 1.0], atol=1e-12)  # a t² / 2, a t
-    inertial_step(x, P, (0.0, 0.0), 0.0, 1.0, 0.01, 0.0, 0.0)
+    inertial_step(x, P, 0.0, 0.0, 0.0, 1.0, 0.01, 0.0, 0.0)
     assert P[1, 1] == pytest.approx(0.01 / 4) and P[3, 3] == pytest.approx(0.01)
 
 
 def test_the_low_pass_reaches_63_percent_after_one_time_constant():
-    lowpass = LowPass(1.0)
-    lowpass(np.zeros(1), 0.0)
-    rc, steps = 1 / (2 * math.pi), 1000
+    held, rc, steps = new_held(), 1 / (2 * math.pi), 1000
+    assert low_pass(held, 0.5, -0.5, 0.0, rc) == (0.5, -0.5)  # the first sample passes as it is
+    assert low_pass(held, 0.0, 0.0, 1e9, rc) == pytest.approx((0.0, 0.0), abs=1e-9)  # long after
     for _ in range(steps):
-        value = lowpass(np.ones(1), rc / steps)
-    assert value[0] == pytest.approx(1 - math.exp(-1), abs=1e-3)
+        value = low_pass(held, 1.0, -2.0, rc / steps, rc)
+    assert value == pytest.approx((1 - math.exp(-1), -2 * (1 - math.exp(-1))), abs=1e-3)
+
+
+def _one_frame(imu_heading=math.nan, imu_yaw_rate=0.0, speed=None, rate=None, gyro_yaw=True):
+    """Predict x = 0, P = I from t = 0 to t = 1 through one IMU sample (and one odometry one)."""
+    x, P, held = np.zeros(SIZE), np.eye(SIZE), new_held()
+    noise = np.zeros(NOISE_SIZE)
+    noise[HEADING_VAR] = noise[SPEED_VAR] = noise[SPEED_FACTOR] = 1.0
+    odometry = np.array([0.0]) if speed is not None else np.zeros(0)
+    predict_samples(x, P, np.array([0.0]), np.zeros((1, 2)), np.array([imu_yaw_rate]),
+                    np.array([imu_heading]), odometry, np.array([speed or 0.0])[:odometry.size],
+                    np.array([rate or 0.0]), 0.0, 1.0 if rate is not None else 0.0, held, noise,
+                    True, speed is not None, gyro_yaw)
+    return x, P
+
+
+def test_a_heading_reading_as_uncertain_as_the_state_pulls_it_halfway():
+    x, P = _one_frame(imu_heading=0.2)
+    assert x[HEADING] == pytest.approx(0.1) and P[HEADING, HEADING] == pytest.approx(0.5)
+
+
+def test_a_speed_reading_as_uncertain_as_the_velocity_pulls_it_halfway():
+    # Facing east with vₓ = 0 ± 1: a speed of 2 ± 1 along the heading gives vₓ = 1, v_y alone.
+    x, P = _one_frame(speed=2.0)
+    assert x[VX] == pytest.approx(1.0) and x[VY] == 0.0 and P[VX, VX] == pytest.approx(0.5)
+
+
+def test_the_turn_rate_is_the_odometry_s_when_told_and_the_gyro_s_otherwise():
+    # The gyro reads 1 rad/s, the odometry 0.5, both at t = 0, held until t = 1 (bias 0).
+    assert _one_frame(imu_yaw_rate=1.0, speed=0.0, rate=0.5, gyro_yaw=False)[0][HEADING] == \
+        pytest.approx(0.5)
+    assert _one_frame(imu_yaw_rate=1.0, speed=0.0, rate=0.5)[0][HEADING] == pytest.approx(1.0)
 
 
 @pytest.fixture(scope="module")
