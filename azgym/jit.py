@@ -45,8 +45,8 @@ KERNEL_MODULES = (
     "sensing/geometry/ordering.py", "sensing/identities.py",
     "sensing/image/render.py", "sensing/labels.py", "sensing/protocol.py", "site/elements.py",
     "site/error_model.py", "site/fisheye.py", "track/_motion_check.py",
-    "track/azimuth_update.py", "track/inertial_steps.py", "track/pose_state.py",
-    "track/repair_fit.py",
+    "track/azimuth_update.py", "track/inertial_steps.py", "track/repair_fit.py",
+    "track/unicycle.py",
 )
 """The modules (relative to the package) with compiled kernels, and every azgym module they import
 from: numba compiles a kernel's global constants (label codes, row numbers) into it, so a change

@@ -27,8 +27,7 @@ import numpy as np
 from azgym.core import FloatArray
 from azgym.mapping.problem import Drive, Settings
 from azgym.sensing.motion import OdometryModel
-from azgym.track.pose_state import IBIAS, ISCALE, STATE_SIZE
-from azgym.track.unicycle import MotionNoise, MotionSteps, predict
+from azgym.track.unicycle import IBIAS, ISCALE, STATE_SIZE, MotionNoise, MotionSteps, predict
 
 __all__ = ["COVARIANCE_FLOOR", "Odometry", "compose", "motion_steps", "relative_poses"]
 

@@ -48,8 +48,7 @@ from azgym.mapping.moves import moved
 from azgym.mapping.odometry import motion_steps
 from azgym.mapping.problem import Drive, Prior, Settings
 from azgym.mapping.survey import Survey
-from azgym.track.pose_state import IBIAS, ISCALE, STATE_SIZE
-from azgym.track.unicycle import predict
+from azgym.track.unicycle import IBIAS, ISCALE, STATE_SIZE, predict
 
 __all__ = ["dead_reckoned", "require_frames", "survey_by_rays"]
 

@@ -46,7 +46,7 @@ import numpy as np
 from azgym.core import BoolArray, FloatArray, IntArray
 from azgym.jit import jit, wrap_compiled
 from azgym.localize.base import ROW_AZIMUTH, ROW_BX, ROW_BY, ROW_WIDTH
-from azgym.track.pose_state import IPHI, IX, IY
+from azgym.track.unicycle import IPHI, IX, IY
 
 __all__ = ["azimuth_variance", "gated_update"]
 

@@ -30,8 +30,13 @@ from azgym.site.error_model import check_azimuth_noise
 from azgym.track.azimuth_update import gated_update
 from azgym.track.base import Tracker, check_choice
 from azgym.track.kinematics import WHEELBASE
-from azgym.track.pose_state import IBIAS, IPHI, ISCALE, IX, IY, STATE_SIZE
 from azgym.track.unicycle import (
+    IBIAS,
+    IPHI,
+    ISCALE,
+    IX,
+    IY,
+    STATE_SIZE,
     VEHICLE_DEFAULTS,
     YAW_SOURCES,
     MotionNoise,

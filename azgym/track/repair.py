@@ -53,11 +53,11 @@ from azgym.localize.bearings import spread
 from azgym.site.error_model import ErrorModel
 from azgym.track.azimuth_update import gated_update
 from azgym.track.gated_ekf import subset
-from azgym.track.pose_state import IPHI, IX, IY
 from azgym.track.repair_fit import FitTest
 from azgym.track.repair_rays import RayStore, locate, pack
 from azgym.track.repair_records import Repair, Run
 from azgym.track.repair_state import StateBeacons, placed_map
+from azgym.track.unicycle import IPHI, IX, IY
 
 __all__ = ["CLEARANCE_M", "OTHERS_AGREE", "OTHERS_DISTINCT", "OUTSIDE_M", "RETRY_GROWTH",
            "STREAK_GAP_S", "MapRepair", "Repair"]

@@ -30,8 +30,8 @@ import math
 import numpy as np
 
 from azgym.core import BeaconMap, FloatArray, IntArray
-from azgym.track.pose_state import STATE_SIZE
 from azgym.track.repair_records import Repair
+from azgym.track.unicycle import STATE_SIZE
 
 __all__ = ["MAX_KEPT", "StateBeacons", "placed_map"]
 

@@ -40,10 +40,9 @@ from azgym.sensing.motion import Motion
 from azgym.site.error_model import ErrorModel
 from azgym.track.gated_ekf import DEFAULT_NOISE, GatedEkf, subset
 from azgym.track.kinematics import WHEELBASE
-from azgym.track.pose_state import IPHI, IX, IY
 from azgym.track.repair import STREAK_GAP_S, MapRepair, Repair
 from azgym.track.repair_lag import Lag, Lagged
-from azgym.track.unicycle import Step, predict
+from azgym.track.unicycle import IPHI, IX, IY, Step, predict
 
 __all__ = ["Robust"]
 

@@ -1,15 +1,15 @@
 """The trackers' motion model: the camera carried by a unicycle driven by odometry and a turn rate.
 
 The state is the camera pose, the turn rate's bias b and the odometry's scale correction k,
-``[x, y, φ, b, k]`` (:mod:`~azgym.track.pose_state`): both sensor errors wander slowly
-(``OdometryModel``, ``ImuModel``), and estimating them keeps dead reckoning straight through an
-outage. Between two frames the vehicle's turning axis (a forklift's reference axle, the one that
-does not steer; a differential drive's wheel axle) moves at the odometry's speed v f (1 + k) along
-the heading, f the odometry's known ``speed_factor``, and turns at the measured rate ω − b: the
-gyro's, or the odometry's (a differential drive's reported yaw rate, or a forklift's v tan δ / L;
-:func:`~azgym.track.kinematics.odometry_yaw_rates`). The camera sits ``lever`` metres ahead of that
-axis (negative: behind it), so it also slides sideways at ω · lever: a forklift's camera, behind its
-steering-free front axle, swings out in turns (:mod:`azgym.world.forklift`).
+``[x, y, φ, b, k]`` (``STATE_SIZE`` = 5): both sensor errors wander slowly (``OdometryModel``,
+``ImuModel``), and estimating them keeps dead reckoning straight through an outage. Between two
+frames the vehicle's turning axis (a forklift's reference axle, the one that does not steer; a
+differential drive's wheel axle) moves at the odometry's speed v f (1 + k) along the heading,
+f the odometry's known ``speed_factor``, and turns at the measured rate ω − b: the gyro's, or the
+odometry's (a differential drive's reported yaw rate, or a forklift's v tan δ / L;
+:func:`~azgym.track.kinematics.odometry_yaw_rates`). The camera sits ``lever`` metres ahead of
+that axis (negative: behind it), so it also slides sideways at ω · lever: a forklift's camera,
+behind its steering-free front axle, swings out in turns (:mod:`azgym.world.forklift`).
 
 Each frame is one step with the mean speed and yaw rate of its samples and the heading at the
 step's midpoint; a frame longer than ``MAX_STEP_S`` (the first after an outage) is cut into
@@ -31,11 +31,18 @@ from azgym.core import FloatArray
 from azgym.profile import DIFFERENTIAL_DRIVE, FORKLIFT
 from azgym.sensing.motion import ImuModel, Motion, OdometryModel
 from azgym.track.kinematics import CAMERA_AHEAD, odometry_yaw_rates
-from azgym.track.pose_state import IBIAS, IPHI, ISCALE, IX, IY, move_covariance
 from azgym.world.forklift import ForkliftSpec
 
-__all__ = ["HOLD_FLOOR_S", "HOLD_PERIODS", "MAX_STEP_S", "VEHICLE_DEFAULTS", "YAW_SOURCES",
-           "HeldStream", "MotionNoise", "MotionSteps", "Step", "predict"]
+__all__ = ["HOLD_FLOOR_S", "HOLD_PERIODS", "IBIAS", "IPHI", "ISCALE", "IX", "IY", "MAX_STEP_S",
+           "STATE_SIZE", "VEHICLE_DEFAULTS", "YAW_SOURCES", "HeldStream", "MotionNoise",
+           "MotionSteps", "Step", "predict"]
+
+STATE_SIZE = 5
+"""Length of the state ``[x, y, φ, b, k]``: camera position [m], heading [rad], gyro bias
+[rad/s] and the odometry's scale correction k [1] (the true speed is (1 + k) times the read)."""
+IX, IY, IPHI, IBIAS, ISCALE = range(STATE_SIZE)
+"""Positions of x, y, heading, gyro bias and odometry scale correction in the state."""
+
 
 @dataclass(frozen=True)
 class MotionNoise:
@@ -125,13 +132,11 @@ class HeldStream:
         gap is longer than ``HOLD_FLOOR_S`` (below it, no sample is cut short).
         """
         self._remember(times)
-        sample_times, rates = times.tolist(), values.tolist()  # a handful: floats beat arrays
-        first = sample_times[0] if sample_times else end
-        ends = [*sample_times[1:], end] if sample_times else []
-        spans = [after - at for at, after in zip(sample_times, ends, strict=True)]
+        first = float(times[0]) if times.size else end
+        spans = np.append(times[1:], end) - times
         longest = first - self.held_since if self.held is not None else 0.0
-        if spans:
-            longest = max(longest, *spans)
+        if times.size:
+            longest = max(longest, float(spans.max()))
         limit = self.limit() if longest > HOLD_FLOOR_S else math.inf
         total = observed = spread = 0.0
         if self.held is not None:
@@ -139,14 +144,13 @@ class HeldStream:
             if until > start:
                 total, observed = self.held * (until - start), until - start
                 spread = observed * observed
-        if spans:
+        if times.size:
             if limit < math.inf:
-                spans = [min(span, limit) for span in spans]
-            for rate, span in zip(rates, spans, strict=True):
-                total += rate * span
-                observed += span
-                spread += span * span
-            self.held, self.held_since = rates[-1], sample_times[-1]
+                spans = np.minimum(spans, limit)
+            total += float(values @ spans)
+            observed += float(spans.sum())
+            spread += float(spans @ spans)
+            self.held, self.held_since = float(values[-1]), float(times[-1])
         return total, observed, spread
 
 
@@ -270,8 +274,8 @@ def predict(state: FloatArray, cov: FloatArray, step: Step, lever: float,
             noise: MotionNoise) -> None:
     """Move ``state`` and ``cov`` (in place) by one :class:`Step`.
 
-    Entries past the first :data:`~azgym.track.pose_state.STATE_SIZE` (beacons a tracker keeps
-    in its state) stand still; their cross-covariances with the pose move with it.
+    Entries past the first :data:`STATE_SIZE` (beacons a tracker keeps in its state) stand
+    still; their cross-covariances with the pose move with it.
     """
     read, measured_rate, tau = step.speed, step.yaw_rate, step.observed
     v = read * (1.0 + state[ISCALE])
@@ -280,11 +284,18 @@ def predict(state: FloatArray, cov: FloatArray, step: Step, lever: float,
     c, s = math.cos(half), math.sin(half)
     dx = v * tau * c - lever * omega * tau * s
     dy = v * tau * s + lever * omega * tau * c
+    jacobian = np.eye(state.size)
+    jacobian[IX, IPHI] = -dy
+    jacobian[IY, IPHI] = dx
+    jacobian[IX, IBIAS] = 0.5 * tau * dy + lever * tau * s
+    jacobian[IY, IBIAS] = -0.5 * tau * dx - lever * tau * c
+    jacobian[IPHI, IBIAS] = -tau
+    jacobian[IX, ISCALE] = read * tau * c
+    jacobian[IY, ISCALE] = read * tau * s
     state[IX] += dx
     state[IY] += dy
     state[IPHI] = math.remainder(state[IPHI] + omega * tau, 2.0 * math.pi)
-    move_covariance(cov, -dy, dx, 0.5 * tau * dy + lever * tau * s,
-                     -0.5 * tau * dx - lever * tau * c, -tau, read * tau * c, read * tau * s)
+    cov[:] = jacobian @ cov @ jacobian.T
     _add_noise(cov, step, c, s, noise)
 
 

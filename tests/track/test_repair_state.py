@@ -18,10 +18,9 @@ import azgym
 from azgym import Measurements
 from azgym.localize.base import ROW_BEACON_INDEX, Problem
 from azgym.track.azimuth_update import gated_update
-from azgym.track.pose_state import STATE_SIZE
 from azgym.track.repair_records import Repair
 from azgym.track.repair_state import MAX_KEPT, StateBeacons, placed_map
-from azgym.track.unicycle import MotionNoise, Step, predict
+from azgym.track.unicycle import STATE_SIZE, MotionNoise, Step, predict
 
 DELTA_D = 0.003
 

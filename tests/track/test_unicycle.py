@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
-from azgym.track.pose_state import IBIAS, IPHI, ISCALE, IX, IY, STATE_SIZE, move_covariance
 from azgym.track.unicycle import MAX_STEP_S, MotionNoise, MotionSteps, predict
 
 SILENT = MotionNoise(speed_noise=0.0, speed_scale=0.0, scale_walk=0.0, turn_rate_noise=0.0,
@@ -40,20 +39,3 @@ def test_a_three_second_gap_with_a_straight_then_a_quarter_turn_is_followed():
     # One step with the gap's mean speed and turn rate would land at 6 m along 45°, 2.4 m off.
     assert math.hypot(6 * math.cos(math.pi / 4) - 3.0 - radius,
                       6 * math.sin(math.pi / 4) - radius) > 2.0
-
-
-@pytest.mark.parametrize("kept_beacons", [0, 3])
-def test_the_covariance_step_is_the_dense_jacobian_product(kept_beacons):
-    # J is the identity but for x's, y's and φ's dependence on (φ, b, k): the in-place step must
-    # give J P Jᵀ, beacon entries (past the pose) included.
-    rng = np.random.default_rng(kept_beacons)
-    n = STATE_SIZE + 2 * kept_beacons
-    root = rng.normal(size=(n, n))
-    cov = root @ root.T
-    entries = rng.normal(size=7)
-    jacobian = np.eye(n)
-    (jacobian[IX, IPHI], jacobian[IY, IPHI], jacobian[IX, IBIAS], jacobian[IY, IBIAS],
-     jacobian[IPHI, IBIAS], jacobian[IX, ISCALE], jacobian[IY, ISCALE]) = entries
-    expected = jacobian @ cov @ jacobian.T
-    move_covariance(cov, *entries)
-    np.testing.assert_allclose(cov, expected, rtol=1e-12, atol=1e-12)
