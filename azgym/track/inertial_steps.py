@@ -1,10 +1,12 @@
-"""Plotter's inertial prediction over one frame's samples, compiled.
+"""The compiled steps of Plotter's inertial Kalman filters: a frame's samples, then its fix.
 
 The trackers of :mod:`azgym.track.inertial_kalman` move their state (x, y, vₓ, v_y, φ, b) (the
 IMU's position, velocity and heading and the gyro's bias b) from one frame to the next through
-every IMU and odometry sample in between, in time order. :func:`predict_samples` does all of a
-frame's steps in one compiled call; a frame holds ten to thirty samples, each a 6 × 6
-covariance step, which in numpy cost more than the frame's fix.
+every IMU and odometry sample in between, in time order, then correct it by the frame's fix.
+:func:`predict_samples` does all of a frame's samples in one compiled call and
+:func:`fix_update` the correction (:func:`camera_estimate` the answer): a frame holds a handful
+to dozens of samples, each a 6 × 6 covariance step, which as numpy calls cost several times the
+frame's fix.
 
 Between samples the held readings move the state (:func:`inertial_step`): the body-frame
 acceleration, turned into the world frame by the heading, is integrated as Plotter's eq. 4 does

@@ -5,7 +5,8 @@ record that outlives its cluster is enough), and a head node started by Ray 2.60
 token when one exists. Each case runs azgym in a child process whose Ray files live in a
 temporary folder of its own (``RAY_TMPDIR``), with a time limit, so the tests never read or
 disturb another Ray on the machine: the one cluster started here is stopped by its process
-group, never by ``ray stop``.
+group, never by ``ray stop``. Ray's ``auto`` joins any live instance it finds among the
+machine's processes, so the case that needs none first waits until no instance lives.
 """
 
 from __future__ import annotations
@@ -77,8 +78,24 @@ def test_without_address_azgym_starts_its_own_instance_whatever_ray_would_join(w
     assert (ray_dir / "out" / "results.json").is_file()
 
 
+def no_live_ray(wait: float = 60.0) -> None:
+    """Wait until no Ray instance lives on this machine, as ``address="auto"`` looks for one.
+
+    Ray's "auto" joins any live instance it finds among the machine's processes (by their
+    ``--gcs-address``) before it reads a record; an instance an earlier test started may take
+    seconds to end.
+    """
+    from ray._private.services import find_gcs_addresses
+
+    deadline = time.monotonic() + wait
+    while find_gcs_addresses():
+        assert time.monotonic() < deadline, f"a Ray instance still lives: {find_gcs_addresses()}"
+        time.sleep(0.5)
+
+
 def test_auto_with_a_stale_record_is_refused_by_name_at_once(ray_dir):
     """Not 20 s of Ray retrying, then an error about something answering there."""
+    no_live_ray()
     record(ray_dir, STALE)
     begun = time.monotonic()
     done = bench(ray_dir, ray_env(ray_dir), "--address", "auto")
