@@ -37,15 +37,3 @@ def paper_beacons(paper_room: azgym.Scenario) -> BeaconMap:
 def make_frame() -> FrameMaker:
     """``make_frame(x, y, heading, beacons)``: a noise-free frame from that pose."""
     return ideal_frame
-
-
-
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Run the tests marked ``ray`` on one pytest-xdist worker, one after another.
-
-    Two live Ray instances on one machine would let the "azgym starts its own instance" tests
-    join each other's; ``--dist loadgroup`` keeps an ``xdist_group`` on one worker.
-    """
-    for item in items:
-        if item.get_closest_marker("ray") is not None:
-            item.add_marker(pytest.mark.xdist_group("ray"))
