@@ -102,6 +102,7 @@ class Tracker(Hyperparameters, ABC):
                 heading may be NaN in any sample: no orientation sensor).
         """
         clock = self._started("predict")
+        self._validate_once()
         given = check_motion(motion, clock)
         self._check_columns(given)
         object.__setattr__(self, "_clock", float(motion.time))

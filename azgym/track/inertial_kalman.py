@@ -164,6 +164,7 @@ class Tkf(Tracker):
             raise InvalidInputError(f"{type(self).__name__}.localizer must name a per-frame "
                                     f"localizer, got {self.localizer!r} (a tracker)")
         self._fixer = fixer
+        self._noise = self._noise_constants()  # the prediction's constants, as now set
 
     def _low_pass_rc(self) -> float:
         """The RC [s] of the accelerometer's low-pass prefilter; none (0) for tkf."""
@@ -179,7 +180,6 @@ class Tkf(Tracker):
         self._time: float | None = None
         self._last_fix: float | None = None
         self._held = new_held()
-        self._noise = self._noise_constants()
         self._accelerometer = False
 
     def _predict(self, motion: Motion) -> None:

@@ -208,3 +208,20 @@ def test_lpkf_refuses_a_bad_cutoff_and_takes_specs():
     tracker.accel_variance = -1.0
     with pytest.raises(InvalidInputError, match=r"Lpkf.accel_variance must be > 0"):
         tracker.reset()
+
+
+def test_a_hyperparameter_set_mid_route_is_checked_and_used_from_the_next_frame(route):
+    # The prediction's constants are compiled-in numbers: setting one must reach them (and a bad
+    # value be refused) at the next frame, not at the next reset.
+    scenario, frames = route
+    changed = azgym.make_tracker("lpkf")
+    _run(changed, scenario, frames[:50])
+    changed.cutoff_hz = 0.0
+    with pytest.raises(InvalidInputError, match=r"Lpkf.cutoff_hz must be > 0"):
+        changed.predict(frames[50].motion)
+    changed.cutoff_hz = 5.0
+    fresh = azgym.make_tracker("lpkf")
+    _run(fresh, scenario, frames[:50])
+    fresh.predict(frames[50].motion)
+    changed.predict(frames[50].motion)
+    assert changed._P[2, 2] != fresh._P[2, 2] or not np.array_equal(changed._x, fresh._x)
