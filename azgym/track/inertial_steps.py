@@ -33,6 +33,7 @@ import numpy as np
 
 from azgym.core import FloatArray
 from azgym.jit import jit, wrap_compiled
+from azgym.localize._levenberg_marquardt import solve3
 
 __all__ = ["ACCEL_VAR", "BIAS", "BIAS_WALK_VAR", "HEADING", "HEADING_VAR", "HELD_SIZE",
            "LOW_PASS_RC", "NOISE_SIZE", "SIZE", "SPEED_FACTOR", "SPEED_VAR", "UNMEASURED_ACCEL_VAR",
@@ -343,19 +344,15 @@ def _camera_rows(x, ahead):
 
 @jit(inline="always")
 def _inverse3(a):
-    """The inverse of a 3 × 3 matrix by its cofactors (NaN or inf where it is singular)."""
+    """The inverse of a 3 × 3 matrix, column by column by :func:`solve3` (NaN if singular)."""
     inverse = np.empty((3, 3))
-    inverse[0, 0] = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
-    inverse[0, 1] = a[0, 2] * a[2, 1] - a[0, 1] * a[2, 2]
-    inverse[0, 2] = a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1]
-    inverse[1, 0] = a[1, 2] * a[2, 0] - a[1, 0] * a[2, 2]
-    inverse[1, 1] = a[0, 0] * a[2, 2] - a[0, 2] * a[2, 0]
-    inverse[1, 2] = a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]
-    inverse[2, 0] = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
-    inverse[2, 1] = a[0, 1] * a[2, 0] - a[0, 0] * a[2, 1]
-    inverse[2, 2] = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
-    determinant = a[0, 0] * inverse[0, 0] + a[0, 1] * inverse[1, 0] + a[0, 2] * inverse[2, 0]
-    for r in range(3):
-        for k in range(3):
-            inverse[r, k] /= determinant
+    unit, column = np.zeros(3), np.empty(3)
+    for k in range(3):
+        unit[k] = 1.0
+        if solve3(a, unit, column) == 0.0:
+            inverse.fill(np.nan)
+            return inverse
+        unit[k] = 0.0
+        for r in range(3):
+            inverse[r, k] = column[r]
     return inverse
