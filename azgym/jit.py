@@ -39,7 +39,7 @@ KERNEL_MODULES = (
     "localize/learned/ng_ransac.py", "localize/learned/pose_network.py",
     "localize/learned/pose_regression.py", "localize/learned/weights.py",
     "localize/base.py", "localize/loo.py", "localize/lsq.py", "localize/mex.py",
-    "localize/ransac.py", "localize/refinement.py", "localize/triplet.py", "nav/_descent.py",
+    "localize/ransac.py", "localize/refinement.py", "localize/triplet.py", "nav/_descent.py", "nav/_observation.py",
     "sensing/geometry/detections.py", "sensing/geometry/direct.py", "sensing/geometry/frame.py",
     "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py",
     "sensing/geometry/ordering.py", "sensing/identities.py",

@@ -28,31 +28,26 @@ jumps and dead-reckoned between them; ``fix_age`` says how long it has been dead
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from azgym.core import FloatArray
-from azgym.nav._descent import follow, points_at
+from azgym.nav._descent import follow
+from azgym.nav._observation import (
+    AHEAD_SCALE,
+    ARCS,
+    FIX_AGE_SCALE,
+    REMAINING_SCALE,
+    SUPPORT_SCALE,
+    fill_observation,
+)
 from azgym.nav.planner import Planner
-from azgym.sensing.geometry import occluders as G
 
 __all__ = ["AHEAD_SCALE", "FIX_AGE_SCALE", "Guidance", "REMAINING_SCALE", "SUPPORT_SCALE", "fields"]
 
-ARCS = np.array([1.5, 3.0, 5.0])
-"""Arc lengths along the planned path of the points shown [m]."""
-AHEAD_SCALE = 5.0
-"""Body-frame offsets of the points ahead are divided by this [m]."""
-FIX_AGE_SCALE = 2.0
-"""Seconds since the last pose are divided by this (and clipped at 1)."""
-SUPPORT_SCALE = 8
-"""Measurements that agree with the pose are divided by this (and clipped at 1)."""
 REPLAN_DISTANCE = 1.5
 """An estimate this far from the path [m] has the path planned again from it."""
 FOLLOW_BACK, FOLLOW_AHEAD = 1.0, 4.0
 """How far behind and ahead of the last projection the next one is looked for [m]."""
-REMAINING_SCALE = 50.0
-"""The path's remaining length is divided by this [m] (and clipped at 1)."""
 HEALTH_FIELDS = ("localized", "fix_age", "support")
 PATH_FIELDS = tuple(f"ahead_{axis}_{k}" for k in range(1, len(ARCS) + 1)
                     for axis in ("forward", "left")) + ("remaining",)
@@ -112,10 +107,9 @@ class Guidance:
             steer_share: Steering angle over full lock.
             true_pose: The body's true pose, where the range sensor is.
         """
-        observation = np.zeros(self.size, dtype=np.float32)
-        observation[0] = float(localized)
-        observation[1] = min(1.0, fix_age / FIX_AGE_SCALE) if estimate is not None else 1.0
-        observation[2] = min(1.0, support / SUPPORT_SCALE) if estimate is not None else 0.0
+        observation = np.empty(self.size, dtype=np.float32)
+        segment, arc = 0, 0.0
+        ex = ey = heading = 0.0
         if estimate is not None:
             ex, ey, heading = estimate
             segment, arc, distance = follow(self.path, self._along, ex, ey, self._segment,
@@ -124,22 +118,10 @@ class Guidance:
                 self._plan(ex, ey)
                 segment, arc = 0, 0.0
             self._segment = segment
-            points_at(self.path, self._along, segment, arc + ARCS, self._ahead)
-            c, s = math.cos(heading), math.sin(heading)
-            for k in range(len(ARCS)):
-                dx, dy = self._ahead[k, 0] - ex, self._ahead[k, 1] - ey
-                observation[3 + 2 * k] = _clip((c * dx + s * dy) / AHEAD_SCALE)
-                observation[4 + 2 * k] = _clip((-s * dx + c * dy) / AHEAD_SCALE)
-            remaining = self._along[-1] - arc
-            observation[3 + 2 * len(ARCS)] = min(1.0, remaining / REMAINING_SCALE)
-        drive = 4 + 2 * len(ARCS)
-        observation[drive] = _clip(speed_share)
-        observation[drive + 1] = _clip(steer_share)
-        x, y, heading = true_pose
-        G.ray_ranges(x, y, heading, self.segments, self.n_rays, self.ray_range, self._rays)
-        observation[drive + 2:] = self._rays / self.ray_range
+        x, y, true_heading = true_pose
+        fill_observation(observation, self.path, self._along, segment, float(arc),
+                         estimate is not None, float(ex), float(ey), float(heading),
+                         float(fix_age), float(support), bool(localized), float(speed_share),
+                         float(steer_share), float(x), float(y), float(true_heading),
+                         self.segments, float(self.ray_range), self._rays, self._ahead)
         return observation
-
-
-def _clip(value: float) -> float:
-    return max(-1.0, min(1.0, value))
