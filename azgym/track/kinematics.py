@@ -26,7 +26,7 @@ from azgym.profile import DIFFERENTIAL_DRIVE, FORKLIFT
 from azgym.sensing.motion import OdometrySamples
 from azgym.world.forklift import ForkliftSpec
 
-__all__ = ["CAMERA_AHEAD", "CAMERA_FROM_IMU", "WHEELBASE", "LowPass", "advance", "held_spans",
+__all__ = ["CAMERA_AHEAD", "CAMERA_FROM_IMU", "WHEELBASE", "advance", "held_spans",
            "odometry_yaw_rates", "yaw_rates"]
 
 _SPEC = ForkliftSpec()
@@ -91,22 +91,3 @@ def advance(pose: tuple[float, float, float], speed: float, yaw_rate: float, ahe
     return (x + (speed * c - across * s) * dt, y + (speed * s + across * c) * dt,
             wrap_scalar(heading + yaw_rate * dt))
 
-
-class LowPass:
-    """A first-order low-pass filter (cut-off ``cutoff_hz``) for irregularly spaced samples.
-
-    y ← y + α (x − y) with α = dt / (RC + dt), RC = 1 / (2π f_c): the discrete RC filter. The
-    first sample passes unchanged (no start-up transient from zero).
-    """
-
-    def __init__(self, cutoff_hz: float) -> None:
-        self._rc = 1.0 / (2.0 * math.pi * cutoff_hz)
-        self._value: FloatArray | None = None
-
-    def __call__(self, value: FloatArray, dt: float) -> FloatArray:
-        """The filtered value after ``value`` arrived ``dt`` seconds after the previous one."""
-        if self._value is None:
-            self._value = np.array(value, dtype=np.float64)
-        else:
-            self._value = self._value + dt / (self._rc + dt) * (value - self._value)
-        return self._value
