@@ -262,7 +262,7 @@ class LocalizeEnv(gym.Env):
     def step(self, action: np.ndarray) -> tuple[LocalizeObservation, float, bool, bool, dict]:
         """Score the estimate of the current frame's pose, then show the next frame."""
         estimate = self.action_to_pose(self._check_action(action))
-        x, y, heading = (float(v) for v in self._poses[self._frame])
+        x, y, heading = self.true_pose()
         position_error, heading_error = pose_error(estimate, (x, y, heading))
         rewards = {"position_error": -self.weights["position_error"] * position_error,
                    "heading_error": -self.weights["heading_error"] * heading_error}
@@ -318,10 +318,10 @@ class LocalizeEnv(gym.Env):
                 f"action must be a pose estimate (x, y, heading) of shape (3,), got shape "
                 f"{estimate.shape}"
             )
-        values = (float(estimate[0]), float(estimate[1]), float(estimate[2]))
-        if not all(math.isfinite(v) for v in values):
+        values = x, y, heading = float(estimate[0]), float(estimate[1]), float(estimate[2])
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
             raise InvalidInputError(f"action must be finite, got {list(values)}")
-        if any(abs(v) > 1.0 + 1e-6 for v in values):
+        if abs(x) > 1.0 + 1e-6 or abs(y) > 1.0 + 1e-6 or abs(heading) > 1.0 + 1e-6:
             raise InvalidInputError(
                 f"action {list(values)} is outside the action space [-1, 1]^3 (use "
                 "pose_to_action to normalise a pose)"
@@ -348,8 +348,8 @@ class LocalizeEnv(gym.Env):
 
     def true_pose(self) -> tuple[float, float, float]:
         """The true camera pose of the frame last observed."""
-        x, y, heading = self._poses[self._frame]
-        return float(x), float(y), float(heading)
+        x, y, heading = self._poses[self._frame].tolist()
+        return x, y, heading
 
     def last_estimate(self) -> tuple[float, float, float] | None:
         """The agent's last answer, if any in this episode."""

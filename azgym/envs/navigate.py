@@ -253,7 +253,7 @@ class NavigateEnv(gym.Env):
         frames = self._due_frames(world.steps)
         forklift = world.forklift
         x, y, _ = pose = forklift.pose
-        states = [forklift.camera_pose_at(pose)]  # the camera i physics steps into the period
+        poses = [pose]  # the body i physics steps into the period
         for _ in range(CONTROL_STEPS):
             world.step(throttle, steer)
             if self._feed is not None:
@@ -261,10 +261,11 @@ class NavigateEnv(gym.Env):
             self._pose.coast(forklift.speed, forklift.steer, PHYSICS_DT)
             previous_x, previous_y = x, y
             x, y, _ = pose = forklift.pose
-            states.append(forklift.camera_pose_at(pose))
+            poses.append(pose)
             self._travelled += math.hypot(x - previous_x, y - previous_y)
         self._steps += 1
-        self._look([(interpolate_pose(states[i], states[i + 1], fraction), time)
+        camera = forklift.camera_pose_at
+        self._look([(interpolate_pose(camera(poses[i]), camera(poses[i + 1]), fraction), time)
                     for i, fraction, time in frames])
         potential = self._cost_to_go(pose)
         arrived = math.hypot(self._goal[0] - x, self._goal[1] - y) < self.goal_radius

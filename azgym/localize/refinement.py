@@ -169,10 +169,11 @@ def package(
     gives
     ``ok=False`` with the reason: its pose is not the minimum of eq. 31, so it is no answer.
     """
-    status = int(out[K.REFINED_STATUS])
-    diagnostics["n_iterations"] = int(out[K.REFINED_ITERATIONS])
+    values = out.tolist()  # Python floats: read one by one, far cheaper than numpy scalars
+    status = int(values[K.REFINED_STATUS])
+    diagnostics["n_iterations"] = int(values[K.REFINED_ITERATIONS])
     diagnostics["converged"] = status == K.CONVERGED
-    diagnostics["cost"] = float(out[K.REFINED_COST])
+    diagnostics["cost"] = values[K.REFINED_COST]
     if status == K.SINGULAR:
         return Estimate.failure(
             "the measurements used do not determine the pose (singular geometry)",
@@ -193,8 +194,8 @@ def package(
             "(ill-conditioned geometry, e.g. the camera near the circle through the beacons)",
             inliers.size, diagnostics,
         )
-    x, y = float(out[K.POSE_X]), float(out[K.POSE_Y])
-    heading = math.atan2(out[K.POSE_SIN], out[K.POSE_COS])
+    x, y = values[K.POSE_X], values[K.POSE_Y]
+    heading = math.atan2(values[K.POSE_SIN], values[K.POSE_COS])
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
         return Estimate.failure("the refinement ended at a non-finite pose", inliers.size,
                                 diagnostics)

@@ -26,6 +26,10 @@ __all__ = ["FORKLIFT_COLLISION_TYPE", "Forklift", "ForkliftSpec"]
 FORKLIFT_COLLISION_TYPE = 1
 SLIP_TOLERANCE = 0.2
 """Largest gap between commanded and actual speed [m/s] before the command follows the body."""
+_SET_VELOCITY = pymunk.Body.__dict__["velocity"].fset
+_SET_ANGULAR_VELOCITY = pymunk.Body.__dict__["angular_velocity"].fset
+"""The control body's velocity setters, called directly: ``body.velocity = v`` first passes
+through pymunk's attribute hook (a Python frame), twice every physics step."""
 
 
 @dataclass(frozen=True)
@@ -157,14 +161,14 @@ class Forklift:
         omega = speed * math.tan(self.steer) / spec.wheelbase
         # Velocity of the body centre: v along the heading at the reference axle, plus ω × r.
         turn = omega * self._centre_offset
-        self.control.velocity = (speed * c - turn * s, speed * s + turn * c)
-        self.control.angular_velocity = omega
+        _SET_VELOCITY(self.control, (speed * c - turn * s, speed * s + turn * c))
+        _SET_ANGULAR_VELOCITY(self.control, omega)
 
     @property
     def pose(self) -> tuple[float, float, float]:
         """(x, y, heading) of the body centre [m, m, rad], the heading wrapped to (−π, π]."""
-        position = self.body.position
-        return position.x, position.y, wrap_scalar(float(self.body.angle))
+        x, y = self.body.position
+        return x, y, wrap_scalar(self.body.angle)
 
     def camera_position(self) -> tuple[float, float]:
         """Where the camera is in the world (x, y) [m]."""
