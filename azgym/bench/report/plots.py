@@ -136,7 +136,7 @@ def _error_map(plt: Any, summary: Summary, frames: list[Case],
     labels = list(summary["localizers"])
     rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
     xy = np.array([frames[k].pose[:2] for k in rows])
-    figure, grid = _panels(plt, len(labels))
+    figure, grid, colour_bar = _panels(plt, len(labels), plan)
     norm = LogNorm(vmin=0.5, vmax=1000.0)
     for axes, label in zip(grid.ravel(), labels, strict=False):
         outcome = outcomes[label]
@@ -148,16 +148,55 @@ def _error_map(plt: Any, summary: Summary, frames: list[Case],
         axes.set_title(label, fontsize=9)
     for axes in grid.ravel()[len(labels):]:
         axes.set_axis_off()
-    figure.colorbar(shown, ax=grid.ravel().tolist(), label="position error [cm] (none: top)")
+    figure.colorbar(shown, cax=colour_bar, label="position error [cm] (none: top)")
     return _save(figure, path, plt)
 
 
-def _panels(plt: Any, count: int) -> tuple[Any, Any]:
-    """A figure with one floor-plan panel per contender, three to a row."""
+PANEL_WIDTH = 4.2
+"""Width of a floor-plan panel [inch]; its height follows the floor's aspect."""
+PANEL_MARGINS = (0.55, 0.15, 0.35, 0.35)
+"""Room around each panel for its tick labels: left, right, bottom, top (its title) [inch]."""
+COLOURBAR_ROOM = 1.1
+"""Width kept right of the panels for the colour bar and its label [inch]."""
+
+
+def _panels(plt: Any, count: int, plan: str | BeaconMap,
+            title: bool = False) -> tuple[Any, Any, Any]:
+    """A figure with one floor-plan panel per contender, three to a row, and a colour-bar axes.
+
+    The panels are laid out at fixed sizes (no layout engine, which costs seconds per figure):
+    each as wide as :data:`PANEL_WIDTH` and as tall as the floor's aspect makes it, with room for
+    its tick labels and title; ``title`` keeps room above for a figure title.
+    """
+    x_min, y_min, x_max, y_max = _extent(plan)
+    aspect = min(2.0, max(0.25, (y_max - y_min) / max(x_max - x_min, 1e-9)))
     columns = min(3, count)
     lines = -(-count // columns)
-    return plt.subplots(lines, columns, figsize=(4.6 * columns, 3.6 * lines), squeeze=False,
-                        constrained_layout=True)
+    left, right, bottom, top = PANEL_MARGINS
+    cell_width = left + PANEL_WIDTH + right
+    cell_height = bottom + PANEL_WIDTH * aspect + top
+    head = 0.35 if title else 0.0
+    width, height = columns * cell_width + COLOURBAR_ROOM, lines * cell_height + head
+    figure = plt.figure(figsize=(width, height))
+    grid = np.empty((lines, columns), dtype=object)
+    for line in range(lines):
+        for column in range(columns):
+            x0 = column * cell_width + left
+            y0 = height - head - (line + 1) * cell_height + bottom
+            grid[line, column] = figure.add_axes(
+                (x0 / width, y0 / height, PANEL_WIDTH / width, PANEL_WIDTH * aspect / height))
+    colour_bar = figure.add_axes(((columns * cell_width + 0.1) / width, 0.1,
+                                  0.15 / width, (height - head) / height - 0.2))
+    return figure, grid, colour_bar
+
+
+def _extent(plan: str | BeaconMap) -> tuple[float, float, float, float]:
+    """(x_min, y_min, x_max, y_max) of a floor plan [m]: the room, or the beacons with 1 m."""
+    if isinstance(plan, BeaconMap):
+        x_min, y_min = plan.xyz[:, :2].min(axis=0) - 1.0
+        x_max, y_max = plan.xyz[:, :2].max(axis=0) + 1.0
+        return float(x_min), float(y_min), float(x_max), float(y_max)
+    return load_scenario(plan).bounds
 
 
 def _floor_plan(axes: Any, plan: str | BeaconMap) -> None:
@@ -186,7 +225,7 @@ def _trajectories(plt: Any, summary: Summary, frames: list[Case],
     scenario_name, plan = scenario
     labels = list(summary["localizers"])
     rows = [k for k, f in enumerate(frames) if f.scenario == scenario_name]
-    figure, grid = _panels(plt, len(labels))
+    figure, grid, colour_bar = _panels(plt, len(labels), plan, title=True)
     norm = LogNorm(vmin=0.5, vmax=1000.0)
     for axes, label in zip(grid.ravel(), labels, strict=False):
         _floor_plan(axes, plan)
@@ -201,7 +240,7 @@ def _trajectories(plt: Any, summary: Summary, frames: list[Case],
         axes.set_title(f"{label}: {len(answered)} of {len(rows)} frames answered", fontsize=9)
     for axes in grid.ravel()[len(labels):]:
         axes.set_axis_off()
-    figure.colorbar(shown, ax=grid.ravel().tolist(), label="position error [cm]")
+    figure.colorbar(shown, cax=colour_bar, label="position error [cm]")
     figure.suptitle(f"{scenario_name}: true routes (lines) and estimates", fontsize=10)
     return _save(figure, path, plt)
 
