@@ -35,7 +35,6 @@ from collections.abc import Sequence
 from typing import Final, Generic, TypedDict, TypeVar
 
 import numpy as np
-import scipy.stats
 from numpy.typing import ArrayLike
 
 from azgym.core import wrap_angle
@@ -243,9 +242,11 @@ def confidence_intervals(position: np.ndarray, ok: np.ndarray, blocks: np.ndarra
         headline = _sorted_quantile(np.sort(frames, axis=1), counts, 0.75)
         return np.stack([headline, np.where(answered.any(axis=1), mean, np.nan), failed])
 
+    from scipy.stats import bootstrap  # imported here: half a second, paid by intervals only
+
     with warnings.catch_warnings():  # a degenerate distribution (all refused) is no error here
         warnings.simplefilter("ignore")
-        distribution = scipy.stats.bootstrap(
+        distribution = bootstrap(
             (np.arange(count),), statistics, n_resamples=RESAMPLES, batch=_BATCH,
             vectorized=True, method="percentile", random_state=np.random.default_rng(seed),
         ).bootstrap_distribution

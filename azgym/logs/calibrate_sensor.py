@@ -32,8 +32,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
-import scipy.stats
 
 from azgym.core import FloatArray, wrap_angle
 from azgym.logs.read import Log
@@ -150,8 +148,10 @@ def _delta(residual: FloatArray, cover: FloatArray) -> float:
     if residual.size == 0 or _score(residual, cover, 0.0)[0].sum() <= 0.0:
         return 0.0
     high = 3.0 * float(np.max(residual**2)) + 1e-30
-    root = scipy.optimize.brentq(lambda square: _score(residual, cover, square)[0].sum(), 0.0,
-                                 high, xtol=1e-30, rtol=1e-12)
+    from scipy.optimize import brentq  # imported here: a calibration's cost, not every command's
+
+    root = brentq(lambda square: _score(residual, cover, square)[0].sum(), 0.0,
+                 high, xtol=1e-30, rtol=1e-12)
     return min(math.sqrt(root), math.pi / 2 - 1e-9)
 
 
@@ -214,9 +214,11 @@ def block_interval(statistic: Callable[[np.ndarray], np.ndarray], blocks: int, v
     """
     if blocks < 2:
         return None
+    from scipy.stats import bootstrap  # imported here: a calibration's cost, not every command's
+
     with warnings.catch_warnings():  # a degenerate (exact) distribution is handled below
         warnings.simplefilter("ignore")
-        low, high = scipy.stats.bootstrap(
+        low, high = bootstrap(
             (np.arange(blocks),), lambda pick, axis=-1: statistic(pick),
             n_resamples=RESAMPLES, vectorized=True, method="BCa", random_state=rng,
         ).confidence_interval

@@ -245,3 +245,11 @@ def test_a_log_without_truth_or_a_bad_seed_is_refused(tmp_path):
 def test_the_same_seed_gives_the_same_figures(tmp_path):
     log = read_log(write_simulated(tmp_path / "log", 4, Truth(seconds=30.0)))
     assert calibrate(log, seed=7).fits == calibrate(log, seed=7).fits
+
+
+def test_the_95_percent_likelihood_bound_is_scipys_chi2_quantile() -> None:
+    import scipy.stats
+
+    from azgym.logs.calibrate_motion import CHI2_95
+
+    assert CHI2_95 == float(scipy.stats.chi2.ppf(0.95, 1))
