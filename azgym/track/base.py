@@ -144,6 +144,14 @@ class Tracker(Hyperparameters, ABC):
                 f"{earlier} in earlier frames: a column is given throughout a stream or left out "
                 "(NaN) throughout")
 
+    def _columns(self, stream: str) -> int:
+        """Which of the stream's :data:`COLUMNS` the sequence's samples give (bit c: column c).
+
+        As :func:`check_motion` found them in the frames with samples so far; any frame's samples
+        give the same (a change is refused).
+        """
+        return int(self.__dict__["_given"].get(stream, 0))
+
     def _started(self, method: str) -> float:
         """The time of the last prediction; refuses a call before ``reset``."""
         clock = self.__dict__.get("_clock")

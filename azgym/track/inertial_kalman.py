@@ -206,7 +206,8 @@ class Tkf(Tracker):
         from_odometry = self._yaw_source == "odometry"
         used = odometry.time.size if use_speed or from_odometry else 0
         # A new array either way (a run's frames arrive read-only): one specialization.
-        rates = np.array(odometry_yaw_rates(odometry, self.vehicle, float(self.wheelbase)),
+        rates = np.array(odometry_yaw_rates(odometry, self.vehicle, float(self.wheelbase),
+                                            self._columns("odometry")),
                          dtype=np.float64) if from_odometry else _GYRO_YAW
         predict_samples(self._x, self._P, imu.time, imu.accel, imu.yaw_rate, imu.heading,
                         odometry.time[:used], odometry.speed[:used], rates, clock, motion.time,
@@ -260,11 +261,13 @@ class Tkf(Tracker):
         gate with it, so a fix that agrees with the prediction brings it back, while a wrong one
         (ransac can be wrong for several frames running) cannot capture it.
         """
-        z = np.array(fix.pose, dtype=np.float64)
+        x, y, heading = fix.pose
         R = np.array(fix.covariance if fix.covariance is not None else _FALLBACK_FIX_COVARIANCE,
                      dtype=np.float64)  # a new array: one specialization of the kernel
-        if not (np.isfinite(z).all() and np.isfinite(R).all()):
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)
+                and np.isfinite(R).all()):
             return False
+        z = np.array((x, y, heading), dtype=np.float64)
         if self._live:
             gate = float(self.gate)
             if fix_update(self._x, self._P, z, R, float(self.camera_from_imu), gate) <= gate:

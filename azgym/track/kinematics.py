@@ -24,6 +24,7 @@ from azgym.core import FloatArray, wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.profile import DIFFERENTIAL_DRIVE, FORKLIFT
 from azgym.sensing.motion import OdometrySamples
+from azgym.track.base import COLUMNS
 from azgym.world.forklift import ForkliftSpec
 
 __all__ = ["CAMERA_AHEAD", "CAMERA_FROM_IMU", "WHEELBASE", "advance", "held_spans",
@@ -37,6 +38,12 @@ CAMERA_AHEAD = _SPEC.camera_offset[0] - 0.5 * _SPEC.wheelbase * (1 if _SPEC.rear
 the rear-steered forklift's reference is the front axle, 0.8 m ahead of the body centre)."""
 CAMERA_FROM_IMU = _SPEC.camera_offset[0]
 """How far the default forklift's camera is ahead of its body centre, where the IMU sits [m]."""
+
+
+_STEER = 1 << COLUMNS["odometry"].index("steer")
+_YAW_RATE = 1 << COLUMNS["odometry"].index("yaw_rate")
+"""The steering angle's and the turn rate's bits in :func:`~azgym.track.base.check_motion`'s
+columns of the odometry."""
 
 
 def held_spans(times: FloatArray, start: float, end: float) -> FloatArray:
@@ -53,21 +60,32 @@ def yaw_rates(speed: FloatArray, steer: FloatArray, wheelbase: float) -> FloatAr
     return speed * np.tan(steer) / wheelbase
 
 
-def odometry_yaw_rates(odometry: OdometrySamples, vehicle: str, wheelbase: float) -> FloatArray:
+def odometry_yaw_rates(odometry: OdometrySamples, vehicle: str, wheelbase: float,
+                       columns: int | None = None) -> FloatArray:
     """The turn rate the odometry reports, per sample [rad/s].
 
     Its ``yaw_rate`` when it reports one (a differential drive's, or any odometry that reports
     its turn rate); else, on a forklift, the bicycle model's v tan δ / L from its steering angle.
+    ``columns``: which of the odometry's :data:`~azgym.track.base.COLUMNS` the samples give, as
+    :func:`~azgym.track.base.check_motion` found them (given throughout or NaN throughout), which
+    saves looking for NaN again; None: look.
 
     Raises:
         InvalidInputError: The odometry reports no turn rate and, on a forklift, no steering
             angle either: the turn rate must then come from the IMU's gyro.
     """
-    if odometry.reports_yaw_rate or not odometry.time.size:
+    if not odometry.time.size:
         return odometry.yaw_rate
-    if vehicle == FORKLIFT and not np.isnan(odometry.steer).any():
+    if columns is None:
+        reports_yaw_rate = odometry.reports_yaw_rate
+        reports_steer = not np.isnan(odometry.steer).any()
+    else:
+        reports_yaw_rate, reports_steer = bool(columns & _YAW_RATE), bool(columns & _STEER)
+    if reports_yaw_rate:
+        return odometry.yaw_rate
+    if vehicle == FORKLIFT and reports_steer:
         return yaw_rates(odometry.speed, odometry.steer, wheelbase)
-    if vehicle == DIFFERENTIAL_DRIVE and not np.isnan(odometry.steer).any():
+    if vehicle == DIFFERENTIAL_DRIVE and reports_steer:
         raise InvalidInputError(
             "vehicle='differential-drive' turns at the odometry's yaw_rate, but this odometry "
             "reports a steering angle instead: set vehicle='forklift', or take the turn rate "
