@@ -90,10 +90,27 @@ def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray
         else:
             _draw_strip(image, cx, cy, camera.focal_px, distortion, math.pi / 2 - e, lo, hi,
                         scale * min(f, 40.0), PSF_SIGMA_PX)
-    if noise is not None:
-        image += noise
-    np.clip(image, 0, 255, out=image)
-    return image.astype(np.uint8)
+    grey = np.empty((height, width), dtype=np.uint8)
+    _to_grey(image, image if noise is None else noise, noise is not None, grey)
+    return grey
+
+
+@jit
+def _to_grey(image, noise, add_noise, out):
+    """``out`` = the 8-bit frame: ``image`` (+ ``noise``) clipped to [0, 255], then truncated.
+
+    One pass over the frame, as numpy's ``(image + noise).clip(0, 255).astype(np.uint8)`` in
+    float32 (three passes and a temporary there), bit for bit.
+    """
+    height, width = image.shape
+    for row in range(height):
+        for column in range(width):
+            value = image[row, column] + noise[row, column] if add_noise else image[row, column]
+            if value < 0.0:
+                value = np.float32(0.0)
+            elif value > 255.0:
+                value = np.float32(255.0)
+            out[row, column] = np.uint8(value)
 
 
 @jit(error_model="python")
