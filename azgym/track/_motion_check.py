@@ -60,6 +60,29 @@ def stream_fault(after, until, time, first, second, third, optional):
 
 
 @jit
+def motion_fault(after, until, odometry_time, speed, steer, odometry_yaw_rate, imu_time,
+                 imu_yaw_rate, accel, odometry_optional, imu_optional):
+    """:func:`stream_fault` of the odometry, then of the IMU, in one call.
+
+    ``accel`` is the IMU's (K, 2) accelerations (columns ax, ay); the ``*_optional`` flags are
+    each stream's, as :func:`stream_fault` takes them.
+
+    Returns:
+        (stream, fault, column, odometry's given, IMU's given): ``stream`` is 0 (the odometry)
+        or 1 (the IMU) for the first stream at fault, with its fault and column, else −1.
+    """
+    fault, column, odometry_given = stream_fault(after, until, odometry_time, speed, steer,
+                                                 odometry_yaw_rate, odometry_optional)
+    if fault:
+        return 0, fault, column, 0, 0
+    fault, column, imu_given = stream_fault(after, until, imu_time, imu_yaw_rate, accel[:, 0],
+                                            accel[:, 1], imu_optional)
+    if fault:
+        return 1, fault, column, 0, 0
+    return -1, 0, -1, odometry_given, imu_given
+
+
+@jit
 def _column(values, optional):
     """_GIVEN, _LEFT_OUT (NaN throughout, where ``optional``), NOT_FINITE or PARTLY_GIVEN."""
     missing = 0

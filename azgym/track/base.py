@@ -26,11 +26,13 @@ from azgym.hyperparameters import Hyperparameters
 from azgym.localize.base import MAX_MEASUREMENTS
 from azgym.localize.registry import SupportsLocalize, build, has_tracker_methods
 from azgym.sensing.motion import Motion
-from azgym.track._motion_check import NOT_FINITE, OUT_OF_ORDER, PARTLY_GIVEN, stream_fault
+from azgym.track._motion_check import NOT_FINITE, OUT_OF_ORDER, PARTLY_GIVEN, motion_fault
 
 __all__ = ["COLUMNS", "FrameByFrame", "SupportsTrack", "Tracker", "check_choice", "check_motion",
            "make_tracker"]
 
+STREAMS = ("odometry", "imu")
+"""The motion streams, in the order :func:`check_motion` checks them."""
 COLUMNS = {"odometry": ("speed", "steer", "yaw_rate"), "imu": ("yaw_rate", "ax", "ay")}
 """The value columns of each motion stream that :func:`check_motion` checks."""
 OPTIONAL = {"odometry": np.array([False, True, True]), "imu": np.array([False, True, True])}
@@ -187,14 +189,13 @@ def check_motion(motion: Any, after: float) -> dict[str, int]:
             f"motion.time must be finite and not before the previous frame's ({after!r}), got "
             f"{motion.time!r}")
     odometry, imu = motion.odometry, motion.imu
-    streams = {"odometry": (odometry.time, odometry.speed, odometry.steer, odometry.yaw_rate),
-               "imu": (imu.time, imu.yaw_rate, imu.accel[:, 0], imu.accel[:, 1])}
-    given = {}
-    for stream, (time, *values) in streams.items():
-        fault, column, given[stream] = stream_fault(after, float(motion.time), time, *values,
-                                                    OPTIONAL[stream])
-        if not fault:
-            continue
+    at_fault, fault, column, odometry_given, imu_given = motion_fault(
+        after, float(motion.time), odometry.time, odometry.speed, odometry.steer,
+        odometry.yaw_rate, imu.time, imu.yaw_rate, imu.accel, OPTIONAL["odometry"],
+        OPTIONAL["imu"])
+    if fault:
+        stream = STREAMS[at_fault]
+        time = (odometry, imu)[at_fault].time
         where = f"motion.{stream}" + (f".{COLUMNS[stream][column]}" if column >= 0 else ".time")
         if fault == OUT_OF_ORDER:
             raise InvalidInputError(
@@ -206,7 +207,7 @@ def check_motion(motion: Any, after: float) -> dict[str, int]:
             raise InvalidInputError(
                 f"{where} is NaN in some samples only: a column is given throughout a stream or "
                 "left out (NaN) throughout")
-    return given
+    return {"odometry": odometry_given, "imu": imu_given}
 
 
 def check_choice(owner: str, name: str, value: Any, choices: tuple[str, ...]) -> None:
