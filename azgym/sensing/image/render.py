@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 
 from azgym.core import FloatArray
+from azgym.errors import InvalidInputError
 from azgym.jit import jit
 from azgym.site.fisheye import FisheyeCamera
 
@@ -72,12 +73,20 @@ def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray
         azimuth_hi: End of it [rad].
         elevation: Each light's elevation above the horizon [rad].
         flux: Each light's flux over the detection threshold (>= 1).
-        noise: An image-sized float32 array of sensor noise to add (grey levels), or None; a
-            bank of precomputed noise frames avoids the cost of fresh Gaussian noise.
+        noise: An image-sized array of sensor noise to add (grey levels, taken as float32), or
+            None; a bank of precomputed noise frames avoids the cost of fresh Gaussian noise.
         half_tall: Each light's angular half-extent in elevation [rad], or None for LEDs (whose
             height the point spread hides). A light taller than a pixel is drawn as a patch.
+
+    Raises:
+        InvalidInputError: Noise that is not one frame (the camera's image size) of grey levels.
     """
     width, height = camera.image_size
+    if noise is not None:
+        noise = np.asarray(noise, dtype=np.float32)
+        if noise.shape != (height, width):
+            raise InvalidInputError(f"render: noise must be one frame of {height} x {width} "
+                                    f"grey levels, got shape {noise.shape}")
     image = np.zeros((height, width), dtype=np.float32)
     cx, cy = camera.principal_point
     distortion = np.array(camera.distortion, dtype=np.float64)

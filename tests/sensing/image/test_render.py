@@ -157,3 +157,28 @@ def test_the_error_model_study_measures_what_eq_1_and_2_assume():
     assert 0.5 < np.mean(ratio) < 0.8
     # Coverage errors of partly covered beacons stay within eq. 2's bound.
     assert summary["partly_covered"] > 0 and summary["coverage_within_eq2_bound"] == 1.0
+
+
+def test_the_frame_is_the_drawing_plus_noise_clipped_and_cast_as_numpy_does() -> None:
+    """The 8-bit frame is numpy's (drawing + noise in float32).clip(0, 255).astype(uint8)."""
+    from azgym.sensing.image.render import _to_grey
+
+    rng = np.random.default_rng(3)
+    drawing = rng.uniform(-60.0, 320.0, (48, 64)).astype(np.float32)
+    drawing[0, :6] = [0.0, 255.0, 254.99998, -0.0, 0.99999994, 255.00002]  # the edges
+    noise = rng.normal(0.0, 30.0, (48, 64)).astype(np.float32)
+    noise[0, :6] = 0.0
+    for added, expected in ((True, drawing + noise), (False, drawing)):
+        grey = np.empty((48, 64), dtype=np.uint8)
+        _to_grey(drawing, noise, added, grey)
+        assert np.array_equal(grey, np.clip(expected, 0, 255).astype(np.uint8))
+    assert grey[0, :6].tolist() == [0, 255, 254, 0, 0, 255]
+
+
+def test_noise_of_the_wrong_shape_is_refused_by_name() -> None:
+    from azgym.errors import InvalidInputError
+
+    camera = FisheyeCamera()
+    with pytest.raises(InvalidInputError, match="noise must be one frame of 480 x 480"):
+        render(camera, np.zeros(1), np.full(1, 0.01), np.full(1, 0.3), np.full(1, 3.0),
+               np.zeros(480))
