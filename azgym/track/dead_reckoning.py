@@ -81,8 +81,8 @@ class DeadReckoning(Tracker):
         spans = held_spans(odometry.time, start, motion.time)
         speeds = np.append(self._speed, odometry.speed)
         if self.yaw_source == "odometry":
-            rates = np.append(self._rate, odometry_yaw_rates(odometry, self.vehicle,
-                                                             float(self.wheelbase)))
+            rates = np.append(self._rate, odometry_yaw_rates(
+                odometry, self.vehicle, float(self.wheelbase), self._columns("odometry")))
         else:
             rates = self._gyro_rates(motion, start, spans)
         pose, factor = self._pose, float(self.speed_factor)

@@ -17,7 +17,7 @@ from azgym.bench.suites import CAUSES, Case
 from azgym.core import BeaconMap
 from azgym.files import write_file
 from azgym.metrics import HEADLINE
-from azgym.site import load_scenario
+from azgym.site import Scenario, load_scenario
 from azgym.site.drawing import draw_floor, line_styles
 
 if TYPE_CHECKING:
@@ -50,7 +50,8 @@ def write_figures(summary: Summary, frames: list[Case],
     written = [_error_cdfs(plt, summary, outcomes, out / "cdf.png"),
                _p75_by_cause(plt, summary, out / "causes.png")]
     for scenario_name in dict.fromkeys(f.scenario for f in frames):
-        plan = maps.get(scenario_name, scenario_name)
+        given = maps.get(scenario_name)
+        plan = given if given is not None else load_scenario(scenario_name)  # parsed once
         written.append(_error_map(plt, summary, frames, outcomes, (scenario_name, plan),
                                   out / f"error_map_{scenario_name}.png"))
         routed = any(f.sequence for f in frames if f.scenario == scenario_name)
@@ -124,7 +125,7 @@ def _p75_by_cause(plt: Any, summary: Summary, path: Path) -> Path:
 
 
 def _error_map(plt: Any, summary: Summary, frames: list[Case],
-               outcomes: dict[str, RunOutcome], scenario: tuple[str, str | BeaconMap],
+               outcomes: dict[str, RunOutcome], scenario: tuple[str, Scenario | BeaconMap],
                path: Path) -> Path:
     """One floor plan per localizer: its position error at each of the scenario's frames.
 
@@ -160,7 +161,7 @@ COLOURBAR_ROOM = 1.1
 """Width kept right of the panels for the colour bar and its label [inch]."""
 
 
-def _panels(plt: Any, count: int, plan: str | BeaconMap,
+def _panels(plt: Any, count: int, plan: Scenario | BeaconMap,
             title: bool = False) -> tuple[Any, Any, Any]:
     """A figure with one floor-plan panel per contender, three to a row, and a colour-bar axes.
 
@@ -190,31 +191,31 @@ def _panels(plt: Any, count: int, plan: str | BeaconMap,
     return figure, grid, colour_bar
 
 
-def _extent(plan: str | BeaconMap) -> tuple[float, float, float, float]:
+def _extent(plan: Scenario | BeaconMap) -> tuple[float, float, float, float]:
     """(x_min, y_min, x_max, y_max) of a floor plan [m]: the room, or the beacons with 1 m."""
     if isinstance(plan, BeaconMap):
         x_min, y_min = plan.xyz[:, :2].min(axis=0) - 1.0
         x_max, y_max = plan.xyz[:, :2].max(axis=0) + 1.0
         return float(x_min), float(y_min), float(x_max), float(y_max)
-    return load_scenario(plan).bounds
+    return plan.bounds
 
 
-def _floor_plan(axes: Any, plan: str | BeaconMap) -> None:
+def _floor_plan(axes: Any, plan: Scenario | BeaconMap) -> None:
     """A scenario's racks (grey) and walls (dark lines), or a beacon map's beacons only.
 
-    ``plan`` is a scenario's name, or the beacon map of a map that is no shipped scenario (a
-    log's ``beacons.csv``): its beacons are drawn as red triangles, without racks or walls.
+    ``plan`` is the scenario, or the beacon map of a map that is no shipped scenario (a log's
+    ``beacons.csv``): its beacons are drawn as red triangles, without racks or walls.
     """
     if isinstance(plan, BeaconMap):
         axes.scatter(plan.xyz[:, 0], plan.xyz[:, 1], marker="^", s=14, color="tab:red",
                      label="beacons")
         axes.set_aspect("equal")
         return
-    draw_floor(axes, load_scenario(plan))
+    draw_floor(axes, plan)
 
 
 def _trajectories(plt: Any, summary: Summary, frames: list[Case],
-                  outcomes: dict[str, RunOutcome], scenario: tuple[str, str | BeaconMap],
+                  outcomes: dict[str, RunOutcome], scenario: tuple[str, Scenario | BeaconMap],
                   path: Path) -> Path:
     """One floor plan per contender: the true routes (lines) and its estimates, by error.
 
