@@ -73,3 +73,12 @@ def test_every_package_is_installed_and_the_scenarios_with_it():
     shipped = run("from importlib import resources; print(sorted(p.name for p in resources.files("
                   "'azgym.site.scenarios').iterdir() if p.name.endswith('.toml')))")
     assert shipped == str(sorted(p.name for p in (ROOT / "envs").glob("*.toml")))
+
+
+def test_the_build_requires_what_compiling_the_kernels_imports_at_the_dependencies_bounds():
+    # The build runs the default benchmark (azgym.build_hook); a bound that drifted from the
+    # dependencies' would compile with one version and run with another.
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    requires = [r for r in project["build-system"]["requires"] if not r.startswith("setuptools")]
+    assert requires and set(requires) <= set(project["project"]["dependencies"])
+    assert project["tool"]["setuptools"]["cmdclass"] == {"build_py": "azgym.build_hook.BuildPy"}

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -143,3 +147,168 @@ def test_with_numba_cache_dir_set_only_that_cache_says_whether_the_kernels_are_c
     run compiles (and says so), whatever the package's own __pycache__ holds."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     assert not localizers_compiled()
+
+
+def ship(package: Path, kernels: dict[str, list[str]], **manifest: str) -> None:
+    """Give a fake package kernels compiled at installation: folder → file names, and a manifest
+    of its own sources and this numba unless told otherwise."""
+    import json
+
+    import numba
+
+    from azgym.jit import COMPILED_FOLDER, MANIFEST_NAME, sources_digest
+
+    shipped = package / COMPILED_FOLDER
+    for folder, names in kernels.items():
+        (shipped / folder).mkdir(parents=True, exist_ok=True)
+        for name in names:
+            (shipped / folder / name).write_text(f"shipped {name}")
+    record = {"sources": sources_digest(package), "numba": numba.__version__, **manifest}
+    (shipped / MANIFEST_NAME).write_text(json.dumps(record))
+
+
+RANSAC = ["ransac._frame-9.py311.nbi", "ransac._frame-9.py311.1.nbc",
+          "ransac._frame-9.py311.2.nbc"]
+MOTION = ["_motion_check.fault-3.py311.nbi", "_motion_check.fault-3.py311.1.nbc"]
+
+
+@pytest.fixture
+def installed(tmp_path, monkeypatch) -> tuple[Path, Path]:
+    """A fake installed package with an empty NUMBA_CACHE_DIR, as a fresh installation runs."""
+    package = fake_package(tmp_path / "site-packages" / "azgym")
+    shared = tmp_path / "empty-cache"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(shared))
+    return package, shared
+
+
+def test_kernels_compiled_at_installation_are_copied_where_numba_looks(installed):
+    package, shared = installed
+    ship(package, {"localize": RANSAC, "track": MOTION})
+    drop_stale_cache(package)
+    localize = shared / numba_subfolder(package / "localize")
+    track = shared / numba_subfolder(package / "track")
+    for folder, names in ((localize, RANSAC), (track, MOTION)):
+        for name in names:
+            assert (folder / name).read_text() == f"shipped {name}"
+    assert not list(shared.rglob(".seed-*"))  # no temporary file left behind
+    assert localizers_compiled(package) is False  # (no file of that name was shipped here)
+
+
+def test_a_kernel_numba_already_cached_is_left_as_it_is(installed):
+    package, shared = installed
+    ship(package, {"localize": RANSAC})
+    drop_stale_cache(package)  # the folder is made, with its record, and seeded
+    localize = shared / numba_subfolder(package / "localize")
+    (localize / RANSAC[0]).write_text("numba's own index, with more signatures")
+    (localize / RANSAC[1]).write_text("numba's own data")
+    drop_stale_cache(package)
+    assert (localize / RANSAC[0]).read_text() == "numba's own index, with more signatures"
+    assert (localize / RANSAC[1]).read_text() == "numba's own data"
+
+
+@pytest.mark.parametrize("manifest", [{"sources": "0" * 64}, {"numba": "0.1.0"}])
+def test_kernels_compiled_from_other_sources_or_by_another_numba_are_not_copied(installed,
+                                                                               manifest):
+    # An editable installation edited since it was installed, or numba upgraded: the files
+    # would at best be ignored by numba, at worst be the old kernels' code.
+    package, shared = installed
+    ship(package, {"localize": RANSAC}, **manifest)
+    drop_stale_cache(package)
+    assert not list(shared.rglob("*.nb[ic]"))
+
+
+@pytest.mark.parametrize("manifest", ["not json", "[1, 2]", ""])
+def test_an_unreadable_manifest_means_no_shipped_kernels(installed, manifest):
+    from azgym.jit import COMPILED_FOLDER, MANIFEST_NAME, shipped_kernels, sources_digest
+
+    package, shared = installed
+    ship(package, {"localize": RANSAC})
+    (package / COMPILED_FOLDER / MANIFEST_NAME).write_text(manifest)
+    assert shipped_kernels(package, sources_digest(package)) is None
+    drop_stale_cache(package)
+    assert not list(shared.rglob("*.nb[ic]"))
+
+
+def test_a_kernel_whose_files_cannot_be_copied_is_left_for_numba_to_compile(installed,
+                                                                          monkeypatch):
+    import os
+
+    package, shared = installed
+    ship(package, {"localize": RANSAC})
+    replace = os.replace
+
+    def full_disk(source, target):
+        if str(target).endswith(".2.nbc"):
+            raise OSError(28, "No space left on device")
+        return replace(source, target)
+
+    monkeypatch.setattr(os, "replace", full_disk)
+    drop_stale_cache(package)
+    localize = shared / numba_subfolder(package / "localize")
+    assert not (localize / RANSAC[0]).exists()  # no index pointing at a missing data file
+    assert not list(localize.glob(".seed-*"))
+
+
+def test_the_build_collects_every_kernel_folder_with_its_manifest(tmp_path):
+    import json
+
+    import numba
+
+    from azgym.jit import MANIFEST_NAME, shipped_kernels, sources_digest
+    from azgym.precompile import collect
+
+    package = fake_package(tmp_path / "stage" / "azgym")
+    cache = tmp_path / "numba-cache"
+    for folder, names in (("localize", RANSAC), ("track", MOTION)):
+        compiled = cache / numba_subfolder(package / folder)
+        compiled.mkdir(parents=True)
+        for name in [*names, "azgym-kernels.sha256"]:
+            (compiled / name).write_text(name)
+    out = tmp_path / "build" / "azgym" / "_compiled"
+    (out / "stale").mkdir(parents=True)  # a previous build's folder is replaced as a whole
+    assert collect(cache, out, package) == 2
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()) == sorted(
+        [MANIFEST_NAME, *(f"localize/{n}" for n in RANSAC), *(f"track/{n}" for n in MOTION)])
+    assert json.loads((out / MANIFEST_NAME).read_text()) == {
+        "sources": sources_digest(package), "numba": numba.__version__}
+    installed = tmp_path / "site-packages" / "azgym"
+    shutil.copytree(package, installed)
+    shutil.copytree(out, installed / "_compiled")
+    assert shipped_kernels(installed, sources_digest(installed)) == installed / "_compiled"
+
+
+FIRST_RUN = """
+import numpy as np
+from numba.core import event
+
+import azgym
+
+compiled = []
+class Record(event.Listener):
+    def on_start(self, e):
+        compiled.append(e.data["dispatcher"].py_func.__module__)
+    def on_end(self, e):
+        pass
+event.register("numba:compile", Record())
+beacons = azgym.load_scenario("warehouse-small").beacons
+ids = beacons.ids[:6]
+bearings = np.arctan2(beacons.xyz[:6, 1] - 5.0, beacons.xyz[:6, 0] - 8.0) - 0.4
+estimate = azgym.make_localizer("ransac").localize(azgym.Measurements(ids, bearings), beacons)
+assert estimate.ok, estimate
+print(len([module for module in compiled if module.startswith("azgym")]))
+"""
+
+
+def test_a_fresh_installation_runs_its_first_frame_without_compiling(tmp_path):
+    # What makes a first azgym bench take seconds, not half a minute: the kernels compiled by
+    # the installation load from an empty NUMBA_CACHE_DIR.
+    from azgym.jit import PACKAGE_DIR, shipped_kernels, sources_digest
+
+    if shipped_kernels(PACKAGE_DIR, sources_digest(PACKAGE_DIR)) is None:
+        pytest.skip("this installation has no kernels compiled from its sources (installed "
+                    "with AZGYM_PRECOMPILE=0, or edited since)")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "empty")}
+    done = subprocess.run([sys.executable, "-c", FIRST_RUN], env=env, capture_output=True,
+                          text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "0"

@@ -16,13 +16,13 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "azgym"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_version",), ("errors",), ("registry",), ("core",),
+    ("_version", "build_hook"), ("errors",), ("registry",), ("core",),
     ("fields",), ("arguments", "hyperparameters", "files", "untrusted", "profile", "progress"),
     ("jit",),
     ("metrics",),
     ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("mapping",),
     ("nav",),
-    ("envs",), ("bench",), ("learn", "placement", "experiments"), ("cli",), ("__init__",),
+    ("envs",), ("bench",), ("learn", "placement", "experiments"), ("cli",), ("precompile",), ("__init__",),
     ("__main__",),
 )
 """The units, lowest first; a unit is a top-level module or subpackage of ``azgym``."""
