@@ -6,7 +6,9 @@ own Python with an empty numba cache. The kernels land in ``azgym/_compiled`` of
 of the source tree for an editable installation (which imports the package from there).
 
 A failed compile does not fail the installation: azgym then compiles its kernels on the first
-run, as numba does, and the build says so. Setting ``AZGYM_PRECOMPILE=0`` skips the step.
+run, as numba does, and the build says so. Setting ``AZGYM_PRECOMPILE=0`` skips the step
+(:data:`azgym.jit.PRECOMPILE_SWITCH`, which this module cannot import: it runs before azgym is
+installed).
 """
 
 from __future__ import annotations
@@ -20,8 +22,10 @@ from pathlib import Path
 
 from setuptools.command.build_py import build_py
 
-__all__ = ["BuildPy", "PRECOMPILE_TIMEOUT"]
+__all__ = ["BuildPy", "PRECOMPILE_SWITCH", "PRECOMPILE_TIMEOUT"]
 
+PRECOMPILE_SWITCH = "AZGYM_PRECOMPILE"
+"""Set to 0, the build compiles no kernel (the same name as ``azgym.jit.PRECOMPILE_SWITCH``)."""
 PRECOMPILE_TIMEOUT = 1800.0
 """Seconds the compile may take before the build gives up on it (it takes about a minute)."""
 _ROOT = Path(__file__).resolve().parent.parent
@@ -34,7 +38,7 @@ class BuildPy(build_py):
     def run(self) -> None:
         """Build the package's Python files, then compile its kernels."""
         super().run()
-        if os.environ.get("AZGYM_PRECOMPILE", "1") == "0":
+        if os.environ.get(PRECOMPILE_SWITCH) == "0":
             return
         if self.editable_mode:
             out = _ROOT / "azgym" / "_compiled"

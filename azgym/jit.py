@@ -36,8 +36,8 @@ from numba.misc.appdirs import AppDirs
 from azgym.core import wrap_scalar
 
 __all__ = ["COMPILED_FOLDER", "KERNEL_MODULES", "MANIFEST_NAME", "PACKAGE_DIR", "STAMP_NAME",
-           "drop_stale_cache", "jit", "kernel_folders", "localizers_compiled", "numba_subfolder",
-           "shipped_kernels", "sources_digest", "wrap_compiled"]
+           "PRECOMPILE_SWITCH", "drop_stale_cache", "jit", "kernel_folders", "localizers_compiled",
+           "numba_subfolder", "shipped_kernels", "sources_digest", "wrap_compiled"]
 
 PACKAGE_DIR = Path(__file__).parent
 KERNEL_MODULES = (
@@ -67,6 +67,9 @@ COMPILED_FOLDER = "_compiled"
 """The package's folder of kernels compiled at installation, one subfolder per source folder."""
 MANIFEST_NAME = "manifest.json"
 """The record in :data:`COMPILED_FOLDER` of the sources and the numba they were compiled by."""
+PRECOMPILE_SWITCH = "AZGYM_PRECOMPILE"
+"""The environment variable that, set to 0, leaves the kernels to numba's first call: the build
+compiles none (:mod:`azgym.build_hook`) and a run copies none of those an installation has."""
 
 
 def jit(function: Callable[..., Any] | None = None, **options: Any) -> Any:
@@ -160,8 +163,10 @@ def shipped_kernels(package_dir: Path, stamp: str) -> Path | None:
     Returns:
         The :data:`COMPILED_FOLDER`, or None when there is none, or its manifest names other
         sources (an edited editable installation) or another numba version (numba would ignore
-        the files).
+        the files), or :data:`PRECOMPILE_SWITCH` is 0.
     """
+    if os.environ.get(PRECOMPILE_SWITCH) == "0":
+        return None
     folder = package_dir / COMPILED_FOLDER
     try:
         manifest = json.loads((folder / MANIFEST_NAME).read_text())

@@ -312,3 +312,18 @@ def test_a_fresh_installation_runs_its_first_frame_without_compiling(tmp_path):
                           text=True, timeout=300, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "0"
+
+
+def test_the_switch_leaves_the_kernels_to_numbas_first_call(installed, monkeypatch):
+    from azgym import build_hook
+    from azgym.jit import PRECOMPILE_SWITCH
+
+    assert build_hook.PRECOMPILE_SWITCH == PRECOMPILE_SWITCH  # the build reads the same name
+    package, shared = installed
+    ship(package, {"localize": RANSAC})
+    monkeypatch.setenv(PRECOMPILE_SWITCH, "0")
+    drop_stale_cache(package)
+    assert not list(shared.rglob("*.nb[ic]"))
+    monkeypatch.setenv(PRECOMPILE_SWITCH, "1")
+    drop_stale_cache(package)
+    assert len(list(shared.rglob("*.nb[ic]"))) == len(RANSAC)

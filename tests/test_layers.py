@@ -22,8 +22,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("metrics",),
     ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("mapping",),
     ("nav",),
-    ("envs",), ("bench",), ("learn", "placement", "experiments"), ("cli",), ("precompile",), ("__init__",),
-    ("__main__",),
+    ("envs",), ("bench",), ("learn", "placement", "experiments"), ("cli",), ("precompile",),
+    ("__init__",), ("__main__",),
 )
 """The units, lowest first; a unit is a top-level module or subpackage of ``azgym``."""
 

@@ -20,6 +20,7 @@ from azgym.bench.run.processes import Worker
 from azgym.bench.run.runner import run_contenders
 from azgym.bench.suites import get_suite
 from azgym.cli import main
+from azgym.jit import PRECOMPILE_SWITCH
 from azgym.localize.registry import is_builtin
 
 PLUGINS = Path(__file__).parents[1] / "hostile" / "plugins"
@@ -234,11 +235,12 @@ def bench_availability(out: Path, env: dict[str, str]) -> dict[str, float]:
 
 @pytest.mark.slow
 def test_a_fresh_installation_scores_the_learned_built_ins_as_a_warm_one(tmp_path):
-    # An empty kernel cache: the run compiles everything, yet never inside a timed call (1 s
-    # here; a learned built-in's first frame alone once compiled for 5-14 s), and the next run
-    # loads the kernels the first one cached instead of taking them for stale.
+    # An empty kernel cache and no kernels from the installation (as after an edit of an editable
+    # one): the run compiles everything, yet never inside a timed call (1 s here; a learned
+    # built-in's first frame alone once compiled for 5-14 s), and the next run loads the kernels
+    # the first one cached instead of taking them for stale.
     kernels = tmp_path / "kernels"
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(kernels)}
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(kernels), PRECOMPILE_SWITCH: "0"}
     fresh = bench_availability(tmp_path / "fresh", env)
     cached = {path: path.stat().st_mtime_ns for path in kernels.rglob("*.nbi")}
     assert fresh == bench_availability(tmp_path / "warm", env)

@@ -243,8 +243,8 @@ def _start(backend: str, say: Progress) -> bool:
     """Start the fork server (locally); whether this run compiles the kernels (said if so)."""
     first_run = not localizers_compiled()
     if first_run:
-        say("compiling azgym's kernels: the first run on an installation takes about 17 s "
-            "longer; they are cached for the next runs")
+        say("compiling azgym's kernels (the installation did not, or its sources changed since): "
+            "this run takes about 17 s longer; they are cached for the next runs")
     if backend == "local":
         start_fork_server()  # its warm-up overlaps the drawing of the cases
     return first_run
