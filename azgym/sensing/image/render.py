@@ -43,6 +43,22 @@ def _splat(image, u, v, sigma, amplitude):
             image[row, column] += amplitude * math.exp(-(du * du + dv * dv) * inv)
 
 
+def _draw_strips(image: np.ndarray, cx: float, cy: float, focal: float, distortion: FloatArray,
+                 strips: list[tuple[float, float, float, float]]) -> None:
+    """Light each strip (polar angle, azimuth from, azimuth to, amplitude) in order, in one call."""
+    if strips:
+        _draw_strip_rows(image, cx, cy, focal, distortion, np.array(strips, dtype=np.float64),
+                         PSF_SIGMA_PX)
+
+
+@jit(error_model="python")
+def _draw_strip_rows(image, cx, cy, focal, distortion, strips, sigma):
+    """:func:`_draw_strip` for each row (polar angle, azimuth from, azimuth to, amplitude)."""
+    for k in range(strips.shape[0]):
+        _draw_strip(image, cx, cy, focal, distortion, strips[k, 0], strips[k, 1], strips[k, 2],
+                    strips[k, 3], sigma)
+
+
 @jit(error_model="python")
 def _draw_strip(image, cx, cy, focal, distortion, polar, azimuth_lo, azimuth_hi, amplitude,
                 sigma):
@@ -92,13 +108,20 @@ def render(camera: FisheyeCamera, azimuth_lo: FloatArray, azimuth_hi: FloatArray
     distortion = np.array(camera.distortion, dtype=np.float64)
     # Total brightness of a blob: enough that a light at the threshold peaks near 60 grey levels.
     scale = 60.0 * 2.0 * math.pi * PSF_SIGMA_PX**2
-    tall = np.zeros(len(elevation)) if half_tall is None else half_tall
-    for lo, hi, e, f, t in zip(azimuth_lo, azimuth_hi, elevation, flux, tall, strict=True):
+    tall = [0.0] * len(elevation) if half_tall is None else np.asarray(half_tall).tolist()
+    lights = zip(np.asarray(azimuth_lo).tolist(), np.asarray(azimuth_hi).tolist(),
+                 np.asarray(elevation).tolist(), np.asarray(flux).tolist(), tall, strict=True)
+    # Lights are added in their order (float sums where two overlap depend on it): each run of
+    # strips, rows of (polar angle, azimuth from, azimuth to, amplitude), in one call.
+    strips: list[tuple[float, float, float, float]] = []
+    for lo, hi, e, f, t in lights:
         if t * camera.focal_px > 0.5:
+            _draw_strips(image, cx, cy, camera.focal_px, distortion, strips)
+            strips = []
             _draw_patch(image, camera, distortion, lo, hi, e - t, e + t, scale * f)
         else:
-            _draw_strip(image, cx, cy, camera.focal_px, distortion, math.pi / 2 - e, lo, hi,
-                        scale * min(f, 40.0), PSF_SIGMA_PX)
+            strips.append((math.pi / 2 - e, lo, hi, scale * min(f, 40.0)))
+    _draw_strips(image, cx, cy, camera.focal_px, distortion, strips)
     grey = np.empty((height, width), dtype=np.uint8)
     _to_grey(image, image if noise is None else noise, noise is not None, grey)
     return grey

@@ -182,3 +182,60 @@ def test_noise_of_the_wrong_shape_is_refused_by_name() -> None:
     with pytest.raises(InvalidInputError, match="noise must be one frame of 480 x 480"):
         render(camera, np.zeros(1), np.full(1, 0.01), np.full(1, 0.3), np.full(1, 3.0),
                np.zeros(480))
+
+
+def test_a_blobs_centroid_weighs_its_pixels_above_the_threshold_by_hand() -> None:
+    # A 3 x 2 blob at column 10, row 20; its weights above a threshold of 25: (0, 5, 0) in its
+    # first row, (1, 3, 2) in its second.
+    image = np.zeros((40, 40), dtype=np.uint8)
+    image[20, 10:13] = [20, 30, 25]  # 20 and 25 are not above the threshold: weight 0
+    image[21, 10:13] = [26, 28, 27]
+    (blob,) = detect(image, FisheyeCamera(), threshold=25)
+    # m00 = 5 + 1 + 3 + 2 = 11; m10 = 1·5 + 0·1 + 1·3 + 2·2 = 12; m01 = 1·(1 + 3 + 2) = 6
+    assert blob.u == 10 + 12 / 11 and blob.v == 20 + 6 / 11
+    assert blob.area == 4 and blob.peak == 30.0
+    cx, cy = FisheyeCamera().principal_point
+    assert blob.azimuth == math.atan2(blob.v - cy, blob.u - cx)
+
+
+def test_the_blob_moments_are_opencvs() -> None:
+    # The compiled pass sums what cv2.moments sums: whole numbers, so equal to the last bit; the
+    # central moments by OpenCV's formula (an OpenCV built with Intel's IPP rounds its own way).
+    import cv2
+
+    from azgym.sensing.image.detect import _box_moments
+
+    rng = np.random.default_rng(8)
+    for _ in range(300):
+        height, width = rng.integers(1, 70, 2)
+        image = (rng.random((80, 80)) * 255 * (rng.random((80, 80)) < 0.7)).astype(np.uint8)
+        x, y = rng.integers(0, 80 - width), rng.integers(0, 80 - height)
+        threshold = int(rng.integers(1, 255))
+        stats = np.empty((1, 8))
+        _box_moments(image, np.array([[x, y, width, height]]), threshold, stats)
+        box = image[y:y + height, x:x + width]
+        weights = cv2.subtract(box, np.full(box.shape, threshold, np.uint8))
+        moments = cv2.moments(weights, binaryImage=False)
+        m00, m10, m01, mu20, mu11, mu02, area, peak = stats[0]
+        assert (m00, m10, m01) == (moments["m00"], moments["m10"], moments["m01"])
+        assert area == cv2.countNonZero(weights) and peak == weights.max()
+        if m00 > 0:
+            for ours, key in ((mu20, "mu20"), (mu11, "mu11"), (mu02, "mu02")):
+                assert ours == pytest.approx(moments[key], rel=1e-12, abs=1e-9 * moments["m20"])
+
+
+@pytest.mark.parametrize(("image", "threshold", "problem"), [
+    (np.zeros((8, 8), dtype=np.float32), 25, "image must be a 2-D 8-bit grey frame"),
+    (np.zeros((8, 8, 3), dtype=np.uint8), 25, "image must be a 2-D 8-bit grey frame"),
+    ([[0, 1], [2, 3]], 25, "image must be a 2-D 8-bit grey frame"),
+    (np.zeros((8, 8), dtype=np.uint8), 0, "threshold must be a grey level in"),
+    (np.zeros((8, 8), dtype=np.uint8), 255, "threshold must be a grey level in"),
+    (np.zeros((8, 8), dtype=np.uint8), 25.5, "threshold must be a grey level in"),
+    (np.zeros((8, 8), dtype=np.uint8), True, "threshold must be a grey level in"),
+])
+def test_detect_refuses_what_is_not_a_grey_frame_or_level_by_name(image, threshold,
+                                                                   problem) -> None:
+    from azgym.errors import InvalidInputError
+
+    with pytest.raises(InvalidInputError, match=problem):
+        detect(image, FisheyeCamera(), threshold)
