@@ -313,11 +313,12 @@ _WARM_UP_MAP = BeaconMap(np.arange(5), np.array([[0.0, 0.0, 3.0], [10.0, 0.0, 3.
 
 
 def _warm_up_route(quality_columns: int) -> list[Packed]:
-    """The warm-up route as a run sends it: four frames, each ``quality_columns`` wide (0: none).
+    """The warm-up route as a run sends it: five frames, each ``quality_columns`` wide (0: none).
 
     The frames: every beacon seen exactly (its start pose known, no motion yet), then, each
     after 0.1 s of motion, two outliers among them (a ghost and a misread id), an id not in
-    the map, and two beacons only.
+    the map, three beacons on one side of the camera (outside their hull: ``mex`` then searches
+    beyond them), and two beacons only.
     """
     xyz = _WARM_UP_MAP.xyz
     x, y, heading = 3.0, 2.5, 0.3
@@ -325,6 +326,7 @@ def _warm_up_route(quality_columns: int) -> list[Packed]:
     views = [(list(range(5)), exact),
              ([0, 1, 2, 3, 4, 0, 2], [*exact, exact[0] + 1.2, exact[3]]),
              ([0, 1, 2, 3, 4, 9], [*exact, 0.5]),
+             ([2, 3, 4], exact[2:5]),
              ([1, 2], exact[1:3])]
     packed = []
     for k, (ids, azimuth) in enumerate(views):
