@@ -163,6 +163,41 @@ def _patch_outline(cx, cy, focal, distortion, azimuth_lo, azimuth_hi, elevation_
     return outline
 
 
+@jit(error_model="python")
+def _patch_box(outline, margin, height, width, shift):
+    """The image box around an outline, ``margin`` pixels wider, and the outline in it.
+
+    Returns (x0, y0, x1, y1, points): the box's columns [x0, x1) and rows [y0, y1), clipped to
+    the image, and the outline relative to (x0, y0) in fixed point (``shift`` fractional bits,
+    rounded half to even), as ``cv2.fillPoly`` takes it; an empty box (x0 >= x1 or y0 >= y1)
+    when the outline lies off the image, and x0 = −1 when it is not finite.
+    """
+    points = np.zeros((outline.shape[0], 2), dtype=np.int32)
+    low_x = high_x = outline[0, 0]
+    low_y = high_y = outline[0, 1]
+    for k in range(outline.shape[0]):
+        u = outline[k, 0]
+        v = outline[k, 1]
+        if not (math.isfinite(u) and math.isfinite(v)):
+            return -1, 0, 0, 0, points
+        low_x = min(low_x, u)
+        high_x = max(high_x, u)
+        low_y = min(low_y, v)
+        high_y = max(high_y, v)
+    # Whole pixels toward zero, as Python's int(); clamped first so that an outline far off the
+    # image (its box then empty) cannot overflow the conversion.
+    far = 2.0**30
+    x0 = max(0, int(min(max(low_x, -far), far)) - margin)
+    y0 = max(0, int(min(max(low_y, -far), far)) - margin)
+    x1 = min(width, int(min(max(high_x, -far), far)) + margin + 2)
+    y1 = min(height, int(min(max(high_y, -far), far)) + margin + 2)
+    scale = float(2**shift)
+    for k in range(outline.shape[0]):
+        points[k, 0] = np.int32(np.rint((outline[k, 0] - x0) * scale))
+        points[k, 1] = np.int32(np.rint((outline[k, 1] - y0) * scale))
+    return x0, y0, x1, y1, points
+
+
 def _draw_patch(image: np.ndarray, camera: FisheyeCamera, distortion: FloatArray,
                 azimuth_lo: float, azimuth_hi: float, elevation_lo: float, elevation_hi: float,
                 total: float) -> None:
@@ -173,16 +208,16 @@ def _draw_patch(image: np.ndarray, camera: FisheyeCamera, distortion: FloatArray
     cx, cy = camera.principal_point
     outline = _patch_outline(cx, cy, camera.focal_px, distortion, azimuth_lo, azimuth_hi,
                              elevation_lo, elevation_hi, 9)
-    margin = int(math.ceil(4 * PSF_SIGMA_PX))
     height, width = image.shape
-    x0 = max(0, int(outline[:, 0].min()) - margin)
-    y0 = max(0, int(outline[:, 1].min()) - margin)
-    x1 = min(width, int(outline[:, 0].max()) + margin + 2)
-    y1 = min(height, int(outline[:, 1].max()) + margin + 2)
+    shift = 4  # sub-pixel vertices: 1/16 px
+    x0, y0, x1, y1, points = _patch_box(outline, math.ceil(4 * PSF_SIGMA_PX), height, width,
+                                        shift)
+    if x0 < 0:
+        raise InvalidInputError(f"render: a light's extent is not finite (azimuth {azimuth_lo!r} "
+                                f"to {azimuth_hi!r}, elevation {elevation_lo!r} to "
+                                f"{elevation_hi!r})")
     if x0 >= x1 or y0 >= y1:
         return
-    shift = 4  # sub-pixel vertices: 1/16 px
-    points = np.round((outline - (x0, y0)) * 2**shift).astype(np.int32)
     area = max(1.0, abs(cv2.contourArea(points)) / 4**shift)
     patch = np.zeros((y1 - y0, x1 - x0), dtype=np.float32)
     cv2.fillPoly(patch, [points], total / area, lineType=cv2.LINE_8, shift=shift)

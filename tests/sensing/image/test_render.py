@@ -239,3 +239,11 @@ def test_detect_refuses_what_is_not_a_grey_frame_or_level_by_name(image, thresho
 
     with pytest.raises(InvalidInputError, match=problem):
         detect(image, FisheyeCamera(), threshold)
+
+
+def test_a_light_whose_extent_is_not_finite_is_refused_by_name() -> None:
+    from azgym.errors import InvalidInputError
+
+    with pytest.raises(InvalidInputError, match="a light's extent is not finite"):
+        render(FisheyeCamera(), np.zeros(1), np.full(1, 0.1), np.full(1, math.nan),
+               np.full(1, 50.0), None, np.full(1, 0.05))
