@@ -4,8 +4,9 @@ numba compiles a kernel on its first call, and azgym's take about twenty seconds
 without this, a fresh installation's first ``azgym bench`` would spend most of its time there.
 The installation's build (:mod:`azgym.build_hook`) runs ``python -m azgym.precompile OUT`` on a
 copy of the package, with an empty ``NUMBA_CACHE_DIR``. That runs what a first run compiles —
-the default ``azgym bench``, then every built-in localizer and tracker through the benchmark's
-warm-up route — and copies numba's cached kernels into ``OUT`` (the package's
+the default ``azgym bench``, every built-in localizer and tracker through the benchmark's
+warm-up route, a short episode of each kind of environment and frames of the fisheye image
+path — and copies numba's cached kernels into ``OUT`` (the package's
 :data:`azgym.jit.COMPILED_FOLDER`), one subfolder per source folder, with a manifest of the
 sources' digest and the numba version. At import, :mod:`azgym.jit` copies them into the
 folder numba caches in when both still match.
@@ -25,6 +26,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numba
+import numpy as np
 
 from azgym.jit import (
     MANIFEST_NAME,
@@ -53,6 +55,45 @@ def compile_all(scratch: Path) -> None:
         raise RuntimeError(f"azgym bench exited with status {status}")
     for name in [*list_localizers(), *list_trackers()]:
         warm_up(make_tracker(name))
+    _step_environments()
+    _observe_images()
+
+
+def _step_environments() -> None:
+    """A short random episode of each kind of environment.
+
+    A first Navigate step compiles the world's, the planner's and the observation's kernels:
+    half a minute without this.
+    """
+    import gymnasium
+
+    from azgym.envs import ENV_IDS
+
+    kinds = {env_id.split("/")[-1].split("-")[0]: env_id for env_id in ENV_IDS}
+    for env_id in kinds.values():
+        env = gymnasium.make(env_id)
+        env.reset(seed=0)
+        env.action_space.seed(0)
+        for _ in range(40):
+            if any(env.step(env.action_space.sample())[2:4]):
+                env.reset()
+        env.close()
+
+
+def _observe_images() -> None:
+    """Frames of the fisheye image path, with ids by the oracle and by blinking."""
+    from azgym.sensing.image.sensor import ImageSensor
+    from azgym.site import load_scenario
+    from azgym.world.drive import camera_trajectory
+
+    scenario = load_scenario("warehouse-small")
+    poses = camera_trajectory(scenario, scenario.routes[0], camera_rate_hz=30.0)
+    for ids in ("oracle", "blink"):
+        sensor = ImageSensor(scenario, ids=ids)
+        sensor.reset(0)
+        rng = np.random.default_rng(0)
+        for pose in poses[:20]:
+            sensor.observe(tuple(pose), rng)
 
 
 def collect(cache: Path, out: Path, package_dir: Path = PACKAGE_DIR) -> int:
