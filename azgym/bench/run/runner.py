@@ -244,7 +244,7 @@ def _start(backend: str, say: Progress) -> bool:
     first_run = not localizers_compiled()
     if first_run:
         say("compiling azgym's kernels (the installation did not, or its sources changed since): "
-            "this run takes about 17 s longer; they are cached for the next runs")
+            "this run takes about 20 s longer; they are cached for the next runs")
     if backend == "local":
         start_fork_server()  # its warm-up overlaps the drawing of the cases
     return first_run
