@@ -27,7 +27,7 @@ __all__ = ["BuildPy", "PRECOMPILE_SWITCH", "PRECOMPILE_TIMEOUT"]
 PRECOMPILE_SWITCH = "AZGYM_PRECOMPILE"
 """Set to 0, the build compiles no kernel (the same name as ``azgym.jit.PRECOMPILE_SWITCH``)."""
 PRECOMPILE_TIMEOUT = 1800.0
-"""Seconds the compile may take before the build gives up on it (it takes about a minute)."""
+"""Seconds the compile may take before the build gives up on it (it takes about two minutes)."""
 _ROOT = Path(__file__).resolve().parent.parent
 _SKIPPED = shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc", "_compiled", ".*")
 

@@ -11,7 +11,7 @@ installed sources by the running numba, so a first run loads them instead of com
 twenty seconds. numba checks each cached function's source by its content, so the copies load
 wherever the package sits.
 
-numba keys each cached function on the timestamp of its own source file only. A kernel in one
+numba keys each cached function on its own source file only. A kernel in one
 module that calls a kernel in another (``ransac.py`` → ``_kernels.py``) therefore keeps running
 the old callee from the cache after the callee's file is edited, or updated by ``git pull`` in an
 editable install. When this module is first imported (by the first kernel module, never by
