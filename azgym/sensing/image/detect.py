@@ -5,7 +5,8 @@ azimuth is its direction around the principal point. OpenCV finds the blobs; the
 summed in one compiled pass over every blob's box (:func:`_box_moments`). The raw moments of
 8-bit pixels are whole numbers, exact in a double, so the centroids are ``cv2.moments``' to the
 last bit; the central moments (the elongation) follow OpenCV's own formulas, which an OpenCV
-built with Intel's IPP (as the pip wheels are) rounds its own way, within 2e-15 of these.
+built with Intel's IPP (as the pip wheels are) rounds its own way: the elongations agree to
+1e-13 (relative) over 175 524 blobs of random frames, 2e-15 on the warehouses' frames.
 """
 
 from __future__ import annotations
