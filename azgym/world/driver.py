@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from azgym.core import FloatArray, wrap_scalar
 from azgym.site.elements import Route
+from azgym.world._polyline import nearest_on_legs
 from azgym.world.forklift import ForkliftSpec
 
 __all__ = ["PurePursuit", "point_at"]
@@ -40,14 +42,15 @@ class PurePursuit:
         self.done = False
 
     @staticmethod
-    def _split(route: Route) -> list[tuple[FloatArray, FloatArray, bool]]:
-        """The stretches of one direction: (points, leg lengths, backwards)."""
+    def _split(route: Route) -> list[_Stretch]:
+        """The stretches of one direction."""
         stretches, start = [], 0
         for leg in range(1, len(route.reverse) + 1):
             if leg == len(route.reverse) or route.reverse[leg] != route.reverse[start]:
                 points = route.waypoints[start:leg + 1]
                 lengths = np.hypot(*np.diff(points, axis=0).T)
-                stretches.append((points, lengths, route.reverse[start]))
+                stretches.append(_Stretch(points, lengths, float(lengths.sum()),
+                                          bool(route.reverse[start])))
                 start = leg
         return stretches
 
@@ -56,13 +59,12 @@ class PurePursuit:
         brake = max(-1.0, min(1.0, -speed / (self.spec.max_accel * 0.1)))
         if self.done:
             return brake, 0.0
-        points, lengths, backwards = self._stretches[self._stretch]
+        points, lengths, total, backwards = self._stretches[self._stretch]
         direction = -1.0 if backwards else 1.0
         reference = self._reference(x, y, heading)
-        total = float(lengths.sum())
-        self._progress = max(self._progress, _project(points, lengths, reference))
+        self._progress = max(self._progress, _project(points, lengths, *reference))
         remaining = total - self._progress
-        end_distance = math.hypot(*(points[-1] - reference))
+        end_distance = math.hypot(points[-1, 0] - reference[0], points[-1, 1] - reference[1])
         if remaining < self.tolerance or end_distance < self.tolerance:
             if abs(speed) < 0.05:
                 self._stretch += 1
@@ -82,20 +84,27 @@ class PurePursuit:
         throttle = max(-1.0, min(1.0, (wanted - speed) / (self.spec.max_accel * 0.2)))
         return throttle, max(-1.0, min(1.0, steer))
 
-    def _reference(self, x: float, y: float, heading: float) -> FloatArray:
+    def _reference(self, x: float, y: float, heading: float) -> tuple[float, float]:
         """The non-steering axle's position (the point pure pursuit steers)."""
         offset = 0.5 * self.spec.wheelbase * (1.0 if self.spec.rear_steer else -1.0)
-        return np.array([x + offset * math.cos(heading), y + offset * math.sin(heading)])
+        return x + offset * math.cos(heading), y + offset * math.sin(heading)
 
 
-def _project(points: FloatArray, lengths: FloatArray, p: FloatArray) -> float:
-    """Arc length of the polyline point nearest to p (all legs at once)."""
-    a = points[:-1]
-    ab = points[1:] - a
-    t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum(lengths**2, 1e-300), 0.0, 1.0)
-    distance = np.hypot(*(a + t[:, None] * ab - p).T)
-    k = int(np.argmin(distance))
-    return float(lengths[:k].sum() + t[k] * lengths[k])
+class _Stretch(NamedTuple):
+    """A stretch of a route driven in one direction."""
+
+    points: FloatArray
+    lengths: FloatArray
+    """Its legs' lengths [m]."""
+    total: float
+    """Its length [m] (the legs' sum)."""
+    backwards: bool
+
+
+def _project(points: FloatArray, lengths: FloatArray, x: float, y: float) -> float:
+    """Arc length of the polyline point nearest to (x, y), searching every leg."""
+    leg, t = nearest_on_legs(points, lengths, 0, lengths.size, x, y)
+    return float(lengths[:leg].sum() + t * lengths[leg])
 
 
 def point_at(points: FloatArray, lengths: FloatArray, s: float) -> FloatArray:

@@ -20,6 +20,7 @@ import numpy as np
 from azgym.core import wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.site.elements import Route
+from azgym.world._polyline import nearest_on_legs
 from azgym.world.driver import point_at
 
 __all__ = ["Robot", "RobotDriver", "RobotSpec"]
@@ -128,6 +129,7 @@ class RobotDriver:
         self._points = route.waypoints
         self._lengths = np.hypot(*np.diff(route.waypoints, axis=0).T)
         self._starts = np.concatenate([[0.0], np.cumsum(self._lengths)[:-1]])
+        self._ends = self._starts + self._lengths
         self._total = float(self._lengths.sum())
         self._progress = 0.0
         self.done = False
@@ -159,12 +161,9 @@ class RobotDriver:
         so a route that crosses itself is not skipped ahead at a crossing.
         """
         low, high = self._progress - self.lookahead, self._progress + 2.0 * self.lookahead
-        legs = np.flatnonzero((self._starts <= high) & (self._starts + self._lengths >= low))
-        a = self._points[legs]
-        ab = self._points[legs + 1] - a
-        p = np.array([x, y])
-        t = np.clip(np.einsum("ij,ij->i", p - a, ab)
-                    / np.maximum(self._lengths[legs] ** 2, 1e-300), 0.0, 1.0)
-        nearest = int(np.argmin(np.hypot(*(a + t[:, None] * ab - p).T)))
-        return float(min(high, self._starts[legs[nearest]]
-                         + t[nearest] * self._lengths[legs[nearest]]))
+        # The legs that start by ``high`` and end from ``low`` on: a run of them, as the legs'
+        # starts and ends only grow along the route.
+        first = int(np.searchsorted(self._ends, low, side="left"))
+        stop = int(np.searchsorted(self._starts, high, side="right"))
+        leg, t = nearest_on_legs(self._points, self._lengths, first, stop, x, y)
+        return float(min(high, self._starts[leg] + t * self._lengths[leg]))
