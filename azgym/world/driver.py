@@ -9,10 +9,10 @@ import numpy as np
 
 from azgym.core import FloatArray, wrap_scalar
 from azgym.site.elements import Route
-from azgym.world._polyline import nearest_on_legs
+from azgym.world._polyline import nearest_on_legs, point_at
 from azgym.world.forklift import ForkliftSpec
 
-__all__ = ["PurePursuit", "point_at"]
+__all__ = ["PurePursuit"]
 
 
 class PurePursuit:
@@ -105,13 +105,3 @@ def _project(points: FloatArray, lengths: FloatArray, x: float, y: float) -> flo
     """Arc length of the polyline point nearest to (x, y), searching every leg."""
     leg, t = nearest_on_legs(points, lengths, 0, lengths.size, x, y)
     return float(lengths[:leg].sum() + t * lengths[leg])
-
-
-def point_at(points: FloatArray, lengths: FloatArray, s: float) -> FloatArray:
-    """The polyline point at arc length s (``lengths``: its legs' lengths)."""
-    for k, length in enumerate(lengths):
-        if s <= length or k == len(lengths) - 1:
-            t = 0.0 if length == 0 else min(s / length, 1.0)
-            return points[k] + t * (points[k + 1] - points[k])
-        s -= length
-    return points[-1]

@@ -20,8 +20,7 @@ import numpy as np
 from azgym.core import wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.site.elements import Route
-from azgym.world._polyline import nearest_on_legs
-from azgym.world.driver import point_at
+from azgym.world._polyline import nearest_on_legs, point_at
 
 __all__ = ["Robot", "RobotDriver", "RobotSpec"]
 
@@ -163,7 +162,7 @@ class RobotDriver:
         low, high = self._progress - self.lookahead, self._progress + 2.0 * self.lookahead
         # The legs that start by ``high`` and end from ``low`` on: a run of them, as the legs'
         # starts and ends only grow along the route.
-        first = int(np.searchsorted(self._ends, low, side="left"))
-        stop = int(np.searchsorted(self._starts, high, side="right"))
+        first = int(self._ends.searchsorted(low, side="left"))
+        stop = int(self._starts.searchsorted(high, side="right"))
         leg, t = nearest_on_legs(self._points, self._lengths, first, stop, x, y)
         return float(min(high, self._starts[leg] + t * self._lengths[leg]))

@@ -1,4 +1,4 @@
-"""The drivers' projection onto a route: hand-worked cases, and numpy's expression to the bit."""
+"""The drivers' polyline kernels: hand-worked cases, and the expressions they replace to the bit."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from azgym.world._polyline import nearest_on_legs
+from azgym.world._polyline import nearest_on_legs, point_at
 
 L_ROUTE = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]])
 """Two legs: 4 m east, then 3 m north."""
@@ -66,3 +66,30 @@ def test_the_kernel_is_numpys_expression_to_the_last_bit(waypoints, x, y, data):
     arc, expected_arc = (lengths[:k].sum() + fraction * lengths[k]
                          for k, fraction in ((leg, t), (expected_leg, expected_t)))
     assert arc.tobytes() == expected_arc.tobytes()
+
+
+def python_point_at(points: np.ndarray, lengths: np.ndarray, s: float) -> np.ndarray:
+    """The loop the drivers ran in Python before the kernel (its reference)."""
+    for k, length in enumerate(lengths):
+        if s <= length or k == len(lengths) - 1:
+            t = 0.0 if length == 0 else min(s / length, 1.0)
+            return points[k] + t * (points[k + 1] - points[k])
+        s -= length
+    return points[-1]
+
+
+def test_the_point_at_a_distance_along_the_route():
+    assert point_at(L_ROUTE, L_LENGTHS, 1.0) == (1.0, 0.0)
+    assert point_at(L_ROUTE, L_LENGTHS, 5.5) == (4.0, 1.5)  # 1.5 m into the second leg
+    assert point_at(L_ROUTE, L_LENGTHS, 9.0) == (4.0, 3.0)  # past the end: the end
+    assert point_at(L_ROUTE, L_LENGTHS, 4.0) == (4.0, 0.0)  # the corner, from the first leg
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(coordinate, coordinate), min_size=2, max_size=12),
+       st.floats(-10.0, 3e3, allow_nan=False))
+def test_point_at_is_the_python_loop_to_the_last_bit(waypoints, s):
+    points = np.array(waypoints)
+    lengths = np.hypot(*np.diff(points, axis=0).T)
+    assert np.array(point_at(points, lengths, s)).tobytes() == \
+        python_point_at(points, lengths, s).tobytes()
