@@ -389,7 +389,7 @@ def test_every_table_of_the_committed_board_sorts_both_ways_in_headless_chromium
                   for name in NAVIGATION_SUITES for split in ("dev", "test")
                   for data in [json.loads((NAVIGATION / f"{name}-{split}.json").read_text())]]
     logs = {e["dataset"]["name"]: e["dataset"]["simulated"]
-            for e in committed_entries() if "dataset" in e}  # checked on build, just below
+            for e in committed_entries() if "dataset" in e}  # sound: the next test builds on them
     # The simulated logs' tables follow the suites', the real ones' come in a part of their own.
     datasets = sorted(name for name in logs if logs[name]) + \
         sorted(name for name in logs if not logs[name])
