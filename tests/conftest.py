@@ -1,4 +1,5 @@
-"""Shared fixtures: the paper room and noise-free frames seen from a known pose."""
+"""Shared fixtures: the paper room and noise-free frames seen from a known pose; the Ray tests
+kept on one test process."""
 
 from __future__ import annotations
 
@@ -19,6 +20,18 @@ FrameMaker = Callable[..., Measurements]
 settings.register_profile("repeatable", derandomize=True, print_blob=True)
 settings.register_profile("explore", derandomize=False, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups off the markers
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Run the tests that start Ray one after another, on one test process (``--dist loadgroup``).
+
+    Ray's ``address="auto"`` joins any instance it finds among the machine's processes, and an
+    instance takes seconds to end: a Ray test beside another would join or wait on the other's.
+    """
+    for item in items:
+        if item.get_closest_marker("ray") is not None:
+            item.add_marker(pytest.mark.xdist_group("ray"))
 
 
 @pytest.fixture(scope="session")

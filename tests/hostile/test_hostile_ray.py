@@ -81,15 +81,20 @@ def test_without_address_azgym_starts_its_own_instance_whatever_ray_would_join(w
 def no_live_ray(wait: float = 60.0) -> None:
     """Wait until no Ray instance lives on this machine, as ``address="auto"`` looks for one.
 
-    Ray's "auto" joins any live instance it finds among the machine's processes (by their
-    ``--gcs-address``) before it reads a record; an instance an earlier test started may take
-    seconds to end.
+    Ray's "auto" joins any live instance it finds among the machine's processes (a raylet's
+    ``--gcs-address``) before it reads a record; an instance an earlier test started (or a
+    test running beside this one) may take seconds to end. Ray's ``find_gcs_addresses``
+    remembers the first non-empty answer for the life of the process, so this asks its
+    uncached scan each time.
     """
-    from ray._private.services import find_gcs_addresses
+    from ray._private.services import _find_address_from_flag
+
+    def live() -> set[str]:
+        return set(_find_address_from_flag("--gcs-address"))
 
     deadline = time.monotonic() + wait
-    while find_gcs_addresses():
-        assert time.monotonic() < deadline, f"a Ray instance still lives: {find_gcs_addresses()}"
+    while found := live():
+        assert time.monotonic() < deadline, f"a Ray instance still lives: {found}"
         time.sleep(0.5)
 
 
