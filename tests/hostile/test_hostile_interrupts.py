@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 
 import pytest
 
@@ -18,6 +19,23 @@ from azgym import cli
 from azgym.cli.options import on_ctrl_c
 
 
+@pytest.fixture
+def ctrl_c_not_ignored() -> Iterator[None]:
+    """Children started meanwhile take Ctrl-C, as a command run from a terminal does.
+
+    A shell without job control starts its background commands with SIGINT ignored (so is a
+    test run from a script with ``&``), and a child inherits that: it would take no Ctrl-C at
+    all. A signal with a handler is reset to its default in a child, so the test process handles
+    SIGINT while it starts one.
+    """
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+@pytest.mark.usefixtures("ctrl_c_not_ignored")
 def test_ctrl_c_ends_a_command_with_one_line_and_exit_code_130(tmp_path):
     command = [sys.executable, "-m", "azgym", "evaluate", "navigator", "pure-pursuit",
                "--episodes", "100000", "--out", str(tmp_path / "out")]
@@ -100,6 +118,7 @@ def test_a_finished_training_run_is_refused_unless_resumed_or_overwritten(model,
     assert "not allowed with argument" in capsys.readouterr().err
 
 
+@pytest.mark.usefixtures("ctrl_c_not_ignored")
 def test_ctrl_c_in_a_bench_run_stops_its_workers_too_and_says_nothing_was_written(tmp_path):
     """A terminal sends Ctrl-C to the whole process group: the workers must not print either."""
     command = [sys.executable, "-m", "azgym", "bench", "--suite", "stress", "--localizer",
