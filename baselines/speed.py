@@ -31,7 +31,7 @@ from azgym.localize.base import Problem  # noqa: E402
 from azgym.localize.ransac_search import search as ransac_search  # noqa: E402
 from azgym.sensing.synthetic import noisy_measurements  # noqa: E402
 
-TARGETS_US = {"ransac": 30.0, "mex": 500_000.0}
+TARGETS_US = {"ransac": 10.0, "mex": 500_000.0}
 PAPER_US = {"ransac": 56.0, "mex": 278_000.0}
 
 
