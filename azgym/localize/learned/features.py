@@ -140,14 +140,18 @@ def first_quality_column(quality: FloatArray | None, count: int) -> tuple[FloatA
     """The first quality column of ``count`` measurements, and whether there is one.
 
     The column is the contiguous float64 array the features' kernel reads; without quality it is
-    zeros, and False says so.
+    zeros, and False says so. It is read-only, as a frame's own columns are, so that the kernels
+    taking it are compiled once, not once for read-only and once for writable arrays.
     """
     if quality is None:
-        return np.zeros(count), False
-    column = quality if quality.ndim == 1 else quality[:, 0]  # of (M, 1): already contiguous
-    if column.dtype != np.float64 or not column.flags.c_contiguous:
-        column = np.ascontiguousarray(column, dtype=np.float64)
-    return column, True
+        column, present = np.zeros(count), False
+    else:
+        column = quality if quality.ndim == 1 else quality[:, 0]  # of (M, 1): contiguous
+        if column.dtype != np.float64 or not column.flags.c_contiguous:
+            column = np.ascontiguousarray(column, dtype=np.float64)
+        present = True
+    column.setflags(write=False)
+    return column, present
 
 
 @jit

@@ -84,7 +84,9 @@ MODEL_NAME = "ng-ransac"
 SHIPPED_WEIGHTS = MODELS / f"{MODEL_NAME}.npz"
 """The trained weights that ship inside the package (model card beside them)."""
 NO_QUALITY = np.zeros(0)
-"""The quality column the kernels get for a frame without quality."""
+"""The quality column the kernels get for a frame without quality: read-only, as a frame's own
+quality column is, so that the kernels are compiled for one kind of array, not two."""
+NO_QUALITY.setflags(write=False)
 
 
 @jit
