@@ -99,9 +99,13 @@ def settings_array(delta_alpha_d: float = math.radians(0.4), coverage: bool = Tr
 
 @lru_cache(maxsize=64)
 def _all_triplets(n: int) -> IntArray:
-    triplets = np.array(list(combinations(range(n), 3)), dtype=np.int64).reshape(-1, 3)
-    triplets.setflags(write=False)
-    return triplets
+    """Every triplet of ``n`` measurements, shared: the kernels only read it.
+
+    Writable, as the triplets ng-ransac's kernels build are, so that the search is compiled for
+    one kind of array, not for read-only and writable ones (:meth:`Ransac.triplets` hands out a
+    read-only view).
+    """
+    return np.array(list(combinations(range(n), 3)), dtype=np.int64).reshape(-1, 3)
 
 
 def _random_triplets(n: int, count: int, rng: np.random.Generator) -> IntArray:
@@ -272,6 +276,12 @@ class Ransac(Localizer):
 
     def triplets(self, n: int) -> IntArray:
         """The triplets (rows of measurement indices) tried for ``n`` usable measurements."""
+        triplets = self._triplets(n).view()
+        triplets.setflags(write=False)
+        return triplets
+
+    def _triplets(self, n: int) -> IntArray:
+        """:meth:`triplets`, as the kernels take them (every triplet: the shared array)."""
         if math.comb(n, 3) <= self.max_exhaustive:
             return _all_triplets(n)
         n_good = max(3, math.ceil(self.min_inlier_fraction * n))
@@ -301,7 +311,7 @@ class Ransac(Localizer):
         return self._estimate(out, mask, cov, math.comb(usable, 3))
 
     def _localize(self, problem: Problem) -> Estimate:
-        triplets = self.triplets(problem.size)
+        triplets = self._triplets(problem.size)
         out = np.empty(OUT_SIZE)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
         cov = np.empty((3, 3))

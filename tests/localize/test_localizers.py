@@ -416,6 +416,13 @@ def test_sampled_triplets_are_valid_and_exhaustive_below_the_limit():
     assert Ransac(max_exhaustive=10, pr_hit=0.999999).triplets(8).shape == (56, 3)
 
 
+def test_the_shared_triplets_cannot_be_changed_through_what_ransac_hands_out():
+    handed_out = Ransac().triplets(12)
+    with pytest.raises(ValueError, match="read-only"):
+        handed_out[0, 0] = 5
+    assert Ransac().triplets(12)[0].tolist() == [0, 1, 2]
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_ransac_fast_path_answers_exactly_as_the_general_path(paper_room, seed):
     # localize() looks ids up inside the compiled kernel; _localize(Problem) is the general path.
