@@ -1,10 +1,10 @@
 """Shared fixtures: the paper room and noise-free frames seen from a known pose; the Ray tests
-kept on one test process."""
+run one at a time."""
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import pytest
 from helpers import ideal_frame
@@ -22,16 +22,24 @@ settings.register_profile("explore", derandomize=False, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 
-@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups off the markers
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Run the tests that start Ray one after another, on one test process (``--dist loadgroup``).
+@pytest.fixture(autouse=True)
+def one_ray_test_at_a_time(request: pytest.FixtureRequest,
+                           tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """Run the tests that start Ray one after another, whichever test process runs them.
 
     Ray's ``address="auto"`` joins any instance it finds among the machine's processes, and an
     instance takes seconds to end: a Ray test beside another would join or wait on the other's.
+    A lock in the folder every test process of the run keeps its temporary files in.
     """
-    for item in items:
-        if item.get_closest_marker("ray") is not None:
-            item.add_marker(pytest.mark.xdist_group("ray"))
+    if request.node.get_closest_marker("ray") is None:
+        yield
+        return
+    import fcntl  # POSIX: the Ray tests are skipped on Windows
+
+    lock = tmp_path_factory.getbasetemp().parent / "ray-tests.lock"
+    with lock.open("a") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)  # released as the file closes
+        yield
 
 
 @pytest.fixture(scope="session")
