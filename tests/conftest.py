@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import pytest
 from helpers import ideal_frame
@@ -22,16 +23,23 @@ settings.register_profile("explore", derandomize=False, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 
-@pytest.fixture(autouse=True)
-def one_ray_test_at_a_time(request: pytest.FixtureRequest,
-                           tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
-    """Run the tests that start Ray one after another, whichever test process runs them.
+@pytest.fixture(scope="session")
+def ray_modules(request: pytest.FixtureRequest) -> set[Path]:
+    """The test files with a test that starts Ray."""
+    return {item.path for item in request.session.items if item.get_closest_marker("ray")}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def one_ray_module_at_a_time(request: pytest.FixtureRequest, ray_modules: set[Path],
+                             tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """Run the test files that start Ray one after another, whichever test process runs them.
 
     Ray's ``address="auto"`` joins any instance it finds among the machine's processes, and an
     instance takes seconds to end: a Ray test beside another would join or wait on the other's.
-    A lock in the folder every test process of the run keeps its temporary files in.
+    A lock in the folder every test process of the run keeps its temporary files in, held for
+    the whole file, as a file's Ray instance may serve all its tests.
     """
-    if request.node.get_closest_marker("ray") is None:
+    if request.node.path not in ray_modules:
         yield
         return
     import fcntl  # POSIX: the Ray tests are skipped on Windows
