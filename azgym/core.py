@@ -353,6 +353,27 @@ class Estimate:
             diagnostics=dict(diagnostics or {}),
         )
 
+    @classmethod
+    def _found(cls, x: float, y: float, heading: float, inliers: BoolArray,
+               covariance: FloatArray | None, diagnostics: Mapping[str, Any]) -> Estimate:
+        """``Estimate(x, y, heading, inliers, covariance=..., diagnostics=...)``, built faster.
+
+        A hot path (a localizer's answer, every frame): the slots are set through their
+        descriptors, which costs about a microsecond less than the dataclass's keyword
+        ``__init__``. Every field is set, ``ok`` to True and ``reason`` to "", as ``__init__``
+        would set them.
+        """
+        estimate = object.__new__(cls)
+        _SET_X(estimate, x)
+        _SET_Y(estimate, y)
+        _SET_HEADING(estimate, heading)
+        _SET_INLIERS(estimate, inliers)
+        _SET_OK(estimate, True)
+        _SET_REASON(estimate, "")
+        _SET_COVARIANCE(estimate, covariance)
+        _SET_DIAGNOSTICS(estimate, diagnostics)
+        return estimate
+
     @property
     def pose(self) -> Pose:
         """(x, y, heading) [m, m, rad]; NaN for a failed estimate."""
@@ -367,3 +388,8 @@ class Estimate:
     def n_inliers(self) -> int:
         """Number of measurements the estimate used."""
         return int(np.count_nonzero(self.inliers))
+
+
+# The slot descriptors' setters, for ``Estimate._found`` (one per field, in the fields' order).
+(_SET_X, _SET_Y, _SET_HEADING, _SET_INLIERS, _SET_OK, _SET_REASON, _SET_COVARIANCE,
+ _SET_DIAGNOSTICS) = (vars(Estimate)[name].__set__ for name in Estimate.__slots__)

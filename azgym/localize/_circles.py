@@ -3,10 +3,11 @@
 Two beacons seen under the angle θ_ij = α_i − α_j put the camera on a circle through both
 (the inscribed-angle theorem, eq. 9-11). :func:`circle_row` writes that circle as one linear
 equation in (x, y, q = x² + y²), :func:`pair_table` computes it for every pair of a frame's
-measurements once, and :func:`solve_triplet` intersects three of them (eq. 7-18) and adds the
-heading (eq. 19-20). :func:`distinct_beacons` is the rule that a triplet must see three different
-beacons, and :func:`write_ascending` the order a triplet's indices are kept in. ransac, the
-triplet localizer and lsq's algebraic start all build on these.
+measurements once (:func:`fill_pair` for one pair, in the frame :func:`pair_frame` sets), and
+:func:`solve_triplet` intersects three of them (eq. 7-18) and adds the heading (eq. 19-20).
+:func:`distinct_beacons` is the rule that a triplet must see three different beacons, and
+:func:`write_ascending` the order a triplet's indices are kept in. ransac, the triplet localizer
+and lsq's algebraic start all build on these.
 """
 
 from __future__ import annotations
@@ -43,12 +44,12 @@ def circle_row(xi, yi, xj, yj, ci, si, cj, sj):
     )
 
 
-@jit
-def pair_table(bx, by, ca, sa):
-    """The circle equation (``circle_row``) of every pair of measurements, computed once a frame.
+@jit(inline="always")
+def pair_frame(bx, by):
+    """The frame the circle equations are written in: the beacons' centroid and their extent L.
 
-    Coordinates are taken relative to the beacons' centroid and scaled by their extent L, so the
-    unknowns (x/L, y/L, q/L²) are all of order one. Returns (rows (n, n, 4), ox, oy, L).
+    Relative to the centroid and scaled by L, the unknowns (x/L, y/L, q/L²) are all of order one.
+    Returns (ox, oy, L).
     """
     n = bx.size
     ox = 0.0
@@ -63,19 +64,40 @@ def pair_table(bx, by, ca, sa):
         scale = max(scale, abs(bx[m] - ox), abs(by[m] - oy))
     if scale == 0.0:
         scale = 1.0
+    return ox, oy, scale
+
+
+@jit(inline="always")
+def fill_pair(rows, bx, by, ca, sa, ox, oy, scale, i, j):
+    """Write the circle equation (``circle_row``) of the pair i < j into ``rows[i, j]``."""
     inv = 1.0 / scale
+    r0, r1, r2, r3 = circle_row((bx[i] - ox) * inv, (by[i] - oy) * inv, (bx[j] - ox) * inv,
+                                (by[j] - oy) * inv, ca[i], sa[i], ca[j], sa[j])
+    rows[i, j, 0] = r0
+    rows[i, j, 1] = r1
+    rows[i, j, 2] = r2
+    rows[i, j, 3] = r3
+
+
+@jit(inline="always")
+def fill_every_pair(rows, bx, by, ca, sa, ox, oy, scale):
+    """``fill_pair`` for every pair i < j of the measurements."""
+    for i in range(bx.size):
+        for j in range(i + 1, bx.size):
+            fill_pair(rows, bx, by, ca, sa, ox, oy, scale, i, j)
+
+
+@jit
+def pair_table(bx, by, ca, sa):
+    """The circle equation (``circle_row``) of every pair of measurements, computed once a frame.
+
+    Written in the ``pair_frame`` (relative to the beacons' centroid, scaled by their extent L).
+    Returns (rows (n, n, 4), ox, oy, L); ``rows[i, j]`` is set for i < j.
+    """
+    n = bx.size
+    ox, oy, scale = pair_frame(bx, by)
     rows = np.zeros((n, n, 4))
-    for i in range(n):
-        xi = (bx[i] - ox) * inv
-        yi = (by[i] - oy) * inv
-        for j in range(i + 1, n):
-            xj = (bx[j] - ox) * inv
-            yj = (by[j] - oy) * inv
-            r0, r1, r2, r3 = circle_row(xi, yi, xj, yj, ca[i], sa[i], ca[j], sa[j])
-            rows[i, j, 0] = r0
-            rows[i, j, 1] = r1
-            rows[i, j, 2] = r2
-            rows[i, j, 3] = r3
+    fill_every_pair(rows, bx, by, ca, sa, ox, oy, scale)
     return rows, ox, oy, scale
 
 

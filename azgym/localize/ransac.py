@@ -22,6 +22,7 @@ from azgym.jit import jit
 from azgym.localize import _kernels as K
 from azgym.localize.base import (
     MIN_MEASUREMENTS,
+    ROW_AZIMUTH,
     ROW_BEACON_INDEX,
     ROW_BX,
     ROW_BY,
@@ -33,14 +34,15 @@ from azgym.localize.base import (
     Problem,
     gather,
 )
-from azgym.localize.ransac_search import score_pose, search
+from azgym.localize.ransac_search import consensus_first_search, score_pose, search
 from azgym.localize.refinement import package, refine_with_covariance
 from azgym.site.error_model import ErrorModel
 
-__all__ = ["N_SETTINGS", "OUT_SIZE", "OUT_SUPPORT", "OUT_TRIPLET_MEAN_SQ", "OUT_VALID_TRIPLETS",
+__all__ = ["N_SETTINGS", "OUT_SIZE", "OUT_SUPPORT", "OUT_TRIED_TRIPLETS", "OUT_TRIPLET_MEAN_SQ",
+           "OUT_VALID_TRIPLETS",
            "Ransac", "SETTING_COVERAGE", "SETTING_DEGENERACY_TOL", "SETTING_DELTA_D",
            "SETTING_MAX_ITER", "SETTING_WEIGHTED", "n_trials", "refine_winner", "score_candidate",
-           "score_triplets", "settings_array", "solve_from_triplets"]
+           "score_triplets", "settings_array", "solve_from_triplets", "solve_ransac"]
 
 # The slots of ``settings``, the hyperparameters handed to the kernels as one float array (one
 # argument instead of five: each argument costs time at the Python/compiled boundary).
@@ -65,7 +67,9 @@ OUT_TRIPLET_MEAN_SQ = K.REFINED_SIZE + 1
 """Slot of ``out``: E, the winning triplet's mean squared error over its supporters (eq. 27)."""
 OUT_VALID_TRIPLETS = K.REFINED_SIZE + 2
 """Slot of ``out``: how many triplets were not degenerate."""
-OUT_SIZE = K.REFINED_SIZE + 3
+OUT_TRIED_TRIPLETS = K.REFINED_SIZE + 3
+"""Slot of ``out``: how many triplets were tried (fewer than all when a consensus settled it)."""
+OUT_SIZE = K.REFINED_SIZE + 4
 """Length of ``out``."""
 
 
@@ -119,13 +123,46 @@ def solve_from_triplets(floats, ints, triplets, settings, out, mask, cov):
     """Steps 1-6 in one compiled call on a Problem's packed arrays.
 
     ``settings`` holds the hyperparameters in the ``SETTING_*`` slots. ``out`` (length OUT_SIZE)
-    gets the refinement's output (see ``_levenberg_marquardt.refine``), then NS, E and the number
-    of valid triplets (``OUT_*`` slots); ``mask`` (length M, all False on entry) the supporters,
-    by original position; ``cov`` the covariance.
+    gets the refinement's output (see ``_levenberg_marquardt.refine``), then NS, E, the number
+    of valid triplets and of triplets tried (``OUT_*`` slots); ``mask`` (length M, all False on
+    entry) the supporters, by original position; ``cov`` the covariance.
     """
     pose = np.empty(K.POSE_SIZE)
     support = np.zeros(floats.shape[1], dtype=np.bool_)
     n_support, mean_sq, n_valid = score_triplets(floats, ints, triplets, settings, pose, support)
+    out[OUT_TRIED_TRIPLETS] = triplets.shape[0]
+    refine_winner(floats, ints, settings, pose, support, n_support, mean_sq, n_valid, out, mask,
+                  cov)
+
+
+@jit
+def solve_ransac(floats, ints, triplets, settings, out, mask, cov):
+    """Ransac's steps 1-6: as :func:`solve_from_triplets`, but consensus first when unweighted.
+
+    The unweighted search is :func:`~azgym.localize.ransac_search.consensus_first_search`: a
+    triplet every measurement supports, among a few spread across the view, ends it. The
+    weighted one ranks every triplet (:func:`~azgym.localize.ransac_search.search`): its weights
+    are the error model's at the winner's pose, so which of the candidates every measurement
+    supports wins (the smallest mean ε², eq. 27) changes the answer. ``out`` also gets how many
+    triplets were tried (``OUT_TRIED_TRIPLETS``).
+    """
+    pose = np.empty(K.POSE_SIZE)
+    support = np.zeros(floats.shape[1], dtype=np.bool_)
+    bx, by, width = floats[ROW_BX], floats[ROW_BY], floats[ROW_WIDTH]
+    ca, sa = floats[ROW_COS_AZ], floats[ROW_SIN_AZ]
+    delta_d = settings[SETTING_DELTA_D]
+    coverage = settings[SETTING_COVERAGE] != 0.0
+    tolerance = settings[SETTING_DEGENERACY_TOL]
+    if settings[SETTING_WEIGHTED] != 0.0:
+        n_support, mean_sq, n_valid = search(bx, by, ca, sa, width, ints[ROW_BEACON_INDEX],
+                                             triplets, delta_d, coverage, tolerance, pose,
+                                             support)
+        tried = triplets.shape[0]
+    else:
+        n_support, mean_sq, n_valid, tried = consensus_first_search(
+            bx, by, ca, sa, width, ints[ROW_BEACON_INDEX], floats[ROW_AZIMUTH], triplets, delta_d,
+            coverage, tolerance, pose, support)
+    out[OUT_TRIED_TRIPLETS] = tried
     refine_winner(floats, ints, settings, pose, support, n_support, mean_sq, n_valid, out, mask,
                   cov)
 
@@ -181,7 +218,9 @@ def refine_winner(floats, ints, settings, pose, support, n_support, mean_sq, n_v
 @jit
 def _ransac_frame(ids, azimuth, sorted_ids, sorted_order, xyz, width, triplets, settings, out,
                   mask, cov):
-    """The id lookup (``gather``) and steps 1-6 in one compiled call, for exhaustive triplets.
+    """The id lookup (``gather``) and steps 1-6 (:func:`solve_ransac`) in one compiled call.
+
+    For exhaustive triplets only.
 
     ``triplets`` are all triplets of the M measurements in lexicographic order; those within the
     first K (the usable measurements) are exactly all triplets of K. Returns (K, distinct
@@ -192,7 +231,7 @@ def _ransac_frame(ids, azimuth, sorted_ids, sorted_order, xyz, width, triplets, 
     if distinct >= MIN_MEASUREMENTS:
         if usable < ids.size:
             triplets = triplets[triplets[:, 2] < usable]
-        solve_from_triplets(floats, ints, triplets, settings, out, mask, cov)
+        solve_ransac(floats, ints, triplets, settings, out, mask, cov)
     return usable, distinct
 
 
@@ -205,7 +244,11 @@ class Ransac(Localizer):
     error; step 6 refines the pose on those supporters by Levenberg-Marquardt (eq. 28-33).
 
     All C(K, 3) triplets are tried when there are at most ``max_exhaustive`` of them; otherwise N_Q
-    random triplets from eq. 6, with N_GOOD = ceil(min_inlier_fraction · K).
+    random triplets from eq. 6, with N_GOOD = ceil(min_inlier_fraction · K). Unweighted, a few
+    triplets spread across the view are tried first, and the first that every measurement
+    supports ends the search: no triplet can have more supporters, and the refinement then uses
+    every measurement whichever of them it starts from (``diagnostics["n_triplets"]`` says how
+    many triplets were tried).
 
     Args:
         delta_alpha_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1).
@@ -296,7 +339,7 @@ class Ransac(Localizer):
     def _localize_frame(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         # The fast path, with the id lookup in the kernel: exhaustive triplets only, since
         # sampled ones depend on the number of usable measurements, known after the lookup.
-        count = len(measurements)
+        count = measurements.ids.size
         if math.comb(count, 3) > self.max_exhaustive:
             return super()._localize_frame(measurements, beacons)
         out = np.empty(OUT_SIZE)
@@ -308,24 +351,25 @@ class Ransac(Localizer):
         )
         if distinct < MIN_MEASUREMENTS:
             return super()._localize_frame(measurements, beacons)  # the standard refusal
-        return self._estimate(out, mask, cov, math.comb(usable, 3))
+        return self._estimate(out, mask, cov)
 
     def _localize(self, problem: Problem) -> Estimate:
         triplets = self._triplets(problem.size)
         out = np.empty(OUT_SIZE)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
         cov = np.empty((3, 3))
-        solve_from_triplets(problem.floats, problem.ints, triplets, self._settings, out, mask,
-                            cov)
-        return self._estimate(out, mask, cov, int(triplets.shape[0]))
+        solve_ransac(problem.floats, problem.ints, triplets, self._settings, out, mask,
+                              cov)
+        return self._estimate(out, mask, cov)
 
     @staticmethod
-    def _estimate(out: FloatArray, mask: BoolArray, cov: FloatArray, n_triplets: int) -> Estimate:
-        diagnostics: dict[str, Any] = {"n_triplets": n_triplets,
-                                       "n_valid_triplets": int(out[OUT_VALID_TRIPLETS])}
-        if out[OUT_SUPPORT] < MIN_MEASUREMENTS:
+    def _estimate(out: FloatArray, mask: BoolArray, cov: FloatArray) -> Estimate:
+        values = out.tolist()  # Python floats: read one by one, far cheaper than numpy scalars
+        diagnostics: dict[str, Any] = {"n_triplets": int(values[OUT_TRIED_TRIPLETS]),
+                                       "n_valid_triplets": int(values[OUT_VALID_TRIPLETS])}
+        if values[OUT_SUPPORT] < MIN_MEASUREMENTS:
             return Estimate.failure(
                 "no non-degenerate triplet with at least 3 supporters", mask.size, diagnostics
             )
-        diagnostics["triplet_mean_sq_error"] = float(out[OUT_TRIPLET_MEAN_SQ])
+        diagnostics["triplet_mean_sq_error"] = values[OUT_TRIPLET_MEAN_SQ]
         return package(mask, out, cov, diagnostics)

@@ -67,19 +67,22 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
                            max_iter, out, cov):
     """Refine the pose array ``start`` on ``use``; fill ``out`` (as ``refine``) and ``cov``.
 
-    The variances are the model's at the start pose; ``weighted`` uses their inverses as weights.
+    ``weighted`` weights each measurement by the inverse of the model's variance at the start
+    pose, fixed while the cost is minimised. The covariance takes the model's variances at the
+    answer, so it depends on the measurements used and the minimum found, not on where the
+    refinement started.
+
     A refinement that ends on a beacon it used (the camera right under it, or a stall there)
     drops that beacon from ``use``, in place, and refines again from there; ending on a beacon
     again gives status ON_BEACON.
     """
     n = bx.size
-    var = np.empty(n)
     weight = np.ones(n)
-    for m in range(n):
-        dist = math.hypot(bx[m] - start[K.POSE_X], by[m] - start[K.POSE_Y])
-        var[m] = _model_variance(width[m], dist, delta_d, coverage)
-        if weighted:
-            weight[m] = 1.0 / max(var[m], MIN_VARIANCE)
+    if weighted:
+        for m in range(n):
+            dist = math.hypot(bx[m] - start[K.POSE_X], by[m] - start[K.POSE_Y])
+            weight[m] = 1.0 / max(_model_variance(width[m], dist, delta_d, coverage),
+                                  MIN_VARIANCE)
     info = np.zeros((3, 3))
     refine(bx, by, ca, sa, weight, use, start[K.POSE_X], start[K.POSE_Y], start[K.POSE_COS],
            start[K.POSE_SIN], max_iter, out, info)
@@ -92,6 +95,10 @@ def refine_with_covariance(bx, by, ca, sa, width, use, weighted, delta_d, covera
         if out[K.REFINED_STATUS] != K.SINGULAR and _beacon_at(
                 bx, by, width, use, out[K.POSE_X], out[K.POSE_Y]) >= 0:
             out[K.REFINED_STATUS] = K.ON_BEACON
+    var = np.empty(n)
+    for m in range(n):
+        dist = math.hypot(bx[m] - out[K.POSE_X], by[m] - out[K.POSE_Y])
+        var[m] = _model_variance(width[m], dist, delta_d, coverage)
     meat = np.empty((3, 3))
     information(bx, by, use, weight * weight * var, out[K.POSE_X], out[K.POSE_Y], meat)
     inverse = np.empty((3, 3))
@@ -199,11 +206,4 @@ def package(
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
         return Estimate.failure("the refinement ended at a non-finite pose", inliers.size,
                                 diagnostics)
-    return Estimate(
-        x=x,
-        y=y,
-        heading=heading,
-        inliers=inliers,
-        covariance=cov,
-        diagnostics=diagnostics,
-    )
+    return Estimate._found(x, y, heading, inliers, cov, diagnostics)

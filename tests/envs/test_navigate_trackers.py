@@ -141,14 +141,18 @@ def pinned(infos: list[dict]) -> tuple:
 
 
 # Recorded before trackers could drive the environment: a localizer's episodes are unchanged.
+# Re-recorded when ransac's search began with a consensus: its refinement starts from another
+# triplet and stops within about 1e-10 m of the same minimum, so the steps, the rejections and
+# the end poses are as they were and the errors' sums of the 313- and 600-step episodes moved
+# in their last digits.
 RANSAC_EPISODES = {
     10.0: [(84, 8, "0x1.3757452a007e1p+6", "0x1.c4014f741eff2p+3", "0x1.c0a79f700452ep+3",
             "-0x1.acdf04357db40p-6"),
-           (600, 186, "0x1.e5b638901b9f2p+11", "0x1.133fa82b60150p+4", "0x1.42c634873db93p+3",
+           (600, 186, "0x1.e5b638901c11ep+11", "0x1.133fa82b60150p+4", "0x1.42c634873db93p+3",
             "0x1.5ad71378584a9p+0")],
     3.0: [(84, 3, "0x1.1f8697df09a4dp+5", "0x1.c18e82f2becc7p+3", "0x1.c080153f659c2p+3",
            "-0x1.b295e0d989345p-6"),
-          (313, 18, "0x1.320bff121ee32p+6", "0x1.df433a454bf82p+3", "0x1.1793d200c936fp+4",
+          (313, 18, "0x1.320bff1224a16p+6", "0x1.df433a454bf82p+3", "0x1.1793d200c936fp+4",
            "0x1.8534d4af434a9p+0")],
 }
 
