@@ -30,7 +30,8 @@ from azgym.localize._circles import (
 )
 from azgym.sensing.geometry.ordering import stable_order
 
-__all__ = ["CONSENSUS_TRIPLETS", "consensus_first_search", "score_pose", "search"]
+__all__ = ["CONSENSUS_MIN_TRIPLETS", "CONSENSUS_TRIPLETS", "consensus_first_search", "score_pose",
+           "search"]
 
 SERIES_Z_MAX = 0.0025
 """u² = tan² ε up to which :func:`_score_all` trusts its atan series (to u¹¹) for an inlier.
@@ -270,6 +271,13 @@ On noisy frames without outliers (paper-room, 12 beacons) one of the first three
 of them, one of the first eight 98 %; a frame with an outlier pays for all eight (about 1 µs)
 before its full search.
 """
+CONSENSUS_MIN_TRIPLETS = 2 * CONSENSUS_TRIPLETS
+"""The fewest triplets (C(K, 3)) a frame needs for the consensus to be tried first: with fewer
+(K <= 5) the full search costs little more than the tries. It also keeps the start of the
+refinement where it was on the frames with the fewest measurements, whose geometry is the
+weakest: on real four-beacon frames, starting from the first triplet every measurement
+supports instead of the one with the smallest mean ε² left some refinements short of the
+minimum at max_iter (a refusal), where the full search's start converged."""
 
 
 @jit(inline="always")
@@ -309,15 +317,17 @@ def consensus_first_search(bx, by, ca, sa, width, beacon_index, azimuth, triplet
                            coverage, degeneracy_tol, best_pose, best_mask):
     """Steps 1-5 as :func:`search`, after a quick look for a triplet every measurement supports.
 
-    Up to CONSENSUS_TRIPLETS triplets spread across the view (:func:`_spread_triplets`) are
-    tried first. The first one every usable measurement supports wins at once: no candidate can
-    have more supporters, step 5's first criterion. Otherwise every triplet of ``triplets`` is
-    ranked as :func:`search` ranks them.
+    On a frame of at least CONSENSUS_MIN_TRIPLETS triplets, up to CONSENSUS_TRIPLETS triplets
+    spread across the view (:func:`_spread_triplets`) are tried first. The first one every
+    usable measurement supports wins at once: no candidate can have more supporters, step 5's
+    first criterion. Otherwise every triplet of ``triplets`` is ranked as :func:`search` ranks
+    them.
 
     The one departure from the exhaustive search is the tie among candidates every measurement
     supports: it goes to the first one tried, not to the smallest mean ε² (eq. 27). Such
     candidates differ only in the pose step 6 starts from; it refines the same measurements (all
-    of them) to the same minimum of eq. 31.
+    of them) to the same minimum of eq. 31, to within its stopping tolerance, wherever it
+    converges from both starts (CONSENSUS_MIN_TRIPLETS says where it may not).
 
     Returns (NS of the winner, E of the winner, non-degenerate triplets, triplets tried).
     """
@@ -326,7 +336,9 @@ def consensus_first_search(bx, by, ca, sa, width, beacon_index, azimuth, triplet
     rows = np.empty((k, k, 4))  # the pair table, filled as far as it is needed
     tan_d = math.tan(delta_d)
     spread = np.empty((CONSENSUS_TRIPLETS, 3), dtype=np.int64)
-    n_spread = _spread_triplets(stable_order(azimuth, k), spread)
+    n_spread = 0
+    if k * (k - 1) * (k - 2) // 6 >= CONSENSUS_MIN_TRIPLETS:
+        n_spread = _spread_triplets(stable_order(azimuth, k), spread)
     n_valid = 0
     tried = 0
     for t in range(n_spread):

@@ -23,7 +23,7 @@ from azgym.localize.ransac import (
     _all_triplets,
     solve_from_triplets,
 )
-from azgym.localize.ransac_search import CONSENSUS_TRIPLETS
+from azgym.localize.ransac_search import CONSENSUS_MIN_TRIPLETS, CONSENSUS_TRIPLETS
 from azgym.sensing.synthetic import inject_outliers, noisy_measurements
 
 
@@ -129,11 +129,15 @@ def test_consensus_first_answers_as_the_full_search(paper_room, pose, n_outliers
                                atol=1e-7 * np.abs(expected_cov).max())
 
 
-@pytest.mark.parametrize("count", [3, 4, 5])
-def test_few_beacons_try_one_spread_triplet(count):
+@pytest.mark.parametrize("count", [3, 4, 5, 6, 7])
+def test_only_a_frame_of_twenty_triplets_or_more_tries_the_consensus_first(count):
+    # K <= 5 has at most ten triplets: the full search costs little more than the consensus.
     xy = at_degrees(*np.linspace(-150.0, 150.0, count))
     beacons = beacon_map(xy)
     frame = ideal_frame(0.5, -0.3, 0.2, beacons)
     estimate = Ransac().localize(frame, beacons)
     assert estimate.ok and estimate.inliers.all()
-    assert estimate.diagnostics["n_triplets"] == 1
+    consensus_first = math.comb(count, 3) >= CONSENSUS_MIN_TRIPLETS
+    assert consensus_first == (count >= 6)
+    expected = 1 if consensus_first else math.comb(count, 3)
+    assert estimate.diagnostics["n_triplets"] == expected
