@@ -39,10 +39,10 @@ from azgym.localize.refinement import package, refine_with_covariance
 from azgym.site.error_model import ErrorModel
 
 __all__ = ["N_SETTINGS", "OUT_SIZE", "OUT_SUPPORT", "OUT_TRIED_TRIPLETS", "OUT_TRIPLET_MEAN_SQ",
-           "OUT_VALID_TRIPLETS",
-           "Ransac", "SETTING_COVERAGE", "SETTING_DEGENERACY_TOL", "SETTING_DELTA_D",
-           "SETTING_MAX_ITER", "SETTING_WEIGHTED", "n_trials", "refine_winner", "score_candidate",
-           "score_triplets", "settings_array", "solve_from_triplets", "solve_ransac"]
+           "OUT_VALID_TRIPLETS", "Ransac", "SETTING_COVERAGE", "SETTING_DEGENERACY_TOL",
+           "SETTING_DELTA_D", "SETTING_MAX_ITER", "SETTING_WEIGHTED", "n_trials", "refine_winner",
+           "score_candidate", "score_triplets", "settings_array", "solve_from_triplets",
+           "solve_ransac"]
 
 # The slots of ``settings``, the hyperparameters handed to the kernels as one float array (one
 # argument instead of five: each argument costs time at the Python/compiled boundary).
@@ -244,11 +244,11 @@ class Ransac(Localizer):
     error; step 6 refines the pose on those supporters by Levenberg-Marquardt (eq. 28-33).
 
     All C(K, 3) triplets are tried when there are at most ``max_exhaustive`` of them; otherwise N_Q
-    random triplets from eq. 6, with N_GOOD = ceil(min_inlier_fraction · K). Unweighted, a few
-    triplets spread across the view are tried first, and the first that every measurement
-    supports ends the search: no triplet can have more supporters, and the refinement then uses
-    every measurement whichever of them it starts from (``diagnostics["n_triplets"]`` says how
-    many triplets were tried).
+    random triplets from eq. 6, with N_GOOD = ceil(min_inlier_fraction · K). Unweighted, on a
+    frame of 20 triplets or more (K >= 6), a few triplets spread across the view are tried
+    first, and the first that every measurement supports ends the search: no triplet can have
+    more supporters, and the refinement then uses every measurement whichever of them it starts
+    from (``diagnostics["n_triplets"]`` says how many triplets were tried).
 
     Args:
         delta_alpha_d: Δα_d, half-width of the centre-detection error [rad] (eq. 1).
@@ -358,8 +358,7 @@ class Ransac(Localizer):
         out = np.empty(OUT_SIZE)
         mask = np.zeros(problem.n_measurements, dtype=np.bool_)
         cov = np.empty((3, 3))
-        solve_ransac(problem.floats, problem.ints, triplets, self._settings, out, mask,
-                              cov)
+        solve_ransac(problem.floats, problem.ints, triplets, self._settings, out, mask, cov)
         return self._estimate(out, mask, cov)
 
     @staticmethod

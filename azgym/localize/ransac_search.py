@@ -267,9 +267,9 @@ def _search_table(rows, ox, oy, scale, bx, by, ca, sa, width, beacon_index, trip
 CONSENSUS_TRIPLETS = 8
 """How many triplets spread across the view :func:`consensus_first_search` tries before all.
 
-On noisy frames without outliers (paper-room, 12 beacons) one of the first three settles 83 %
-of them, one of the first eight 98 %; a frame with an outlier pays for all eight (about 1 µs)
-before its full search.
+On the noisy frames without outliers of ``baselines/speed.py`` (paper-room, 12 beacons, 3 000
+frames) one of the first three settled 82 % of them, one of the first eight 97 %; a frame with
+an outlier tries all eight before its full search.
 """
 CONSENSUS_MIN_TRIPLETS = 2 * CONSENSUS_TRIPLETS
 """The fewest triplets (C(K, 3)) a frame needs for the consensus to be tried first: with fewer
@@ -282,12 +282,12 @@ minimum at max_iter (a refusal), where the full search's start converged."""
 
 @jit(inline="always")
 def _spread_triplets(order, out):
-    """Triplets spread across the view, best first; returns how many were written into ``out``.
+    """Triplets spread across the view, in the order to try them; returns how many were written.
 
     With the K measurements in ``order`` (sorted by azimuth), the places s, s + ⌊K/3⌋ and
     s + ⌊2K/3⌋ (mod K) for s = 0, 1, ..., then s, s + ⌊K/3⌋ + 1 and s + ⌊2K/3⌋ + 1: each
     triplet's three about a third of the way round the view from each other. Each is written
-    once (as measurement indices, ascending), up to ``out.shape[0]`` of them.
+    into ``out`` once (as measurement indices, ascending), up to ``out.shape[0]`` of them.
     """
     k = order.size
     made = 0
