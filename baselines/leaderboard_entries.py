@@ -83,7 +83,8 @@ def main() -> None:
         _submit(result.summary, out, entries, f"data-{log.manifest.name}", args.localizer)
     if args.no_board:
         return
-    for path in board.build(entries, ROOT / "leaderboard", ROOT / "leaderboard" / "navigation"):
+    for path in board.build(entries, ROOT / "leaderboard", ROOT / "leaderboard" / "navigation",
+                            mapping_dir=ROOT / "leaderboard" / "mapping"):
         print(f"wrote {path}")
 
 

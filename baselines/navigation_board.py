@@ -48,7 +48,8 @@ def main() -> None:
             print(result.table())
             print(f"{name} {split} (seed {result.record['seed']}): "
                   f"{time.perf_counter() - started:.0f} s; wrote {path}\n", flush=True)
-    for path in board.build(ROOT / "leaderboard" / "entries", ROOT / "leaderboard", folder):
+    for path in board.build(ROOT / "leaderboard" / "entries", ROOT / "leaderboard", folder,
+                            mapping_dir=ROOT / "leaderboard" / "mapping"):
         print(f"wrote {path}")
 
 

@@ -273,11 +273,10 @@ an outlier tries all eight before its full search.
 """
 CONSENSUS_MIN_TRIPLETS = 2 * CONSENSUS_TRIPLETS
 """The fewest triplets (C(K, 3)) a frame needs for the consensus to be tried first: with fewer
-(K <= 5) the full search costs little more than the tries. It also keeps the start of the
-refinement where it was on the frames with the fewest measurements, whose geometry is the
-weakest: on real four-beacon frames, starting from the first triplet every measurement
-supports instead of the one with the smallest mean ε² left some refinements short of the
-minimum at max_iter (a refusal), where the full search's start converged."""
+(K <= 5) the full search costs little more than the tries. It also keeps the refinement's start
+where it was on the frames of fewest measurements, whose geometry is the weakest: on real
+four-beacon frames, the first triplet every measurement supports, as a start instead of the one
+of smallest mean ε², left some refinements at max_iter (a refusal) that converged from it."""
 
 
 @jit(inline="always")
