@@ -1,7 +1,8 @@
 """The paper's RANSAC localizer (Rátosi & Simon 2021, Sec. 2.3-2.7).
 
 Here: the :class:`Ransac` class, which triplets it tries (all of them, or N_Q random ones from
-eq. 4-6), and its two compiled entry points, which run steps 1-6 on a frame and exchange the
+eq. 4-6), and its compiled entry points, which run steps 1-6 on a frame (ransac's own,
+consensus first, and the full search the learned localizers call) and exchange the
 hyperparameters and results with the class through the named ``SETTING_*`` and ``OUT_*`` slots.
 Steps 1-5, the triplet search itself, are compiled in :mod:`azgym.localize.ransac_search`;
 step 6 is the shared refinement of :mod:`azgym.localize.refinement`.

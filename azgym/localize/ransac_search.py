@@ -5,9 +5,9 @@
 within the tolerance Δα_i = 2 (Δα_d + Δα_c,i) at that pose (eq. 21-26), and their mean squared
 error (eq. 27), and keeps the best (step 5). The tolerance test is :func:`_inside_tolerance`
 (no sqrt or atan), with :func:`_is_inlier` as its exact form; :func:`_score_all` scores every
-candidate at once in a vectorised loop. Only :func:`search` and :func:`score_pose` (steps 4-5 for a
-pose found elsewhere) are called from outside, by the compiled entry points in ``ransac.py``,
-which hold the settings and output slots and go on to step 6, the refinement.
+candidate at once in a vectorised loop. :func:`search`, :func:`consensus_first_search` (a few
+spread triplets first) and :func:`score_pose` (steps 4-5 for a pose found elsewhere) are all
+``ransac.py``'s compiled entry points call here, before step 6, the refinement.
 """
 
 from __future__ import annotations
