@@ -58,7 +58,7 @@ KERNEL_MODULES = (
     "sensing/protocol.py", "site/elements.py",
     "site/error_model.py", "site/fisheye.py", "track/_motion_check.py",
     "track/azimuth_update.py", "track/inertial_steps.py", "track/repair_fit.py",
-    "track/unicycle.py", "world/_polyline.py",
+    "track/unicycle.py", "track/unicycle_steps.py", "world/_polyline.py",
 )
 """The modules (relative to the package) with compiled kernels, and every azgym module they import
 from: numba compiles a kernel's global constants (label codes, row numbers) into it, so a change

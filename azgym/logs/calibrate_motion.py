@@ -13,7 +13,7 @@ factor), so that σ is in the odometry's own units and the truth is the regresso
 rate: y = the true heading change minus the read one, a = −(seconds read), x₀ = the bias.
 
 A sample holds its value until the next sample, for at most max(``HOLD_PERIODS`` median
-periods, ``HOLD_FLOOR_S``): the trackers' rule (:class:`azgym.track.unicycle.HeldStream`), so
+periods, ``HOLD_FLOOR_S``): the trackers' rule (:class:`azgym.track.unicycle.MotionSteps`), so
 that a logger's jitter is held over and a stopped stream is not; an interval the samples do not
 cover whole is left out. The likelihood is exact: a Kalman filter on
 d, with x₀ entering linearly and so solved in closed form (generalized least squares), evaluated

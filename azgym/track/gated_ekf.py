@@ -41,7 +41,6 @@ from azgym.track.unicycle import (
     YAW_SOURCES,
     MotionNoise,
     MotionSteps,
-    predict,
 )
 
 __all__ = ["DEFAULT_NOISE", "GatedEkf", "subset"]
@@ -185,9 +184,8 @@ class GatedEkf(Tracker):
         self._running = True
 
     def _predict(self, motion: Motion) -> None:
-        for step in self._steps.steps(motion):
-            if self._running:
-                predict(self._state, self._cov, step, self._lever, self._noise)
+        self._steps.advance(motion, self._state, self._cov, self._lever, self._noise,
+                            self._running)
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
         if not self._running:
