@@ -31,8 +31,9 @@ class Hyperparameters:
     def __setattr__(self, name: str, value: Any) -> None:
         """Set an attribute; setting a hyperparameter has it checked again before the next frame."""
         object.__setattr__(self, name, value)
+        # A private attribute (a tracker's state, set every frame) is never a hyperparameter.
         # mypy#11470: mypy takes no class object for Hashable, which every class is.
-        if name in _param_names(type(self)):  # type: ignore[arg-type]
+        if not name.startswith("_") and name in _param_names(type(self)):  # type: ignore[arg-type]
             object.__setattr__(self, "_params_checked", False)
 
     def _take(self, arguments: dict[str, Any]) -> None:

@@ -200,7 +200,7 @@ class Tkf(Tracker):
         if not self._live:
             return
         if imu.time.size:
-            self._accelerometer = bool(np.isfinite(imu.accel[0, 0]))
+            self._accelerometer = math.isfinite(imu.accel[0, 0])
         use_speed = self.odometry_speed if self.odometry_speed is not None \
             else not self._accelerometer
         from_odometry = self._yaw_source == "odometry"
@@ -241,12 +241,10 @@ class Tkf(Tracker):
             return Estimate.failure(reason, len(measurements), {"fix": _fix_state(fix, used)})
         x = self._x
         camera, covariance = camera_estimate(x, self._P, float(self.camera_from_imu))
-        return Estimate(
-            x=float(camera[0]), y=float(camera[1]), heading=wrap_scalar(float(camera[2])),
-            inliers=fix.inliers if used else np.zeros(len(measurements), bool),
-            covariance=covariance,
-            diagnostics={"fix": _fix_state(fix, used), "holdover": since,
-                         "speed": math.hypot(x[2], x[3])})
+        return Estimate._found(
+            float(camera[0]), float(camera[1]), wrap_scalar(float(camera[2])),
+            fix.inliers if used else np.zeros(len(measurements), bool), covariance,
+            {"fix": _fix_state(fix, used), "holdover": since, "speed": math.hypot(x[2], x[3])})
 
     def _since_fix(self, now: float) -> float:
         """Seconds since the last fix used, or since the start pose."""
@@ -264,17 +262,21 @@ class Tkf(Tracker):
         x, y, heading = fix.pose
         R = np.array(fix.covariance if fix.covariance is not None else _FALLBACK_FIX_COVARIANCE,
                      dtype=np.float64)  # a new array: one specialization of the kernel
-        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)
-                and np.isfinite(R).all()):
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
             return False
         z = np.array((x, y, heading), dtype=np.float64)
         if self._live:
             gate = float(self.gate)
-            if fix_update(self._x, self._P, z, R, float(self.camera_from_imu), gate) <= gate:
+            distance = fix_update(self._x, self._P, z, R, float(self.camera_from_imu), gate)
+            if distance < 0.0:  # R is not finite
+                return False
+            if distance <= gate:
                 self._confirmed = True
                 return True
             if self._confirmed:
                 return False
+        elif not np.isfinite(R).all():
+            return False
         self._start(z, R, FIX_START_SPEED_SD)
         return True
 

@@ -274,8 +274,12 @@ def fix_update(x, P, z, R, ahead, gate):
 
     Returns:
         The innovation's squared Mahalanobis distance νᵀ S⁻¹ ν. The state is left alone when it
-        exceeds ``gate``, or is NaN (a singular S).
+        exceeds ``gate``, or is NaN (a singular S), and when R is not finite: then −1.
     """
+    for r in range(3):
+        for k in range(3):
+            if not math.isfinite(R[r, k]):
+                return -1.0
     H, innovation = _camera_rows(x, ahead)
     innovation[0] = z[0] - innovation[0]
     innovation[1] = z[1] - innovation[1]

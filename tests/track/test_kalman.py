@@ -55,6 +55,44 @@ def test_the_fix_sees_the_camera_ahead_of_the_imu():
     np.testing.assert_allclose(x[[X, Y]], [0.0, 0.0], atol=1e-15)
 
 
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_a_fix_whose_covariance_is_not_finite_changes_nothing(bad):
+    x, P = np.zeros(SIZE), np.eye(SIZE)
+    R = np.eye(3)
+    R[1, 2] = bad
+    assert fix_update(x, P, np.array([1.0, 2.0, 0.3]), R, 0.5, math.inf) == -1.0
+    assert not x.any() and np.array_equal(P, np.eye(SIZE))
+
+
+class _NotFiniteFix:
+    """ransac's fix with a covariance that is NaN from the given frame on."""
+
+    def __init__(self, from_frame):
+        self.ransac, self.frame, self.from_frame = azgym.make_localizer("ransac"), 0, from_frame
+
+    def localize(self, measurements, beacons):
+        fix = self.ransac.localize(measurements, beacons)
+        self.frame += 1
+        if self.frame >= self.from_frame and fix.covariance is not None:
+            fix.covariance[0, 0] = math.nan
+        return fix
+
+
+@pytest.mark.parametrize("from_frame", [1, 5])  # before the filter starts, and once it runs
+def test_tkf_refuses_a_fix_whose_covariance_is_not_finite(from_frame):
+    scenario = azgym.load_scenario("warehouse-small")
+    frames = list(simulate(scenario, scenario.routes[0].name, seed=1))[:12]
+    tracker = azgym.make_tracker("tkf")
+    tracker._fixer = _NotFiniteFix(from_frame)
+    tracker.reset(seed=0)
+    states = []
+    for frame in frames[1:]:
+        tracker.predict(frame.motion)
+        states.append(tracker.update(frame.observation.measurements, scenario.beacons))
+    assert all(state.diagnostics["fix"] != "used" for state in states[from_frame - 1:])
+    assert all(np.isfinite(tracker._x)) and np.isfinite(tracker._P).all()
+
+
 def test_the_gate_leaves_the_state_alone_for_an_outlier():
     x, P, distance = _fix_update([10.0, 0.0, 0.0], gate=16.0)
     assert distance == pytest.approx(50.0)
