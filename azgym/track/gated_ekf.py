@@ -242,10 +242,9 @@ class GatedEkf(Tracker):
 
     def _estimate(self, inliers: np.ndarray, diagnostics: dict | None = None) -> Estimate:
         state = self._state
-        return Estimate(x=float(state[IX]), y=float(state[IY]),
-                        heading=wrap_scalar(float(state[IPHI])), inliers=inliers,
-                        covariance=self._cov[:3, :3].copy(),
-                        diagnostics=diagnostics or {})
+        return Estimate._found(float(state[IX]), float(state[IY]),
+                               wrap_scalar(float(state[IPHI])), inliers,
+                               self._cov[:3, :3].copy(), diagnostics or {})
 
 
 def subset(measurements: Measurements, rows: np.ndarray) -> Measurements:

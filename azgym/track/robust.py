@@ -297,7 +297,7 @@ class Robust(GatedEkf):
         if self._position_std() > self.max_position_std:
             return self._relocalize(measurements, beacons)
         inliers, distinct = self._correct(measurements, beacons)
-        accepted = int(inliers.sum())
+        accepted = int(np.count_nonzero(inliers))
         inconsistent = distinct >= 3 and 2 * accepted < distinct
         if self._tentative:
             if accepted < distinct:
