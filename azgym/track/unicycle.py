@@ -155,37 +155,44 @@ class MotionSteps:
         The first frame of a sequence has no start: it only starts the clock and the holds (the
         start pose is the pose at its time), and has no steps.
         """
-        streams = self._streams(motion)
+        samples, speed_count = self._samples(motion)
         if self.time is None:
             self.time = motion.time
-            hold_streams(self.streams, *streams)
+            hold_streams(self.streams, samples, speed_count)
             return []
         start, self.time = self.time, motion.time
-        rows = frame_steps(self.streams, *streams, start, float(motion.time), self.speed_factor,
-                           self.period)
+        rows = frame_steps(self.streams, samples, speed_count, start, float(motion.time),
+                           self.speed_factor, self.period)
         return [Step(*row) for row in rows.tolist()]
 
     def advance(self, motion: Motion, state: FloatArray, cov: FloatArray, lever: float,
                 noise: MotionNoise, move: bool) -> None:
         """:meth:`steps`, and when ``move``, :func:`predict` through them: one compiled call."""
-        streams = self._streams(motion)
+        samples, speed_count = self._samples(motion)
         if self.time is None:
             self.time = motion.time
-            hold_streams(self.streams, *streams)
+            hold_streams(self.streams, samples, speed_count)
             return
         start, self.time = self.time, motion.time
-        advance(self.streams, *streams, start, float(motion.time), self.speed_factor,
+        advance(self.streams, samples, speed_count, start, float(motion.time), self.speed_factor,
                 self.period, state, cov, float(lever), noise.vector, move)
 
-    def _streams(self, motion: Motion) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """The odometry's times and speeds, the turn rate's times and rates."""
+    def _samples(self, motion: Motion) -> tuple[FloatArray, int]:
+        """The odometry's times and speeds, then the turn rate's times and rates, in one array.
+
+        One new array, whatever the samples' own are (read-only from a run's wire, strided from
+        a log's table): the kernels then have one specialization each, compiled once. Also the
+        number of odometry samples.
+        """
         odometry = motion.odometry
         if self.yaw_source == "gyro":
             turn_time, turn_rate = motion.imu.time, motion.imu.yaw_rate
         else:
             turn_time = odometry.time
             turn_rate = odometry_yaw_rates(odometry, self.vehicle, self.wheelbase)
-        return odometry.time, odometry.speed, turn_time, turn_rate
+        samples = np.concatenate((odometry.time, odometry.speed, turn_time, turn_rate),
+                                 dtype=np.float64)
+        return samples, int(odometry.time.size)
 
 
 def predict(state: FloatArray, cov: FloatArray, step: Step, lever: float,

@@ -64,8 +64,7 @@ def new_streams() -> np.ndarray:
 
 
 @jit
-def frame_steps(streams, speed_time, speed_value, turn_time, turn_rate, start, end,
-                speed_factor, period):
+def frame_steps(streams, samples, speed_count, start, end, speed_factor, period):
     """A frame's steps over (``start``, ``end``]: one, unless it spans more than ``MAX_STEP_S``.
 
     The frame's samples all lie in (``start``, ``end``] (the tracker's motion check). Time no
@@ -74,10 +73,9 @@ def frame_steps(streams, speed_time, speed_value, turn_time, turn_rate, start, e
 
     Args:
         streams: The two streams' rows (:func:`new_streams`), updated in place.
-        speed_time: The odometry samples' times [s], in order.
-        speed_value: Their speeds [m/s].
-        turn_time: The turn-rate samples' times [s], in order.
-        turn_rate: Their turn rates [rad/s].
+        samples: The odometry samples' times [s] (in order) and speeds [m/s], then the
+            turn-rate samples' times [s] (in order) and rates [rad/s], one after the other.
+        speed_count: How many odometry samples there are.
         start: The previous frame's time [s].
         end: This frame's time [s].
         speed_factor: True over read distance of the odometry [1].
@@ -86,6 +84,7 @@ def frame_steps(streams, speed_time, speed_value, turn_time, turn_rate, start, e
     Returns:
         (S, :data:`STEP_FIELDS`) the steps, in time order.
     """
+    speed_time, speed_value, turn_time, turn_rate = _split(samples, speed_count)
     count = max(int(math.ceil((end - start) / MAX_STEP_S)), 1)
     steps = np.zeros((count, STEP_FIELDS))
     if count == 1:  # the usual frame: one step, every sample
@@ -112,18 +111,18 @@ def frame_steps(streams, speed_time, speed_value, turn_time, turn_rate, start, e
 
 
 @jit
-def hold_streams(streams, speed_time, speed_value, turn_time, turn_rate):
-    """Take a sequence's first frame's samples without integrating them: they start the holds."""
+def hold_streams(streams, samples, speed_count):
+    """Hold a sequence's first frame's samples (as :func:`frame_steps` takes them), unintegrated."""
+    speed_time, speed_value, turn_time, turn_rate = _split(samples, speed_count)
     _hold(streams[0], speed_time, speed_value)
     _hold(streams[1], turn_time, turn_rate)
 
 
 @jit
-def advance(streams, speed_time, speed_value, turn_time, turn_rate, start, end, speed_factor,
-            period, state, cov, lever, noise, move):
+def advance(streams, samples, speed_count, start, end, speed_factor, period, state, cov, lever,
+            noise, move):
     """A tracker's frame: :func:`frame_steps`, then each step's :func:`predict_step` if ``move``."""
-    steps = frame_steps(streams, speed_time, speed_value, turn_time, turn_rate, start, end,
-                        speed_factor, period)
+    steps = frame_steps(streams, samples, speed_count, start, end, speed_factor, period)
     if move:
         for k in range(steps.shape[0]):
             predict_step(state, cov, steps[k], lever, noise)
@@ -300,6 +299,15 @@ def _limit(stream, period):
     else:
         typical = (intervals[found // 2 - 1] + intervals[found // 2]) / 2.0
     return max(HOLD_PERIODS * typical, HOLD_FLOOR_S)
+
+
+@jit(inline="always")
+def _split(samples, speed_count):
+    """The odometry's times and speeds, the turn rate's times and rates (views of ``samples``)."""
+    turn_count = (samples.size - 2 * speed_count) // 2
+    turn_from = 2 * speed_count
+    return (samples[:speed_count], samples[speed_count:turn_from],
+            samples[turn_from:turn_from + turn_count], samples[turn_from + turn_count:])
 
 
 @jit(inline="always")
