@@ -1,9 +1,10 @@
 """The unicycle motion model's compiled kernels: held streams, a frame's steps, a step's prediction.
 
 :mod:`azgym.track.unicycle` states the model and keeps its Python interface; the arithmetic is
-here, in three entry points: :func:`frame_steps` (a frame's motion samples into steps),
-:func:`predict_step` (one step moves a state and its covariance) and :func:`advance` (both, for a
-tracker's frame, in one call).
+here, in four entry points: :func:`frame_steps` (a frame's motion samples into steps),
+:func:`predict_step` (one step moves a state and its covariance), :func:`advance` (both, for a
+tracker's frame, in one call) and :func:`hold_streams` (a sequence's first frame, which only
+starts the holds).
 
 A stream's hold (:class:`~azgym.track.unicycle.MotionSteps` states the rule) lives in a row of
 ``streams`` (odometry speed, then turn rate): whether a sample holds, its value and time, and a
