@@ -53,9 +53,7 @@ def compile_all(scratch: Path) -> None:
     status = azgym_command(["bench", "--out", str(scratch / "bench")])
     if status != 0:
         raise RuntimeError(f"azgym bench exited with status {status}")
-    # robust with map repair steps through the motion model as the mappers do (its lag keeps
-    # each frame's steps), whose kernels no other built-in calls on their own
-    for name in [*list_localizers(), *list_trackers(), "robust:repair=true"]:
+    for name in [*list_localizers(), *list_trackers()]:
         warm_up(make_tracker(name))
     _step_environments()
     _observe_images()
