@@ -145,28 +145,30 @@ def predict_step(state, cov, step, lever, noise):
     c, s = math.cos(half), math.sin(half)
     dx = v * tau * c - lever * omega * tau * s
     dy = v * tau * s + lever * omega * tau * c
-    x_phi, x_bias, x_scale = -dy, 0.5 * tau * dy + lever * tau * s, read * tau * c
-    y_phi, y_bias, y_scale = dx, -0.5 * tau * dx - lever * tau * c, read * tau * s
-    phi_bias = -tau
+    x_row = (-dy, 0.5 * tau * dy + lever * tau * s, read * tau * c)  # ∂x/∂(φ, b, k)
+    y_row = (dx, -0.5 * tau * dx - lever * tau * c, read * tau * s)  # ∂y/∂(φ, b, k)
     state[IX] += dx
     state[IY] += dy
     state[IPHI] = _remainder(state[IPHI] + omega * tau)
-    n = state.size
-    for j in range(n):  # rows: J P
-        row_x = cov[IX, j] + x_phi * cov[IPHI, j] + x_bias * cov[IBIAS, j] \
-            + x_scale * cov[ISCALE, j]
-        row_y = cov[IY, j] + y_phi * cov[IPHI, j] + y_bias * cov[IBIAS, j] \
-            + y_scale * cov[ISCALE, j]
-        cov[IPHI, j] += phi_bias * cov[IBIAS, j]
-        cov[IX, j], cov[IY, j] = row_x, row_y
-    for i in range(n):  # columns: (J P) Jᵀ
-        column_x = cov[i, IX] + x_phi * cov[i, IPHI] + x_bias * cov[i, IBIAS] \
-            + x_scale * cov[i, ISCALE]
-        column_y = cov[i, IY] + y_phi * cov[i, IPHI] + y_bias * cov[i, IBIAS] \
-            + y_scale * cov[i, ISCALE]
-        cov[i, IPHI] += phi_bias * cov[i, IBIAS]
-        cov[i, IX], cov[i, IY] = column_x, column_y
+    _jacobian_rows(cov, x_row, y_row, -tau)  # J P
+    _jacobian_rows(cov.T, x_row, y_row, -tau)  # (J P) Jᵀ: the same on its columns
     _add_noise(cov, step, c, s, noise)
+
+
+@jit(inline="always")
+def _jacobian_rows(matrix, x_row, y_row, phi_bias):
+    """``matrix`` ← J ``matrix``, in place.
+
+    J is the step's Jacobian: the identity but for the rows of x and y (``x_row``, ``y_row``:
+    their entries for φ, b and k) and of φ (``phi_bias``, its entry for b).
+    """
+    for j in range(matrix.shape[1]):
+        new_x = matrix[IX, j] + x_row[0] * matrix[IPHI, j] + x_row[1] * matrix[IBIAS, j] \
+            + x_row[2] * matrix[ISCALE, j]
+        new_y = matrix[IY, j] + y_row[0] * matrix[IPHI, j] + y_row[1] * matrix[IBIAS, j] \
+            + y_row[2] * matrix[ISCALE, j]
+        matrix[IPHI, j] += phi_bias * matrix[IBIAS, j]
+        matrix[IX, j], matrix[IY, j] = new_x, new_y
 
 
 @jit(inline="always")
