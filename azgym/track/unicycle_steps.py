@@ -101,8 +101,8 @@ def frame_steps(streams, samples, speed_count, start, end, speed_factor, period)
     for k in range(count):
         low = k * width + start
         high = end if k == count - 1 else (k + 1) * width + start
-        speed_to = speed_time.size if k == count - 1 else _after(speed_time, high)
-        turn_to = turn_time.size if k == count - 1 else _after(turn_time, high)
+        speed_to = speed_time.size if k == count - 1 else _after(speed_time, speed_from, high)
+        turn_to = turn_time.size if k == count - 1 else _after(turn_time, turn_from, high)
         _step(streams, speed_time, speed_value, speed_from, speed_to, turn_time, turn_rate,
               turn_from, turn_to, low, high, speed_factor, period, steps[k])
         unseen += steps[k, SECONDS] - steps[k, OBSERVED]
@@ -314,9 +314,13 @@ def _split(samples, speed_count):
 
 
 @jit(inline="always")
-def _after(times, bound):
-    """How many of ``times`` (in order) are at or before ``bound`` (numpy's side="right")."""
-    found = 0
+def _after(times, first, bound):
+    """How many of ``times`` (in order) are at or before ``bound`` (numpy's side="right").
+
+    The count starts at ``first``: the first ``first`` times are known to be, so a frame's cuts
+    cost one pass over its samples, however many steps it has.
+    """
+    found = first
     while found < times.size and times[found] <= bound:
         found += 1
     return found
