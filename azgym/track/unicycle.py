@@ -155,27 +155,32 @@ class MotionSteps:
         The first frame of a sequence has no start: it only starts the clock and the holds (the
         start pose is the pose at its time), and has no steps.
         """
-        samples, speed_count = self._samples(motion)
-        if self.time is None:
-            self.time = motion.time
-            hold_streams(self.streams, samples, speed_count)
+        frame = self._frame(motion)
+        if frame is None:
             return []
-        start, self.time = self.time, motion.time
-        rows = frame_steps(self.streams, samples, speed_count, start, float(motion.time),
-                           self.speed_factor, self.period)
+        rows = frame_steps(self.streams, *frame, self.speed_factor, self.period)
         return [Step(*row) for row in rows.tolist()]
 
     def advance(self, motion: Motion, state: FloatArray, cov: FloatArray, lever: float,
                 noise: MotionNoise, move: bool) -> None:
         """:meth:`steps`, and when ``move``, :func:`predict` through them: one compiled call."""
+        frame = self._frame(motion)
+        if frame is not None:
+            advance(self.streams, *frame, self.speed_factor, self.period, state, cov,
+                    float(lever), noise.vector, move)
+
+    def _frame(self, motion: Motion) -> tuple[FloatArray, int, float, float] | None:
+        """The frame's samples and their odometry count (:meth:`_samples`), its start and end.
+
+        None for a sequence's first frame, whose samples only start the holds.
+        """
         samples, speed_count = self._samples(motion)
         if self.time is None:
             self.time = motion.time
             hold_streams(self.streams, samples, speed_count)
-            return
-        start, self.time = self.time, motion.time
-        advance(self.streams, samples, speed_count, start, float(motion.time), self.speed_factor,
-                self.period, state, cov, float(lever), noise.vector, move)
+            return None
+        start, self.time = self.time, float(motion.time)
+        return samples, speed_count, start, self.time
 
     def _samples(self, motion: Motion) -> tuple[FloatArray, int]:
         """The odometry's times and speeds, then the turn rate's times and rates, in one array.
