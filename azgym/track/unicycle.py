@@ -38,9 +38,11 @@ from azgym.track.unicycle_steps import (
     ISCALE,
     IX,
     IY,
+    MAX_FRAME_STEPS,
     MAX_STEP_S,
     PERIOD_HISTORY,
     STATE_SIZE,
+    UNSEEN_HORIZON_S,
     advance,
     frame_steps,
     hold_streams,
@@ -49,8 +51,9 @@ from azgym.track.unicycle_steps import (
 )
 from azgym.world.forklift import ForkliftSpec
 
-__all__ = ["HOLD_FLOOR_S", "HOLD_PERIODS", "IBIAS", "IPHI", "ISCALE", "IX", "IY", "MAX_STEP_S",
-           "PERIOD_HISTORY", "STATE_SIZE", "VEHICLE_DEFAULTS", "YAW_SOURCES", "MotionNoise",
+__all__ = ["HOLD_FLOOR_S", "HOLD_PERIODS", "IBIAS", "IPHI", "ISCALE", "IX", "IY",
+           "MAX_FRAME_STEPS", "MAX_STEP_S", "PERIOD_HISTORY", "STATE_SIZE", "UNSEEN_HORIZON_S",
+           "VEHICLE_DEFAULTS", "YAW_SOURCES", "MotionNoise",
            "MotionSteps", "Step", "predict"]
 
 

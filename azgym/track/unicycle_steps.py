@@ -20,9 +20,9 @@ import numpy as np
 
 from azgym.jit import jit
 
-__all__ = ["HOLD_FLOOR_S", "HOLD_PERIODS", "IBIAS", "IPHI", "ISCALE", "IX", "IY", "MAX_STEP_S",
-           "PERIOD_HISTORY", "STATE_SIZE", "advance", "frame_steps", "hold_streams",
-           "new_streams", "predict_step"]
+__all__ = ["HOLD_FLOOR_S", "HOLD_PERIODS", "IBIAS", "IPHI", "ISCALE", "IX", "IY",
+           "MAX_FRAME_STEPS", "MAX_STEP_S", "PERIOD_HISTORY", "STATE_SIZE", "UNSEEN_HORIZON_S",
+           "advance", "frame_steps", "hold_streams", "new_streams", "predict_step"]
 
 PERIOD_HISTORY = 64
 """How many of a stream's latest sample intervals its typical period is the median of."""
@@ -39,6 +39,15 @@ MAX_STEP_S = 0.25
 seconds) is cut into equal steps no longer than this, each with its own samples' means. One
 step with the mean speed and turn rate of a 3 s gap that held a straight and a turn put the
 track metres off."""
+MAX_FRAME_STEPS = 4096
+"""Most steps a frame is cut into: a frame longer than ``MAX_FRAME_STEPS`` × ``MAX_STEP_S``
+(17 minutes) has longer steps, so that a time stamp's jump (a log whose clock leaps by years)
+costs bounded memory and time instead of billions of steps."""
+UNSEEN_HORIZON_S = 3600.0
+"""Longest unobserved stretch whose motion a step's covariance charges [s]: after an hour
+unwatched the vehicle may be anywhere an hour's drive reaches, farther than any site spans, so
+the position's variance stops growing (as the heading's stops at π²). A time stamp's leap of
+years otherwise makes a covariance of 10¹⁸ m² that no azimuth update can invert."""
 
 STATE_SIZE = 5
 """Length of the state ``[x, y, φ, b, k]``: camera position [m], heading [rad], gyro bias
@@ -68,6 +77,9 @@ def new_streams() -> np.ndarray:
 def frame_steps(streams, samples, speed_count, start, end, speed_factor, period):
     """A frame's steps over (``start``, ``end``]: one, unless it spans more than ``MAX_STEP_S``.
 
+    A longer frame is cut into equal steps no longer than ``MAX_STEP_S``, at most
+    ``MAX_FRAME_STEPS`` of them.
+
     The frame's samples all lie in (``start``, ``end``] (the tracker's motion check). Time no
     sensor watched is charged whole to the last step: an unobserved stretch is one unknown
     motion, whose spread grows with its whole length, not a sum of independent ones.
@@ -86,7 +98,8 @@ def frame_steps(streams, samples, speed_count, start, end, speed_factor, period)
         (S, :data:`STEP_FIELDS`) the steps, in time order.
     """
     speed_time, speed_value, turn_time, turn_rate = _split(samples, speed_count)
-    count = max(int(math.ceil((end - start) / MAX_STEP_S)), 1)
+    # in floats until the cap: a jump of 10³⁰⁰ s overflows no integer
+    count = int(max(min(np.ceil((end - start) / MAX_STEP_S), float(MAX_FRAME_STEPS)), 1.0))
     steps = np.zeros((count, STEP_FIELDS))
     if count == 1:  # the usual frame: one step, every sample
         _step(streams, speed_time, speed_value, 0, speed_time.size, turn_time, turn_rate, 0,
@@ -174,7 +187,7 @@ def _jacobian_rows(matrix, x_row, y_row, phi_bias):
 @jit(inline="always")
 def _add_noise(cov, step, c, s, noise):
     """The step's process noise: along and across the track, heading, bias, unobserved time."""
-    tau, dt, unseen = step[OBSERVED], step[SECONDS], step[UNSEEN]
+    tau, dt, unseen = step[OBSERVED], step[SECONDS], min(step[UNSEEN], UNSEEN_HORIZON_S)
     along = noise[SPEED_NOISE] ** 2 * step[SPEED_SPREAD] + noise[POSITION_WALK] ** 2 * tau
     across = noise[POSITION_WALK] ** 2 * tau
     cov[IX, IX] += along * c * c + across * s * s

@@ -10,7 +10,17 @@ import pytest
 from azgym.jit import jit
 from azgym.sensing.motion import ImuSamples, Motion, OdometrySamples
 from azgym.track import unicycle_steps as kernels
-from azgym.track.unicycle import HOLD_FLOOR_S, HOLD_PERIODS, MotionNoise, MotionSteps, Step, predict
+from azgym.track.unicycle import (
+    HOLD_FLOOR_S,
+    HOLD_PERIODS,
+    MAX_FRAME_STEPS,
+    MAX_STEP_S,
+    UNSEEN_HORIZON_S,
+    MotionNoise,
+    MotionSteps,
+    Step,
+    predict,
+)
 
 NOISE = MotionNoise(speed_noise=0.03, speed_scale=0.02, scale_walk=1e-3, turn_rate_noise=0.01,
                     bias_walk=1e-4, position_walk=0.02, heading_walk=0.002, max_speed=2.5,
@@ -64,14 +74,15 @@ def reference_predict(state, cov, step: Step, lever: float, noise: MotionNoise):
     cov[3, 3] += noise.bias_walk**2 * step.seconds
     cov[4, 4] += noise.scale_walk**2 * step.seconds
     if step.unseen > 0:
-        cov[0, 0] += (noise.max_speed * step.unseen) ** 2
-        cov[1, 1] += (noise.max_speed * step.unseen) ** 2
-        cov[2, 2] += min((noise.max_turn_rate * step.unseen) ** 2, math.pi**2)
+        unseen = min(step.unseen, UNSEEN_HORIZON_S)
+        cov[0, 0] += (noise.max_speed * unseen) ** 2
+        cov[1, 1] += (noise.max_speed * unseen) ** 2
+        cov[2, 2] += min((noise.max_turn_rate * unseen) ** 2, math.pi**2)
     return state, cov
 
 
 @pytest.mark.parametrize("size", [5, 9])  # 9: two beacons kept in the state
-@pytest.mark.parametrize("unseen", [0.0, 0.3])
+@pytest.mark.parametrize("unseen", [0.0, 0.3, 1e9])  # 1e9: past UNSEEN_HORIZON_S
 def test_a_step_moves_the_state_and_covariance_as_the_dense_jacobian_does(size, unseen):
     rng = np.random.default_rng(size)
     state = np.concatenate([[3.0, -2.0, 3.1, 0.004, -0.01], rng.normal(0.0, 5.0, size - 5)])
@@ -126,3 +137,18 @@ def test_a_sample_holds_for_five_median_periods_of_the_latest_intervals_only():
     assert sum(s.observed for s in step) == pytest.approx(held)
     assert sum(s.unseen for s in step) == pytest.approx(0.8 - held)
     assert HOLD_PERIODS * 0.01 < HOLD_FLOOR_S < HOLD_PERIODS * 0.1
+
+
+def test_a_frame_is_cut_into_steps_of_a_quarter_second_but_never_more_than_the_cap():
+    steps = MotionSteps(0.01)
+    steps.steps(jittery_motion(np.zeros(0), 0.0))
+    steps.steps(jittery_motion(np.arange(1, 101) * 0.01, 1.0))
+    long = steps.steps(jittery_motion(np.zeros(0), 1000.0))  # 999 s: 3 996 steps of 0.25 s
+    assert len(long) == 3996 < MAX_FRAME_STEPS
+    assert [step.seconds for step in long] == pytest.approx([MAX_STEP_S] * 3996)
+    # a clock that leaps by 10⁹ s: as many steps as the cap allows, the leap unobserved
+    leap = steps.steps(jittery_motion(np.zeros(0), 1000.0 + 1e9))
+    assert len(leap) == MAX_FRAME_STEPS
+    assert sum(step.seconds for step in leap) == pytest.approx(1e9)
+    assert sum(step.observed for step in leap) == 0.0
+    assert leap[-1].unseen == pytest.approx(1e9)
