@@ -53,7 +53,7 @@ KERNEL_MODULES = (
     "nav/_observation.py",
     "sensing/geometry/detections.py", "sensing/geometry/direct.py", "sensing/geometry/frame.py",
     "sensing/geometry/mirrors.py", "sensing/geometry/occluders.py",
-    "sensing/geometry/ordering.py", "sensing/identities.py",
+    "sensing/geometry/ordering.py", "sensing/identities.py", "sensing/image/_turn.py",
     "sensing/image/detect.py", "sensing/image/render.py", "sensing/labels.py",
     "sensing/protocol.py", "site/elements.py",
     "site/error_model.py", "site/fisheye.py", "track/_motion_check.py",

@@ -17,8 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from azgym.core import FloatArray, IntArray, wrap_angle, wrap_scalar
+from azgym.core import FloatArray, IntArray, wrap_scalar
 from azgym.errors import InvalidInputError
+from azgym.sensing.image._turn import common_turn
 from azgym.sensing.image.blink_code import MAX_DARK_RUN, BlinkCode
 
 __all__ = ["NEW_TRACK_GATES", "BlobTracker"]
@@ -170,21 +171,9 @@ class BlobTracker:
             return self._turn
         own_azimuth = np.array([t.azimuth + t.parallax_rate for t in tracks])
         own_radius = np.array([t.radius + t.radius_rate for t in tracks])
-        # Pairs at similar radii whose shift is within max_turn_change of the last turn.
-        close = np.abs(radius[None, :] - own_radius[:, None]) <= self.gate_px
-        shift = wrap_angle((azimuth[None, :] - own_azimuth[:, None] - self._turn)[close])
-        candidates = np.sort(shift[np.abs(shift) <= self.max_turn_change])
-        if candidates.size < TURN_SUPPORT:
-            return self._turn
-        support = np.searchsorted(candidates, candidates + TURN_WINDOW, side="right") - \
-            np.arange(candidates.size)
-        most = support.max()
-        if most < TURN_SUPPORT:
-            return self._turn
-        # Among the densest windows, the one nearest the last turn.
-        starts = np.flatnonzero(support == most)
-        best = starts[np.argmin(np.abs(candidates[starts] + 0.5 * TURN_WINDOW))]
-        return self._turn + float(np.median(candidates[best:best + most]))
+        return float(common_turn(azimuth, radius, own_azimuth, own_radius, float(self._turn),
+                                 float(self.gate_px), float(self.max_turn_change), TURN_WINDOW,
+                                 TURN_SUPPORT))
 
     def update(self, pixels: FloatArray, areas: FloatArray | None = None) -> IntArray:
         """Take one frame's blob centres (N, 2) [px]; return each blob's decoded id, shape (N,).

@@ -9,9 +9,16 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from azgym.core import wrap_angle
 from azgym.errors import InvalidInputError
+from azgym.sensing.image._turn import common_turn
 from azgym.sensing.image.blink_code import MARKER, BlinkCode
-from azgym.sensing.image.blob_tracker import NEW_TRACK_GATES, BlobTracker
+from azgym.sensing.image.blob_tracker import (
+    NEW_TRACK_GATES,
+    TURN_SUPPORT,
+    TURN_WINDOW,
+    BlobTracker,
+)
 
 CODE = BlinkCode(6)
 
@@ -178,3 +185,38 @@ def test_the_image_path_decodes_ids_on_a_warehouse_route(scenario, route):
     assert stats.eligible > 1000
     assert stats.correct_share >= 0.99
     assert stats.misdecode_rate <= 0.01
+
+
+def numpy_common_turn(azimuth, radius, own_azimuth, own_radius, last_turn, gate, max_change):
+    """The common turn as numpy calls: pairs at similar radii, their shifts' densest window."""
+    close = np.abs(radius[None, :] - own_radius[:, None]) <= gate
+    shift = wrap_angle((azimuth[None, :] - own_azimuth[:, None] - last_turn)[close])
+    candidates = np.sort(shift[np.abs(shift) <= max_change])
+    if candidates.size < TURN_SUPPORT:
+        return last_turn
+    support = np.searchsorted(candidates, candidates + TURN_WINDOW, side="right") - \
+        np.arange(candidates.size)
+    most = support.max()
+    starts = np.flatnonzero(support == most)
+    best = starts[np.argmin(np.abs(candidates[starts] + 0.5 * TURN_WINDOW))]
+    return last_turn + float(np.median(candidates[best:best + most]))
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(0, 12), st.integers(0, 12),
+       st.sampled_from([0.0, 0.05, -3.1, 3.14]))
+def test_the_compiled_common_turn_is_the_numpy_one_bit_for_bit(seed, tracks, blobs, last_turn):
+    rng = np.random.default_rng(seed)
+    # blobs that are the tracks turned by a common shift, some noise blobs, a few repeated
+    # shifts (ties between windows) and azimuths near ±π (wrapping)
+    own_azimuth = rng.uniform(-math.pi, math.pi, tracks)
+    own_radius = rng.uniform(50.0, 230.0, tracks)
+    turn = last_turn + rng.uniform(-0.12, 0.12)
+    moved = own_azimuth[:blobs] + turn + np.round(rng.normal(0.0, 0.004, min(blobs, tracks)), 3)
+    azimuth = wrap_angle(np.concatenate([moved, rng.uniform(-math.pi, math.pi,
+                                                            blobs - moved.size)]))
+    radius = np.concatenate([own_radius[:moved.size] + rng.normal(0.0, 3.0, moved.size),
+                             rng.uniform(50.0, 230.0, blobs - moved.size)])
+    expected = numpy_common_turn(azimuth, radius, own_azimuth, own_radius, last_turn, 8.0, 0.1)
+    found = common_turn(azimuth, radius, own_azimuth, own_radius, last_turn, 8.0, 0.1,
+                        TURN_WINDOW, TURN_SUPPORT)
+    assert found == expected
