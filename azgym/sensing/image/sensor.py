@@ -36,6 +36,7 @@ from azgym.core import BeaconMap, FloatArray, IntArray, Pose
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.sensing.geometry.sensor import FrameBuffers, GeometrySensor
 from azgym.sensing.identities import ID_MODES, misread_row
+from azgym.sensing.image._match import nearest_lights
 from azgym.sensing.image.blink_code import BLINK_CAMERA_RATE_HZ, BlinkCode
 from azgym.sensing.image.blob_tracker import BlobTracker
 from azgym.sensing.image.detect import detect
@@ -93,6 +94,7 @@ class ImageSensor:
                 f'sensor="geometry"')
         self.scenario = scenario
         self.camera = scenario.fisheye
+        self._distortion = np.array(self.camera.distortion, dtype=np.float64)
         self.ids = ids
         self.threshold = threshold
         self.match_px = match_px
@@ -237,22 +239,12 @@ class ImageSensor:
         is as big as the window).
         """
         source = np.full(len(pixels), -1, dtype=np.int64)
-        if not len(pixels) or not len(lights.azimuth):
-            return source
-        c = np.cos(lights.elevation)
-        centres = self.camera.project(np.column_stack(
-            [c * np.cos(lights.azimuth), c * np.sin(lights.azimuth), np.sin(lights.elevation)]))
-        radius = np.hypot(centres[:, 0] - self.camera.principal_point[0],
-                          centres[:, 1] - self.camera.principal_point[1])
-        reach = self.match_px + np.maximum(radius * lights.half_width,
-                                           self.camera.focal_px * lights.half_tall)
-        distance = np.hypot(pixels[:, None, 0] - centres[None, :, 0],
-                            pixels[:, None, 1] - centres[None, :, 1])
-        nearest = distance.argmin(axis=1)
-        close = distance[np.arange(len(pixels)), nearest] <= reach[nearest]
-        source[close] = nearest[close]
+        if len(pixels) and len(lights.azimuth):
+            cx, cy = self.camera.principal_point
+            nearest_lights(pixels, lights.azimuth, lights.elevation, lights.half_width,
+                           lights.half_tall, float(cx), float(cy), float(self.camera.focal_px),
+                           self._distortion, float(self.match_px), source)
         return source
-
 
 def _truth(source: IntArray, lights: _Lights) -> DetectionTruth:
     """The ground truth of each blob, from the light that made it.

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from azgym.sensing.image._match import nearest_lights
 from azgym.sensing.image.detect import detect
 from azgym.sensing.image.render import render
 from azgym.site.fisheye import FisheyeCamera
@@ -247,3 +248,44 @@ def test_a_light_whose_extent_is_not_finite_is_refused_by_name() -> None:
     with pytest.raises(InvalidInputError, match="a light's extent is not finite"):
         render(FisheyeCamera(), np.zeros(1), np.full(1, 0.1), np.full(1, math.nan),
                np.full(1, 50.0), None, np.full(1, 0.05))
+
+
+def numpy_nearest_lights(camera, pixels, azimuth, elevation, half_width, half_tall, match_px):
+    """Each blob's light as numpy calls: the centres through ``camera.project``, then a table."""
+    c = np.cos(elevation)
+    centres = camera.project(np.column_stack([c * np.cos(azimuth), c * np.sin(azimuth),
+                                              np.sin(elevation)]))
+    radius = np.hypot(centres[:, 0] - camera.principal_point[0],
+                      centres[:, 1] - camera.principal_point[1])
+    reach = match_px + np.maximum(radius * half_width, camera.focal_px * half_tall)
+    distance = np.hypot(pixels[:, None, 0] - centres[None, :, 0],
+                        pixels[:, None, 1] - centres[None, :, 1])
+    nearest = distance.argmin(axis=1)
+    close = distance[np.arange(len(pixels)), nearest] <= reach[nearest]
+    return np.where(close, nearest, -1)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_each_blob_takes_the_nearest_light_within_its_reach_as_numpy_finds_it(seed):
+    rng = np.random.default_rng(seed)
+    camera = FisheyeCamera(distortion=(0.02, -0.01, 0.003, -0.0005))
+    lights = int(rng.integers(1, 16))
+    azimuth = rng.uniform(-math.pi, math.pi, lights)
+    elevation = rng.uniform(0.0, 1.3, lights)
+    half_width = rng.uniform(0.0, 0.02, lights)
+    half_tall = np.where(rng.random(lights) < 0.3, rng.uniform(0.0, 0.05, lights), 0.0)
+    c = np.cos(elevation)
+    centres = camera.project(np.column_stack([c * np.cos(azimuth), c * np.sin(azimuth),
+                                              np.sin(elevation)]))
+    # blobs near the lights (some out of reach), blobs anywhere, two at one light
+    near = centres[rng.integers(0, lights, 10)] + rng.normal(0.0, 4.0, (10, 2))
+    pixels = np.concatenate([near, rng.uniform(0.0, 480.0, (5, 2)), centres[:1], centres[:1]])
+    expected = numpy_nearest_lights(camera, pixels, azimuth, elevation, half_width, half_tall,
+                                    3.0)
+    source = np.full(len(pixels), -2, dtype=np.int64)
+    cx, cy = camera.principal_point
+    nearest_lights(pixels, azimuth, elevation, half_width, half_tall, float(cx), float(cy),
+                   float(camera.focal_px), np.array(camera.distortion, dtype=np.float64), 3.0,
+                   source)
+    assert source.tolist() == expected.tolist()
+    assert source[-1] == source[-2] >= 0  # a blob at a light's centre is within its reach
