@@ -1,4 +1,4 @@
-"""Which light made each blob, compiled (:meth:`~azgym.sensing.image.sensor.ImageSensor`).
+"""Which light made each blob, compiled (:class:`~azgym.sensing.image.sensor.ImageSensor`).
 
 Each blob takes the light whose projected centre is nearest, if within that light's reach. As
 numpy calls (the lights' directions, the fisheye's projection, a blob-by-light distance table)

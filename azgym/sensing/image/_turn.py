@@ -1,10 +1,11 @@
-"""The blob tracker's common turn, compiled (:meth:`~azgym.sensing.image.blob_tracker.BlobTracker`).
+"""The blob tracker's common turn, compiled (:mod:`~azgym.sensing.image.blob_tracker`).
 
 Every frame the tracker pairs each track with each blob at a similar radius and looks for the
 densest cluster of their azimuth shifts; as a dozen numpy calls on a frame's few dozen pairs it
 cost about 150 µs, a fifth of a blinking camera's frame. One loop here, the same answer bit for
-bit (the same differences, sort, window counts and median), in a module of its own so that the
-kernel cache depends on nothing else.
+bit (the same differences, order, window counts and median; the order by the sensor's insertion
+sort, which compiles in milliseconds where numba's ``np.sort`` takes seconds), in a module of its
+own so that the kernel cache depends on nothing else.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from azgym.jit import jit, wrap_compiled
+from azgym.sensing.geometry.ordering import stable_order
 
 __all__ = ["common_turn"]
 
@@ -48,11 +50,16 @@ def common_turn(azimuth, radius, own_azimuth, own_radius, last_turn, gate_px, ma
                     count += 1
     if count < support_needed:
         return last_turn
-    candidates = np.sort(shifts[:count])
-    ends = np.searchsorted(candidates, candidates + window, side="right")
+    order = stable_order(shifts, count)
+    candidates = np.empty(count)
+    for k in range(count):
+        candidates[k] = shifts[order[k]]
     most, best, nearest = 0, 0, np.inf
+    end = 0  # past the last shift within the window from candidates[k]
     for k in range(count):  # the densest window, the first of those nearest the last turn
-        support = ends[k] - k
+        while end < count and candidates[end] <= candidates[k] + window:
+            end += 1
+        support = end - k
         distance = abs(candidates[k] + 0.5 * window)
         if support > most or (support == most and distance < nearest):
             most, best, nearest = support, k, distance

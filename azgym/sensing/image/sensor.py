@@ -246,6 +246,7 @@ class ImageSensor:
                            self._distortion, float(self.match_px), source)
         return source
 
+
 def _truth(source: IntArray, lights: _Lights) -> DetectionTruth:
     """The ground truth of each blob, from the light that made it.
 

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from azgym.core import wrap_angle
@@ -202,6 +202,7 @@ def numpy_common_turn(azimuth, radius, own_azimuth, own_radius, last_turn, gate,
     return last_turn + float(np.median(candidates[best:best + most]))
 
 
+@settings(deadline=None)  # the first example loads (or compiles) the kernel
 @given(st.integers(0, 2**32 - 1), st.integers(0, 12), st.integers(0, 12),
        st.sampled_from([0.0, 0.05, -3.1, 3.14]))
 def test_the_compiled_common_turn_is_the_numpy_one_bit_for_bit(seed, tracks, blobs, last_turn):
@@ -220,3 +221,16 @@ def test_the_compiled_common_turn_is_the_numpy_one_bit_for_bit(seed, tracks, blo
     found = common_turn(azimuth, radius, own_azimuth, own_radius, last_turn, 8.0, 0.1,
                         TURN_WINDOW, TURN_SUPPORT)
     assert found == expected
+
+
+def test_a_shift_exactly_one_window_away_is_inside_the_window():
+    # one track at azimuth 0, two blobs at shifts x and x + TURN_WINDOW: one window holds both
+    # (its end is inclusive, as numpy's searchsorted(side="right") counts), so the turn is
+    # their mean; an exclusive end would find no window of TURN_SUPPORT shifts
+    x = 0.01
+    azimuth = np.array([x, x + TURN_WINDOW])
+    turn = common_turn(azimuth, np.full(2, 100.0), np.zeros(1), np.full(1, 100.0), 0.0, 8.0,
+                       0.1, TURN_WINDOW, TURN_SUPPORT)
+    assert turn == (x + (x + TURN_WINDOW)) / 2.0
+    assert turn == numpy_common_turn(azimuth, np.full(2, 100.0), np.zeros(1), np.full(1, 100.0),
+                                     0.0, 8.0, 0.1)
