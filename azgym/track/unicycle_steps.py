@@ -36,9 +36,9 @@ its occasional 0.1-0.2 s gaps) is not a stream that stopped. After a longer sile
 has stopped (a forklift carried with its sensors off), and the time is unobserved."""
 MAX_STEP_S = 0.25
 """Longest prediction step [s]: a longer frame (the first after an outage, whose motion spans
-seconds) is cut into equal steps no longer than this, each with its own samples' means. One
-step with the mean speed and turn rate of a 3 s gap that held a straight and a turn put the
-track metres off."""
+seconds) is cut into equal steps no longer than this (up to ``MAX_FRAME_STEPS`` of them), each
+with its own samples' means. One step with the mean speed and turn rate of a 3 s gap that held a
+straight and a turn put the track metres off."""
 MAX_FRAME_STEPS = 4096
 """Most steps a frame is cut into: a frame longer than ``MAX_FRAME_STEPS`` × ``MAX_STEP_S``
 (17 minutes) has longer steps, so that a time stamp's jump (a log whose clock leaps by years)
@@ -77,8 +77,8 @@ def new_streams() -> np.ndarray:
 def frame_steps(streams, samples, speed_count, start, end, speed_factor, period):
     """A frame's steps over (``start``, ``end``]: one, unless it spans more than ``MAX_STEP_S``.
 
-    A longer frame is cut into equal steps no longer than ``MAX_STEP_S``, at most
-    ``MAX_FRAME_STEPS`` of them.
+    A longer frame is cut into equal steps no longer than ``MAX_STEP_S``, or into
+    ``MAX_FRAME_STEPS`` equal (longer) steps when that would take more.
 
     The frame's samples all lie in (``start``, ``end``] (the tracker's motion check). Time no
     sensor watched is charged whole to the last step: an unobserved stretch is one unknown
