@@ -70,7 +70,7 @@ from azgym.cli.info import add_info
 from azgym.cli.layout import add_layout
 from azgym.cli.leaderboard import add_leaderboard
 from azgym.cli.logs import add_logs
-from azgym.cli.options import interruption_within, stopped
+from azgym.cli.options import ctrl_c_never_lost, interruption_within, stopped
 from azgym.cli.show import add_show
 from azgym.cli.studies import add_reproduce, add_study
 from azgym.cli.survey import add_survey
@@ -131,7 +131,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``azgym`` command."""
     args = build_parser().parse_args(argv)
     try:
-        return int(args.handler(args))
+        with ctrl_c_never_lost():
+            return int(args.handler(args))
     except AzgymError as exc:
         print(f"azgym: error: {exc}", file=sys.stderr)
         return 2

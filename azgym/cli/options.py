@@ -11,14 +11,18 @@ FILE`` (:func:`out_file`), an empty name refused by both, and replaces nothing a
 without ``--overwrite`` (:func:`add_overwrite`, checked by :func:`azgym.files.claim_file` and
 :func:`azgym.files.claim_folder` before any work). :func:`progress_printer` shows a run's
 progress; :func:`stopped` ends a command interrupted by Ctrl-C with one line (what it kept,
-:class:`Interrupted`, raised by :func:`on_ctrl_c`) and exit code 130.
+:class:`Interrupted`, raised by :func:`on_ctrl_c`) and exit code 130;
+:func:`ctrl_c_never_lost` delivers again a Ctrl-C that a library's clean-up swallowed.
 """
 
 from __future__ import annotations
 
+import _thread
 import argparse
 import sys
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from azgym.arguments import time_limit
@@ -29,9 +33,13 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 
-__all__ = ["Interrupted", "add_backend_options", "add_overwrite", "check_backend", "out_file",
-           "out_folder", "profile_option", "progress_printer", "resolve_workers",
-           "interruption_within", "on_ctrl_c", "seconds_option", "stopped", "workers_option"]
+REDELIVERY_S = 0.02
+"""How long after a finalizer dropped a Ctrl-C :func:`ctrl_c_never_lost` delivers it again."""
+
+__all__ = ["REDELIVERY_S", "Interrupted", "add_backend_options", "add_overwrite", "check_backend",
+           "ctrl_c_never_lost", "interruption_within", "on_ctrl_c", "out_file", "out_folder",
+           "profile_option", "progress_printer", "resolve_workers", "seconds_option", "stopped",
+           "workers_option"]
 
 
 def seconds_option(text: str) -> float:
@@ -176,6 +184,42 @@ def on_ctrl_c(run: Callable[[], T], kept: Callable[[], str]) -> T:
         if interruption_within(exc) is None:
             raise
         raise Interrupted(kept()) from None
+
+
+@contextmanager
+def ctrl_c_never_lost() -> Iterator[None]:
+    """Within: a Ctrl-C that landed in a finalizer is delivered again, not lost.
+
+    Python cannot raise from a finalizer (an object's ``__del__``, a weakref callback, a cffi
+    ``ffi.gc`` callback, which is how pymunk frees its spaces): a Ctrl-C that arrives while one
+    runs is printed as "Exception ignored ..." and dropped, and the command would carry on as if
+    no one had pressed it. Python hands every such exception to :data:`sys.unraisablehook`;
+    within this block the hook passes anything else to the hook it replaced, and has an
+    interruption delivered to the main thread again once the finalizer is over (a timer's
+    thread, :data:`REDELIVERY_S` later: delivered at once, it would land in the hook itself and be
+    dropped again). It lands in the command's own code, or in the next finalizer and comes back
+    here.
+    """
+    previous = sys.unraisablehook
+    redeliveries: list[threading.Timer] = []
+
+    def deliver_again(unraisable: Any) -> None:
+        exc_value = unraisable.exc_value
+        if exc_value is not None and interruption_within(exc_value) is not None:
+            redelivery = threading.Timer(REDELIVERY_S, _thread.interrupt_main)
+            redelivery.daemon = True
+            redelivery.start()
+            redeliveries.append(redelivery)
+        else:
+            previous(unraisable)
+
+    sys.unraisablehook = deliver_again
+    try:
+        yield
+    finally:
+        sys.unraisablehook = previous
+        for redelivery in redeliveries:  # the command ended meanwhile: nothing left to stop
+            redelivery.cancel()
 
 
 def stopped(interruption: KeyboardInterrupt) -> int:

@@ -100,6 +100,64 @@ def test_a_system_error_not_from_ctrl_c_is_not_called_an_interruption(monkeypatc
         cli.main(["suites"])
 
 
+class _FreedOnCtrlC:
+    """An object whose finalizer a Ctrl-C lands in."""
+
+    def __del__(self):
+        raise KeyboardInterrupt
+
+
+def _ctrl_c_in_a_finalizer() -> None:
+    _FreedOnCtrlC()  # freed at once; its finalizer's exception is "ignored" by Python
+
+
+def _ctrl_c_in_a_cffi_callback() -> None:
+    """As pymunk frees a space: cffi's ``ffi.gc`` callback, its exception "ignored"."""
+    import cffi
+
+    def free(pointer):
+        raise KeyboardInterrupt
+    ffi = cffi.FFI()
+    ffi.gc(ffi.new("int *"), free)
+
+
+@pytest.mark.usefixtures("ctrl_c_not_ignored")
+@pytest.mark.parametrize("lose_a_ctrl_c", [_ctrl_c_in_a_finalizer, _ctrl_c_in_a_cffi_callback])
+def test_a_ctrl_c_that_lands_in_a_finalizer_still_stops_the_command(lose_a_ctrl_c, monkeypatch,
+                                                                    capsys):
+    """Python drops an exception raised in a finalizer: the Ctrl-C is delivered again."""
+    carried_on = []
+
+    def drive(args):
+        lose_a_ctrl_c()
+        for _ in range(200):  # the command's own work goes on: 2 s
+            time.sleep(0.01)
+        carried_on.append(True)
+        return 0
+    _run_instead(monkeypatch, drive)
+    assert cli.main(["suites"]) == 130
+    assert not carried_on
+    err = capsys.readouterr().err
+    assert err.strip() == "azgym: interrupted" and "KeyboardInterrupt" not in err
+
+
+def test_another_exception_in_a_finalizer_still_reaches_the_hook_before(monkeypatch):
+    seen = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda unraisable: seen.append(unraisable))
+
+    class Broken:
+        def __del__(self):
+            raise ValueError("a genuine fault in a finalizer")
+
+    def drive(args):
+        Broken()
+        return 0
+    _run_instead(monkeypatch, drive)
+    assert cli.main(["suites"]) == 0
+    assert [str(unraisable.exc_value) for unraisable in seen] == ["a genuine fault in a finalizer"]
+    assert sys.unraisablehook is not None and sys.unraisablehook.__name__ == "<lambda>"
+
+
 @pytest.mark.parametrize("model,weights", [("ng-ransac", "ng-ransac.npz"),
                                            ("learned", "learned.npz")])
 def test_a_finished_training_run_is_refused_unless_resumed_or_overwritten(model, weights,
