@@ -176,6 +176,25 @@ def test_intervals_are_seeded_and_an_unbounded_headline_has_an_infinite_bound():
     assert low < float(np.mean(~ok)) < high
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_a_resample_s_headline_is_the_quantile_of_its_frames_sorted(seed):
+    """The bootstrap ranks the frames once and counts; each resample's p75 is what sorting its
+    frames gives (refusals, ties and blocks of every size included), bit for bit."""
+    from azgym.metrics import _resampled_quantile
+
+    rng = np.random.default_rng(seed)
+    count = int(rng.integers(2, 40))
+    blocks = rng.integers(0, count, 600)
+    blocks[:count] = np.arange(count)  # every block has a frame
+    error = np.where(rng.random(600) < 0.2, np.inf, np.round(rng.exponential(30, 600), 1))
+    by_error = np.argsort(error, kind="stable")
+    chosen = rng.integers(0, count, (25, count))
+    headlines = _resampled_quantile(chosen, error[by_error], blocks[by_error], count, 0.75)
+    for drawn, headline in zip(chosen, headlines, strict=True):
+        frames = np.concatenate([error[blocks == block] for block in drawn])
+        assert headline == quantile(frames, 0.75)
+
+
 def test_fewer_than_two_blocks_give_no_interval():
     one = confidence_intervals(np.array([0.01, 0.02]), np.array([True, True]),
                                np.array([0, 0]))

@@ -64,10 +64,11 @@ def cdf_png(ranked: list[tuple[Entry, str]]) -> str | None:
     figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
     curves = []
     for entry, frames in ranked:
-        rows = csv.DictReader(io.StringIO(frames))
+        header, *rows = csv.reader(io.StringIO(frames))
+        ok, error = header.index("ok"), header.index("position_error_m")
         # A missing estimate is a failure: it sits at +inf, never at zero error.
         curves.append((entry["name"], np.array(
-            [float(r["position_error_m"]) * 100 if r["ok"] == "1" else np.inf for r in rows])))
+            [float(row[error]) * 100 if row[ok] == "1" else np.inf for row in rows])))
     draw_error_cdfs(axes, curves, legend_size=7)
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=90)

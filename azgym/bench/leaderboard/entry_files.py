@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, NotRequired, TypedDict
 
 import numpy as np
 
+from azgym.bench.leaderboard.frame_screen import HEADING_LIMIT, screened_columns
 from azgym.bench.report.results import (
     ESTIMATE_COLUMNS,
     FRAME_COLUMNS,
@@ -46,8 +47,6 @@ MAX_JSON_DEPTH = 16
 MAX_FRAMES_BYTES = 64 * 2**20
 """Per-frame results larger than this, compressed or decompressed, are refused (the largest
 suite's are about 4 MB)."""
-HEADING_LIMIT = math.pi + 1e-9
-"""A heading error is wrapped to [0, π] [rad]."""
 
 
 class EntryLocalizer(TypedDict):
@@ -210,7 +209,13 @@ def parse_frames(text: str, origin: str, cases: Sequence[Case] | None = None) ->
     written before they were added (:data:`~azgym.bench.report.results.OUTCOME_COLUMNS` only)
     still reads, without estimates. Rows beyond ``cases`` are checked as numbered from 0 (the
     count is the coverage check's).
+
+    A sound file is read at once (:func:`~azgym.bench.leaderboard.frame_screen.screened_columns`);
+    any other row by row, which names the first row at fault.
     """
+    table = _read_at_once(text, cases)
+    if table is not None:
+        return table
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         header = next(reader, None)
@@ -236,6 +241,24 @@ def parse_frames(text: str, origin: str, cases: Sequence[Case] | None = None) ->
     table.outcome = outcome if header == OUTCOME_COLUMNS else \
         RunOutcome(**vars(outcome), estimate=columns[:, 4:].reshape(-1, 3))
     return table
+
+
+def _read_at_once(text: str, cases: Sequence[Case] | None) -> FrameTable | None:
+    """The table of a file whose every row is sound, None if any row may not be (or not CSV)."""
+    try:
+        header, *rows = csv.reader(io.StringIO(text, newline=""))
+    except (csv.Error, ValueError):  # not CSV, or no header at all
+        return None
+    if header not in (FRAME_COLUMNS, OUTCOME_COLUMNS):
+        return None
+    screened = screened_columns(rows, len(header), cases)
+    if screened is None:
+        return None
+    label, scenario, group, cause, errors, numbers = screened
+    outcome = Outcome(numbers[:, 0].astype(bool), numbers[:, 1], numbers[:, 2], numbers[:, 3],
+                      errors)
+    return FrameTable(label, scenario, group, cause, outcome if header == OUTCOME_COLUMNS else
+                      RunOutcome(**vars(outcome), estimate=numbers[:, 4:].reshape(-1, 3)))
 
 
 def _frame_row(row: list[str], place: tuple[int, int], case: Case | None, origin: str,
