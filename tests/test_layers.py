@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "azgym"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("_version", "build_hook"), ("errors",), ("registry",), ("core",),
     ("fields",), ("arguments", "hyperparameters", "files", "untrusted", "profile", "progress"),
-    ("jit",),
+    ("jit", "torch_kernels"),
     ("metrics",),
     ("site",), ("sensing",), ("world",), ("localize",), ("track",), ("logs",), ("mapping",),
     ("nav",),

@@ -9,7 +9,7 @@ so that both classes count alike whatever the frames' outlier share; what NG-RAN
 from the scores is their order, which the held-out AUC and top-3 figures measure.
 
 Runs are reproducible: seeded initialisation and shuffling, one torch thread by default, and
-the CPU kernels every x86-64 processor computes alike (:mod:`azgym.learn.kernels`). Batches are
+the CPU kernels every x86-64 processor computes alike (:mod:`azgym.torch_kernels`). Batches are
 counted on the shared meter (:mod:`azgym.progress`). A checkpoint after every epoch is resumed
 by a run with the same data and settings (ending with the very weights of one never
 interrupted). At the end: ``ng-ransac.npz``, the learning curve and the model card
@@ -36,10 +36,10 @@ from azgym.arguments import positive_number, whole_number
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder, write_file
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
-from azgym.learn.kernels import pin_kernels
 from azgym.learn.torch_net import TorchInlierScorer, export
 from azgym.learn.train_report import Batches, write_card, write_learning_curve
 from azgym.progress import Meter, Progress
+from azgym.torch_kernels import pin_kernels
 
 __all__ = ["CHECKPOINT_NAME", "EVAL_BATCH", "MODEL", "TrainConfig", "TrainResult", "WEIGHTS_NAME",
            "auc", "build_data", "evaluate", "fingerprint", "finite", "fit", "prepared_data",
@@ -323,7 +323,7 @@ def fingerprint(data: tuple[tuple[torch.Tensor, ...], ...], config: Any,
     """SHA-256 of the data and every setting a resumed run must share (not epochs, threads).
 
     ``config`` is a dataclass of the run's hyperparameters (any model's); ``kernels`` the CPU
-    kernels torch computes with (:func:`azgym.learn.kernels.pin_kernels`): a run resumed on
+    kernels torch computes with (:func:`azgym.torch_kernels.pin_kernels`): a run resumed on
     other kernels would not end with the weights of one never interrupted.
     """
     digest = hashlib.sha256(feature_layout.encode())

@@ -16,7 +16,7 @@ cosine from ``learning_rate`` to 5 % of it, a function of the epoch, so a resume
 scheduler state.
 
 Reproducible and resumable as the inlier scorer's training is (seeds, one thread, the portable
-CPU kernels of :mod:`azgym.learn.kernels`, a checkpoint per epoch, the same fingerprint rule:
+CPU kernels of :mod:`azgym.torch_kernels`, a checkpoint per epoch, the same fingerprint rule:
 :func:`azgym.learn.train.fingerprint`), with the same progress. Batches group
 frames of similar size (shuffled within groups of 16 batches, the batches then shuffled), so
 little padding is computed.
@@ -38,7 +38,6 @@ from azgym.arguments import positive_number, whole_number
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder
 from azgym.learn.defaults import FRAMES_PER_LAYOUT, MODEL_DEFAULTS
-from azgym.learn.kernels import pin_kernels
 from azgym.learn.torch_regression import TorchPoseRegressor, export
 from azgym.learn.train import (
     EVAL_BATCH,
@@ -53,6 +52,7 @@ from azgym.learn.train import (
 from azgym.learn.train import fingerprint as run_fingerprint
 from azgym.learn.train_report import Batches
 from azgym.localize.learned.pose_network import N_TOKENS, frame_tokens
+from azgym.torch_kernels import pin_kernels
 
 __all__ = ["CHECKPOINT_NAME", "MODEL", "RegressionConfig", "WEIGHTS_NAME", "epoch_line", "evaluate",
            "fit_regression", "frame_arrays", "learning_rate", "loss_terms", "tensors",

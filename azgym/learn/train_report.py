@@ -19,8 +19,8 @@ from typing import Any
 
 from azgym.files import write_file
 from azgym.learn.distribution import card_section
-from azgym.learn.kernels import describe_kernels
 from azgym.progress import Meter, Progress, counter
+from azgym.torch_kernels import describe_kernels
 
 __all__ = ["FIGURES", "Batches", "bullets", "run_setup", "show", "write_card",
            "write_learning_curve"]
@@ -71,7 +71,7 @@ def run_setup(info: dict[str, Any]) -> str:
     """How a run computed, for its card: ``torch 2.13.0+cpu, portable CPU kernels, 1 thread(s)``.
 
     A run on the processor's own kernels says that its weights repeat only on a like one
-    (:mod:`azgym.learn.kernels`).
+    (:mod:`azgym.torch_kernels`).
     """
     return (f"torch {info['torch_version']}, {describe_kernels(info['kernels'])}, "
             f"{info['hyperparameters']['threads']} thread(s)")

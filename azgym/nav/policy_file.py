@@ -104,6 +104,7 @@ def load_policy(path_or_name: str | Path, env: gym.Env) -> Policy:
     data = _read(path)
     algorithm = _algorithm_of(path, data)
     require_rl()
+    _pin_kernels(path)
     model = _load_model(path, data, algorithm)
     for kind in ("observation", "action"):
         saved, wanted = getattr(model, f"{kind}_space"), getattr(env, f"{kind}_space")
@@ -182,6 +183,25 @@ def require_rl(also: tuple[tuple[str, str], ...] = ()) -> None:
         if importlib.util.find_spec(module) is None:
             raise DependencyNotInstalled(f'{name} is not installed: pip install "azgym[rl]" '
                                          '(after pip install torch==2.13.0, the CPU wheel)')
+
+
+def _pin_kernels(path: Path) -> None:
+    """Ask for torch's portable CPU kernels before the policy acts (:mod:`azgym.torch_kernels`).
+
+    Episodes are chaotic: an action that differs in its last bit on another processor moves
+    the whole episode. With the portable kernels a policy's actions, and so its scores, repeat
+    on every x86-64 processor; in a process where torch already chose the processor's own, they
+    repeat only on a like one, which a warning says.
+    """
+    from azgym.torch_kernels import PORTABLE, pin_kernels
+
+    kernels = pin_kernels()
+    if kernels != PORTABLE:
+        warnings.warn(f"{path}: torch already computes with the {kernels.removeprefix('native ')} "
+                      "CPU kernels in this process (it ran before the policy was loaded), so the "
+                      "policy's episodes repeat only on a like processor; load policies before "
+                      "anything else runs torch for scores that repeat on any x86-64 processor",
+                      RuntimeWarning, stacklevel=3)
 
 
 def _load_model(path: Path, raw: bytes, algorithm: str) -> Any:

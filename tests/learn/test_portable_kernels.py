@@ -1,4 +1,4 @@
-"""Training computes with the CPU kernels every x86-64 processor runs alike (azgym.learn.kernels).
+"""Training computes with the CPU kernels every x86-64 processor runs alike (azgym.torch_kernels).
 
 torch chooses its kernels by the processor (ATen's AVX-512, AVX2 or baseline loops, oneMKL's
 branches), and they round differently: the same command trained other weights on another
@@ -54,7 +54,7 @@ def test_the_command_trains_the_same_weights_on_every_processor(model, tmp_path)
 
 
 def test_a_process_that_already_ran_torch_says_its_kernels_are_the_processor_s_own():
-    ask = "from azgym.learn.kernels import pin_kernels; print(pin_kernels())"
+    ask = "from azgym.torch_kernels import pin_kernels; print(pin_kernels())"
     assert run(ask, "avx2", timeout=120).stdout.split() == ["portable"]
     late = run("import torch; torch.relu(torch.ones(64)); "
                f"print(torch.backends.cpu.get_cpu_capability()); {ask}", "avx2", timeout=120)

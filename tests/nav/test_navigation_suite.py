@@ -82,7 +82,7 @@ def _set_success(data):
     (lambda d: d.update(kind="frames"), "not a navigation results file"),
     (lambda d: d.update(format=1), "format must be 2"),
     (lambda d: d.update(suite="stress"), "'stress' is not a navigation suite"),
-    (lambda d: d.update(suite_version=1), "suite_version 1: navigation is at version 2"),
+    (lambda d: d.update(suite_version=2), "suite_version 2: navigation is at version 3"),
     (lambda d: d.update(env_kwargs={"sensor": "image"}), "env and env_kwargs must be the suite"),
     (lambda d: d.update(seed=5), "a dev run uses the suite's seed 2300"),
     (lambda d: d.update(seed=-1), r"seed must be an integer in \[0, 2147483648\), got -1"),

@@ -37,7 +37,9 @@ class NavigationSuite:
     Attributes:
         name: Identifier (``azgym bench --suite NAME``).
         version: Bumped whenever its episodes or their scoring change (2: SPL against the
-            geodesic shortest path, :mod:`azgym.nav.geodesic`).
+            geodesic shortest path, :mod:`azgym.nav.geodesic`; 3: a stable-baselines3 policy
+            acts through torch's portable CPU kernels, :mod:`azgym.torch_kernels`, so that its
+            episodes repeat on every x86-64 processor).
         description: One line for listings and reports.
         dev_seed: The seed of the ``dev`` split's first episode.
         env_id: The Navigate environment driven.
@@ -84,13 +86,13 @@ def overlap(first: range, second: range) -> range:
 NAVIGATION_SUITES: Registry[NavigationSuite] = Registry("navigation suite", {
     suite.name: suite for suite in (
         NavigationSuite(
-            "navigation", 2, "closed loop in warehouse-small: a navigator drives spot to spot on "
+            "navigation", 3, "closed loop in warehouse-small: a navigator drives spot to spot on "
             "each localizer's pose; success, SPL, collisions, time to goal, error along the way",
             2300, "azgym/Navigate-WarehouseSmall-v2", 100, 10,
             ("truth", "ransac", "lsq", "mex-coarse", "loo", "ng-ransac", "learned", "tkf", "lpkf",
              "gated-ekf")),
         NavigationSuite(
-            "navigation-image", 2, "the navigation suite through the fisheye image path: blobs "
+            "navigation-image", 3, "the navigation suite through the fisheye image path: blobs "
             "detected from pixels, ids decoded from blinking (30 Hz camera)",
             2400, "azgym/Navigate-WarehouseSmall-v2", 100, 5, ("ransac", "lsq", "gated-ekf"),
             {"sensor": "image", "ids": "blink"}),

@@ -18,8 +18,8 @@ import numpy as np
 
 from azgym._version import __version__
 from azgym.files import write_file
-from azgym.learn.kernels import describe_kernels
 from azgym.learn.navigator.request import CURVE, EVAL_SEED, EVALUATIONS, POLICY, Request
+from azgym.torch_kernels import describe_kernels
 
 __all__ = ["REPRODUCIBILITY", "write_card", "write_learning_curve"]
 
@@ -28,7 +28,7 @@ REPRODUCIBILITY = (
     "torch and stable-baselines3 on the CPU, gives a policy with bit-identical parameters "
     "(azgym's tests train twice with one seed and compare every parameter; policy.zip itself "
     "differs, as it records when it was written). torch computes with the CPU kernels every "
-    "x86-64 processor computes alike (azgym.learn.kernels), but stable-baselines3 promises no "
+    "x86-64 processor computes alike (azgym.torch_kernels), but stable-baselines3 promises no "
     "more than repeatability on one machine: another number of torch threads, other versions of "
     "torch, numpy or numba, or the localizer's compiled kernels on another processor may change "
     "the floating-point sums, and a policy trained on them differs, though it should score "
@@ -69,7 +69,7 @@ def write_card(request: Request, path: Path, *, wall_time: float,
                score: dict[str, float], kernels: str) -> Path:
     """The model card of a finished run, beside its policy.
 
-    ``kernels`` names the CPU kernels torch computed with (:func:`azgym.learn.kernels.pin_kernels`).
+    ``kernels`` names the CPU kernels torch computed with (:func:`azgym.torch_kernels.pin_kernels`).
     """
     import stable_baselines3
     import torch

@@ -33,7 +33,6 @@ from azgym.arguments import whole_number
 from azgym.envs.registration import navigation_spec
 from azgym.errors import InvalidInputError, unknown_name
 from azgym.files import prepare_folder, write_file
-from azgym.learn.kernels import pin_kernels
 from azgym.learn.navigator.card import write_card, write_learning_curve
 from azgym.learn.navigator.request import (
     CARD,
@@ -46,6 +45,7 @@ from azgym.learn.navigator.request import (
 )
 from azgym.nav import policy_file
 from azgym.nav.controls import Policy
+from azgym.torch_kernels import pin_kernels
 
 __all__ = ["ALGORITHMS", "EpisodeEnds", "HYPERPARAMS", "NAVIGATOR_FILES", "SETTINGS",
            "TrainingResult", "hyperparameters", "prepare", "require_rl", "run", "train_navigator"]

@@ -1,4 +1,4 @@
-"""torch's CPU kernels for training: the ones every x86-64 processor computes alike.
+"""torch's CPU kernels for training and serving: the ones every x86-64 processor computes alike.
 
 torch chooses its CPU kernels by the processor it runs on: ATen's vectorised loops by the widest
 instruction set there is (AVX-512, AVX2 or neither), oneMKL's matrix products likewise. Their
@@ -13,10 +13,18 @@ x86-64 processor with the same torch wheel and thread count (other architectures
 otherwise). The cost is speed: ng-ransac's epochs take about 35 % longer than with AVX-512
 kernels, ``learned``'s about 20 %.
 
+Serving a policy is the same story: a navigator drives on its own actions, so one action that
+differs in its last bit moves the whole episode, and the shipped PPO policy scored the
+navigation board's episodes differently on an AVX-512 processor than on the one that made the
+board. :func:`~azgym.nav.policy_file.load_policy` therefore pins the kernels too, and the
+board's episodes repeat on any x86-64 processor.
+
 Both settings are read when torch runs its first operation in a process, so
-:func:`pin_kernels` comes before that (the training functions call it first). A process that has
-already run torch operations keeps the processor's own kernels; the run then says so in its
-manifest and model card (``kernels``), as weights that repeat only on a like processor.
+:func:`pin_kernels` comes before that (the training functions and the policy loader call it
+first). A process that has already run torch operations keeps the processor's own kernels; a
+training run then says so in its manifest and model card (``kernels``), as weights that repeat
+only on a like processor, and the policy loader warns that the episodes it drives repeat only on
+a like processor.
 """
 
 from __future__ import annotations
