@@ -93,8 +93,8 @@ def _sound(numbers: np.ndarray, has_heading: np.ndarray, raised: np.ndarray) -> 
 
     An estimate (ok) has a finite non-negative position error, a heading error in [0, π] (NaN
     where the truth has no heading) and a finite pose; a frame without one has NaN errors and
-    pose. A runtime is NaN exactly where the call raised, else finite and non-negative; a
-    frame that raised has no estimate.
+    pose. A runtime is finite and non-negative, or NaN where the call raised; a frame that
+    raised has no estimate.
     """
     answered = numbers[0] == 1.0
     position, heading, micros, estimate = numbers[1], numbers[2], numbers[3], numbers[4:]
