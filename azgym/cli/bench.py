@@ -232,13 +232,14 @@ def _bench(args: argparse.Namespace) -> int:
         suite.check_profile(profile)
     if args.time_limit is None:
         args.time_limit = DEFAULT_TIME_LIMIT
-    contenders = _contenders(args, args.time_limit, profile)
+    progress = progress_printer()
+    contenders = _contenders(args, args.time_limit, profile, progress)
     workers = resolve_workers(args)
     out = _claim(args, BENCH_FILES, f"{suite.name}{'-quick' if quick else ''}")
     started = time.perf_counter()
     result = _interruptible(lambda: run_benchmark(
         suite, contenders, split=args.split, quick=quick, workers=workers,
-        time_limit=args.time_limit, progress=progress_printer(), backend=args.backend,
+        time_limit=args.time_limit, progress=progress, backend=args.backend,
         address=args.address, profile=profile))
     written = result.write(out)
     print(run_report(result.summary, time.perf_counter() - started, written))
@@ -262,17 +263,22 @@ def _interruptible(run: Callable[[], T]) -> T:
     return on_ctrl_c(run, lambda: "nothing was written: a run writes its results when it ends")
 
 
-def _contenders(args: argparse.Namespace, time_limit: float, profile: Profile | None
-                ) -> list[Contender]:
+def _contenders(args: argparse.Namespace, time_limit: float, profile: Profile | None,
+                progress: Progress) -> list[Contender]:
     """The contenders ``--localizer`` and ``--with-builtins`` name, each built once first.
 
     A bad name, spec or hyperparameter stops the command here, before any frame is drawn,
     rather than scoring a localizer that cannot run as failing every frame. Each is built in a
     worker process, as the run would build it, within the time limit; with a profile, the
-    built-ins too (with the profile's defaults).
+    built-ins too (with the profile's defaults). The workers' fork server starts first, warming
+    up the run's built-ins, so that each is compiled (on a first run) or loaded once, there.
     """
-    from azgym.bench.run.contenders import check_buildable, resolve_contenders
+    from azgym.bench.run.contenders import check_buildable, resolve_contenders, with_reference
+    from azgym.bench.run.runner import start_workers
 
+    if args.localizer or profile is not None:  # some are built here, in workers
+        run = resolve_contenders(args.localizer, with_builtins=args.with_builtins, check=None)
+        start_workers(with_reference(run), "local", progress, profile)
     return resolve_contenders(args.localizer, with_builtins=args.with_builtins,
                               check=partial(check_buildable, time_limit=time_limit,
                                             profile=profile),
@@ -295,7 +301,7 @@ def _bench_data(args: argparse.Namespace, progress: Progress, profile: Profile |
     for note in log.notes:  # what the reader changed, said before the figures it shapes
         progress(f"note: {note}")
     time_limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
-    contenders = _contenders(args, time_limit, log_profile(log, profile))
+    contenders = _contenders(args, time_limit, log_profile(log, profile), progress)
     out = _claim(args, BENCH_FILES, f"data-{log.manifest.name}")
     started = time.perf_counter()
     result = _interruptible(lambda: run_log_benchmark(

@@ -43,6 +43,7 @@ from azgym.bench.mapping.scoring import (
 )
 from azgym.bench.mapping.suites import MappingCase, get_mapping_suite
 from azgym.bench.run.answers import GIVE_UP_AFTER
+from azgym.bench.run.contenders import REPAIR_TRACKER
 from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT
 from azgym.bench.run.processes import default_workers, start_fork_server
 from azgym.core import BeaconMap, FloatArray, pose_error
@@ -84,7 +85,7 @@ def run_mapping(suite_name: str, mappers: Sequence[str], quick: bool = False,
     workers = default_workers() if workers is None else whole_number("workers", workers)
     time_limit = checked_time_limit("time_limit", time_limit)
     began = time.monotonic()
-    start_fork_server()  # its warm-up overlaps the drawing of the cases
+    start_fork_server([REPAIR_TRACKER])  # its warm-up overlaps the drawing of the cases
     cases = suite.build(suite.dev_seed, quick)
     for spec, problem in build_problems(specs, cases, workers, time_limit).items():
         if problem:

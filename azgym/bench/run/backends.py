@@ -36,12 +36,10 @@ def open_local(address: str | None, workers: int, say: Say = None
         InvalidInputError: An address (that is Ray's), or fewer than one worker.
     """
     from azgym.bench.run.isolation import IsolatedRun
-    from azgym.bench.run.processes import start_fork_server
 
     if address is not None:
         raise InvalidInputError("address is for backend 'ray' (a Ray cluster's address)")
     workers = whole_number("workers", workers, minimum=1)
-    start_fork_server()
     return IsolatedRun, nullcontext(workers)
 
 

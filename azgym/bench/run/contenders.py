@@ -13,6 +13,8 @@ log, a navigation suite and a sweep all choose theirs through it.
 
 from __future__ import annotations
 
+import contextlib
+import json
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,12 +23,13 @@ from azgym.bench.run.isolation import DEFAULT_TIME_LIMIT, build_problem
 from azgym.bench.run.profiles import contender_params
 from azgym.bench.run.worker import warm_up as warm_up_tracker
 from azgym.errors import InvalidInputError
-from azgym.localize.registry import parse_spec, spec_label
+from azgym.localize.registry import is_builtin, parse_spec, spec_label
 from azgym.profile import Profile
 from azgym.track.base import make_tracker
 
-__all__ = ["DEFAULT_SPECS", "REFERENCE", "Contender", "check_buildable", "contender",
-           "default_contenders", "resolve_contenders", "warm_up", "with_reference"]
+__all__ = ["DEFAULT_SPECS", "REFERENCE", "REPAIR_TRACKER", "Contender", "builtins_named",
+           "builtins_to_warm", "check_buildable", "contender", "default_contenders",
+           "resolve_contenders", "warm_up", "with_reference"]
 
 REFERENCE = "ransac"
 """The localizer every runtime is compared with (added to a run that lacks it)."""
@@ -34,6 +37,11 @@ REFERENCE = "ransac"
 DEFAULT_SPECS = ("ransac", "ransac-weighted", "loo", "lsq", "triplet", "mex-coarse")
 """The bench's default contenders; mex runs coarse-to-fine (10 cm, then the 1 cm lattice), as
 the exhaustive 1 cm search takes about 0.1 s a frame."""
+
+REPAIR_TRACKER = "robust:repair=true"
+"""The ``repair`` mapper's tracker. Its warm-up also reaches the motion model's kernels that every
+built-in mapper steps a drive through (its lag keeps each frame's steps), so a mapping run warms
+it in the fork server, and its first case does not compile them inside its time limit."""
 
 
 @dataclass(frozen=True)
@@ -157,18 +165,48 @@ def resolve_contenders(
     return chosen
 
 
+def builtins_to_warm(contenders: Iterable[Contender]) -> list[Contender]:
+    """The built-ins among the contenders, the reference first: what a run's fork server warms.
+
+    ``ransac``, the reference, takes the longest to compile, so on a machine's first run the
+    fork server starts with it while the runner warms the others (:func:`warm_up`).
+    """
+    return sorted((c for c in contenders if is_builtin(c.spec)), key=lambda c: not c.is_reference)
+
+
+def builtins_named(labels: str | None) -> list[Contender]:
+    """The built-ins a JSON list of contender labels names, in its order (a plug-in is left out).
+
+    The bench's defaults and :data:`REPAIR_TRACKER` when ``labels`` is None or no such list; a
+    label that cannot be read is left out (a worker meets, and reports, the same problem).
+    """
+    try:
+        named = json.loads(labels) if labels is not None else None
+    except ValueError:
+        named = None
+    if not (isinstance(named, list) and all(isinstance(label, str) for label in named)):
+        named = [*DEFAULT_SPECS, REPAIR_TRACKER]
+    chosen = []
+    for label in named:
+        with contextlib.suppress(InvalidInputError):
+            chosen.append(contender(label))
+    return [c for c in chosen if is_builtin(c.spec)]
+
+
 def warm_up(contenders: Iterable[Contender], profile: Profile | None = None) -> None:
     """Run each contender through the warm-up route (:func:`azgym.bench.run.worker.warm_up`).
 
     That loads (or compiles) its kernels for every specialization a run's frames reach. The
-    workers' fork server does this for every default contender before it forks any worker.
-    On a machine's first run the runner does it too, for the contenders other than ``ransac``,
-    while the fork server compiles ``ransac`` (the longest to compile): the fork server then
-    finds the others in numba's cache, which shortens the first run by a third. Each is built
-    as the run builds it, with the profile's defaults under its hyperparameters (built-ins
-    only: this runs in the caller's process).
+    workers' fork server does this for the run's built-ins (:func:`builtins_to_warm`) before it
+    forks any worker. On a machine's first run the runner does it too, for those after the
+    first, from the last, while the fork server compiles ``ransac``: each then finds in numba's
+    cache what the other compiled, which shortens a first run by a third. Each is built as the
+    run builds it, with the profile's defaults under its hyperparameters. Built-ins only: this
+    runs in the caller's process, and a plug-in is skipped.
     """
     for contender in contenders:
+        if not is_builtin(contender.spec):
+            continue
         try:
             warm_up_tracker(make_tracker(contender.spec, **contender_params(
                 contender.spec, contender.params, profile)))

@@ -1,28 +1,29 @@
 """What the workers' fork server loads before it forks any worker.
 
-Importing this module (the fork server does, once) imports the worker and runs every default
-built-in, and the ``repair`` mapper's tracker, through the warm-up route
+Importing this module (the fork server does, once) imports the worker and runs the built-in
+contenders the run that started the server named
+(:func:`~azgym.bench.run.processes.start_fork_server`; by default the bench's default contenders
+and the ``repair`` mapper's tracker) through the warm-up route
 (:func:`~azgym.bench.run.contenders.warm_up`), which loads their compiled code, or compiles it
-on a machine's first run. Every worker forked afterwards
-starts with that code in memory instead of loading it again, so starting one costs
-milliseconds. Nothing of a benchmark run is here: the server starts from a fresh interpreter,
-not from the process that runs the benchmark. It lets go of the runner's standard streams (a
-worker could otherwise open the runner's output through ``/proc/SERVER/fd/1``) and turns
-non-dumpable, as its workers then are (:func:`~azgym.bench.run.worker.hide_process`).
+on a machine's first run. Every worker forked afterwards starts with that code in memory
+instead of loading it again, so starting one costs milliseconds. A plug-in is never loaded
+here, whatever the list says (:func:`~azgym.bench.run.contenders.builtins_named`): its code runs
+in its own workers only. Nothing of a benchmark run is here: the server starts from a fresh
+interpreter, not from the process that runs the benchmark. It lets go of the runner's standard
+streams (a worker could otherwise open the runner's output through ``/proc/SERVER/fd/1``) and
+turns non-dumpable, as its workers then are (:func:`~azgym.bench.run.worker.hide_process`).
 """
 
 from __future__ import annotations
 
+import os
+
 from azgym.bench.run import worker
-from azgym.bench.run.contenders import contender, default_contenders, warm_up
+from azgym.bench.run.contenders import builtins_named, warm_up
+from azgym.bench.run.processes import WARM_UP
 
 __all__: list[str] = []  # imported for what importing does, not for a name
 
-MAP_REPAIR = "robust:repair=true"
-"""The ``repair`` mapper's tracker. Its warm-up also reaches the motion model's kernels that every
-built-in mapper steps a drive through (its lag keeps each frame's steps), so that a mapping run's
-first case does not compile them inside its time limit."""
-
 worker.quiet_streams()
 worker.hide_process()
-warm_up([*default_contenders(), contender(MAP_REPAIR)])
+warm_up(builtins_named(os.environ.pop(WARM_UP, None)))  # popped: the workers do not inherit it

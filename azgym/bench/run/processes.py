@@ -1,19 +1,21 @@
 """The worker processes of the pool: started from the fork server, heard, stopped.
 
 The fork server (:mod:`azgym.bench.run.preload`) is a fresh interpreter that imported azgym and
-loaded the built-ins' compiled code; every worker forks from it, so it starts in milliseconds
-and holds nothing of the run that started it. :mod:`azgym.bench.run.isolation` drives the workers.
+loaded the compiled code of the run's built-ins; every worker forks from it, so it starts in
+milliseconds and holds nothing of the run that started it. :mod:`azgym.bench.run.isolation`
+drives the workers.
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
 import multiprocessing
 import os
 import sys
 import time
 import types
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,10 +24,13 @@ from azgym.bench.run.answers import death
 from azgym.bench.run.wire import STOP, MapData, ProtocolError, heard, write_all
 from azgym.profile import Profile
 
-__all__ = ["Worker", "build_verdict", "caller_main_hidden", "context", "default_workers", "poll",
-           "start_fork_server", "start_worker", "stop"]
+__all__ = ["WARM_UP", "Worker", "build_verdict", "caller_main_hidden", "context",
+           "default_workers", "poll", "start_fork_server", "start_worker", "stop"]
 
 PRELOAD = "azgym.bench.run.preload"
+WARM_UP = "AZGYM_FORK_SERVER_WARMS"
+"""The environment variable that tells a starting fork server which built-ins to warm up: their
+labels, a JSON list (:func:`start_fork_server`)."""
 
 
 def context() -> Any:
@@ -35,12 +40,28 @@ def context() -> Any:
     return ctx
 
 
-def start_fork_server() -> None:
-    """Start the fork server now, so its warm-up overlaps whatever the caller does next."""
+def start_fork_server(warm: Sequence[str] | None = None) -> None:
+    """Start the fork server now, so its warm-up overlaps whatever the caller does next.
+
+    Args:
+        warm: The labels of the built-in contenders it runs through the warm-up route, in that
+            order (:mod:`~azgym.bench.run.preload`; None: the bench's defaults). A fork server
+            already running keeps what it loaded: a worker whose contender it did not warm up
+            loads or compiles its kernels itself, within the allowance a built-in's warm-up has.
+    """
     context()
     from multiprocessing import forkserver
 
-    forkserver.ensure_running()
+    before = os.environ.get(WARM_UP)
+    if warm is not None:
+        os.environ[WARM_UP] = json.dumps(list(warm))  # the server's environment is ours
+    try:
+        forkserver.ensure_running()
+    finally:
+        if before is None:
+            os.environ.pop(WARM_UP, None)
+        else:
+            os.environ[WARM_UP] = before
 
 
 @dataclass

@@ -25,8 +25,8 @@ from azgym.bench.report.summary import DatasetSummary
 from azgym.bench.run.answers import Answers
 from azgym.bench.run.backends import BACKENDS
 from azgym.bench.run.contenders import (
-    REFERENCE,
     Contender,
+    builtins_to_warm,
     default_contenders,
     warm_up,
     with_reference,
@@ -48,7 +48,8 @@ from azgym.profile import Profile
 from azgym.progress import Progress, counter
 from azgym.site import load_scenario
 
-__all__ = ["Progress", "batch_bounds", "run_benchmark", "run_contenders", "run_log_benchmark"]
+__all__ = ["Progress", "batch_bounds", "run_benchmark", "run_contenders", "run_log_benchmark",
+           "start_workers"]
 
 BATCHES_PER_WORKER = 4
 """Frames go to the workers in this many batches per worker: few round trips, and a slow batch
@@ -86,6 +87,8 @@ def run_contenders(
         address: The Ray cluster's address (``backend="ray"`` only).
         profile: Whose hyperparameters are every contender's defaults (None: none).
     """
+    if backend == "local":  # unless a run started it already
+        start_fork_server([c.label for c in builtins_to_warm(contenders)])
     Run, session = BACKENDS.make(backend, address=address, workers=workers, say=progress)
     time_limit = checked_time_limit("time_limit", time_limit)
     cases = list(cases)
@@ -187,11 +190,8 @@ def run_benchmark(
     contenders = with_reference(contenders or default_contenders())
     say = progress or (lambda _line: None)
     seed, secret = _seed(suite, split, seed)
-    first_run = _start(backend, say)
+    start_workers(contenders, backend, say, profile)  # the server warms up while cases are drawn
     cases = _draw(suite, split, seed, quick, secret, say)
-    if first_run:
-        # The fork server compiles ransac meanwhile (contenders.warm_up).
-        warm_up((c for c in default_contenders() if c.spec != REFERENCE), profile)
     outcomes = run_contenders(cases, contenders, workers=workers, maps=maps,
                               time_limit=time_limit, progress=progress, backend=backend,
                               address=address, profile=profile)
@@ -239,15 +239,24 @@ def run_log_benchmark(log: Log, contenders: Sequence[Contender] | None = None, *
                        maps={} if log.shipped_map else {log.map_name: log.beacons})
 
 
-def _start(backend: str, say: Progress) -> bool:
-    """Start the fork server (locally); whether this run compiles the kernels (said if so)."""
+def start_workers(contenders: Sequence[Contender], backend: str, say: Progress,
+                  profile: Profile | None = None) -> None:
+    """Start the workers' fork server (``backend`` "local") warming up the contenders' built-ins.
+
+    On a machine's first run (said) the kernels compile: the fork server starts with ransac's
+    while this process compiles the others' (:func:`~azgym.bench.run.contenders.warm_up`). The
+    command line calls this before it builds the named contenders in workers, so that they fork
+    warm; the run calls it again (a fork server, once started, stays as it is).
+    """
+    warmed = builtins_to_warm(contenders)
     first_run = not localizers_compiled()
     if first_run:
         say("compiling azgym's kernels (the installation did not, or its sources changed since): "
             "this run takes about 20 s longer; they are cached for the next runs")
     if backend == "local":
-        start_fork_server()  # its warm-up overlaps the drawing of the cases
-    return first_run
+        start_fork_server([c.label for c in warmed])
+    if first_run:
+        warm_up(reversed(warmed[1:]), profile)
 
 
 def _seed(suite: Suite, split: str, seed: int | None) -> tuple[int, bool]:
