@@ -10,8 +10,9 @@ Three parts, each printed and written to ``OUT/trackers.json``:
    computed untimed; for ``gated-ekf`` and ``robust`` the gating and update on the raw
    azimuths), the whole frame (``predict`` and ``update``, the fix included), and ransac on the
    same frame. Shared machines drift in speed by up to 2x within seconds, so ``--rounds`` rounds
-   are run and the least disturbed is reported, each figure also as a ratio to ransac timed in
-   the same round.
+   are run and for each figure the least disturbed round is reported (the lowest ratio to
+   ransac timed in the same round), with that ratio. The frame's motion samples are gathered
+   before the clock starts, as the measurements ransac gets are.
 2. **Faults.** ``tkf`` against ``gated-ekf`` on the frames with a mirror ghost or a misread id,
    read from the committed leaderboard entries (their per-frame files; ``azgym leaderboard
    verify`` reruns them). A frame without an answer counts as a failure, never as a zero error.
@@ -41,7 +42,10 @@ from azgym.world.drive import simulate  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 ENTRIES = ROOT / "leaderboard" / "entries"
 TRACKERS = ("tkf", "lpkf", "gated-ekf", "robust")
-UPDATE_TARGET_US = 30.0
+FRAME_TARGET_RATIO = 2.0
+"""tkf's and lpkf's target: a whole frame at most this many times ransac's."""
+FRAME_TARGET_US = 30.0
+"""gated-ekf's and robust's target: a whole frame within this many µs."""
 FAULTS = ("ghost", "misidentified")
 
 
@@ -62,11 +66,11 @@ def replay_timings(name: str, scenario, routes: list[list]) -> dict[str, np.ndar
     for frames in routes:
         tracker.reset(seed=0, initial=frames[0].pose)
         for frame in frames[1:]:
-            measurements = frame.observation.measurements
+            measurements, motion = frame.observation.measurements, frame.motion  # untimed
             start = time.perf_counter_ns()
             ransac.localize(measurements, scenario.beacons)
             middle = time.perf_counter_ns()
-            tracker.predict(frame.motion)
+            tracker.predict(motion)
             tracker.update(measurements, scenario.beacons)
             times["ransac"].append(middle - start)
             times["frame"].append(time.perf_counter_ns() - middle)
@@ -80,17 +84,16 @@ def speed(rounds: int) -> dict:
               "trackers": {}}
     for name in TRACKERS:
         replay_timings(name, scenario, routes[:1])  # compile and warm up
-        best = None
-        for _ in range(rounds):
-            medians = {k: float(np.median(v))
-                       for k, v in replay_timings(name, scenario, routes).items()}
-            if best is None or medians["update"] / medians["ransac"] \
-                    < best["update"] / best["ransac"]:
-                best = medians
+        medians = [{k: float(np.median(v)) for k, v in replay_timings(name, scenario,
+                                                                    routes).items()}
+                   for _ in range(rounds)]
+        # For each figure, the round least disturbed: the lowest ratio to ransac in its round.
+        update = min(medians, key=lambda m: m["update"] / m["ransac"])
+        frame = min(medians, key=lambda m: m["frame"] / m["ransac"])
         report["trackers"][name] = {
-            "update_us": best["update"], "frame_us": best["frame"], "ransac_us": best["ransac"],
-            "update_per_ransac": best["update"] / best["ransac"],
-            "frame_per_ransac": best["frame"] / best["ransac"]}
+            "update_us": update["update"], "frame_us": frame["frame"],
+            "ransac_us": frame["ransac"], "update_per_ransac": update["update"] / update["ransac"],
+            "frame_per_ransac": frame["frame"] / frame["ransac"]}
     return report
 
 
@@ -178,10 +181,11 @@ def main() -> None:
     report = {"speed": speed(args.rounds), "faults": faults(), "drift": drift(args.out)}
     (args.out / "trackers.json").write_text(json.dumps(report, indent=2) + "\n")
 
-    print(f"Speed on {report['speed']['frames']} frames of warehouse-small (median µs, least "
-          "disturbed round)")
+    print(f"Speed on {report['speed']['frames']} frames of warehouse-small (median µs, each "
+          "figure's least disturbed round; ransac's is the frame's round)")
     print(f"{'tracker':<11} {'update':>7} {'x ransac':>9} {'frame':>7} {'x ransac':>9} "
-          f"{'ransac':>7}   target: update <= {UPDATE_TARGET_US:.0f} µs")
+          f"{'ransac':>7}   targets: a frame <= {FRAME_TARGET_RATIO:.0f} x ransac (tkf, lpkf), "
+          f"<= {FRAME_TARGET_US:.0f} µs (gated-ekf, robust)")
     for name, row in report["speed"]["trackers"].items():
         print(f"{name:<11} {row['update_us']:7.1f} {row['update_per_ransac']:9.2f} "
               f"{row['frame_us']:7.1f} {row['frame_per_ransac']:9.2f} {row['ransac_us']:7.1f}")

@@ -123,7 +123,7 @@ class Tracker(Hyperparameters, ABC):
         if not isinstance(beacons, BeaconMap):
             raise InvalidInputError(
                 f"beacons must be an azgym.BeaconMap, got {type(beacons).__name__}")
-        if len(measurements) > MAX_MEASUREMENTS:
+        if measurements.ids.size > MAX_MEASUREMENTS:
             raise InvalidInputError(
                 f"measurements has {len(measurements)} detections, more than the "
                 f"{MAX_MEASUREMENTS} a tracker accepts in one frame")

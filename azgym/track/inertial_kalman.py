@@ -36,12 +36,14 @@ Sec. IV-B) before they reach the filter. docs/plotter.md gives the gap each brid
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose, wrap_scalar
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
+from azgym.localize.base import Localizer
 from azgym.localize.registry import SupportsLocalize, build
 from azgym.profile import FORKLIFT, VEHICLE_KINDS
 from azgym.sensing.motion import ImuModel, Motion, OdometryModel
@@ -87,6 +89,26 @@ _GYRO_YAW = np.zeros(0)
 """The odometry's turn rates when the turn rate is the gyro's: unused."""
 FIX_START_SPEED_SD = 1.0
 """Velocity uncertainty [m/s] when a fix starts the filter: the forklift may be moving."""
+
+
+@dataclass(slots=True)
+class _Run:
+    """What a :class:`Tkf` knows of the sequence besides the filter's state, set frame by frame.
+
+    Plain attributes of their own: set on the tracker, each would pass through the check that
+    notices a changed hyperparameter.
+    """
+
+    time: float | None = None
+    """The time the state is at [s]; None before the first prediction."""
+    last_fix: float | None = None
+    """When a fix, or the start pose, last corrected the state [s]."""
+    live: bool = False
+    """Whether the filter has started (from a start pose or a fix)."""
+    confirmed: bool = False
+    """Whether a second fix passed the gate after the first (or the start pose was given)."""
+    accelerometer: bool = False
+    """Whether the IMU reports accelerations (the last frame with IMU samples)."""
 
 
 class Tkf(Tracker):
@@ -163,8 +185,14 @@ class Tkf(Tracker):
         if not isinstance(fixer, SupportsLocalize):
             raise InvalidInputError(f"{type(self).__name__}.localizer must name a per-frame "
                                     f"localizer, got {self.localizer!r} (a tracker)")
-        self._fixer = fixer
+        # Tracker.update checked the frame as Localizer.localize would, and the fixer's
+        # hyperparameters were checked as it was built (no one else holds it): a localizer of
+        # azgym's base class takes the frame straight to its solver.
+        self._fix = fixer._localize_frame if isinstance(fixer, Localizer) else fixer.localize
         self._noise = self._noise_constants()  # the prediction's constants, as now set
+        # and the correction's, as floats (read every frame)
+        self._ahead, self._gate = float(self.camera_from_imu), float(self.gate)
+        self._max_holdover = float(self.max_holdover)
 
     def _low_pass_rc(self) -> float:
         """The RC [s] of the accelerometer's low-pass prefilter; none (0) for tkf."""
@@ -173,14 +201,11 @@ class Tkf(Tracker):
     def _reset(self, rng: np.random.Generator, initial: Pose | None) -> None:
         self._x = np.zeros(SIZE)
         self._P = np.zeros((SIZE, SIZE))
-        self._live = self._confirmed = False
-        if initial is not None:
-            self._start(np.array(initial), np.diag(np.square(START_SD)[_POSE]), START_SD[2])
-            self._confirmed = True
-        self._time: float | None = None
-        self._last_fix: float | None = None
         self._held = new_held()
-        self._accelerometer = False
+        self._run = _Run()
+        if initial is not None:
+            self._start(initial, np.diag(np.square(START_SD)[_POSE]), START_SD[2])
+            self._run.confirmed = True
 
     def _predict(self, motion: Motion) -> None:
         """Step through the frame's samples in time order (:mod:`azgym.track.inertial_steps`).
@@ -190,19 +215,19 @@ class Tkf(Tracker):
         the velocity along the heading and, with ``yaw_source="odometry"``, starts the turn
         rate held. On a repeated time stamp the IMU's sample comes first.
         """
-        imu, odometry = motion.imu, motion.odometry
-        if self._time is None:
+        imu, odometry, run = motion.imu, motion.odometry, self._run
+        if run.time is None:
             first = imu.time if imu.time.size else odometry.time
-            self._time = float(first[0]) if first.size else motion.time
-            if self._live:
-                self._last_fix = self._time
-        clock, self._time = self._time, motion.time
-        if not self._live:
+            run.time = float(first[0]) if first.size else motion.time
+            if run.live:
+                run.last_fix = run.time
+        clock, run.time = run.time, motion.time
+        if not run.live:
             return
         if imu.time.size:
-            self._accelerometer = math.isfinite(imu.accel[0, 0])
+            run.accelerometer = math.isfinite(imu.accel[0, 0])
         use_speed = self.odometry_speed if self.odometry_speed is not None \
-            else not self._accelerometer
+            else not run.accelerometer
         from_odometry = self._yaw_source == "odometry"
         used = odometry.time.size if use_speed or from_odometry else 0
         # A new array either way (a run's frames arrive read-only): one specialization.
@@ -210,8 +235,8 @@ class Tkf(Tracker):
                                             self._columns("odometry")),
                          dtype=np.float64) if from_odometry else _GYRO_YAW
         predict_samples(self._x, self._P, imu.time, imu.accel, imu.yaw_rate, imu.heading,
-                        odometry.time[:used], odometry.speed[:used], rates, clock, motion.time,
-                        self._held, self._noise, self._accelerometer, bool(use_speed),
+                        odometry.time, odometry.speed, rates, used, clock, motion.time,
+                        self._held, self._noise, run.accelerometer, bool(use_speed),
                         not from_odometry)
 
     def _noise_constants(self) -> FloatArray:
@@ -228,27 +253,25 @@ class Tkf(Tracker):
         return noise
 
     def _update(self, measurements: Measurements, beacons: BeaconMap) -> Estimate:
-        fix = self._fixer.localize(measurements, beacons)
-        now = self._time if self._time is not None else 0.0
+        fix = self._fix(measurements, beacons)
+        run = self._run
+        now = run.time if run.time is not None else 0.0
         used = fix.ok and self._correct(fix)
         if used:
-            self._last_fix = now
-        since = self._since_fix(now)
-        if not self._confirmed or since > float(self.max_holdover):
-            reason = ("no fix yet" if not self._live else
-                      "a first fix, waiting for a second to confirm it" if not self._confirmed
+            run.last_fix = now
+        since = 0.0 if run.last_fix is None else now - run.last_fix
+        if not run.confirmed or since > self._max_holdover:
+            reason = ("no fix yet" if not run.live else
+                      "a first fix, waiting for a second to confirm it" if not run.confirmed
                       else f"no fix for {since:.1f} s (max_holdover {self.max_holdover} s)")
             return Estimate.failure(reason, len(measurements), {"fix": _fix_state(fix, used)})
         x = self._x
-        camera, covariance = camera_estimate(x, self._P, float(self.camera_from_imu))
+        covariance = np.empty((3, 3))
+        camera_x, camera_y, heading = camera_estimate(x, self._P, self._ahead, covariance)
         return Estimate._found(
-            float(camera[0]), float(camera[1]), wrap_scalar(float(camera[2])),
+            camera_x, camera_y, wrap_scalar(heading),
             fix.inliers if used else np.zeros(len(measurements), bool), covariance,
             {"fix": _fix_state(fix, used), "holdover": since, "speed": math.hypot(x[2], x[3])})
-
-    def _since_fix(self, now: float) -> float:
-        """Seconds since the last fix used, or since the start pose."""
-        return 0.0 if self._last_fix is None else now - self._last_fix
 
     def _correct(self, fix: Estimate) -> bool:
         """Start or correct the filter with a fix; False if the gate refused it.
@@ -259,37 +282,37 @@ class Tkf(Tracker):
         gate with it, so a fix that agrees with the prediction brings it back, while a wrong one
         (ransac can be wrong for several frames running) cannot capture it.
         """
-        x, y, heading = fix.pose
+        x, y, heading = fix.x, fix.y, fix.heading
         R = np.array(fix.covariance if fix.covariance is not None else _FALLBACK_FIX_COVARIANCE,
                      dtype=np.float64)  # a new array: one specialization of the kernel
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
             return False
-        z = np.array((x, y, heading), dtype=np.float64)
-        if self._live:
-            gate = float(self.gate)
-            distance = fix_update(self._x, self._P, z, R, float(self.camera_from_imu), gate)
+        run = self._run
+        if run.live:
+            gate = self._gate
+            distance = fix_update(self._x, self._P, x, y, heading, R, self._ahead, gate)
             if distance < 0.0:  # R is not finite
                 return False
             if distance <= gate:
-                self._confirmed = True
+                run.confirmed = True
                 return True
-            if self._confirmed:
+            if run.confirmed:
                 return False
         elif not np.isfinite(R).all():
             return False
-        self._start(z, R, FIX_START_SPEED_SD)
+        self._start((x, y, heading), R, FIX_START_SPEED_SD)
         return True
 
-    def _start(self, camera: np.ndarray, R: np.ndarray, speed_sd: float) -> None:
+    def _start(self, camera: Pose, R: np.ndarray, speed_sd: float) -> None:
         """Start the filter from the camera's pose (covariance ``R``), its velocity unknown."""
-        ahead = float(self.camera_from_imu)
+        ahead = self._ahead
         c, s = math.cos(camera[2]), math.sin(camera[2])
         self._x[:] = (camera[0] - ahead * c, camera[1] - ahead * s, 0.0, 0.0, camera[2], 0.0)
         self._P[:] = 0.0
         self._P[np.ix_(_POSE, _POSE)] = R
         self._P[2, 2] = self._P[3, 3] = speed_sd ** 2
         self._P[-1, -1] = GYRO_BIAS_SD ** 2
-        self._live, self._confirmed = True, False
+        self._run.live, self._run.confirmed = True, False
 
 
 class Lpkf(Tkf):

@@ -197,8 +197,8 @@ def _speed_reading(x, P, speed, variance, accelerometer):
 
 @jit
 def predict_samples(x, P, imu_time, imu_accel, imu_yaw_rate, imu_heading, odometry_time,
-                    odometry_speed, odometry_rate, clock, end, held, noise, accelerometer,
-                    use_speed, gyro_yaw):
+                    odometry_speed, odometry_rate, odometry_used, clock, end, held, noise,
+                    accelerometer, use_speed, gyro_yaw):
     """Move the state from ``clock`` to ``end`` through a frame's samples (module docstring).
 
     Args:
@@ -208,9 +208,11 @@ def predict_samples(x, P, imu_time, imu_accel, imu_yaw_rate, imu_heading, odomet
         imu_accel: Their accelerations (forward, left) [m/s²], (K, 2).
         imu_yaw_rate: Their gyro's yaw rates [rad/s].
         imu_heading: Their orientation sensor's headings [rad] (NaN: none).
-        odometry_time: The odometry samples' times [s], in order (none: the odometry unused).
+        odometry_time: The odometry samples' times [s], in order.
         odometry_speed: Their speeds [m/s].
         odometry_rate: Their turn rates [rad/s] (unused when ``gyro_yaw``).
+        odometry_used: How many of the odometry's samples are stepped through, from the first
+            (0: the odometry unused).
         clock: The time the state is at [s].
         end: The frame's time [s].
         held: The readings in force (:data:`HELD_SIZE` slots), updated in place.
@@ -221,8 +223,8 @@ def predict_samples(x, P, imu_time, imu_accel, imu_yaw_rate, imu_heading, odomet
         gyro_yaw: Whether the turn rate is the gyro's (else the odometry's).
     """
     i = j = 0
-    while i < imu_time.size or j < odometry_time.size:
-        if j == odometry_time.size or (i < imu_time.size and imu_time[i] <= odometry_time[j]):
+    while i < imu_time.size or j < odometry_used:
+        if j == odometry_used or (i < imu_time.size and imu_time[i] <= odometry_time[j]):
             _hold(x, P, imu_time[i] - clock, held, noise, accelerometer)
             clock = imu_time[i]
             if not math.isnan(imu_heading[i]):
@@ -264,7 +266,7 @@ def _hold_imu(held, time, forward, left, rc):
 
 
 @jit
-def fix_update(x, P, z, R, ahead, gate):
+def fix_update(x, P, fix_x, fix_y, fix_heading, R, ahead, gate):
     """Correct the state by a camera fix z = (x, y, φ) with covariance R (eq. 6-9), in place.
 
     The fix sees the camera, ``ahead`` metres in front of the IMU the state follows:
@@ -281,9 +283,9 @@ def fix_update(x, P, z, R, ahead, gate):
             if not math.isfinite(R[r, k]):
                 return -1.0
     H, innovation = _camera_rows(x, ahead)
-    innovation[0] = z[0] - innovation[0]
-    innovation[1] = z[1] - innovation[1]
-    innovation[2] = wrap_compiled(z[2] - innovation[2])
+    innovation[0] = fix_x - innovation[0]
+    innovation[1] = fix_y - innovation[1]
+    innovation[2] = wrap_compiled(fix_heading - innovation[2])
     PHt = np.zeros((SIZE, 3))
     for i in range(SIZE):
         for k in range(3):
@@ -322,16 +324,21 @@ def fix_update(x, P, z, R, ahead, gate):
 
 
 @jit
-def camera_estimate(x, P, ahead):
-    """The camera's pose h(x) and its covariance H P Hᵀ, ``ahead`` metres in front of the IMU."""
+def camera_estimate(x, P, ahead, covariance):
+    """The camera's pose h(x) as x, y, φ, its covariance H P Hᵀ written into ``covariance``.
+
+    The camera is ``ahead`` metres in front of the IMU. The caller makes the 3 × 3 array: numba
+    takes longer to hand a new array back than numpy takes to make one.
+    """
     H, pose = _camera_rows(x, ahead)
-    covariance = np.zeros((3, 3))
     for r in range(3):
         for k in range(3):
+            total = 0.0
             for i in range(SIZE):
                 for j in range(SIZE):
-                    covariance[r, k] += H[r, i] * P[i, j] * H[k, j]
-    return pose, covariance
+                    total += H[r, i] * P[i, j] * H[k, j]
+            covariance[r, k] = total
+    return pose[0], pose[1], pose[2]
 
 
 @jit(inline="always")

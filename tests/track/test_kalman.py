@@ -35,7 +35,7 @@ def _fix_update(z, heading=0.0, ahead=0.0, gate=math.inf):
     """A fix with covariance I on x = (0, 0, 0, 0, heading, 0), P = I; the state after, and d²."""
     x, P = np.zeros(SIZE), np.eye(SIZE)
     x[HEADING] = heading
-    distance = fix_update(x, P, np.array(z, dtype=float), np.eye(3), ahead, gate)
+    distance = fix_update(x, P, *map(float, z), np.eye(3), ahead, gate)
     return x, P, distance
 
 
@@ -60,7 +60,7 @@ def test_a_fix_whose_covariance_is_not_finite_changes_nothing(bad):
     x, P = np.zeros(SIZE), np.eye(SIZE)
     R = np.eye(3)
     R[1, 2] = bad
-    assert fix_update(x, P, np.array([1.0, 2.0, 0.3]), R, 0.5, math.inf) == -1.0
+    assert fix_update(x, P, 1.0, 2.0, 0.3, R, 0.5, math.inf) == -1.0
     assert not x.any() and np.array_equal(P, np.eye(SIZE))
 
 
@@ -83,7 +83,7 @@ def test_tkf_refuses_a_fix_whose_covariance_is_not_finite(from_frame):
     scenario = azgym.load_scenario("warehouse-small")
     frames = list(simulate(scenario, scenario.routes[0].name, seed=1))[:12]
     tracker = azgym.make_tracker("tkf")
-    tracker._fixer = _NotFiniteFix(from_frame)
+    tracker._fix = _NotFiniteFix(from_frame).localize
     tracker.reset(seed=0)
     states = []
     for frame in frames[1:]:
@@ -107,7 +107,8 @@ def test_a_heading_innovation_is_wrapped():
 def test_the_camera_s_covariance_carries_the_heading_s_through_the_lever():
     # Facing east, camera 2 m ahead: its y moves 2 m per radian of heading, so var(y) = 1 + 4.
     x, P = np.zeros(SIZE), np.eye(SIZE)
-    pose, covariance = camera_estimate(x, P, 2.0)
+    covariance = np.full((3, 3), np.nan)
+    pose = camera_estimate(x, P, 2.0, covariance)
     np.testing.assert_allclose(pose, [2.0, 0.0, 0.0])
     np.testing.assert_allclose(covariance, [[1.0, 0.0, 0.0], [0.0, 5.0, 2.0], [0.0, 2.0, 1.0]])
 
@@ -139,8 +140,8 @@ def _one_frame(imu_heading=math.nan, imu_yaw_rate=0.0, speed=None, rate=None, gy
     odometry = np.array([0.0]) if speed is not None else np.zeros(0)
     predict_samples(x, P, np.array([0.0]), np.zeros((1, 2)), np.array([imu_yaw_rate]),
                     np.array([imu_heading]), odometry, np.array([speed or 0.0])[:odometry.size],
-                    np.array([rate or 0.0]), 0.0, 1.0 if rate is not None else 0.0, held, noise,
-                    True, speed is not None, gyro_yaw)
+                    np.array([rate or 0.0]), odometry.size, 0.0, 1.0 if rate is not None else 0.0,
+                    held, noise, True, speed is not None, gyro_yaw)
     return x, P
 
 
