@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose, wrap_scalar
+from azgym.core import BeaconMap, Estimate, FloatArray, Measurements, Pose
 from azgym.errors import InvalidInputError
 from azgym.hyperparameters import check_flag, check_range
 from azgym.localize.base import Localizer
@@ -269,7 +269,7 @@ class Tkf(Tracker):
         covariance = np.empty((3, 3))
         camera_x, camera_y, heading = camera_estimate(x, self._P, self._ahead, covariance)
         return Estimate._found(
-            camera_x, camera_y, wrap_scalar(heading),
+            camera_x, camera_y, heading,
             fix.inliers if used else np.zeros(len(measurements), bool), covariance,
             {"fix": _fix_state(fix, used), "holdover": since, "speed": math.hypot(x[2], x[3])})
 

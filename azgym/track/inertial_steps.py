@@ -325,7 +325,7 @@ def fix_update(x, P, fix_x, fix_y, fix_heading, R, ahead, gate):
 
 @jit
 def camera_estimate(x, P, ahead, covariance):
-    """The camera's pose h(x) as x, y, φ, its covariance H P Hᵀ written into ``covariance``.
+    """The camera's pose h(x) as x, y, φ (wrapped), its covariance H P Hᵀ into ``covariance``.
 
     The camera is ``ahead`` metres in front of the IMU. The caller makes the 3 × 3 array: numba
     takes longer to hand a new array back than numpy takes to make one.
@@ -338,7 +338,7 @@ def camera_estimate(x, P, ahead, covariance):
                 for j in range(SIZE):
                     total += H[r, i] * P[i, j] * H[k, j]
             covariance[r, k] = total
-    return pose[0], pose[1], pose[2]
+    return pose[0], pose[1], wrap_compiled(pose[2])
 
 
 @jit(inline="always")
