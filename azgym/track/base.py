@@ -88,7 +88,7 @@ class Tracker(Hyperparameters, ABC):
                     f"heading), got {initial!r}")
             initial = (float(pose[0]), float(pose[1]), float(pose[2]))
         object.__setattr__(self, "_clock", -math.inf)
-        object.__setattr__(self, "_given", {})
+        object.__setattr__(self, "_given", (0, 0))
         self._reset(np.random.default_rng(seed), initial)
 
     def predict(self, motion: Motion) -> None:
@@ -130,14 +130,13 @@ class Tracker(Hyperparameters, ABC):
         self._validate_once()
         return self._update(measurements, beacons)
 
-    def _check_columns(self, given: dict[str, int]) -> None:
+    def _check_columns(self, given: tuple[int, int]) -> None:
         """Refuse a stream that gives a column it left out before, or leaves out one it gave."""
         seen = self.__dict__["_given"]
         if given == seen:
             return
-        for stream, columns in given.items():
-            before = seen.setdefault(stream, columns) if columns else columns
-            if before == columns:
+        for stream, columns, before in zip(STREAMS, given, seen, strict=True):
+            if not (columns and before) or before == columns:  # a stream without samples gives 0
                 continue
             c = next(c for c in range(len(COLUMNS[stream])) if (before ^ columns) >> c & 1)
             now, earlier = ("given", "NaN") if columns >> c & 1 else ("NaN", "given")
@@ -145,6 +144,9 @@ class Tracker(Hyperparameters, ABC):
                 f"motion.{stream}.{COLUMNS[stream][c]} is {now} in this frame's samples but was "
                 f"{earlier} in earlier frames: a column is given throughout a stream or left out "
                 "(NaN) throughout")
+        # A stream's first samples say which columns it gives from now on.
+        merged = tuple(before or columns for columns, before in zip(given, seen, strict=True))
+        object.__setattr__(self, "_given", merged)
 
     def _columns(self, stream: str) -> int:
         """Which of the stream's :data:`COLUMNS` the sequence's samples give (bit c: column c).
@@ -152,7 +154,7 @@ class Tracker(Hyperparameters, ABC):
         As :func:`check_motion` found them in the frames with samples so far; any frame's samples
         give the same (a change is refused).
         """
-        return int(self.__dict__["_given"].get(stream, 0))
+        return int(self.__dict__["_given"][STREAMS.index(stream)])
 
     def _started(self, method: str) -> float:
         """The time of the last prediction; refuses a call before ``reset``."""
@@ -176,11 +178,12 @@ class Tracker(Hyperparameters, ABC):
         """Correct the state with one frame; return its estimate."""
 
 
-def check_motion(motion: Any, after: float) -> dict[str, int]:
+def check_motion(motion: Any, after: float) -> tuple[int, int]:
     """Refuse motion data a tracker cannot use: out of order, in the past, or not finite.
 
     Returns:
-        Per stream, which of its :data:`COLUMNS` it gives (bit c for column c; 0: no samples).
+        Per stream of :data:`STREAMS`, which of its :data:`COLUMNS` it gives (bit c for column
+        c; 0: no samples).
     """
     if not isinstance(motion, Motion):
         raise InvalidInputError(f"motion must be an azgym Motion, got {type(motion).__name__}")
@@ -207,7 +210,7 @@ def check_motion(motion: Any, after: float) -> dict[str, int]:
             raise InvalidInputError(
                 f"{where} is NaN in some samples only: a column is given throughout a stream or "
                 "left out (NaN) throughout")
-    return {"odometry": odometry_given, "imu": imu_given}
+    return odometry_given, imu_given
 
 
 def check_choice(owner: str, name: str, value: Any, choices: tuple[str, ...]) -> None:

@@ -109,6 +109,17 @@ def test_a_column_given_in_part_is_refused(first, second, message):
         tracker.predict(second)
 
 
+def test_a_stream_that_starts_late_keeps_the_columns_its_first_samples_give():
+    tracker = azgym.make_tracker("gated-ekf")
+    tracker.reset(0, (0.0, 0.0, 0.0))
+    tracker.predict(Motion(0.2, odometry([]), imu([0.1])))  # no odometry yet
+    tracker.predict(Motion(0.4, odometry([0.3], [math.nan], yaw_rate=[0.3]), imu([0.35])))
+    with pytest.raises(InvalidInputError, match=r"motion.odometry.yaw_rate is NaN in this "
+                                                r"frame's samples but was given in earlier"):
+        tracker.predict(Motion(0.6, odometry([0.5], [math.nan], yaw_rate=[math.nan]),
+                               imu([0.55])))
+
+
 def test_a_column_left_out_throughout_is_accepted():
     tracker = azgym.make_tracker("tkf")  # reads the IMU's accelerations
     tracker.reset(0, (0.0, 0.0, 0.0))
