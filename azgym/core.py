@@ -343,33 +343,34 @@ class Estimate:
         cls, reason: str, n_measurements: int, diagnostics: Mapping[str, Any] | None = None
     ) -> Estimate:
         """An estimate that says no pose could be found, and why."""
-        return cls(
-            x=float("nan"),
-            y=float("nan"),
-            heading=float("nan"),
-            inliers=np.zeros(n_measurements, dtype=bool),
-            ok=False,
-            reason=reason,
-            diagnostics=dict(diagnostics or {}),
-        )
+        return cls._filled(math.nan, math.nan, math.nan, np.zeros(n_measurements, dtype=bool),
+                           False, reason, None, dict(diagnostics or {}))
 
     @classmethod
     def _found(cls, x: float, y: float, heading: float, inliers: BoolArray,
                covariance: FloatArray | None, diagnostics: Mapping[str, Any]) -> Estimate:
         """``Estimate(x, y, heading, inliers, covariance=..., diagnostics=...)``, built faster.
 
-        A hot path (a localizer's answer, every frame): the slots are set through their
-        descriptors, which costs about a microsecond less than the dataclass's keyword
-        ``__init__``. Every field is set, ``ok`` to True and ``reason`` to "", as ``__init__``
-        would set them.
+        A hot path (a localizer's answer, every frame), as :meth:`_filled`.
+        """
+        return cls._filled(x, y, heading, inliers, True, "", covariance, diagnostics)
+
+    @classmethod
+    def _filled(cls, x: float, y: float, heading: float, inliers: BoolArray, ok: bool,
+                reason: str, covariance: FloatArray | None, diagnostics: Mapping[str, Any]
+                ) -> Estimate:
+        """``Estimate(...)`` with every field given, built faster.
+
+        The slots are set through their descriptors, which costs about a microsecond less than
+        the frozen dataclass's keyword ``__init__``, which has nothing else to do.
         """
         estimate = object.__new__(cls)
         _SET_X(estimate, x)
         _SET_Y(estimate, y)
         _SET_HEADING(estimate, heading)
         _SET_INLIERS(estimate, inliers)
-        _SET_OK(estimate, True)
-        _SET_REASON(estimate, "")
+        _SET_OK(estimate, ok)
+        _SET_REASON(estimate, reason)
         _SET_COVARIANCE(estimate, covariance)
         _SET_DIAGNOSTICS(estimate, diagnostics)
         return estimate
@@ -390,6 +391,6 @@ class Estimate:
         return int(np.count_nonzero(self.inliers))
 
 
-# The slot descriptors' setters, for ``Estimate._found`` (one per field, in the fields' order).
+# The slot descriptors' setters, for ``Estimate._filled`` (one per field, in the fields' order).
 (_SET_X, _SET_Y, _SET_HEADING, _SET_INLIERS, _SET_OK, _SET_REASON, _SET_COVARIANCE,
  _SET_DIAGNOSTICS) = (vars(Estimate)[name].__set__ for name in Estimate.__slots__)

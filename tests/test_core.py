@@ -284,6 +284,15 @@ def test_the_fast_answer_is_the_estimate_the_dataclass_builds_field_for_field():
         fast.x = 0.0
 
 
+def test_a_failure_is_the_estimate_the_dataclass_builds_field_for_field():
+    failed = Estimate.failure("no fix yet", 2, {"fix": "none"})
+    built = Estimate(x=math.nan, y=math.nan, heading=math.nan, inliers=np.zeros(2, bool),
+                     ok=False, reason="no fix yet", diagnostics={"fix": "none"})
+    assert repr(failed) == repr(built)
+    assert failed.inliers.dtype == bool and failed.covariance is None
+    assert all(math.isnan(value) for value in failed.pose)
+
+
 def test_failure_diagnostics_are_copied():
     extra = {"n": 1}
     failed = Estimate.failure("x", 1, extra)
