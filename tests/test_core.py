@@ -272,7 +272,7 @@ def test_estimate_position_and_inlier_count():
 
 def test_the_fast_answer_is_the_estimate_the_dataclass_builds_field_for_field():
     inliers, covariance, diagnostics = np.array([True, False]), np.eye(3), {"n_triplets": 1}
-    fast = Estimate._found(1.5, -2.0, 0.3, inliers, covariance, diagnostics)
+    fast = Estimate._filled(1.5, -2.0, 0.3, inliers, True, "", covariance, diagnostics)
     built = Estimate(x=1.5, y=-2.0, heading=0.3, inliers=inliers, covariance=covariance,
                      diagnostics=diagnostics)
     for field in dataclasses.fields(Estimate):  # a field added later must be set by both

@@ -206,4 +206,4 @@ def package(
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
         return Estimate.failure("the refinement ended at a non-finite pose", inliers.size,
                                 diagnostics)
-    return Estimate._found(x, y, heading, inliers, cov, diagnostics)
+    return Estimate._filled(x, y, heading, inliers, True, "", cov, diagnostics)

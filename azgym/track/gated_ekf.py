@@ -242,9 +242,9 @@ class GatedEkf(Tracker):
 
     def _estimate(self, inliers: np.ndarray, diagnostics: dict | None = None) -> Estimate:
         state = self._state
-        return Estimate._found(float(state[IX]), float(state[IY]),
-                               wrap_scalar(float(state[IPHI])), inliers,
-                               self._cov[:3, :3].copy(), diagnostics or {})
+        return Estimate._filled(float(state[IX]), float(state[IY]),
+                                wrap_scalar(float(state[IPHI])), inliers, True, "",
+                                self._cov[:3, :3].copy(), diagnostics or {})
 
 
 def subset(measurements: Measurements, rows: np.ndarray) -> Measurements:

@@ -268,9 +268,9 @@ class Tkf(Tracker):
         x = self._x
         covariance = np.empty((3, 3))
         camera_x, camera_y, heading = camera_estimate(x, self._P, self._ahead, covariance)
-        return Estimate._found(
+        return Estimate._filled(
             camera_x, camera_y, heading,
-            fix.inliers if used else np.zeros(len(measurements), bool), covariance,
+            fix.inliers if used else np.zeros(len(measurements), bool), True, "", covariance,
             {"fix": _fix_state(fix, used), "holdover": since, "speed": math.hypot(x[2], x[3])})
 
     def _correct(self, fix: Estimate) -> bool:

@@ -13,9 +13,10 @@ import pytest
 from azgym.bench.run.contenders import (
     DEFAULT_SPECS,
     REPAIR_TRACKER,
-    builtins_named,
     builtins_to_warm,
     contender,
+    contenders_named,
+    warm_up,
 )
 from azgym.jit import PRECOMPILE_SWITCH
 
@@ -32,14 +33,23 @@ def test_the_reference_comes_first_and_plug_ins_are_left_out():
 
 @pytest.mark.parametrize("given", [None, "not json", '{"ransac": 1}', '["ransac", 3]', "[[]]"])
 def test_without_a_list_of_labels_the_defaults_are_warmed(given):
-    assert labels(builtins_named(given)) == [*DEFAULT_SPECS, REPAIR_TRACKER]
+    assert labels(contenders_named(given)) == [*DEFAULT_SPECS, REPAIR_TRACKER]
 
 
-def test_a_list_names_its_built_ins_in_order_and_nothing_else():
-    given = json.dumps(["triplet", "evil.py:Evil", "azgym_evil.module:Class", "ransac:=",
-                        "mex-coarse", REPAIR_TRACKER])
-    assert labels(builtins_named(given)) == ["triplet", "mex-coarse", REPAIR_TRACKER]
-    assert builtins_named("[]") == []
+def test_a_list_names_its_contenders_in_order_an_unreadable_label_left_out():
+    given = json.dumps(["triplet", "evil.py:Evil", "ransac:a=1,a=2", "mex-coarse", REPAIR_TRACKER])
+    assert labels(contenders_named(given)) == ["triplet", "evil.py:Evil", "mex-coarse",
+                                               REPAIR_TRACKER]
+    assert contenders_named("[]") == []
+
+
+def test_the_warm_up_never_imports_a_plug_in(tmp_path):
+    # It runs in the caller's process (the runner, the fork server), where the truth may be.
+    marker = tmp_path / "imported"
+    plugin = tmp_path / "planted.py"
+    plugin.write_text(f"open({str(marker)!r}, 'w').close()\nclass Planted: pass\n")
+    warm_up([contender(f"{plugin}:Planted"), contender("azgym_evil_module:Class")])
+    assert not marker.exists()
 
 
 PROBE = """

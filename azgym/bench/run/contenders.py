@@ -27,8 +27,8 @@ from azgym.localize.registry import is_builtin, parse_spec, spec_label
 from azgym.profile import Profile
 from azgym.track.base import make_tracker
 
-__all__ = ["DEFAULT_SPECS", "REFERENCE", "REPAIR_TRACKER", "Contender", "builtins_named",
-           "builtins_to_warm", "check_buildable", "contender", "default_contenders",
+__all__ = ["DEFAULT_SPECS", "REFERENCE", "REPAIR_TRACKER", "Contender", "builtins_to_warm",
+           "contenders_named", "check_buildable", "contender", "default_contenders",
            "resolve_contenders", "warm_up", "with_reference"]
 
 REFERENCE = "ransac"
@@ -174,8 +174,8 @@ def builtins_to_warm(contenders: Iterable[Contender]) -> list[Contender]:
     return sorted((c for c in contenders if is_builtin(c.spec)), key=lambda c: not c.is_reference)
 
 
-def builtins_named(labels: str | None) -> list[Contender]:
-    """The built-ins a JSON list of contender labels names, in its order (a plug-in is left out).
+def contenders_named(labels: str | None) -> list[Contender]:
+    """The contenders a JSON list of labels names, in its order.
 
     The bench's defaults and :data:`REPAIR_TRACKER` when ``labels`` is None or no such list; a
     label that cannot be read is left out (a worker meets, and reports, the same problem).
@@ -190,7 +190,7 @@ def builtins_named(labels: str | None) -> list[Contender]:
     for label in named:
         with contextlib.suppress(InvalidInputError):
             chosen.append(contender(label))
-    return [c for c in chosen if is_builtin(c.spec)]
+    return chosen
 
 
 def warm_up(contenders: Iterable[Contender], profile: Profile | None = None) -> None:
