@@ -1,5 +1,5 @@
 """Shared fixtures: the paper room and noise-free frames seen from a known pose; the Ray tests
-run one at a time."""
+run one at a time, on one test process."""
 
 from __future__ import annotations
 
@@ -10,6 +10,8 @@ from pathlib import Path
 import pytest
 from helpers import ideal_frame
 from hypothesis import settings
+from xdist.remote import Producer
+from xdist.scheduler import LoadGroupScheduling
 
 import azgym
 from azgym.core import BeaconMap, Measurements
@@ -23,23 +25,46 @@ settings.register_profile("explore", derandomize=False, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 
-@pytest.fixture(scope="session")
-def ray_modules(request: pytest.FixtureRequest) -> set[Path]:
-    """The test files with a test that starts Ray."""
-    return {item.path for item in request.session.items if item.get_closest_marker("ray")}
+RAY_FILES = frozenset({"tests/bench/test_profiles.py", "tests/bench/test_ray_backend.py",
+                       "tests/bench/test_sequences.py", "tests/hostile/test_hostile_ray.py",
+                       "tests/hostile/test_hostile_runner.py"})
+"""The test files with a test that starts Ray (marked ``ray``), relative to the root (a test in
+test_ray_files.py finds any such test elsewhere)."""
+
+
+def ray_file(path: Path, root: Path) -> bool:
+    """Whether the test file at ``path`` is one of :data:`RAY_FILES`."""
+    return path.relative_to(root).as_posix() in RAY_FILES
+
+
+class RayFilesTogether(LoadGroupScheduling):
+    """pytest-xdist's ``loadgroup`` with every test of :data:`RAY_FILES` in one group: one test
+    process runs them all, one after another, while the other runs the rest instead of waiting
+    on the lock below. (xdist's own groups, from ``xdist_group`` marks, rename the tests in a
+    way pytest 9.2 no longer sees.)"""
+
+    def _split_scope(self, nodeid: str) -> str:
+        return "ray" if nodeid.partition("::")[0] in RAY_FILES else nodeid
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Producer) -> RayFilesTogether | None:
+    """``--dist loadgroup`` (addopts) schedules with :class:`RayFilesTogether`."""
+    return RayFilesTogether(config, log) if config.getvalue("dist") == "loadgroup" else None
 
 
 @pytest.fixture(scope="module", autouse=True)
-def one_ray_module_at_a_time(request: pytest.FixtureRequest, ray_modules: set[Path],
+def one_ray_module_at_a_time(request: pytest.FixtureRequest,
                              tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
     """Run the test files that start Ray one after another, whichever test process runs them.
 
     Ray's ``address="auto"`` joins any instance it finds among the machine's processes, and an
     instance takes seconds to end: a Ray test beside another would join or wait on the other's.
-    A lock in the folder every test process of the run keeps its temporary files in, held for
-    the whole file, as a file's Ray instance may serve all its tests.
+    The scheduler above keeps them on one test process; this lock, in the folder every test
+    process of the run keeps its temporary files in, keeps them apart under any other ``--dist``
+    too. It is held for the whole file, as a file's Ray instance may serve all its tests.
     """
-    if request.node.path not in ray_modules:
+    if not ray_file(request.node.path, request.config.rootpath):
         yield
         return
     import fcntl  # POSIX: the Ray tests are skipped on Windows

@@ -95,6 +95,8 @@ def test_a_tracker_cannot_find_its_route_s_next_frames_anywhere_in_its_process(r
     # than the one it is asked about: a worker gets a route one frame at a time.
     if backend == "ray":
         pytest.importorskip("ray", reason="ray is not installed")
-    outcome = run_contenders(route, [plugin("clairvoyant")], workers=1,
-                             backend=backend)["clairvoyant"]
+    # (a walk of every object a Ray worker holds takes seconds, more beside other tests: the
+    # limit is wide, as what is checked is what the walk finds)
+    outcome = run_contenders(route, [plugin("clairvoyant")], workers=1, backend=backend,
+                             time_limit=60.0)["clairvoyant"]
     assert outcome.errors == [""] * len(route)  # it answered every frame: "no future here"
