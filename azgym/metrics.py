@@ -30,7 +30,6 @@ segment's path is D within the tolerance rather than D plus up to one frame's st
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Sequence
 from typing import Final, Generic, TypedDict, TypeVar
 
@@ -236,8 +235,10 @@ def confidence_intervals(position: np.ndarray, ok: np.ndarray, blocks: np.ndarra
     """95 % percentile-bootstrap intervals of the headline, the mean error [cm] and failure rate.
 
     Whole blocks (:func:`bootstrap_blocks`) are resampled with replacement, as many as there
-    are (``scipy.stats.bootstrap`` draws the block numbers); a missing estimate stays a
-    refusal. The headline's bounds may be infinite. With fewer than two blocks there is no
+    are: each resample's block numbers are a row of ``Generator.integers(0, blocks)`` drawn
+    :data:`_BATCH` rows at a time, the draws of ``scipy.stats.bootstrap`` (so the intervals are
+    the ones its percentile method gives, without its half-second import); a missing estimate
+    stays a refusal. The headline's bounds may be infinite. With fewer than two blocks there is no
     interval (NaN). The generator is seeded, so the intervals repeat like the figures.
 
     Args:
@@ -258,7 +259,7 @@ def confidence_intervals(position: np.ndarray, ok: np.ndarray, blocks: np.ndarra
     padded[blocks[order], np.arange(blocks.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)] \
         = error[order]
 
-    def statistics(chosen: np.ndarray, axis: int = -1) -> np.ndarray:
+    def statistics(chosen: np.ndarray) -> np.ndarray:
         frames = padded[chosen].reshape(chosen.shape[0], -1)  # resample × frames (NaN-padded)
         counts = np.count_nonzero(~np.isnan(frames), axis=1)
         answered = np.isfinite(frames)
@@ -267,14 +268,10 @@ def confidence_intervals(position: np.ndarray, ok: np.ndarray, blocks: np.ndarra
         headline = _resampled_quantile(chosen, error[by_error], blocks[by_error], count, 0.75)
         return np.stack([headline, np.where(answered.any(axis=1), mean, np.nan), failed])
 
-    from scipy.stats import bootstrap  # imported here: half a second, paid by intervals only
-
-    with warnings.catch_warnings():  # a degenerate distribution (all refused) is no error here
-        warnings.simplefilter("ignore")
-        distribution = bootstrap(
-            (np.arange(count),), statistics, n_resamples=RESAMPLES, batch=_BATCH,
-            vectorized=True, method="percentile", random_state=np.random.default_rng(seed),
-        ).bootstrap_distribution
+    draws = np.random.default_rng(seed)
+    distribution = np.concatenate(
+        [statistics(draws.integers(0, count, size=(min(_BATCH, RESAMPLES - done), count)))
+         for done in range(0, RESAMPLES, _BATCH)], axis=1)
     headline, mean, failed = (_percentile_interval(values) for values in distribution)
     return {HEADLINE: headline, "mean_cm": mean, "failure_rate": failed}
 
