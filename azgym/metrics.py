@@ -235,11 +235,12 @@ def confidence_intervals(position: np.ndarray, ok: np.ndarray, blocks: np.ndarra
     """95 % percentile-bootstrap intervals of the headline, the mean error [cm] and failure rate.
 
     Whole blocks (:func:`bootstrap_blocks`) are resampled with replacement, as many as there
-    are: each resample's block numbers are a row of ``Generator.integers(0, blocks)`` drawn
-    :data:`_BATCH` rows at a time, the draws of ``scipy.stats.bootstrap`` (so the intervals are
-    the ones its percentile method gives, without its half-second import); a missing estimate
-    stays a refusal. The headline's bounds may be infinite. With fewer than two blocks there is no
-    interval (NaN). The generator is seeded, so the intervals repeat like the figures.
+    are: of ``n`` blocks, each resample's block numbers are a row of ``Generator.integers(0,
+    n)`` drawn :data:`_BATCH` rows at a time, the draws of ``scipy.stats.bootstrap`` (so the
+    intervals are the ones its percentile method gives, without its half-second import); a
+    missing estimate stays a refusal. The headline's bounds may be infinite. With fewer than two
+    blocks there is no interval (NaN). The generator is seeded, so the intervals repeat like the
+    figures.
 
     Args:
         position: Each frame's position error [m] (ignored where not ``ok``).
