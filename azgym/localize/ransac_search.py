@@ -42,11 +42,7 @@ the exact angle.
 """
 
 
-# The per-measurement tests below are inlined in numba's IR (``inline="always"``), so they take
-# their callers' fast-math flags in the vectorised scoring loop; the search's larger steps are
-# left for LLVM to inline: inlining those in the IR too cost ransac's warm-up 9.5 s more
-# compiling (26.9 s against 17.4 s on an empty cache) for no speed.
-@jit(inline="always")
+@jit(inline="always")  # in the IR: takes the scoring loop's fast-math flags; larger steps: LLVM's
 def _inside_tolerance(cross, dot, d2, w, tan_d, wide_d2):
     """|ε| <= Δα = 2(Δα_d + Δα_c) (eq. 25-26) from the direction vectors, without sqrt or atan.
 
