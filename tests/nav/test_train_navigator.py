@@ -202,13 +202,19 @@ def test_evaluation_episodes_are_the_same_each_time_and_report_their_success():
 
 
 @pytest.mark.slow
-def test_a_tiny_run_writes_a_policy_that_loads_and_drives(tmp_path):
+def test_a_tiny_run_writes_a_policy_that_loads_and_drives(tmp_path, monkeypatch):
     needs_rl()
+    import tempfile
+
     from azgym.bench.navigation.scoring import drive
 
+    system_temporary = tmp_path.parent / f"{tmp_path.name}-system"
+    system_temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(system_temporary))
     result = train.train_navigator(SMALL, "ppo", 2048, tmp_path, **TINY)
     assert {path.name for path in tmp_path.iterdir()} == {
         "policy.zip", "evaluations.npz", "learning-curve.png", "model-card.md", "checkpoints"}
+    assert list(system_temporary.glob("SB3-*")) == []  # no log folder of SB3's left behind
     assert any((tmp_path / "checkpoints").glob("ppo_*_steps.zip"))
     evaluations = np.load(result.evaluations)
     assert list(evaluations["timesteps"]) == [1024, 2048]

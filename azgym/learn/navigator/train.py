@@ -230,6 +230,7 @@ def run(request: Request, verbose: bool = True) -> TrainingResult:
     kernels = pin_kernels()  # before torch's first operation
     import torch
     from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.logger import Logger
 
     torch.set_num_threads(request.threads)
     envs = make_vec_env(request.env_id, n_envs=request.n_envs, seed=request.seed,
@@ -237,6 +238,8 @@ def run(request: Request, verbose: bool = True) -> TrainingResult:
     model = _algorithm(request.algo)(
         request.policy, envs, seed=request.seed, device="cpu", verbose=0,
         policy_kwargs=request.policy_kwargs, **request.algo_kwargs)
+    # SB3 would otherwise make an empty folder in the system's temporary one on every run
+    model.set_logger(Logger(folder=None, output_formats=[]))
     started = time.perf_counter()
     model.learn(total_timesteps=request.steps, callback=_callbacks(request, verbose),
                 progress_bar=verbose and _can_draw_a_bar())
