@@ -10,14 +10,13 @@ own per-frame results. Text is HTML-escaped; a link has already been made safe b
 from __future__ import annotations
 
 import base64
-import csv
 import html
 import importlib.util
 import io
 
 import numpy as np
 
-from azgym.bench.leaderboard.entry_files import Entry
+from azgym.bench.leaderboard.entry_files import Entry, FrameTable
 from azgym.bench.report.plots import draw_error_cdfs
 from azgym.site.drawing import figures_skipped
 
@@ -46,7 +45,7 @@ document.querySelectorAll("table.board th").forEach(function (th) {
 """
 
 
-def cdf_png(ranked: list[tuple[Entry, str]]) -> str | None:
+def cdf_png(ranked: list[tuple[Entry, FrameTable]]) -> str | None:
     """A table's error CDFs, each from its entry's own per-frame results, as a base64 PNG.
 
     The curves are drawn as a run's are (:func:`~azgym.bench.report.plots.draw_error_cdfs`),
@@ -62,13 +61,9 @@ def cdf_png(ranked: list[tuple[Entry, str]]) -> str | None:
     import matplotlib.pyplot as plt
 
     figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
-    curves = []
-    for entry, frames in ranked:
-        header, *rows = csv.reader(io.StringIO(frames))
-        ok, error = header.index("ok"), header.index("position_error_m")
-        # A missing estimate is a failure: it sits at +inf, never at zero error.
-        curves.append((entry["name"], np.array(
-            [float(row[error]) * 100 if row[ok] == "1" else np.inf for row in rows])))
+    # A missing estimate is a failure: it sits at +inf, never at zero error.
+    curves = [(entry["name"], np.where(frames.outcome.ok, frames.outcome.position * 100, np.inf))
+              for entry, frames in ranked]
     draw_error_cdfs(axes, curves, legend_size=7)
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=90)

@@ -91,7 +91,7 @@ def clean(value: Any) -> Any:
 
 
 def validate_entry(entry: Any, frames_text: str | None, origin: str,
-                   stem: str | None = None, datasets: Path | None = None) -> str:
+                   stem: str | None = None, datasets: Path | None = None) -> FrameTable:
     """Raise :class:`LeaderboardError` naming the problem unless the entry is sound.
 
     Args:
@@ -102,7 +102,7 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
         datasets: Where a dataset entry's log is looked for first (:mod:`.entry_data`).
 
     Returns:
-        The per-frame results, checked.
+        The per-frame results, checked and read.
 
     Raises:
         DatasetUnavailable: A dataset entry's log is not found (every other check passed).
@@ -121,7 +121,7 @@ def validate_entry(entry: Any, frames_text: str | None, origin: str,
     _check_coverage(entry, table, cases, origin)
     _check_estimates(table, cases, origin)
     _check_figures(entry, table, cases, origin)
-    return frames_text
+    return table
 
 
 def _check_schema(entry: Any, origin: str) -> None:

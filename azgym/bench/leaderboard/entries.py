@@ -36,6 +36,7 @@ from azgym.bench.leaderboard.entry_data import (
 from azgym.bench.leaderboard.entry_files import (
     MAX_FRAMES_BYTES,
     Entry,
+    FrameTable,
     LeaderboardError,
     read_bytes,
     read_frames,
@@ -236,8 +237,8 @@ def load_entry(path: Path, datasets: Path | None = None) -> Entry:
     return _load(path, datasets or default_datasets(path.parent))[0]
 
 
-def _load(path: Path, datasets: Path | None) -> tuple[Entry, str]:
-    """The validated entry and its per-frame results text."""
+def _load(path: Path, datasets: Path | None) -> tuple[Entry, FrameTable]:
+    """The validated entry and its per-frame results, read."""
     entry = read_json(path, "leaderboard entry")
     frames = None
     if isinstance(entry, dict) and isinstance(entry.get("results_file"), str):
@@ -254,7 +255,7 @@ def load_entries(entries_dir: Path, datasets: Path | None = None) -> list[Entry]
 
 
 def load_all(entries_dir: Path, datasets: Path | None = None
-             ) -> list[tuple[Entry, str]]:
+             ) -> list[tuple[Entry, FrameTable]]:
     """Every entry of the folder with its per-frame results, validated; names unique.
 
     Raises:
@@ -268,7 +269,7 @@ def load_all(entries_dir: Path, datasets: Path | None = None
 
 def load_available(entries_dir: Path, datasets: Path | None = None,
                    progress: Progress | None = None
-                   ) -> tuple[list[tuple[Entry, str]], list[DatasetUnavailable]]:
+                   ) -> tuple[list[tuple[Entry, FrameTable]], list[DatasetUnavailable]]:
     """Every entry that can be checked, validated, and the dataset entries that cannot.
 
     A dataset entry whose log is not found (in ``datasets``, default ``datasets/`` beside the
@@ -278,7 +279,7 @@ def load_available(entries_dir: Path, datasets: Path | None = None,
     of entries checked.
     """
     datasets = datasets or default_datasets(entries_dir)
-    loaded: list[tuple[Entry, str]] = []
+    loaded: list[tuple[Entry, FrameTable]] = []
     unavailable: list[DatasetUnavailable] = []
     seen: dict[str, str] = {}
     paths = sorted(entries_dir.glob("*.json"))
