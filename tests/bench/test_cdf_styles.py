@@ -30,7 +30,7 @@ def _styles(monkeypatch, draw) -> list[tuple]:
 def test_the_board_cdf_styles_stay_distinct_past_ten_entries(monkeypatch):
     outcome = SimpleNamespace(ok=np.array([True, True, False]),
                               position=np.array([0.01, 0.02, np.nan]))
-    ranked = [({"name": f"entry-{k}"}, SimpleNamespace(outcome=outcome)) for k in range(COUNT)]
+    ranked = [({"name": f"entry-{k}"}, outcome) for k in range(COUNT)]
     styles = _styles(monkeypatch, lambda: board_page.cdf_png(ranked))
     assert len(set(styles)) == COUNT
     assert styles == _styles(monkeypatch, lambda: board_page.cdf_png(ranked))  # deterministic

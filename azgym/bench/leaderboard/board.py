@@ -25,7 +25,7 @@ from azgym.bench.leaderboard.entries import (
     load_available,
     table_key,
 )
-from azgym.bench.leaderboard.entry_files import Entry, FrameTable
+from azgym.bench.leaderboard.entry_files import Entry
 from azgym.bench.mapping.report import MAPPING_NOTE, MAPPING_PART
 from azgym.bench.report.table import LEGEND, RANK_BY, rank_key
 from azgym.bench.report.tracking import (
@@ -35,6 +35,7 @@ from azgym.bench.report.tracking import (
     TrackFigures,
     drift_at,
 )
+from azgym.bench.run.outcome import Outcome
 from azgym.bench.suites import SUITES, get_suite
 from azgym.errors import InvalidInputError
 from azgym.files import prepare_folder, write_file
@@ -95,8 +96,8 @@ NAVIGATION_NOTE = (
     "episodes.")
 
 
-def _ranked(loaded: list[tuple[Entry, FrameTable]], key: tuple[Any, ...]
-            ) -> list[tuple[Entry, FrameTable]]:
+def _ranked(loaded: list[tuple[Entry, Outcome]], key: tuple[Any, ...]
+            ) -> list[tuple[Entry, Outcome]]:
     """The entries of one table (:func:`~azgym.bench.leaderboard.entries.table_key`), ranked."""
     rows = [(e, frames) for e, frames in loaded if table_key(e) == key]
     return sorted(rows, key=lambda pair: rank_key(pair[0]["metrics"]["all"], pair[0]["name"]))
@@ -264,7 +265,7 @@ def build(entries_dir: Path, out_dir: Path, navigation_dir: Path | None = None,
     return [readme, write_file(out_dir / "index.html", text)]
 
 
-def _suite_tables(loaded: list[tuple[Entry, FrameTable]], suite: str, sections: list[Section]
+def _suite_tables(loaded: list[tuple[Entry, Outcome]], suite: str, sections: list[Section]
                   ) -> list[str]:
     """A suite's part of the board: one table per split and size that has entries."""
     tables = [(split, quick, title, _ranked(loaded, (suite, split, quick, None)))
@@ -323,7 +324,7 @@ def _intro(count: int) -> list[str]:
 
 def _add_table(lines: list[str], sections: list[Section],
                heading: tuple[str, str, str, str, str],
-               ranked: list[tuple[Entry, FrameTable]]) -> None:
+               ranked: list[tuple[Entry, Outcome]]) -> None:
     """A ranked table's Markdown lines and page section (heading: part, suite, text, title, id)."""
     part, suite, description, title, table_id = heading
     header, tracks = _header([entry for entry, _ in ranked])
@@ -333,7 +334,7 @@ def _add_table(lines: list[str], sections: list[Section],
                      [web_link(entry["link"]) for entry, _ in ranked], cdf_png(ranked)))
 
 
-def _dataset_tables(loaded: list[tuple[Entry, FrameTable]], sections: list[Section],
+def _dataset_tables(loaded: list[tuple[Entry, Outcome]], sections: list[Section],
                     real: bool) -> list[str]:
     """One ranked table per dataset of real data, or of simulated data (its name and SHA-256).
 

@@ -16,8 +16,9 @@ import io
 
 import numpy as np
 
-from azgym.bench.leaderboard.entry_files import Entry, FrameTable
+from azgym.bench.leaderboard.entry_files import Entry
 from azgym.bench.report.plots import draw_error_cdfs
+from azgym.bench.run.outcome import Outcome
 from azgym.site.drawing import figures_skipped
 
 __all__ = ["NAME_COLUMN", "Section", "Table", "cdf_png", "page"]
@@ -45,7 +46,7 @@ document.querySelectorAll("table.board th").forEach(function (th) {
 """
 
 
-def cdf_png(ranked: list[tuple[Entry, FrameTable]]) -> str | None:
+def cdf_png(ranked: list[tuple[Entry, Outcome]]) -> str | None:
     """A table's error CDFs, each from its entry's own per-frame results, as a base64 PNG.
 
     The curves are drawn as a run's are (:func:`~azgym.bench.report.plots.draw_error_cdfs`),
@@ -62,8 +63,8 @@ def cdf_png(ranked: list[tuple[Entry, FrameTable]]) -> str | None:
 
     figure, axes = plt.subplots(figsize=(7, 4), constrained_layout=True)
     # A missing estimate is a failure: it sits at +inf, never at zero error.
-    curves = [(entry["name"], np.where(frames.outcome.ok, frames.outcome.position * 100, np.inf))
-              for entry, frames in ranked]
+    curves = [(entry["name"], np.where(outcome.ok, outcome.position * 100, np.inf))
+              for entry, outcome in ranked]
     draw_error_cdfs(axes, curves, legend_size=7)
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=90)

@@ -36,7 +36,6 @@ from azgym.bench.leaderboard.entry_data import (
 from azgym.bench.leaderboard.entry_files import (
     MAX_FRAMES_BYTES,
     Entry,
-    FrameTable,
     LeaderboardError,
     read_bytes,
     read_frames,
@@ -45,6 +44,7 @@ from azgym.bench.leaderboard.entry_files import (
 from azgym.bench.leaderboard.entry_localizer import portable_localizer, runnable_localizer
 from azgym.bench.report.results import FRAME_COLUMNS
 from azgym.bench.report.summary import Dataset
+from azgym.bench.run.outcome import Outcome
 from azgym.bench.run.runner import Contender, run_benchmark, run_log_benchmark
 from azgym.bench.suites import SUITES, get_suite
 from azgym.files import prepare_folder, write_file
@@ -237,16 +237,17 @@ def load_entry(path: Path, datasets: Path | None = None) -> Entry:
     return _load(path, datasets or default_datasets(path.parent))[0]
 
 
-def _load(path: Path, datasets: Path | None) -> tuple[Entry, FrameTable]:
-    """The validated entry and its per-frame results, read."""
+def _load(path: Path, datasets: Path | None) -> tuple[Entry, Outcome]:
+    """The validated entry and its per-frame outcome (the results' numbers, not their text)."""
     entry = read_json(path, "leaderboard entry")
     frames = None
     if isinstance(entry, dict) and isinstance(entry.get("results_file"), str):
         frames_path = path.parent / Path(entry["results_file"]).name
         if frames_path.is_file():
             frames = read_frames(frames_path)
-    return entry, validate_entry(entry, frames, str(path), stem=path.name.removesuffix(".json"),
-                                 datasets=datasets)
+    table = validate_entry(entry, frames, str(path), stem=path.name.removesuffix(".json"),
+                           datasets=datasets)
+    return entry, table.outcome
 
 
 def load_entries(entries_dir: Path, datasets: Path | None = None) -> list[Entry]:
@@ -255,7 +256,7 @@ def load_entries(entries_dir: Path, datasets: Path | None = None) -> list[Entry]
 
 
 def load_all(entries_dir: Path, datasets: Path | None = None
-             ) -> list[tuple[Entry, FrameTable]]:
+             ) -> list[tuple[Entry, Outcome]]:
     """Every entry of the folder with its per-frame results, validated; names unique.
 
     Raises:
@@ -269,7 +270,7 @@ def load_all(entries_dir: Path, datasets: Path | None = None
 
 def load_available(entries_dir: Path, datasets: Path | None = None,
                    progress: Progress | None = None
-                   ) -> tuple[list[tuple[Entry, FrameTable]], list[DatasetUnavailable]]:
+                   ) -> tuple[list[tuple[Entry, Outcome]], list[DatasetUnavailable]]:
     """Every entry that can be checked, validated, and the dataset entries that cannot.
 
     A dataset entry whose log is not found (in ``datasets``, default ``datasets/`` beside the
@@ -279,7 +280,7 @@ def load_available(entries_dir: Path, datasets: Path | None = None,
     of entries checked.
     """
     datasets = datasets or default_datasets(entries_dir)
-    loaded: list[tuple[Entry, FrameTable]] = []
+    loaded: list[tuple[Entry, Outcome]] = []
     unavailable: list[DatasetUnavailable] = []
     seen: dict[str, str] = {}
     paths = sorted(entries_dir.glob("*.json"))
