@@ -95,9 +95,9 @@ def test_a_tracker_cannot_find_its_route_s_next_frames_anywhere_in_its_process(r
     # than the one it is asked about: a worker gets a route one frame at a time.
     if backend == "ray":
         pytest.importorskip("ray", reason="ray is not installed")
-        # A walk of every object and shared mapping of a Ray worker takes seconds a frame beside
-        # other tests: the route's first 6 frames (each of the first 5 has frames ahead to
-        # find), under a wide limit, as what is checked is what the walk finds.
+        # A walk of every object and shared mapping a Ray worker holds is slow: the route's
+        # first 6 frames (each of the first 5 has frames ahead to find), under a wide limit, as
+        # what is checked is what the walk finds.
         route = route[:6]
     outcome = run_contenders(route, [plugin("clairvoyant")], workers=1, backend=backend,
                              time_limit=60.0)["clairvoyant"]

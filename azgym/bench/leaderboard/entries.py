@@ -257,7 +257,7 @@ def load_entries(entries_dir: Path, datasets: Path | None = None) -> list[Entry]
 
 def load_all(entries_dir: Path, datasets: Path | None = None
              ) -> list[tuple[Entry, Outcome]]:
-    """Every entry of the folder with its per-frame results, validated; names unique.
+    """Every entry of the folder with its per-frame outcome, validated; names unique.
 
     Raises:
         DatasetUnavailable: A dataset entry's log is not found (:func:`load_available`).
