@@ -99,7 +99,7 @@ NAVIGATION_NOTE = (
 def _ranked(loaded: list[tuple[Entry, Outcome]], key: tuple[Any, ...]
             ) -> list[tuple[Entry, Outcome]]:
     """The entries of one table (:func:`~azgym.bench.leaderboard.entries.table_key`), ranked."""
-    rows = [(e, frames) for e, frames in loaded if table_key(e) == key]
+    rows = [(e, outcome) for e, outcome in loaded if table_key(e) == key]
     return sorted(rows, key=lambda pair: rank_key(pair[0]["metrics"]["all"], pair[0]["name"]))
 
 

@@ -287,16 +287,16 @@ def load_available(entries_dir: Path, datasets: Path | None = None,
     with counter(progress, "checking entries", len(paths), "entries") as count:
         for done, path in enumerate(paths, 1):
             try:
-                entry, frames = _load(path, datasets)
+                entry, outcome = _load(path, datasets)
             except DatasetUnavailable as missing:
-                entry, frames = cast(Entry, missing.entry), None  # checked before it was raised
+                entry, outcome = cast(Entry, missing.entry), None  # checked before it was raised
                 unavailable.append(missing)
             twin = seen.setdefault(entry["name"].lower(), entry["name"])
             if twin != entry["name"]:
                 raise LeaderboardError(f"{path}: name: {entry['name']!r} and {twin!r} differ "
                                        "only in case; entry names must be unique")
-            if frames is not None:
-                loaded.append((entry, frames))
+            if outcome is not None:
+                loaded.append((entry, outcome))
             count(done)
     return loaded, unavailable
 
