@@ -1,5 +1,5 @@
 """Shared fixtures: the paper room and noise-free frames seen from a known pose; the Ray tests
-run one at a time, on one test process."""
+run one at a time, on one test process; the tests marked slow run when asked for."""
 
 from __future__ import annotations
 
@@ -23,6 +23,27 @@ FrameMaker = Callable[..., Measurements]
 settings.register_profile("repeatable", derandomize=True, print_blob=True)
 settings.register_profile("explore", derandomize=False, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--slow", action="store_true",
+                     help="run the tests marked slow too: the whole suite (left out by default)")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Leave out the tests marked ``slow`` unless the command line asks for them.
+
+    It does with ``--slow`` (the whole suite), with a ``-m`` expression of its own (``-m slow``
+    runs those alone) or by naming a test (``FILE::NAME``). The slow tests are the end-to-end
+    checks: the committed leaderboard recomputed, first runs that compile, Ray, training.
+    """
+    if (config.getoption("--slow") or config.option.markexpr
+            or any("::" in arg for arg in config.args)):
+        return
+    slow = [item for item in items if item.get_closest_marker("slow") is not None]
+    if slow:
+        config.hook.pytest_deselected(items=slow)
+        items[:] = [item for item in items if item.get_closest_marker("slow") is None]
 
 
 RAY_FILES = frozenset({"tests/bench/test_profiles.py", "tests/bench/test_ray_backend.py",

@@ -210,6 +210,7 @@ def test_the_logged_data_section_scores_the_shipped_log(tmp_path, monkeypatch, c
     assert (row[4], row[2]) == (said.group(1), f"{float(said.group(2)):.1f}%"), row
 
 
+@pytest.mark.slow
 def test_the_robot_recipe_prints_the_figures_the_readme_gives(tmp_path, monkeypatch, capsys):
     """Calibrated on robot-arena's long route, the trackers on wander-2: the README's figures."""
     section = README.read_text(encoding="utf-8").split("## Logged data", 1)[1]

@@ -74,6 +74,7 @@ print(worker.exitcode)
 """
 
 
+@pytest.mark.slow
 def test_the_fork_server_compiles_the_named_built_in_only_and_never_imports_a_plug_in(tmp_path):
     # An empty kernel cache and no kernels from the installation: whatever the server warms up,
     # it compiles, and numba writes the kernel's index to the cache.

@@ -56,6 +56,7 @@ def same_outcome(a, b) -> bool:
             and np.array_equal(a.estimate, b.estimate, equal_nan=True))
 
 
+@pytest.mark.slow
 def test_ray_gives_the_figures_of_one_local_worker_on_the_default_suite(local_ray):
     suite = get_suite("warehouse-static")
     contenders = [contender("ransac"), contender("lsq"), contender("mex-coarse")]
@@ -78,6 +79,7 @@ def test_ray_keeps_a_route_whole_for_a_tracker(local_ray):
     assert same_outcome(alone, spread)
 
 
+@pytest.mark.slow
 def test_a_raising_and_a_hanging_plugin_cost_their_frames_under_ray_as_in_the_pool(local_ray):
     cases = get_suite("warehouse-static").build(7, True)[:8]
     contenders = [plugin("exiter"), plugin("hoarder"), plugin("sleeper")]
@@ -120,6 +122,7 @@ def test_a_sweep_gives_the_same_table_on_ray_as_locally(local_ray):
     assert len(here.rows) == 6 and here.rows[0][:4] == ["warehouse-static", 7, "ransac", False]
 
 
+@pytest.mark.slow
 def test_a_session_in_a_process_that_has_ray_running_uses_it_and_says_so(local_ray):
     said: list[str] = []
     with ray_session(None, 0, said.append) as slots:
@@ -128,6 +131,7 @@ def test_a_session_in_a_process_that_has_ray_running_uses_it_and_says_so(local_r
     assert ray.is_initialized()  # not the session's to shut down
 
 
+@pytest.mark.slow
 def test_a_session_without_address_starts_a_local_instance_and_says_so(tmp_path):
     """Whatever RAY_ADDRESS names: Ray alone would join it (nothing listens there)."""
     code = ("from azgym.bench.run.ray_session import ray_session\n"
@@ -167,6 +171,7 @@ def test_an_address_of_the_wrong_form_is_refused_as_it_is_parsed(command, addres
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.slow
 def test_an_address_where_something_else_listens_fails_by_name_within_the_deadline(tmp_path):
     """A server that accepts connections but is not Ray: Ray alone would wait for minutes."""
     with socket.create_server(("127.0.0.1", 0)) as server:

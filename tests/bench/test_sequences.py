@@ -89,6 +89,7 @@ def route():
     return [case for case in cases if case.sequence == cases[0].sequence][:40]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["local", pytest.param("ray", marks=pytest.mark.ray)])
 def test_a_tracker_cannot_find_its_route_s_next_frames_anywhere_in_its_process(route, backend):
     # It walks its call stack, every object gc knows and its shared memory for frames later

@@ -24,7 +24,8 @@ def test_stable_baselines3_check_env_passes_without_warnings(env_id):
 
 
 @pytest.mark.slow
-def test_ppo_trains_on_a_navigation_environment():
+def test_ppo_trains_on_a_navigation_environment(monkeypatch, tmp_path):
+    monkeypatch.setenv("SB3_LOGDIR", str(tmp_path))  # SB3 makes its log folder even to log nothing
     torch.set_num_threads(1)  # one core: the other is busy (docs/performance.md)
     env = gym.make("azgym/Navigate-WarehouseSmall-v2", max_steps=200)
     model = sb3.PPO("MlpPolicy", env, n_steps=512, batch_size=128, n_epochs=2, seed=0,

@@ -67,6 +67,7 @@ def _build(tmp_path: Path, files: dict[str, dict | Path], capsys) -> tuple[int, 
     return code, capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_second_table_with_a_path_driven_faster_than_the_forklift_is_refused(
         genuine, tmp_path, capsys):
     # The attack as found: lsq at 100 % success and SPL 1, each path driven at 18 m/s.
@@ -80,6 +81,7 @@ def test_a_second_table_with_a_path_driven_faster_than_the_forklift_is_refused(
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
 
 
+@pytest.mark.slow
 def test_a_path_driven_at_top_speed_from_the_first_step_is_refused(genuine, tmp_path, capsys):
     # Under the top speed on average, but only if the forklift needed no time to accelerate:
     # from rest at 1.5 m/s², 3.5 m/s on average is out of reach over a few seconds.

@@ -35,6 +35,7 @@ def ctrl_c_not_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, before)
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("ctrl_c_not_ignored")
 def test_ctrl_c_ends_a_command_with_one_line_and_exit_code_130(tmp_path):
     command = [sys.executable, "-m", "azgym", "evaluate", "navigator", "pure-pursuit",
@@ -176,6 +177,7 @@ def test_a_finished_training_run_is_refused_unless_resumed_or_overwritten(model,
     assert "not allowed with argument" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("ctrl_c_not_ignored")
 def test_ctrl_c_in_a_bench_run_stops_its_workers_too_and_says_nothing_was_written(tmp_path):
     """A terminal sends Ctrl-C to the whole process group: the workers must not print either."""

@@ -63,6 +63,7 @@ def test_no_process_of_the_run_lets_a_worker_read_its_memory(tmp_path, backend):
     assert thief_figures(tmp_path / "out", "MemoryThief")["availability"] == 0.0
 
 
+@pytest.mark.slow
 def test_verify_reruns_a_test_entry_on_a_fresh_seed_that_no_plug_in_can_read(tmp_path):
     # The submitter's own run, on a seed of their choosing, answered from the truth.
     own_run = (f"from pathlib import Path\n"

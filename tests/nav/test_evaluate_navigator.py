@@ -197,7 +197,9 @@ def test_pure_pursuit_is_scored_through_the_command(tmp_path, capsys):
     assert [episode["seed"] for episode in row["episodes"]] == [1_000_000, 1_000_001]
 
 
-def test_a_ppo_model_trained_on_the_environment_loads_and_is_scored(tmp_path, capsys):
+def test_a_ppo_model_trained_on_the_environment_loads_and_is_scored(tmp_path, capsys,
+                                                                    monkeypatch):
+    monkeypatch.setenv("SB3_LOGDIR", str(tmp_path / "sb3"))  # SB3 makes it even to log nothing
     sb3 = pytest.importorskip("stable_baselines3")
     torch = pytest.importorskip("torch")
     torch.set_num_threads(1)

@@ -37,6 +37,7 @@ def test_a_mapping_file_is_one_table_its_mappers_ranked_with_the_boards_glyphs(t
     assert rows[1][3:7] == ["∞", "∞", "0.0", "–"]  # p95, worst, placed %, precision
 
 
+@pytest.mark.slow
 def test_the_mapping_part_comes_last_and_leaves_the_rest_of_the_board_as_it_was(entries,
                                                                               tmp_path):
     mapping = tmp_path / "mapping"
