@@ -30,32 +30,49 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                      help="run the tests marked slow too: the whole suite (left out by default)")
 
 
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Leave out the tests marked ``slow`` unless the command line asks for them.
-
-    It does with ``--slow`` (the whole suite), with a ``-m`` expression of its own (``-m slow``
-    runs those alone) or by naming a test (``FILE::NAME``). The slow tests are the end-to-end
-    checks: the committed leaderboard recomputed, first runs that compile, Ray, training.
-    """
-    if (config.getoption("--slow") or config.option.markexpr
-            or any("::" in arg for arg in config.args)):
-        return
-    slow = [item for item in items if item.get_closest_marker("slow") is not None]
-    if slow:
-        config.hook.pytest_deselected(items=slow)
-        items[:] = [item for item in items if item.get_closest_marker("slow") is None]
-
-
 RAY_FILES = frozenset({"tests/bench/test_profiles.py", "tests/bench/test_ray_backend.py",
                        "tests/bench/test_sequences.py", "tests/hostile/test_hostile_ray.py",
                        "tests/hostile/test_hostile_runner.py"})
-"""The test files with a test that starts Ray (marked ``ray``), relative to the root (a test in
-test_ray_files.py finds any such test elsewhere)."""
+"""The test files with a test that starts Ray (marked ``ray``), relative to the root (such a
+test elsewhere fails: :func:`pytest_runtest_setup`)."""
 
 
 def ray_file(path: Path, root: Path) -> bool:
     """Whether the test file at ``path`` is one of :data:`RAY_FILES`."""
     return path.relative_to(root).as_posix() in RAY_FILES
+
+
+def outside_the_ray_files(item: pytest.Item) -> bool:
+    """Whether ``item`` starts Ray (marked ``ray``) outside :data:`RAY_FILES`: it could run beside
+    another Ray test and join or wait on its instance."""
+    return item.get_closest_marker("ray") is not None and not ray_file(item.path,
+                                                                        item.config.rootpath)
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """A test that starts Ray outside :data:`RAY_FILES` fails before it starts it."""
+    if outside_the_ray_files(item):
+        pytest.fail("it starts Ray (marked ray) outside the files RAY_FILES names in "
+                    "tests/conftest.py, where it could run beside another Ray test", pytrace=False)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Leave out the tests marked ``slow`` unless the command line asks for them.
+
+    It does with ``--slow`` (the whole suite), with a ``-m`` expression of its own (``-m slow``
+    runs those alone) or by naming them (``FILE::NAME``). The slow tests are the end-to-end
+    checks: the committed leaderboard recomputed, first runs that compile, Ray, training. A test
+    outside the Ray files is kept, slow or not, to fail (:func:`pytest_runtest_setup`).
+    """
+    if (config.getoption("--slow") or config.option.markexpr
+            or any("::" in arg for arg in config.args)):
+        return
+    slow = [item for item in items
+            if item.get_closest_marker("slow") is not None and not outside_the_ray_files(item)]
+    if slow:
+        config.hook.pytest_deselected(items=slow)
+        left_out = set(slow)
+        items[:] = [item for item in items if item not in left_out]
 
 
 class RayFilesTogether(LoadGroupScheduling):
