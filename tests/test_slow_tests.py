@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+
+ROOT = Path(__file__).parents[1]
 
 FILE = "tests/bench/test_fork_server.py"
 SLOW = f"{FILE}::test_the_fork_server_compiles_the_named_built_in_only_and_never_imports_a_plug_in"
@@ -16,7 +19,7 @@ def collected(*arguments: str) -> list[str]:
     """The test ids ``python -m pytest --collect-only`` lists, given these arguments."""
     done = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-n0",
                            "-p", "no:cacheprovider", *arguments],
-                          capture_output=True, text=True, timeout=120, check=True)
+                          capture_output=True, text=True, timeout=120, check=True, cwd=ROOT)
     return [line for line in done.stdout.splitlines() if "::" in line]
 
 
