@@ -25,11 +25,6 @@ settings.register_profile("explore", derandomize=False, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 
-def pytest_addoption(parser: pytest.Parser) -> None:
-    parser.addoption("--slow", action="store_true",
-                     help="run the tests marked slow too: the whole suite (left out by default)")
-
-
 RAY_FILES = frozenset({"tests/bench/test_profiles.py", "tests/bench/test_ray_backend.py",
                        "tests/bench/test_sequences.py", "tests/hostile/test_hostile_ray.py",
                        "tests/hostile/test_hostile_runner.py"})
@@ -54,6 +49,11 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
     if outside_the_ray_files(item):
         pytest.fail("it starts Ray (marked ray) outside the files RAY_FILES names in "
                     "tests/conftest.py, where it could run beside another Ray test", pytrace=False)
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--slow", action="store_true",
+                     help="run the tests marked slow too: the whole suite (left out by default)")
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
